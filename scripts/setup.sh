@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Installs the Debian packages PLR needs (only those missing), then configures
+# and builds into build/. Extra arguments go to CMake's configure step.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=(
+  build-essential cmake ninja-build pkg-config git clang-format
+  libeigen3-dev libfcl-dev liboctomap-dev libsimbody-dev
+  cyclonedds-dev cyclonedds-tools
+  libyaml-cpp-dev libflatbuffers-dev flatbuffers-compiler
+  libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  liburdfdom-dev libsvm-dev
+  libompl-dev libboost-serialization-dev libboost-filesystem-dev libboost-system-dev
+  iproute2 openssl procps
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "setup: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+build_type=${PLR_BUILD_TYPE:-RelWithDebInfo}
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE="$build_type" "$@" >/dev/null
+cmake --build build -j "$(nproc)"
