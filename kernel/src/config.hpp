@@ -1,0 +1,94 @@
+// The pipeline config (YAML): what nodes run, with which plug-ins and
+// parameters, in which host processes, and what crosses machines.
+#pragma once
+
+#include <plr/expected.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace plr::kernel {
+
+// Where a value came from, for error messages ("file:line:column").
+struct SourceLocation {
+  std::string file;
+  int line = 0;
+  int column = 0;
+  std::string str() const;
+};
+
+enum class RestartPolicy { Never, OnFailure };
+
+struct HostConfig {
+  std::string name;
+  RestartPolicy restart = RestartPolicy::OnFailure;
+  int max_restarts = 5;
+  int backoff_ms = 200;  // doubles after each restart
+  SourceLocation where;
+};
+
+enum class TopicPolicy { KeepLast, Reliable };
+
+struct TopicConfig {
+  std::string name;
+  TopicPolicy policy = TopicPolicy::KeepLast;
+  std::size_t depth = 64;                  // queued messages per subscriber
+  std::size_t slot_size = 1 << 20;         // bytes, for shared memory
+  bool busy_poll = false;                  // shared-memory readers spin instead of sleeping
+  SourceLocation where;
+};
+
+struct NodeConfig {
+  std::string name;
+  std::string plugin;
+  std::string host = "main";
+  nlohmann::json params = nlohmann::json::object();
+  std::map<std::string, std::string> remap;  // name used by the plug-in -> bus name
+  SourceLocation where;
+};
+
+struct DdsConfig {
+  bool enabled = false;
+  int domain = 0;
+  std::vector<std::string> interfaces{"lo"};
+  std::vector<std::string> export_patterns;  // topic or service names, '*' wildcards
+  std::vector<std::string> import_patterns;
+  bool allow_remote_control = false;
+  std::string security_dir;  // DDS Security material; required for remote control
+};
+
+struct Config {
+  std::string file;      // absolute path of the YAML file
+  std::string pipeline;  // name of the run; defaults to the file's stem
+  std::vector<std::string> plugin_paths;  // absolute; relative entries resolve against the file's folder
+  std::string clock = "wall";             // "wall" or "sim" (time from the `clock` topic)
+  std::vector<NodeConfig> nodes;
+  std::vector<HostConfig> hosts;          // always contains "main"
+  std::vector<TopicConfig> topics;
+  DdsConfig dds;
+
+  const NodeConfig* node(const std::string& name) const;
+  const HostConfig* host(const std::string& name) const;
+  // Settings for a topic: its own entry, or the defaults.
+  TopicConfig topic(const std::string& name) const;
+};
+
+// One override from the command line: "nodes.sim.params.seed=3" (dotted path
+// into the YAML; the value is parsed as YAML, so numbers stay numbers).
+struct Override {
+  std::string path;
+  std::string value;
+};
+
+// Parses and validates; nothing starts before this succeeds. Every error is
+// one line naming file:line:column and the key, e.g.
+//   "configs/x.yaml:12:5: nodes.planner.plugin: expected a string"
+Expected<Config> load_config(const std::string& file, const std::vector<Override>& overrides = {});
+Expected<Config> parse_config(const std::string& yaml_text, const std::string& file_name,
+                              const std::vector<Override>& overrides = {});
+Expected<Override> parse_override(const std::string& text);  // "a.b.c=value"
+
+}  // namespace plr::kernel

@@ -1,0 +1,69 @@
+// Loads plug-in libraries, only from the configured search paths, and checks
+// them before any of their code beyond the entry point runs.
+#pragma once
+
+#include <plr/expected.hpp>
+#include <plr/plugin_abi.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace plr::kernel {
+
+// An open plug-in library; closing it (destructor) unloads the code, so it
+// must outlive every node created from it.
+class PluginLibrary {
+ public:
+  PluginLibrary(void* handle, const plr_plugin_descriptor* descriptor, std::string path);
+  ~PluginLibrary();
+  PluginLibrary(const PluginLibrary&) = delete;
+  PluginLibrary& operator=(const PluginLibrary&) = delete;
+
+  const plr_plugin_descriptor& descriptor() const { return *descriptor_; }
+  const std::string& path() const { return path_; }
+  std::string name() const { return descriptor_->name; }
+
+ private:
+  void* handle_;
+  const plr_plugin_descriptor* descriptor_;
+  std::string path_;
+};
+
+struct PluginInfo {
+  std::string name;
+  std::string version;
+  std::string kind;
+  std::string description;
+  std::string path;
+  unsigned abi_major = 0;
+  unsigned abi_minor = 0;
+};
+
+class PluginLoader {
+ public:
+  explicit PluginLoader(std::vector<std::string> search_paths);
+
+  // Loads `<path>/<name>.so` from the first search path that has it. Errors,
+  // one line each, naming the file and the cause: not found in the search
+  // paths (listing them), outside the search paths (for a name with a '/'),
+  // group- or world-writable file or folder, dlopen failure (with dlerror),
+  // missing entry point, wrong ABI major, descriptor name differing from the
+  // file name, a name already loaded from another file (duplicate).
+  Expected<std::shared_ptr<PluginLibrary>> load(const std::string& name);
+
+  // Every loadable plug-in in the search paths (broken ones are skipped and
+  // reported through `errors`).
+  std::vector<PluginInfo> list(std::vector<std::string>* errors = nullptr);
+
+  const std::vector<std::string>& search_paths() const { return paths_; }
+
+ private:
+  std::vector<std::string> paths_;
+  std::vector<std::pair<std::string, std::string>> loaded_;  // name -> file, for duplicate checks
+};
+
+// The kernel's default search path: <folder of the plr binary>/../lib/plugins.
+std::string default_plugin_path();
+
+}  // namespace plr::kernel
