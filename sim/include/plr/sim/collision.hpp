@@ -1,0 +1,92 @@
+// FCL collision checking of the unloader against the world W and itself.
+//
+// World: the trailer shell as an octree (octomap::OcTree -> fcl::OcTree) plus
+// every perceived box as an FCL box. Self-collision: every pair of links
+// except the URDF-adjacent ones and those allowed with allowCollision().
+// Boxes held by the suction plate are attached to the plate link, so they
+// collide with the world and with the rest of the robot like part of the arm.
+//
+// Motion checks are conservative sweeps: each link's shapes, inflated by a
+// bound on how far any of their points moves over half a segment, are checked
+// at the segment's midpoint; a segment whose sweep touches something is split
+// until its sweep is below `motion_resolution`, where the state itself is
+// checked. Far from obstacles a whole segment costs one check; near them the
+// motion is checked at `motion_resolution` of link travel.
+//
+// Not thread-safe: a checker updates its FCL objects in place. Use one per
+// thread.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "plr/sim/robot_model.hpp"
+#include "plr/sim/world.hpp"
+
+namespace octomap {
+class OcTree;
+}
+
+namespace plr::sim {
+
+struct CollisionOptions {
+  // Voxel size of the trailer octree built when none is given.
+  double octree_resolution = 0.05;
+  // Largest link travel (m) between two checked states of a motion.
+  double motion_resolution = 0.02;
+  // Joint-limit tolerance of isValid().
+  double limit_tolerance = 1e-9;
+};
+
+struct CollisionStats {
+  std::uint64_t state_checks = 0;
+  std::uint64_t sweep_checks = 0;
+};
+
+// Builds the occupancy octree of a trailer shell: floor (extended 5 m behind
+// the open rear, where the robot drives in), ceiling, side walls and front
+// wall, one voxel thick. For callers that have no perceived octree.
+std::shared_ptr<octomap::OcTree> makeTrailerOctree(const Trailer& trailer, double resolution);
+
+class CollisionChecker {
+ public:
+  // `octree` is the world's occupancy; null builds the trailer shell of
+  // `world.trailer`. The robot model must outlive the checker.
+  CollisionChecker(const RobotModel& robot, const World& world,
+                   std::shared_ptr<const octomap::OcTree> octree = nullptr,
+                   const CollisionOptions& options = {});
+  ~CollisionChecker();
+  CollisionChecker(CollisionChecker&&) noexcept;
+  CollisionChecker& operator=(CollisionChecker&&) noexcept;
+
+  const RobotModel& robot() const;
+  const CollisionOptions& options() const;
+
+  // Links `a` and `b` may touch. Throws std::invalid_argument on an unknown name.
+  void allowCollision(const std::string& a, const std::string& b);
+  // World boxes left out of the checks (e.g. the box about to be grasped).
+  void ignoreBox(std::uint32_t id);
+  void clearIgnoredBoxes();
+  // Rigidly attaches `box` to the plate at its current world pose, taken with
+  // the robot at `q`; the same box is then ignored as a world obstacle.
+  void attachBox(const Box& box, const Config& q);
+  void detachAll();
+
+  // Within joint limits and free of world and self collision.
+  bool isValid(const Config& q) const;
+  // Both ends and the straight joint-space segment between them are valid.
+  bool isMotionValid(const Config& a, const Config& b) const;
+  // What collides at q, e.g. "arm_fore - box 12", "plate - trailer",
+  // "arm_1 beyond limits"; empty if q is valid.
+  std::string describeCollision(const Config& q) const;
+
+  const CollisionStats& stats() const;
+  void resetStats();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace plr::sim

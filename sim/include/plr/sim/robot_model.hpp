@@ -1,0 +1,116 @@
+// Kinematic model of the unloader, read from URDF (sim/robots/unloader.urdf).
+//
+// Configuration q (8 doubles, this order everywhere):
+//   [base_x, arm_1, arm_2, arm_3, arm_4, nose_1, nose_2, nose_3]
+// The arm is yaw (arm_1) + three pitch joints; its end effector is the
+// suction plate, whose frame has its origin on the suction surface and its
+// normal along +x. A plate target is a position plus a pitch (angle of the
+// normal below the horizontal); the plate's yaw follows from the position,
+// which is what makes the closed-form IK possible.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <array>
+#include <string>
+#include <vector>
+
+namespace plr::sim {
+
+inline constexpr int kNumJoints = 8;
+using Config = Eigen::Matrix<double, kNumJoints, 1>;
+
+enum JointIndex : int {
+  kBaseX = 0,
+  kArm1 = 1,
+  kArm2 = 2,
+  kArm3 = 3,
+  kArm4 = 4,
+  kNose1 = 5,
+  kNose2 = 6,
+  kNose3 = 7,
+};
+
+// Joint names in configuration order; the URDF must define all of them.
+inline constexpr std::array<const char*, kNumJoints> kJointNames = {
+    "base_x", "arm_1", "arm_2", "arm_3", "arm_4", "nose_1", "nose_2", "nose_3"};
+
+struct JointLimits {
+  double lower = 0.0;
+  double upper = 0.0;
+  double velocity = 0.0;      // |qd| max, rad/s or m/s
+  double acceleration = 0.0;  // |qdd| max
+};
+
+struct CollisionShape {
+  enum class Type { kBox, kCylinder, kSphere };
+  Type type = Type::kBox;
+  // Box: full extents. Cylinder: (radius, length, 0), axis along local z.
+  // Sphere: (radius, 0, 0).
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();
+  Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();  // in the link frame
+};
+
+enum class JointType { kFixed, kRevolute, kPrismatic };
+
+struct Link {
+  std::string name;
+  int parent_link = -1;  // -1 for the root
+  // Index into the configuration of the joint that moves this link relative
+  // to its parent, or -1 for a fixed joint / the root.
+  int joint = -1;
+  JointType joint_type = JointType::kFixed;
+  Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();  // joint frame in the parent link
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitX();           // in the joint frame
+  std::vector<CollisionShape> shapes;
+};
+
+// Plate target: position of the suction surface centre (world frame) and the
+// pitch of the plate normal below the horizontal (0: facing +x/forward along
+// the arm, pi/2: facing down).
+struct PlateTarget {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  double pitch = 0.0;
+};
+
+class RobotModel {
+ public:
+  // Throws std::runtime_error with a one-line message "<file>: <cause>".
+  static RobotModel fromUrdfFile(const std::string& path);
+  // `source` names the text in error messages.
+  static RobotModel fromUrdfString(const std::string& xml,
+                                   const std::string& source = "<string>");
+
+  const std::vector<Link>& links() const { return links_; }
+  int linkIndex(const std::string& name) const;  // -1 if absent
+  int plateLink() const { return plate_link_; }
+
+  const JointLimits& limits(int joint) const { return limits_[joint]; }
+  const std::array<JointLimits, kNumJoints>& allLimits() const { return limits_; }
+  bool withinLimits(const Config& q, double tol = 1e-9) const;
+
+  // World pose of every link, indexed like links(). `poses` is resized.
+  void forwardKinematics(const Config& q, std::vector<Eigen::Isometry3d>& poses) const;
+  Eigen::Isometry3d platePose(const Config& q) const;
+  PlateTarget plateTarget(const Config& q) const;
+
+  // Closed-form IK of the arm for a plate target. base_x and the nose joints
+  // are copied from `seed`. Returns every solution within joint limits,
+  // nearest to the seed (in joint distance) first.
+  std::vector<Config> armIk(const PlateTarget& target, const Config& seed) const;
+
+  // Arm dimensions read from the URDF (for reach checks and heuristics).
+  struct ArmGeometry {
+    Eigen::Vector3d yaw_origin;  // arm_1 axis origin, in base_link
+    double shoulder_height;      // arm_2 above arm_1 origin
+    double upper = 0, fore = 0, plate = 0;  // arm_2->arm_3, arm_3->arm_4, arm_4->plate
+  };
+  const ArmGeometry& arm() const { return arm_; }
+
+ private:
+  std::vector<Link> links_;  // parents before children
+  std::array<JointLimits, kNumJoints> limits_{};
+  int plate_link_ = -1;
+  ArmGeometry arm_{};
+};
+
+}  // namespace plr::sim

@@ -1,0 +1,299 @@
+#include "plr/sim/robot_model.hpp"
+
+#include <console_bridge/console.h>
+#include <tinyxml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <urdf_parser/urdf_parser.h>
+
+namespace plr::sim {
+namespace {
+
+[[noreturn]] void fail(const std::string& source, const std::string& cause) {
+  throw std::runtime_error(source + ": " + cause);
+}
+
+// urdfdom reports why it rejected a model only through console_bridge; keep
+// the first error so our exception can name the cause.
+class CaptureErrors : public console_bridge::OutputHandler {
+ public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR && first_error.empty()) {
+      first_error = text;
+    }
+  }
+  std::string first_error;
+};
+
+Eigen::Isometry3d toIsometry(const urdf::Pose& p) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
+  t.linear() = Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z)
+                   .normalized()
+                   .toRotationMatrix();
+  return t;
+}
+
+// Acceleration limits are not part of URDF; read our extension element.
+std::map<std::string, double> readAccelerationLimits(const TiXmlDocument& doc) {
+  std::map<std::string, double> out;
+  const TiXmlElement* robot = doc.FirstChildElement("robot");
+  if (robot == nullptr) return out;
+  for (const TiXmlElement* j = robot->FirstChildElement("joint"); j != nullptr;
+       j = j->NextSiblingElement("joint")) {
+    const char* name = j->Attribute("name");
+    const TiXmlElement* acc = j->FirstChildElement("acceleration_limit");
+    double value = 0.0;
+    if (name != nullptr && acc != nullptr && acc->QueryDoubleAttribute("value", &value) == TIXML_SUCCESS) {
+      out[name] = value;
+    }
+  }
+  return out;
+}
+
+bool isPureOffset(const Eigen::Isometry3d& t, const Eigen::Vector3d& along) {
+  const Eigen::Vector3d p = t.translation();
+  return t.linear().isIdentity(1e-9) && (p - p.dot(along) * along).norm() < 1e-9;
+}
+
+double wrapNear(double a, double lo, double hi) {
+  // Bring an angle into [lo, hi] by whole turns if possible.
+  while (a > hi + 1e-12) a -= 2.0 * M_PI;
+  while (a < lo - 1e-12) a += 2.0 * M_PI;
+  return a;
+}
+
+}  // namespace
+
+RobotModel RobotModel::fromUrdfFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) fail(path, "cannot open file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return fromUrdfString(ss.str(), path);
+}
+
+RobotModel RobotModel::fromUrdfString(const std::string& xml, const std::string& source) {
+  TiXmlDocument doc;
+  doc.Parse(xml.c_str());
+  if (doc.Error()) {
+    fail(source, "XML error at line " + std::to_string(doc.ErrorRow()) + ": " + doc.ErrorDesc());
+  }
+  if (doc.FirstChildElement("robot") == nullptr) fail(source, "no <robot> element");
+
+  CaptureErrors capture;
+  console_bridge::useOutputHandler(&capture);
+  urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(xml);
+  console_bridge::restorePreviousOutputHandler();
+  if (!model) {
+    fail(source, "invalid URDF: " + (capture.first_error.empty() ? std::string("rejected by urdfdom")
+                                                                  : capture.first_error));
+  }
+  const auto accel = readAccelerationLimits(doc);
+
+  RobotModel m;
+  // Links in parent-before-child order: breadth-first from the root.
+  std::vector<urdf::LinkConstSharedPtr> order{model->getRoot()};
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    for (const auto& child : order[i]->child_links) order.push_back(child);
+  }
+  std::map<std::string, int> index;
+  std::array<bool, kNumJoints> seen{};
+  for (const auto& l : order) {
+    Link link;
+    link.name = l->name;
+    Link& cj = link;
+    if (const auto& j = l->parent_joint) {
+      link.parent_link = index.at(j->parent_link_name);
+      cj.origin = toIsometry(j->parent_to_joint_origin_transform);
+      cj.axis = Eigen::Vector3d(j->axis.x, j->axis.y, j->axis.z);
+      switch (j->type) {
+        case urdf::Joint::FIXED: cj.joint_type = JointType::kFixed; break;
+        case urdf::Joint::REVOLUTE: cj.joint_type = JointType::kRevolute; break;
+        case urdf::Joint::PRISMATIC: cj.joint_type = JointType::kPrismatic; break;
+        default: fail(source, "joint '" + j->name + "': only fixed, revolute and prismatic joints are supported");
+      }
+      const auto it = std::find(kJointNames.begin(), kJointNames.end(), j->name);
+      if (it != kJointNames.end()) {
+        const int qi = static_cast<int>(it - kJointNames.begin());
+        if (cj.joint_type == JointType::kFixed) fail(source, "joint '" + j->name + "' must not be fixed");
+        if (!j->limits) fail(source, "joint '" + j->name + "' has no <limit>");
+        if (j->limits->lower >= j->limits->upper) fail(source, "joint '" + j->name + "' has lower >= upper");
+        if (j->limits->velocity <= 0) fail(source, "joint '" + j->name + "' has no positive velocity limit");
+        const auto a = accel.find(j->name);
+        if (a == accel.end() || a->second <= 0) {
+          fail(source, "joint '" + j->name + "' has no positive <acceleration_limit value=..>");
+        }
+        m.limits_[qi] = {j->limits->lower, j->limits->upper, j->limits->velocity, a->second};
+        link.joint = qi;
+        seen[qi] = true;
+      } else if (cj.joint_type != JointType::kFixed) {
+        fail(source, "joint '" + j->name + "' is movable but not one of the 8 planned joints");
+      }
+    }
+    for (const auto& c : l->collision_array) {
+      if (!c || !c->geometry) continue;
+      CollisionShape s;
+      s.origin = toIsometry(c->origin);
+      switch (c->geometry->type) {
+        case urdf::Geometry::BOX: {
+          const auto& b = static_cast<const urdf::Box&>(*c->geometry);
+          s.type = CollisionShape::Type::kBox;
+          s.size = Eigen::Vector3d(b.dim.x, b.dim.y, b.dim.z);
+          break;
+        }
+        case urdf::Geometry::CYLINDER: {
+          const auto& cy = static_cast<const urdf::Cylinder&>(*c->geometry);
+          s.type = CollisionShape::Type::kCylinder;
+          s.size = Eigen::Vector3d(cy.radius, cy.length, 0.0);
+          break;
+        }
+        case urdf::Geometry::SPHERE: {
+          const auto& sp = static_cast<const urdf::Sphere&>(*c->geometry);
+          s.type = CollisionShape::Type::kSphere;
+          s.size = Eigen::Vector3d(sp.radius, 0.0, 0.0);
+          break;
+        }
+        default: fail(source, "link '" + l->name + "': only box, cylinder and sphere collision geometry is supported");
+      }
+      link.shapes.push_back(s);
+    }
+    index[link.name] = static_cast<int>(m.links_.size());
+    m.links_.push_back(std::move(link));
+  }
+  for (int i = 0; i < kNumJoints; ++i) {
+    if (!seen[i]) fail(source, std::string("missing joint '") + kJointNames[i] + "'");
+  }
+
+  // The closed-form IK assumes yaw about z, then three pitch joints about y
+  // offset along the link's x, then the plate offset along x.
+  auto jointLink = [&](int qi) {
+    for (std::size_t i = 0; i < m.links_.size(); ++i) {
+      if (m.links_[i].joint == qi) return static_cast<int>(i);
+    }
+    return -1;
+  };
+  const int l1 = jointLink(kArm1), l2 = jointLink(kArm2), l3 = jointLink(kArm3), l4 = jointLink(kArm4);
+  const auto plate = index.find("plate");
+  if (plate == index.end()) fail(source, "missing link 'plate'");
+  m.plate_link_ = plate->second;
+  const Eigen::Vector3d ex = Eigen::Vector3d::UnitX(), ey = Eigen::Vector3d::UnitY(), ez = Eigen::Vector3d::UnitZ();
+  if (m.links_[l1].parent_link != jointLink(kBaseX) || !m.links_[l1].axis.isApprox(ez) ||
+      !m.links_[l1].origin.linear().isIdentity(1e-9)) {
+    fail(source, "arm_1 must turn about z on base_link (closed-form IK)");
+  }
+  if (m.links_[l2].parent_link != l1 || !m.links_[l2].axis.isApprox(ey) || !isPureOffset(m.links_[l2].origin, ez)) {
+    fail(source, "arm_2 must pitch about y straight above arm_1 (closed-form IK)");
+  }
+  if (m.links_[l3].parent_link != l2 || !m.links_[l3].axis.isApprox(ey) || !isPureOffset(m.links_[l3].origin, ex)) {
+    fail(source, "arm_3 must pitch about y, offset along x from arm_2 (closed-form IK)");
+  }
+  if (m.links_[l4].parent_link != l3 || !m.links_[l4].axis.isApprox(ey) || !isPureOffset(m.links_[l4].origin, ex)) {
+    fail(source, "arm_4 must pitch about y, offset along x from arm_3 (closed-form IK)");
+  }
+  if (m.links_[m.plate_link_].parent_link != l4 || m.links_[m.plate_link_].joint_type != JointType::kFixed ||
+      !isPureOffset(m.links_[m.plate_link_].origin, ex)) {
+    fail(source, "link 'plate' must be fixed to the arm_4 link, offset along x (closed-form IK)");
+  }
+  m.arm_.yaw_origin = m.links_[l1].origin.translation();
+  m.arm_.shoulder_height = m.links_[l2].origin.translation().z();
+  m.arm_.upper = m.links_[l3].origin.translation().x();
+  m.arm_.fore = m.links_[l4].origin.translation().x();
+  m.arm_.plate = m.links_[m.plate_link_].origin.translation().x();
+  return m;
+}
+
+int RobotModel::linkIndex(const std::string& name) const {
+  for (std::size_t i = 0; i < links_.size(); ++i) {
+    if (links_[i].name == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+bool RobotModel::withinLimits(const Config& q, double tol) const {
+  for (int i = 0; i < kNumJoints; ++i) {
+    if (!(q[i] >= limits_[i].lower - tol && q[i] <= limits_[i].upper + tol)) return false;
+  }
+  return true;
+}
+
+void RobotModel::forwardKinematics(const Config& q, std::vector<Eigen::Isometry3d>& poses) const {
+  poses.resize(links_.size());
+  for (std::size_t i = 0; i < links_.size(); ++i) {
+    const Link& cj = links_[i];
+    Eigen::Isometry3d local = cj.origin;
+    if (links_[i].joint >= 0) {
+      const double v = q[links_[i].joint];
+      if (cj.joint_type == JointType::kRevolute) {
+        local.linear() = local.linear() * Eigen::AngleAxisd(v, cj.axis).toRotationMatrix();
+      } else {
+        local.translation() += local.linear() * (cj.axis * v);
+      }
+    }
+    poses[i] = links_[i].parent_link < 0 ? local : poses[links_[i].parent_link] * local;
+  }
+}
+
+Eigen::Isometry3d RobotModel::platePose(const Config& q) const {
+  std::vector<Eigen::Isometry3d> poses;
+  forwardKinematics(q, poses);
+  return poses[plate_link_];
+}
+
+PlateTarget RobotModel::plateTarget(const Config& q) const {
+  const Eigen::Isometry3d p = platePose(q);
+  const Eigen::Vector3d n = p.linear().col(0);
+  // Pitch is measured in the vertical plane through the yaw axis and the
+  // plate, from the horizontal direction pointing away from the axis.
+  const Eigen::Vector3d d = p.translation() - (arm_.yaw_origin + Eigen::Vector3d(q[kBaseX], 0.0, 0.0));
+  const double r = std::hypot(d.x(), d.y());
+  const double psi = r > 1e-9 ? std::atan2(d.y(), d.x()) : q[kArm1];
+  const double forward = n.x() * std::cos(psi) + n.y() * std::sin(psi);
+  return {p.translation(), std::atan2(-n.z(), forward)};
+}
+
+std::vector<Config> RobotModel::armIk(const PlateTarget& target, const Config& seed) const {
+  std::vector<Config> out;
+  const Eigen::Vector3d yaw_origin = arm_.yaw_origin + Eigen::Vector3d(seed[kBaseX], 0.0, 0.0);
+  const Eigen::Vector3d d = target.position - yaw_origin;
+  const double r = std::hypot(d.x(), d.y());
+  const double psi = r > 1e-9 ? std::atan2(d.y(), d.x()) : seed[kArm1];
+  const double height = d.z() - arm_.shoulder_height;
+  const double l1 = arm_.upper, l2 = arm_.fore;
+  // Two yaw branches: facing the target (reach r, pitch phi) and turned away
+  // (reach -r, link angle pi - phi); each has elbow up and elbow down.
+  for (int branch = 0; branch < 2; ++branch) {
+    const double yaw = branch == 0 ? psi : psi + M_PI;
+    const double a = branch == 0 ? target.pitch : M_PI - target.pitch;
+    const double u_plate = branch == 0 ? r : -r;
+    // Planar coordinates (u forward, v down) of the wrist joint.
+    const double u = u_plate - arm_.plate * std::cos(a);
+    const double v = -height - arm_.plate * std::sin(a);
+    const double c3 = (u * u + v * v - l1 * l1 - l2 * l2) / (2.0 * l1 * l2);
+    if (c3 < -1.0 - 1e-12 || c3 > 1.0 + 1e-12) continue;
+    const double base3 = std::acos(std::clamp(c3, -1.0, 1.0));
+    for (double q3 : {base3, -base3}) {
+      const double q2 = std::atan2(v, u) - std::atan2(l2 * std::sin(q3), l1 + l2 * std::cos(q3));
+      Config q = seed;
+      q[kArm1] = wrapNear(yaw, limits_[kArm1].lower, limits_[kArm1].upper);
+      q[kArm2] = wrapNear(q2, limits_[kArm2].lower, limits_[kArm2].upper);
+      q[kArm3] = wrapNear(q3, limits_[kArm3].lower, limits_[kArm3].upper);
+      q[kArm4] = wrapNear(a - q2 - q3, limits_[kArm4].lower, limits_[kArm4].upper);
+      if (!withinLimits(q)) continue;
+      const bool duplicate = std::any_of(out.begin(), out.end(), [&](const Config& o) { return (o - q).norm() < 1e-9; });
+      if (!duplicate) out.push_back(q);
+      if (base3 == 0.0) break;
+    }
+  }
+  std::sort(out.begin(), out.end(), [&](const Config& x, const Config& y) {
+    return (x - seed).squaredNorm() < (y - seed).squaredNorm();
+  });
+  return out;
+}
+
+}  // namespace plr::sim

@@ -1,0 +1,163 @@
+#include "plr/sim/collision.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fcl/fcl.h>
+#include <octomap/octomap.h>
+
+using plr::sim::Box;
+using plr::sim::CollisionChecker;
+using plr::sim::Config;
+using plr::sim::RobotModel;
+using plr::sim::World;
+
+namespace {
+
+const RobotModel& robot() {
+  static const RobotModel m = RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
+  return m;
+}
+
+// Arm folded above the raised nose, robot 1 m inside the trailer.
+Config home(double base_x = 1.0) {
+  Config q;
+  q << base_x, 0.0, -1.0, 2.0, -1.0, 0.5, 0.0, 0.0;
+  return q;
+}
+
+Box box(std::uint32_t id, double x, double y, double z, double s = 0.4) {
+  Box b;
+  b.id = id;
+  b.size = Eigen::Vector3d::Constant(s);
+  b.pose.translation() = Eigen::Vector3d(x, y, z);
+  return b;
+}
+
+}  // namespace
+
+TEST(Collision, TrailerOctreeHasShellNotInterior) {
+  const auto tree = plr::sim::makeTrailerOctree(plr::sim::Trailer{}, 0.05);
+  auto occupied = [&](double x, double y, double z) {
+    const auto* n = tree->search(x, y, z);
+    return n != nullptr && tree->isNodeOccupied(n);
+  };
+  EXPECT_TRUE(occupied(3.0, 0.0, -0.02));
+  EXPECT_TRUE(occupied(3.0, 1.27, 1.0));
+  EXPECT_TRUE(occupied(3.0, 0.0, 2.72));
+  EXPECT_TRUE(occupied(16.02, 0.0, 1.0));
+  EXPECT_FALSE(occupied(3.0, 0.0, 1.0));
+  EXPECT_FALSE(occupied(-1.0, 0.0, 1.0));  // open rear
+}
+
+TEST(Collision, HomeIsFreeInEmptyTrailer) {
+  World w;
+  CollisionChecker cc(robot(), w);
+  EXPECT_TRUE(cc.isValid(home())) << cc.describeCollision(home());
+  EXPECT_EQ(cc.describeCollision(home()), "");
+}
+
+TEST(Collision, LimitsAreReported) {
+  World w;
+  CollisionChecker cc(robot(), w);
+  Config q = home();
+  q[plr::sim::kArm2] = 3.0;
+  EXPECT_FALSE(cc.isValid(q));
+  EXPECT_EQ(cc.describeCollision(q), "arm_2 beyond limits");
+}
+
+TEST(Collision, BoxAtThePlateCollides) {
+  World w;
+  const Eigen::Vector3d plate = robot().platePose(home()).translation();
+  w.boxes.push_back(box(12, plate.x() + 0.19, plate.y(), plate.z()));
+  CollisionChecker cc(robot(), w);
+  EXPECT_FALSE(cc.isValid(home()));
+  EXPECT_EQ(cc.describeCollision(home()), "plate - box 12");
+  cc.ignoreBox(12);
+  EXPECT_TRUE(cc.isValid(home()));
+}
+
+TEST(Collision, WallsAndFloorCollide) {
+  World w;
+  CollisionChecker cc(robot(), w);
+  Config q = home();
+  q[plr::sim::kArm1] = 1.57;  // arm sideways
+  q[plr::sim::kArm2] = 0.0;
+  q[plr::sim::kArm3] = 0.0;
+  q[plr::sim::kArm4] = 0.0;
+  EXPECT_FALSE(cc.isValid(q));
+  EXPECT_NE(cc.describeCollision(q).find("trailer"), std::string::npos) << cc.describeCollision(q);
+  Config front = home(15.5);  // nose through the front wall
+  EXPECT_FALSE(cc.isValid(front));
+}
+
+TEST(Collision, SelfCollisionButNotAdjacentLinks) {
+  World w;
+  CollisionChecker cc(robot(), w);
+  // Forearm folded back down into the base.
+  Config q = home(3.0);
+  q[plr::sim::kArm2] = 0.3;
+  q[plr::sim::kArm3] = 2.5;
+  q[plr::sim::kArm4] = 0.0;
+  const std::string what = cc.describeCollision(q);
+  EXPECT_FALSE(cc.isValid(q));
+  EXPECT_EQ(what.find("trailer"), std::string::npos) << what;
+  EXPECT_EQ(what.find("box"), std::string::npos) << what;
+}
+
+TEST(Collision, HeldBoxCountsAsArm) {
+  World w;
+  const Config q = home();
+  const Eigen::Isometry3d plate = robot().platePose(q);
+  Box held = box(5, 0, 0, 0, 0.5);
+  held.pose = plate * Eigen::Translation3d(0.25, 0.0, 0.0);
+  w.boxes.push_back(held);
+  CollisionChecker cc(robot(), w);
+  EXPECT_FALSE(cc.isValid(q));
+  cc.attachBox(held, q);
+  EXPECT_TRUE(cc.isValid(q)) << cc.describeCollision(q);
+  // A box just in front of the held one: moving forward hits it with the
+  // held box, not with the plate.
+  World w2 = w;
+  w2.boxes.push_back(box(6, held.pose.translation().x() + 0.5, held.pose.translation().y(),
+                         held.pose.translation().z()));
+  CollisionChecker cc2(robot(), w2);
+  cc2.attachBox(held, q);
+  EXPECT_TRUE(cc2.isValid(q)) << cc2.describeCollision(q);
+  Config ahead = q;
+  ahead[plr::sim::kBaseX] += 0.3;
+  EXPECT_EQ(cc2.describeCollision(ahead), "held box 5 - box 6");
+  EXPECT_FALSE(cc2.isMotionValid(q, ahead));
+  cc.detachAll();
+  cc.clearIgnoredBoxes();
+  EXPECT_FALSE(cc.isValid(q));
+}
+
+TEST(Collision, MotionThroughThinObstacleIsCaughtBetweenEndpoints) {
+  // A thin board between two free configurations: endpoints are free, the
+  // straight motion is not.
+  World w;
+  Config a = home(2.0), b = home(2.0);
+  a[plr::sim::kArm1] = -0.8;
+  b[plr::sim::kArm1] = 0.8;
+  Box board;
+  board.id = 1;
+  board.size = Eigen::Vector3d(3.0, 0.03, 0.3);
+  board.pose.translation() = robot().platePose(home(2.0)).translation() + Eigen::Vector3d(0.5, 0, 0);
+  w.boxes.push_back(board);
+  CollisionChecker cc(robot(), w);
+  ASSERT_TRUE(cc.isValid(a)) << cc.describeCollision(a);
+  ASSERT_TRUE(cc.isValid(b)) << cc.describeCollision(b);
+  EXPECT_FALSE(cc.isMotionValid(a, b));
+  Config c = a;
+  c[plr::sim::kArm1] = -0.4;
+  EXPECT_TRUE(cc.isMotionValid(a, c));
+}
+
+TEST(Collision, FreeMotionFarFromObstaclesIsCheap) {
+  World w;
+  CollisionChecker cc(robot(), w);
+  cc.resetStats();
+  EXPECT_TRUE(cc.isMotionValid(home(1.0), home(3.0)));
+  // One sweep for the whole 2 m when nothing is near; a few more at most.
+  EXPECT_LE(cc.stats().sweep_checks, 8u);
+}

@@ -1,0 +1,144 @@
+#include "plr/sim/robot_model.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+using plr::sim::Config;
+using plr::sim::RobotModel;
+
+namespace {
+
+const RobotModel& robot() {
+  static const RobotModel m = RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
+  return m;
+}
+
+std::string errorOf(const std::string& xml) {
+  try {
+    RobotModel::fromUrdfString(xml, "bad.urdf");
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(RobotModel, LoadsShippedUrdf) {
+  const RobotModel& m = robot();
+  EXPECT_GE(m.links().size(), 10u);
+  EXPECT_GE(m.plateLink(), 0);
+  for (int j = 0; j < plr::sim::kNumJoints; ++j) {
+    EXPECT_LT(m.limits(j).lower, m.limits(j).upper) << j;
+    EXPECT_GT(m.limits(j).velocity, 0.0) << j;
+    EXPECT_GT(m.limits(j).acceleration, 0.0) << j;
+  }
+  for (const auto& l : m.links()) {
+    if (l.name != "ground") {
+      EXPECT_FALSE(l.shapes.empty()) << l.name;
+    }
+  }
+}
+
+TEST(RobotModel, ZeroConfigurationPlatePose) {
+  // Arm stretched forward: plate at yaw origin + upper + fore + plate along x.
+  const RobotModel& m = robot();
+  Config q = Config::Zero();
+  q[plr::sim::kBaseX] = 2.0;
+  const auto& a = m.arm();
+  const Eigen::Vector3d p = m.platePose(q).translation();
+  EXPECT_NEAR(p.x(), 2.0 + a.yaw_origin.x() + a.upper + a.fore + a.plate, 1e-9);
+  EXPECT_NEAR(p.y(), 0.0, 1e-9);
+  EXPECT_NEAR(p.z(), a.yaw_origin.z() + a.shoulder_height, 1e-9);
+}
+
+TEST(RobotModel, ReachesFloorToCeilingAcrossTheWidth) {
+  const RobotModel& m = robot();
+  Config seed = Config::Zero();
+  for (double y : {-1.0, 0.0, 1.0}) {
+    for (double z : {0.2, 1.3, 2.5}) {
+      const auto sols = m.armIk({Eigen::Vector3d(1.2, y, z), 0.0}, seed);
+      EXPECT_FALSE(sols.empty()) << "y=" << y << " z=" << z;
+    }
+  }
+}
+
+TEST(RobotModel, IkInvertsFkOnRandomConfigurations) {
+  const RobotModel& m = robot();
+  std::mt19937 rng(7);
+  int checked = 0;
+  for (int i = 0; i < 500; ++i) {
+    Config q;
+    for (int j = 0; j < plr::sim::kNumJoints; ++j) {
+      std::uniform_real_distribution<double> u(m.limits(j).lower, m.limits(j).upper);
+      q[j] = u(rng);
+    }
+    const auto target = m.plateTarget(q);
+    // Pitch beyond +-90 degrees is the turned-away branch; both are covered.
+    const auto sols = m.armIk(target, q);
+    ASSERT_FALSE(sols.empty()) << "no IK for a reachable FK pose, i=" << i;
+    bool found_original = false;
+    for (const Config& s : sols) {
+      EXPECT_TRUE(m.withinLimits(s));
+      const auto back = m.plateTarget(s);
+      EXPECT_LT((back.position - target.position).norm(), 1e-7);
+      EXPECT_NEAR(std::remainder(back.pitch - target.pitch, 2 * M_PI), 0.0, 1e-7);
+      // Same plate normal (the turned-away branch rolls the plate by pi).
+      EXPECT_LT((m.platePose(s).linear().col(0) - m.platePose(q).linear().col(0)).norm(), 1e-6);
+      if ((s - q).norm() < 1e-6) found_original = true;
+    }
+    EXPECT_TRUE(found_original) << "i=" << i;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 500);
+}
+
+TEST(RobotModel, UnreachableTargetHasNoSolution) {
+  EXPECT_TRUE(robot().armIk({Eigen::Vector3d(6.0, 0.0, 1.0), 0.0}, Config::Zero()).empty());
+}
+
+TEST(RobotModel, MissingFileNamesFileAndCause) {
+  try {
+    RobotModel::fromUrdfFile("/nonexistent/robot.urdf");
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "/nonexistent/robot.urdf: cannot open file");
+  }
+}
+
+TEST(RobotModel, XmlSyntaxErrorGivesLine) {
+  const std::string msg = errorOf("<robot name='r'>\n<link name='a'>\n</robot>");
+  EXPECT_EQ(msg.rfind("bad.urdf: XML error at line", 0), 0u) << msg;
+}
+
+TEST(RobotModel, MissingJointIsNamed) {
+  const std::string msg = errorOf("<robot name='r'><link name='a'/></robot>");
+  EXPECT_EQ(msg, "bad.urdf: missing joint 'base_x'");
+}
+
+TEST(RobotModel, UrdfdomRejectionCarriesItsReason) {
+  const std::string msg = errorOf(
+      "<robot name='r'><link name='a'/><joint name='j' type='revolute'><parent link='a'/>"
+      "<child link='nope'/></joint></robot>");
+  EXPECT_EQ(msg.rfind("bad.urdf: invalid URDF: ", 0), 0u) << msg;
+  EXPECT_GT(msg.size(), std::string("bad.urdf: invalid URDF: ").size());
+}
+
+TEST(RobotModel, MissingAccelerationLimitIsNamed) {
+  std::string xml;
+  {
+    std::ifstream in(PLR_UNLOADER_URDF);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    xml = ss.str();
+  }
+  const auto pos = xml.find("<acceleration_limit value=\"2.5\"/>");
+  ASSERT_NE(pos, std::string::npos);
+  xml.erase(pos, std::string("<acceleration_limit value=\"2.5\"/>").size());
+  EXPECT_EQ(errorOf(xml), "bad.urdf: joint 'arm_1' has no positive <acceleration_limit value=..>");
+}
