@@ -1,0 +1,84 @@
+// ARA* (Likhachev, Gordon, Thrun 2003) and its special cases: weighted A*
+// (one iteration at a fixed ε), A* (ε = 1) and Dijkstra (zero heuristic).
+//
+// Search memory (per-state records, heap, INCONS list) belongs to the search
+// object and is reused by the next search: records are stamped with a search
+// number and reset lazily when first touched, so a new search allocates only
+// for states never seen before.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <deque>
+#include <limits>
+#include <vector>
+
+#include "graph.hpp"
+#include "intrusive_heap.hpp"
+
+namespace plr::search {
+
+struct SearchOptions {
+  double eps_initial = 1.0;    // first iteration's heuristic weight
+  double eps_final = 1.0;      // stop improving once this ε is done
+  double eps_decrement = 0.5;  // ε step between iterations
+  double time_limit_s = std::numeric_limits<double>::infinity();
+  // Stop at the first solution instead of improving it while time remains.
+  bool first_solution_only = false;
+};
+
+enum class SearchStatus { kSolved, kNoPath, kTimeout };
+
+struct SearchResult {
+  SearchStatus status = SearchStatus::kNoPath;
+  std::vector<StateId> path;  // start .. goal
+  double cost = std::numeric_limits<double>::infinity();
+  // cost <= bound * optimal cost (1 once an ε = 1 iteration completed).
+  double suboptimality_bound = std::numeric_limits<double>::infinity();
+  double final_eps = 0.0;  // ε of the last completed iteration
+  int iterations = 0;      // completed ImprovePath calls
+  std::size_t expansions = 0;
+  std::size_t first_solution_expansions = 0;
+  double first_solution_time_s = 0.0;
+  double time_s = 0.0;
+};
+
+class AraStar {
+ public:
+  SearchResult search(Graph& graph, Heuristic& heuristic, StateId start, const SearchOptions& options);
+
+ private:
+  struct Record : HeapElement {
+    unsigned search = 0;  // stamp; stale records are reset on first touch
+    unsigned closed_iteration = 0;
+    double g = 0.0;
+    double h = 0.0;
+    StateId id = kNoState;
+    StateId parent = kNoState;
+    bool incons = false;
+  };
+  using Clock = std::chrono::steady_clock;
+
+  Record& record(StateId s);
+  double keyOf(const Record& r) const { return r.g + eps_ * r.h; }
+  // Returns false if the time limit hit first.
+  bool improvePath(Graph& graph, const Clock::time_point& deadline, SearchResult& result);
+  void extractPath(SearchResult& result) const;
+  double minUnexpandedF() const;
+
+  std::deque<Record> records_;  // by StateId; a deque keeps addresses stable
+  IntrusiveHeap<Record> open_;
+  std::vector<StateId> incons_;
+  std::vector<Successor> successors_;
+  Heuristic* heuristic_ = nullptr;
+  unsigned search_stamp_ = 0;
+  unsigned iteration_ = 0;
+  double eps_ = 1.0;
+  StateId best_goal_ = kNoState;
+};
+
+// Conveniences over one AraStar run.
+SearchResult astar(Graph& graph, Heuristic& heuristic, StateId start, double weight = 1.0);
+SearchResult dijkstra(Graph& graph, StateId start);
+
+}  // namespace plr::search

@@ -1,0 +1,77 @@
+// Runs the search core on a Moving AI grid benchmark and compares path
+// lengths with the published optima.
+//   bench_grid MAP SCEN [--json] [--weight W]
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "search/arastar.hpp"
+#include "search/grid.hpp"
+
+int main(int argc, char** argv) {
+  std::string map_path, scen_path;
+  bool json = false;
+  double weight = 1.0;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--json") == 0) {
+      json = true;
+    } else if (std::strcmp(argv[i], "--weight") == 0 && i + 1 < argc) {
+      weight = std::atof(argv[++i]);
+    } else if (map_path.empty()) {
+      map_path = argv[i];
+    } else if (scen_path.empty()) {
+      scen_path = argv[i];
+    } else {
+      std::fprintf(stderr, "bench_grid: unexpected argument '%s'\n", argv[i]);
+      return 2;
+    }
+  }
+  if (scen_path.empty() || weight < 1.0) {
+    std::fprintf(stderr, "usage: bench_grid MAP SCEN [--json] [--weight W>=1]\n");
+    return 2;
+  }
+  try {
+    const auto map = plr::search::loadGridMap(map_path);
+    const auto queries = plr::search::loadScenario(scen_path);
+    plr::search::GridGraph graph(map);
+    plr::search::OctileHeuristic h(map);
+    plr::search::AraStar search;
+    plr::search::SearchOptions opt;
+    opt.eps_initial = opt.eps_final = weight;
+    std::size_t solved = 0, mismatches = 0, expansions = 0;
+    double worst_ratio = 1.0;
+    const auto t0 = std::chrono::steady_clock::now();
+    for (const auto& q : queries) {
+      graph.setGoal(q.goal_x, q.goal_y);
+      h.setGoal(q.goal_x, q.goal_y);
+      const auto r = search.search(graph, h, graph.id(q.start_x, q.start_y), opt);
+      expansions += r.expansions;
+      if (r.status != plr::search::SearchStatus::kSolved) continue;
+      ++solved;
+      if (std::abs(r.cost - q.optimal) > 0.01) ++mismatches;
+      if (q.optimal > 0) worst_ratio = std::max(worst_ratio, r.cost / q.optimal);
+    }
+    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (json) {
+      nlohmann::json j{{"map", map_path},         {"scenario", scen_path}, {"weight", weight},
+                       {"queries", queries.size()}, {"solved", solved},       {"mismatches", mismatches},
+                       {"worst_cost_ratio", worst_ratio}, {"expansions", expansions}, {"time_s", secs}};
+      std::printf("%s\n", j.dump().c_str());
+    } else {
+      std::printf("map %s (%dx%d), weight %.2f\n", map_path.c_str(), map.width, map.height, weight);
+      std::printf("queries %zu, solved %zu, mismatches vs published optimum (tol 0.01) %zu\n", queries.size(),
+                  solved, mismatches);
+      std::printf("worst cost / optimum %.4f, expansions %zu, time %.3f s (%.3f ms/query)\n", worst_ratio,
+                  expansions, secs, queries.empty() ? 0.0 : 1e3 * secs / queries.size());
+    }
+    return solved == queries.size() && (weight > 1.0 || mismatches == 0) ? 0 : 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_grid: %s\n", e.what());
+    return 2;
+  }
+}
