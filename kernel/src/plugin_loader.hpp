@@ -59,8 +59,15 @@ class PluginLoader {
   const std::vector<std::string>& search_paths() const { return paths_; }
 
  private:
+  // A library handed out earlier: reused while alive (hot swap loads the same
+  // file repeatedly), and checked against for duplicate names.
+  struct Loaded {
+    std::string name;
+    std::string file;  // canonical path
+    std::weak_ptr<PluginLibrary> library;
+  };
   std::vector<std::string> paths_;
-  std::vector<std::pair<std::string, std::string>> loaded_;  // name -> file, for duplicate checks
+  std::vector<Loaded> loaded_;
 };
 
 // The kernel's default search path: <folder of the plr binary>/../lib/plugins.
