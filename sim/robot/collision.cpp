@@ -15,7 +15,9 @@ std::shared_ptr<octomap::OcTree> makeTrailerOctree(const Trailer& trailer, doubl
   const double r = resolution;
   const double x0 = -5.0, x1 = trailer.depth + r;
   const double hw = trailer.width / 2.0;
-  auto mark = [&](double x, double y, double z) { tree->updateNode(octomap::point3d(x, y, z), true, true); };
+  auto mark = [&](double x, double y, double z) {
+    tree->updateNode(octomap::point3d(x, y, z), true, true);
+  };
   // Voxel centres one voxel outside the free interior.
   for (double x = x0 + r / 2; x < x1; x += r) {
     for (double y = -hw - r / 2; y < hw + r; y += r) {
@@ -62,6 +64,74 @@ struct WorldBox {
   std::unique_ptr<fcl::CollisionObjectd> obj;
 };
 
+// Coarse cells holding any occupied octree leaf: a shape whose AABB touches
+// none of them cannot hit the octree, which spares FCL's descent from the
+// root for links in free space (most checks).
+class OccupancyGrid {
+ public:
+  static constexpr double kCell = 0.25;
+
+  explicit OccupancyGrid(const octomap::OcTree& tree) {
+    double x0, y0, z0, x1, y1, z1;
+    tree.getMetricMin(x0, y0, z0);
+    tree.getMetricMax(x1, y1, z1);
+    origin_ = Eigen::Vector3d(x0, y0, z0);
+    for (int i = 0; i < 3; ++i) {
+      const double span = (i == 0 ? x1 - x0 : i == 1 ? y1 - y0 : z1 - z0);
+      dims_[i] = std::max(1, static_cast<int>(std::ceil(span / kCell)) + 1);
+    }
+    bits_.assign(static_cast<std::size_t>(dims_[0]) * dims_[1] * dims_[2], 0);
+    for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
+      if (!tree.isNodeOccupied(*it)) continue;
+      const double h = it.getSize() / 2.0;
+      const Eigen::Vector3d c(it.getX(), it.getY(), it.getZ());
+      mark(c - Eigen::Vector3d::Constant(h), c + Eigen::Vector3d::Constant(h));
+    }
+  }
+
+  bool mayHit(const fcl::AABBd& box) const {
+    Eigen::Vector3i lo, hi;
+    if (!range(box.min_, box.max_, lo, hi)) return false;
+    for (int x = lo[0]; x <= hi[0]; ++x) {
+      for (int y = lo[1]; y <= hi[1]; ++y) {
+        for (int z = lo[2]; z <= hi[2]; ++z) {
+          if (bits_[index(x, y, z)]) return true;
+        }
+      }
+    }
+    return false;
+  }
+
+ private:
+  std::size_t index(int x, int y, int z) const {
+    return (static_cast<std::size_t>(x) * dims_[1] + y) * dims_[2] + z;
+  }
+  bool range(const Eigen::Vector3d& a, const Eigen::Vector3d& b, Eigen::Vector3i& lo,
+             Eigen::Vector3i& hi) const {
+    for (int i = 0; i < 3; ++i) {
+      const double l = std::floor((a[i] - origin_[i]) / kCell),
+                   h = std::floor((b[i] - origin_[i]) / kCell);
+      if (h < 0 || l >= dims_[i]) return false;
+      lo[i] = static_cast<int>(std::max(0.0, l));
+      hi[i] = static_cast<int>(std::min<double>(dims_[i] - 1, h));
+    }
+    return true;
+  }
+  void mark(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    Eigen::Vector3i lo, hi;
+    if (!range(a, b, lo, hi)) return;
+    for (int x = lo[0]; x <= hi[0]; ++x) {
+      for (int y = lo[1]; y <= hi[1]; ++y) {
+        for (int z = lo[2]; z <= hi[2]; ++z) bits_[index(x, y, z)] = 1;
+      }
+    }
+  }
+
+  Eigen::Vector3d origin_;
+  std::array<int, 3> dims_{};
+  std::vector<std::uint8_t> bits_;
+};
+
 bool collide(const fcl::CollisionObjectd* a, const fcl::CollisionObjectd* b) {
   if (!a->getAABB().overlap(b->getAABB())) return false;
   fcl::CollisionRequestd req;
@@ -77,19 +147,23 @@ struct CollisionChecker::Impl {
   CollisionOptions options;
   std::shared_ptr<const octomap::OcTree> octree;
   std::unique_ptr<fcl::CollisionObjectd> octree_obj;
-  std::vector<WorldBox> boxes;
+  std::unique_ptr<OccupancyGrid> grid;
+  std::vector<WorldBox> boxes;  // sorted by AABB min x
+  std::vector<double> box_min_x;
+  double box_max_len_x = 0.0;
   std::unordered_set<std::uint32_t> ignored;
   std::vector<RobotShape> shapes;
-  int robot_shape_count = 0;  // shapes beyond this are held boxes
-  std::vector<std::vector<bool>> allowed;  // [link][link]
+  int robot_shape_count = 0;                    // shapes beyond this are held boxes
+  std::vector<std::vector<bool>> allowed;       // [link][link]
   std::vector<std::pair<int, int>> self_pairs;  // shape index pairs checked
   // reach[l][j]: bound on how far a point of link l moves per unit of joint j.
   std::vector<std::array<double, kNumJoints>> reach;
   mutable std::vector<Eigen::Isometry3d> poses;
   mutable CollisionStats stats;
 
-  void addShape(int link, const Eigen::Isometry3d& origin, std::shared_ptr<fcl::CollisionGeometryd> geom,
-                const Eigen::Vector3d& half, std::string label) {
+  void addShape(int link, const Eigen::Isometry3d& origin,
+                std::shared_ptr<fcl::CollisionGeometryd> geom, const Eigen::Vector3d& half,
+                std::string label) {
     RobotShape s;
     s.link = link;
     s.origin = origin;
@@ -106,7 +180,8 @@ struct CollisionChecker::Impl {
     for (std::size_t i = 0; i < shapes.size(); ++i) {
       for (std::size_t j = i + 1; j < shapes.size(); ++j) {
         const int a = shapes[i].link, b = shapes[j].link;
-        if (a != b && !allowed[a][b]) self_pairs.emplace_back(static_cast<int>(i), static_cast<int>(j));
+        if (a != b && !allowed[a][b])
+          self_pairs.emplace_back(static_cast<int>(i), static_cast<int>(j));
       }
     }
     // A point of link l is at most (sum of joint offsets down the chain +
@@ -142,16 +217,32 @@ struct CollisionChecker::Impl {
     }
   }
 
+  bool hitsOctree(const fcl::CollisionObjectd* o) const {
+    return octree_obj && grid->mayHit(o->getAABB()) && collide(o, octree_obj.get());
+  }
+
+  // World box hit by `o` (not ignored), or -1.
+  long hitBox(const fcl::CollisionObjectd* o) const {
+    const fcl::AABBd& a = o->getAABB();
+    auto i = std::lower_bound(box_min_x.begin(), box_min_x.end(), a.min_.x() - box_max_len_x) -
+             box_min_x.begin();
+    for (; i < static_cast<long>(boxes.size()) &&
+           box_min_x[static_cast<std::size_t>(i)] <= a.max_.x();
+         ++i) {
+      const WorldBox& b = boxes[static_cast<std::size_t>(i)];
+      if (collide(o, b.obj.get()) && ignored.count(b.id) == 0) return i;
+    }
+    return -1;
+  }
+
   // Index of the first colliding shape pair as text, or empty.
   std::string firstHit(bool swept) const {
     auto obj = [&](const RobotShape& s) { return swept ? s.swept.get() : s.exact.get(); };
     for (const auto& s : shapes) {
-      if (octree_obj && collide(obj(s), octree_obj.get())) return s.label + " - trailer";
-      for (const auto& b : boxes) {
-        if (ignored.count(b.id) == 0 && collide(obj(s), b.obj.get())) {
-          return s.label + " - box " + std::to_string(b.id);
-        }
-      }
+      if (hitsOctree(obj(s))) return s.label + " - trailer";
+      const long b = hitBox(obj(s));
+      if (b >= 0)
+        return s.label + " - box " + std::to_string(boxes[static_cast<std::size_t>(b)].id);
     }
     for (const auto& [i, j] : self_pairs) {
       if (collide(obj(shapes[i]), obj(shapes[j]))) return shapes[i].label + " - " + shapes[j].label;
@@ -162,10 +253,7 @@ struct CollisionChecker::Impl {
   bool anyHit(bool swept) const {
     auto obj = [&](const RobotShape& s) { return swept ? s.swept.get() : s.exact.get(); };
     for (const auto& s : shapes) {
-      if (octree_obj && collide(obj(s), octree_obj.get())) return true;
-      for (const auto& b : boxes) {
-        if (collide(obj(s), b.obj.get()) && ignored.count(b.id) == 0) return true;
-      }
+      if (hitsOctree(obj(s)) || hitBox(obj(s)) >= 0) return true;
     }
     for (const auto& [i, j] : self_pairs) {
       if (collide(obj(shapes[i]), obj(shapes[j]))) return true;
@@ -194,15 +282,13 @@ struct CollisionChecker::Impl {
       // The base translates along world x: stretch the box along that
       // direction only (exact for a translation), in the shape's frame.
       const Eigen::Vector3d base_shift =
-          (pose.linear().transpose() * Eigen::Vector3d::UnitX()).cwiseAbs() * std::abs(half_step[kBaseX]);
+          (pose.linear().transpose() * Eigen::Vector3d::UnitX()).cwiseAbs() *
+          std::abs(half_step[kBaseX]);
       s.swept_box->side = 2.0 * (s.half + Eigen::Vector3d::Constant(d_self) + base_shift);
       s.swept_box->computeLocalAABB();
       s.swept->setTransform(toFcl(pose));
       s.swept->computeAABB();
-      if (octree_obj && collide(s.swept.get(), octree_obj.get())) return false;
-      for (const auto& b : boxes) {
-        if (collide(s.swept.get(), b.obj.get()) && ignored.count(b.id) == 0) return false;
-      }
+      if (hitsOctree(s.swept.get()) || hitBox(s.swept.get()) >= 0) return false;
       s.swept_box->side = 2.0 * (s.half + Eigen::Vector3d::Constant(d_self));
       s.swept_box->computeLocalAABB();
       s.swept->computeAABB();
@@ -231,15 +317,26 @@ CollisionChecker::CollisionChecker(const RobotModel& robot, const World& world,
   Impl& m = *impl_;
   m.robot = &robot;
   m.options = options;
-  m.octree = octree ? std::move(octree) : makeTrailerOctree(world.trailer, options.octree_resolution);
+  m.octree =
+      octree ? std::move(octree) : makeTrailerOctree(world.trailer, options.octree_resolution);
   m.octree_obj = std::make_unique<fcl::CollisionObjectd>(std::make_shared<fcl::OcTreed>(m.octree));
   m.octree_obj->computeAABB();
+  m.grid = std::make_unique<OccupancyGrid>(*m.octree);
   for (const Box& b : world.boxes) {
     WorldBox wb;
     wb.id = b.id;
-    wb.obj = std::make_unique<fcl::CollisionObjectd>(std::make_shared<fcl::Boxd>(b.size), toFcl(b.pose));
+    wb.obj =
+        std::make_unique<fcl::CollisionObjectd>(std::make_shared<fcl::Boxd>(b.size), toFcl(b.pose));
     wb.obj->computeAABB();
     m.boxes.push_back(std::move(wb));
+  }
+  std::sort(m.boxes.begin(), m.boxes.end(), [](const WorldBox& a, const WorldBox& b) {
+    return a.obj->getAABB().min_.x() < b.obj->getAABB().min_.x();
+  });
+  for (const WorldBox& b : m.boxes) {
+    const fcl::AABBd& a = b.obj->getAABB();
+    m.box_min_x.push_back(a.min_.x());
+    m.box_max_len_x = std::max(m.box_max_len_x, a.max_.x() - a.min_.x());
   }
   const auto& links = robot.links();
   for (std::size_t l = 0; l < links.size(); ++l) {
@@ -270,6 +367,7 @@ CollisionChecker::CollisionChecker(const RobotModel& robot, const World& world,
       m.allowed[l][links[l].parent_link] = m.allowed[links[l].parent_link][l] = true;
     }
   }
+  for (const auto& [a, b] : robot.allowedCollisions()) m.allowed[a][b] = m.allowed[b][a] = true;
   m.rebuildPairsAndReach();
 }
 
@@ -277,18 +375,27 @@ CollisionChecker::~CollisionChecker() = default;
 CollisionChecker::CollisionChecker(CollisionChecker&&) noexcept = default;
 CollisionChecker& CollisionChecker::operator=(CollisionChecker&&) noexcept = default;
 
-const RobotModel& CollisionChecker::robot() const { return *impl_->robot; }
-const CollisionOptions& CollisionChecker::options() const { return impl_->options; }
+const RobotModel& CollisionChecker::robot() const {
+  return *impl_->robot;
+}
+const CollisionOptions& CollisionChecker::options() const {
+  return impl_->options;
+}
 
 void CollisionChecker::allowCollision(const std::string& a, const std::string& b) {
   const int ia = impl_->robot->linkIndex(a), ib = impl_->robot->linkIndex(b);
-  if (ia < 0 || ib < 0) throw std::invalid_argument("allowCollision: unknown link '" + (ia < 0 ? a : b) + "'");
+  if (ia < 0 || ib < 0)
+    throw std::invalid_argument("allowCollision: unknown link '" + (ia < 0 ? a : b) + "'");
   impl_->allowed[ia][ib] = impl_->allowed[ib][ia] = true;
   impl_->rebuildPairsAndReach();
 }
 
-void CollisionChecker::ignoreBox(std::uint32_t id) { impl_->ignored.insert(id); }
-void CollisionChecker::clearIgnoredBoxes() { impl_->ignored.clear(); }
+void CollisionChecker::ignoreBox(std::uint32_t id) {
+  impl_->ignored.insert(id);
+}
+void CollisionChecker::clearIgnoredBoxes() {
+  impl_->ignored.clear();
+}
 
 void CollisionChecker::attachBox(const Box& box, const Config& q) {
   Impl& m = *impl_;
@@ -305,11 +412,13 @@ void CollisionChecker::detachAll() {
   impl_->rebuildPairsAndReach();
 }
 
-bool CollisionChecker::isValid(const Config& q) const { return impl_->stateValid(q); }
+bool CollisionChecker::isValid(const Config& q) const {
+  return impl_->stateValid(q);
+}
 
-bool CollisionChecker::isMotionValid(const Config& a, const Config& b) const {
+bool CollisionChecker::isMotionValid(const Config& a, const Config& b, bool check_endpoints) const {
   const Impl& m = *impl_;
-  if (!m.stateValid(a) || !m.stateValid(b)) return false;
+  if (check_endpoints && (!m.stateValid(a) || !m.stateValid(b))) return false;
   const double res = m.options.motion_resolution;
   struct Segment {
     Config a, b;
@@ -337,7 +446,8 @@ std::string CollisionChecker::describeCollision(const Config& q) const {
   const Impl& m = *impl_;
   for (int i = 0; i < kNumJoints; ++i) {
     const JointLimits& l = m.robot->limits(i);
-    if (!(q[i] >= l.lower - m.options.limit_tolerance && q[i] <= l.upper + m.options.limit_tolerance)) {
+    if (!(q[i] >= l.lower - m.options.limit_tolerance &&
+          q[i] <= l.upper + m.options.limit_tolerance)) {
       return std::string(kJointNames[i]) + " beyond limits";
     }
   }
@@ -345,7 +455,11 @@ std::string CollisionChecker::describeCollision(const Config& q) const {
   return m.firstHit(false);
 }
 
-const CollisionStats& CollisionChecker::stats() const { return impl_->stats; }
-void CollisionChecker::resetStats() { impl_->stats = {}; }
+const CollisionStats& CollisionChecker::stats() const {
+  return impl_->stats;
+}
+void CollisionChecker::resetStats() {
+  impl_->stats = {};
+}
 
 }  // namespace plr::sim

@@ -3,13 +3,13 @@
 #include <console_bridge/console.h>
 #include <tinyxml.h>
 
+#include <urdf_parser/urdf_parser.h>
 #include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
 #include <sstream>
 #include <stdexcept>
-#include <urdf_parser/urdf_parser.h>
 
 namespace plr::sim {
 namespace {
@@ -49,7 +49,8 @@ std::map<std::string, double> readAccelerationLimits(const TiXmlDocument& doc) {
     const char* name = j->Attribute("name");
     const TiXmlElement* acc = j->FirstChildElement("acceleration_limit");
     double value = 0.0;
-    if (name != nullptr && acc != nullptr && acc->QueryDoubleAttribute("value", &value) == TIXML_SUCCESS) {
+    if (name != nullptr && acc != nullptr &&
+        acc->QueryDoubleAttribute("value", &value) == TIXML_SUCCESS) {
       out[name] = value;
     }
   }
@@ -91,8 +92,9 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const std::string&
   urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(xml);
   console_bridge::restorePreviousOutputHandler();
   if (!model) {
-    fail(source, "invalid URDF: " + (capture.first_error.empty() ? std::string("rejected by urdfdom")
-                                                                  : capture.first_error));
+    fail(source,
+         "invalid URDF: " + (capture.first_error.empty() ? std::string("rejected by urdfdom")
+                                                         : capture.first_error));
   }
   const auto accel = readAccelerationLimits(doc);
 
@@ -113,18 +115,29 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const std::string&
       cj.origin = toIsometry(j->parent_to_joint_origin_transform);
       cj.axis = Eigen::Vector3d(j->axis.x, j->axis.y, j->axis.z);
       switch (j->type) {
-        case urdf::Joint::FIXED: cj.joint_type = JointType::kFixed; break;
-        case urdf::Joint::REVOLUTE: cj.joint_type = JointType::kRevolute; break;
-        case urdf::Joint::PRISMATIC: cj.joint_type = JointType::kPrismatic; break;
-        default: fail(source, "joint '" + j->name + "': only fixed, revolute and prismatic joints are supported");
+        case urdf::Joint::FIXED:
+          cj.joint_type = JointType::kFixed;
+          break;
+        case urdf::Joint::REVOLUTE:
+          cj.joint_type = JointType::kRevolute;
+          break;
+        case urdf::Joint::PRISMATIC:
+          cj.joint_type = JointType::kPrismatic;
+          break;
+        default:
+          fail(source,
+               "joint '" + j->name + "': only fixed, revolute and prismatic joints are supported");
       }
       const auto it = std::find(kJointNames.begin(), kJointNames.end(), j->name);
       if (it != kJointNames.end()) {
         const int qi = static_cast<int>(it - kJointNames.begin());
-        if (cj.joint_type == JointType::kFixed) fail(source, "joint '" + j->name + "' must not be fixed");
+        if (cj.joint_type == JointType::kFixed)
+          fail(source, "joint '" + j->name + "' must not be fixed");
         if (!j->limits) fail(source, "joint '" + j->name + "' has no <limit>");
-        if (j->limits->lower >= j->limits->upper) fail(source, "joint '" + j->name + "' has lower >= upper");
-        if (j->limits->velocity <= 0) fail(source, "joint '" + j->name + "' has no positive velocity limit");
+        if (j->limits->lower >= j->limits->upper)
+          fail(source, "joint '" + j->name + "' has lower >= upper");
+        if (j->limits->velocity <= 0)
+          fail(source, "joint '" + j->name + "' has no positive velocity limit");
         const auto a = accel.find(j->name);
         if (a == accel.end() || a->second <= 0) {
           fail(source, "joint '" + j->name + "' has no positive <acceleration_limit value=..>");
@@ -159,7 +172,9 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const std::string&
           s.size = Eigen::Vector3d(sp.radius, 0.0, 0.0);
           break;
         }
-        default: fail(source, "link '" + l->name + "': only box, cylinder and sphere collision geometry is supported");
+        default:
+          fail(source, "link '" + l->name +
+                           "': only box, cylinder and sphere collision geometry is supported");
       }
       link.shapes.push_back(s);
     }
@@ -168,6 +183,18 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const std::string&
   }
   for (int i = 0; i < kNumJoints; ++i) {
     if (!seen[i]) fail(source, std::string("missing joint '") + kJointNames[i] + "'");
+  }
+  for (const TiXmlElement* a = doc.FirstChildElement("robot")->FirstChildElement("allow_collision");
+       a != nullptr; a = a->NextSiblingElement("allow_collision")) {
+    const char* l1 = a->Attribute("link1");
+    const char* l2 = a->Attribute("link2");
+    const auto i1 = l1 ? index.find(l1) : index.end();
+    const auto i2 = l2 ? index.find(l2) : index.end();
+    if (i1 == index.end() || i2 == index.end()) {
+      fail(source, "<allow_collision> at line " + std::to_string(a->Row()) +
+                       " needs existing link1 and link2");
+    }
+    m.allowed_.emplace_back(i1->second, i2->second);
   }
 
   // The closed-form IK assumes yaw about z, then three pitch joints about y
@@ -178,25 +205,31 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const std::string&
     }
     return -1;
   };
-  const int l1 = jointLink(kArm1), l2 = jointLink(kArm2), l3 = jointLink(kArm3), l4 = jointLink(kArm4);
+  const int l1 = jointLink(kArm1), l2 = jointLink(kArm2), l3 = jointLink(kArm3),
+            l4 = jointLink(kArm4);
   const auto plate = index.find("plate");
   if (plate == index.end()) fail(source, "missing link 'plate'");
   m.plate_link_ = plate->second;
-  const Eigen::Vector3d ex = Eigen::Vector3d::UnitX(), ey = Eigen::Vector3d::UnitY(), ez = Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d ex = Eigen::Vector3d::UnitX(), ey = Eigen::Vector3d::UnitY(),
+                        ez = Eigen::Vector3d::UnitZ();
   if (m.links_[l1].parent_link != jointLink(kBaseX) || !m.links_[l1].axis.isApprox(ez) ||
       !m.links_[l1].origin.linear().isIdentity(1e-9)) {
     fail(source, "arm_1 must turn about z on base_link (closed-form IK)");
   }
-  if (m.links_[l2].parent_link != l1 || !m.links_[l2].axis.isApprox(ey) || !isPureOffset(m.links_[l2].origin, ez)) {
+  if (m.links_[l2].parent_link != l1 || !m.links_[l2].axis.isApprox(ey) ||
+      !isPureOffset(m.links_[l2].origin, ez)) {
     fail(source, "arm_2 must pitch about y straight above arm_1 (closed-form IK)");
   }
-  if (m.links_[l3].parent_link != l2 || !m.links_[l3].axis.isApprox(ey) || !isPureOffset(m.links_[l3].origin, ex)) {
+  if (m.links_[l3].parent_link != l2 || !m.links_[l3].axis.isApprox(ey) ||
+      !isPureOffset(m.links_[l3].origin, ex)) {
     fail(source, "arm_3 must pitch about y, offset along x from arm_2 (closed-form IK)");
   }
-  if (m.links_[l4].parent_link != l3 || !m.links_[l4].axis.isApprox(ey) || !isPureOffset(m.links_[l4].origin, ex)) {
+  if (m.links_[l4].parent_link != l3 || !m.links_[l4].axis.isApprox(ey) ||
+      !isPureOffset(m.links_[l4].origin, ex)) {
     fail(source, "arm_4 must pitch about y, offset along x from arm_3 (closed-form IK)");
   }
-  if (m.links_[m.plate_link_].parent_link != l4 || m.links_[m.plate_link_].joint_type != JointType::kFixed ||
+  if (m.links_[m.plate_link_].parent_link != l4 ||
+      m.links_[m.plate_link_].joint_type != JointType::kFixed ||
       !isPureOffset(m.links_[m.plate_link_].origin, ex)) {
     fail(source, "link 'plate' must be fixed to the arm_4 link, offset along x (closed-form IK)");
   }
@@ -250,7 +283,8 @@ PlateTarget RobotModel::plateTarget(const Config& q) const {
   const Eigen::Vector3d n = p.linear().col(0);
   // Pitch is measured in the vertical plane through the yaw axis and the
   // plate, from the horizontal direction pointing away from the axis.
-  const Eigen::Vector3d d = p.translation() - (arm_.yaw_origin + Eigen::Vector3d(q[kBaseX], 0.0, 0.0));
+  const Eigen::Vector3d d =
+      p.translation() - (arm_.yaw_origin + Eigen::Vector3d(q[kBaseX], 0.0, 0.0));
   const double r = std::hypot(d.x(), d.y());
   const double psi = r > 1e-9 ? std::atan2(d.y(), d.x()) : q[kArm1];
   const double forward = n.x() * std::cos(psi) + n.y() * std::sin(psi);
@@ -285,7 +319,8 @@ std::vector<Config> RobotModel::armIk(const PlateTarget& target, const Config& s
       q[kArm3] = wrapNear(q3, limits_[kArm3].lower, limits_[kArm3].upper);
       q[kArm4] = wrapNear(a - q2 - q3, limits_[kArm4].lower, limits_[kArm4].upper);
       if (!withinLimits(q)) continue;
-      const bool duplicate = std::any_of(out.begin(), out.end(), [&](const Config& o) { return (o - q).norm() < 1e-9; });
+      const bool duplicate = std::any_of(out.begin(), out.end(),
+                                         [&](const Config& o) { return (o - q).norm() < 1e-9; });
       if (!duplicate) out.push_back(q);
       if (base3 == 0.0) break;
     }

@@ -66,7 +66,8 @@ TrajectorySample Trajectory::sample(double t) const {
   if (waypoints_.empty()) return out;
   t = std::clamp(t, 0.0, duration());
   // Segment containing t (the last one for t == duration()).
-  std::size_t i = std::upper_bound(start_times_.begin(), start_times_.end(), t) - start_times_.begin();
+  std::size_t i =
+      std::upper_bound(start_times_.begin(), start_times_.end(), t) - start_times_.begin();
   i = std::clamp<std::size_t>(i, 1, profiles_.size()) - 1;
   if (profiles_.empty()) {
     out.position = waypoints_.front();

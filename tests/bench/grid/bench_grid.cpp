@@ -56,18 +56,26 @@ int main(int argc, char** argv) {
       if (std::abs(r.cost - q.optimal) > 0.01) ++mismatches;
       if (q.optimal > 0) worst_ratio = std::max(worst_ratio, r.cost / q.optimal);
     }
-    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double secs =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (json) {
-      nlohmann::json j{{"map", map_path},         {"scenario", scen_path}, {"weight", weight},
-                       {"queries", queries.size()}, {"solved", solved},       {"mismatches", mismatches},
-                       {"worst_cost_ratio", worst_ratio}, {"expansions", expansions}, {"time_s", secs}};
+      nlohmann::json j{{"map", map_path},
+                       {"scenario", scen_path},
+                       {"weight", weight},
+                       {"queries", queries.size()},
+                       {"solved", solved},
+                       {"mismatches", mismatches},
+                       {"worst_cost_ratio", worst_ratio},
+                       {"expansions", expansions},
+                       {"time_s", secs}};
       std::printf("%s\n", j.dump().c_str());
     } else {
       std::printf("map %s (%dx%d), weight %.2f\n", map_path.c_str(), map.width, map.height, weight);
-      std::printf("queries %zu, solved %zu, mismatches vs published optimum (tol 0.01) %zu\n", queries.size(),
-                  solved, mismatches);
-      std::printf("worst cost / optimum %.4f, expansions %zu, time %.3f s (%.3f ms/query)\n", worst_ratio,
-                  expansions, secs, queries.empty() ? 0.0 : 1e3 * secs / queries.size());
+      std::printf("queries %zu, solved %zu, mismatches vs published optimum (tol 0.01) %zu\n",
+                  queries.size(), solved, mismatches);
+      std::printf("worst cost / optimum %.4f, expansions %zu, time %.3f s (%.3f ms/query)\n",
+                  worst_ratio, expansions, secs,
+                  queries.empty() ? 0.0 : 1e3 * secs / queries.size());
     }
     return solved == queries.size() && (weight > 1.0 || mismatches == 0) ? 0 : 1;
   } catch (const std::exception& e) {

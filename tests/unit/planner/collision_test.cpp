@@ -142,7 +142,8 @@ TEST(Collision, MotionThroughThinObstacleIsCaughtBetweenEndpoints) {
   Box board;
   board.id = 1;
   board.size = Eigen::Vector3d(3.0, 0.03, 0.3);
-  board.pose.translation() = robot().platePose(home(2.0)).translation() + Eigen::Vector3d(0.5, 0, 0);
+  board.pose.translation() =
+      robot().platePose(home(2.0)).translation() + Eigen::Vector3d(0.5, 0, 0);
   w.boxes.push_back(board);
   CollisionChecker cc(robot(), w);
   ASSERT_TRUE(cc.isValid(a)) << cc.describeCollision(a);

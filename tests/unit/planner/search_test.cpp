@@ -167,7 +167,9 @@ TEST(Search, TimeLimitStopsASearchWithoutSolution) {
   // A graph that never ends, goal unreachable.
   class Line final : public Graph {
    public:
-    void successors(StateId s, std::vector<Successor>& out) override { out.push_back({s + 1, 1.0}); }
+    void successors(StateId s, std::vector<Successor>& out) override {
+      out.push_back({s + 1, 1.0});
+    }
     bool isGoal(StateId) override { return false; }
   } line;
   ZeroHeuristic zero;
@@ -202,7 +204,8 @@ TEST_P(MovingAi, AStarMatchesPublishedOptimum) {
   EXPECT_EQ(mismatches, 0u);
 }
 
-INSTANTIATE_TEST_SUITE_P(Maps, MovingAi, ::testing::Values("arena.map", "den011d.map", "random512-10-0.map"));
+INSTANTIATE_TEST_SUITE_P(Maps, MovingAi,
+                         ::testing::Values("arena.map", "den011d.map", "random512-10-0.map"));
 
 TEST(Grid, BadFilesNameFileAndCause) {
   try {

@@ -6,7 +6,8 @@
 namespace plr::search {
 
 AraStar::Record& AraStar::record(StateId s) {
-  if (static_cast<std::size_t>(s) >= records_.size()) records_.resize(static_cast<std::size_t>(s) + 1);
+  if (static_cast<std::size_t>(s) >= records_.size())
+    records_.resize(static_cast<std::size_t>(s) + 1);
   Record& r = records_[static_cast<std::size_t>(s)];
   if (r.search != search_stamp_) {
     r.search = search_stamp_;
@@ -21,13 +22,13 @@ AraStar::Record& AraStar::record(StateId s) {
   return r;
 }
 
-bool AraStar::improvePath(Graph& graph, const Clock::time_point& deadline, SearchResult& result) {
+bool AraStar::improvePath(Graph& graph, Clock::time_point deadline, SearchResult& result) {
   std::size_t since_clock = 0;
   while (!open_.empty()) {
     const double goal_g = best_goal_ == kNoState ? std::numeric_limits<double>::infinity()
                                                  : records_[static_cast<std::size_t>(best_goal_)].g;
     if (open_.topKey() >= goal_g) break;
-    if (++since_clock == 32) {
+    if (++since_clock == 8) {
       since_clock = 0;
       if (Clock::now() >= deadline) return false;
     }
@@ -46,7 +47,8 @@ bool AraStar::improvePath(Graph& graph, const Clock::time_point& deadline, Searc
       n.parent = id;
       if (graph.isGoal(succ.id)) {
         // Goals need no expansion: they end the path.
-        if (best_goal_ == kNoState || ng < records_[static_cast<std::size_t>(best_goal_)].g) best_goal_ = succ.id;
+        if (best_goal_ == kNoState || ng < records_[static_cast<std::size_t>(best_goal_)].g)
+          best_goal_ = succ.id;
         continue;
       }
       if (n.closed_iteration != iteration_) {
@@ -81,12 +83,13 @@ void AraStar::extractPath(SearchResult& result) const {
   result.cost = records_[static_cast<std::size_t>(best_goal_)].g;
 }
 
-SearchResult AraStar::search(Graph& graph, Heuristic& heuristic, StateId start, const SearchOptions& options) {
+SearchResult AraStar::search(Graph& graph, Heuristic& heuristic, StateId start,
+                             const SearchOptions& options) {
   const auto t0 = Clock::now();
-  const auto deadline = std::isinf(options.time_limit_s)
-                            ? Clock::time_point::max()
-                            : t0 + std::chrono::duration_cast<Clock::duration>(
-                                       std::chrono::duration<double>(options.time_limit_s));
+  auto deadline = std::isinf(options.time_limit_s)
+                      ? Clock::time_point::max()
+                      : t0 + std::chrono::duration_cast<Clock::duration>(
+                                 std::chrono::duration<double>(options.time_limit_s));
   auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
 
   heuristic_ = &heuristic;
@@ -119,12 +122,19 @@ SearchResult AraStar::search(Graph& graph, Heuristic& heuristic, StateId start, 
     result.final_eps = eps_;
     // ARA*'s bound: cost / min over unexpanded states of g + h.
     const double lower = minUnexpandedF();
-    result.suboptimality_bound = std::min(eps_, std::isinf(lower) ? 1.0 : std::max(1.0, result.cost / lower));
+    result.suboptimality_bound =
+        std::min(eps_, std::isinf(lower) ? 1.0 : std::max(1.0, result.cost / lower));
     if (first) {
       result.first_solution_time_s = elapsed();
       result.first_solution_expansions = result.expansions;
+      if (std::isfinite(options.improve_time_s)) {
+        deadline = std::min(
+            deadline, Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                         std::chrono::duration<double>(options.improve_time_s)));
+      }
     }
-    if (options.first_solution_only || eps_ <= eps_final || result.suboptimality_bound <= 1.0) break;
+    if (options.first_solution_only || eps_ <= eps_final || result.suboptimality_bound <= 1.0)
+      break;
     // Next iteration: smaller ε, INCONS back into OPEN, keys recomputed,
     // CLOSED emptied by moving to a new iteration number.
     eps_ = std::max(eps_final, eps_ - options.eps_decrement);

@@ -23,6 +23,8 @@ struct SearchOptions {
   double eps_final = 1.0;      // stop improving once this ε is done
   double eps_decrement = 0.5;  // ε step between iterations
   double time_limit_s = std::numeric_limits<double>::infinity();
+  // Once a solution exists, improve it for at most this long.
+  double improve_time_s = std::numeric_limits<double>::infinity();
   // Stop at the first solution instead of improving it while time remains.
   bool first_solution_only = false;
 };
@@ -45,7 +47,8 @@ struct SearchResult {
 
 class AraStar {
  public:
-  SearchResult search(Graph& graph, Heuristic& heuristic, StateId start, const SearchOptions& options);
+  SearchResult search(Graph& graph, Heuristic& heuristic, StateId start,
+                      const SearchOptions& options);
 
  private:
   struct Record : HeapElement {
@@ -62,7 +65,7 @@ class AraStar {
   Record& record(StateId s);
   double keyOf(const Record& r) const { return r.g + eps_ * r.h; }
   // Returns false if the time limit hit first.
-  bool improvePath(Graph& graph, const Clock::time_point& deadline, SearchResult& result);
+  bool improvePath(Graph& graph, Clock::time_point deadline, SearchResult& result);
   void extractPath(SearchResult& result) const;
   double minUnexpandedF() const;
 

@@ -43,10 +43,12 @@ GridMap loadGridMap(const std::string& path) {
   for (int y = 0; y < map.height; ++y) {
     if (!std::getline(in, row)) fail(path, "map ends at row " + std::to_string(y));
     if (!row.empty() && row.back() == '\r') row.pop_back();
-    if (static_cast<int>(row.size()) < map.width) fail(path, "row " + std::to_string(y) + " is short");
+    if (static_cast<int>(row.size()) < map.width)
+      fail(path, "row " + std::to_string(y) + " is short");
     for (int x = 0; x < map.width; ++x) {
       const char c = row[static_cast<std::size_t>(x)];
-      map.passable[static_cast<std::size_t>(y) * map.width + x] = (c == '.' || c == 'G' || c == 'S') ? 1 : 0;
+      map.passable[static_cast<std::size_t>(y) * map.width + x] =
+          (c == '.' || c == 'G' || c == 'S') ? 1 : 0;
     }
   }
   return map;
@@ -65,7 +67,8 @@ std::vector<GridQuery> loadScenario(const std::string& path) {
     int bucket = 0, w = 0, h = 0;
     std::string map_name;
     GridQuery q;
-    if (!(ss >> bucket >> map_name >> w >> h >> q.start_x >> q.start_y >> q.goal_x >> q.goal_y >> q.optimal)) {
+    if (!(ss >> bucket >> map_name >> w >> h >> q.start_x >> q.start_y >> q.goal_x >> q.goal_y >>
+          q.optimal)) {
       fail(path, "line " + std::to_string(line_no) + ": expected 9 fields");
     }
     out.push_back(q);

@@ -15,7 +15,8 @@ struct GridMap {
   int height = 0;
   std::vector<unsigned char> passable;  // row-major, y * width + x
   bool free(int x, int y) const {
-    return x >= 0 && y >= 0 && x < width && y < height && passable[static_cast<std::size_t>(y) * width + x] != 0;
+    return x >= 0 && y >= 0 && x < width && y < height &&
+           passable[static_cast<std::size_t>(y) * width + x] != 0;
   }
 };
 

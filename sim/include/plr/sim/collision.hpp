@@ -76,7 +76,8 @@ class CollisionChecker {
   // Within joint limits and free of world and self collision.
   bool isValid(const Config& q) const;
   // Both ends and the straight joint-space segment between them are valid.
-  bool isMotionValid(const Config& a, const Config& b) const;
+  // With check_endpoints false the caller vouches for both ends.
+  bool isMotionValid(const Config& a, const Config& b, bool check_endpoints = true) const;
   // What collides at q, e.g. "arm_fore - box 12", "plate - trailer",
   // "arm_1 beyond limits"; empty if q is valid.
   std::string describeCollision(const Config& q) const;

@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace plr::sim {
@@ -77,12 +78,14 @@ class RobotModel {
   // Throws std::runtime_error with a one-line message "<file>: <cause>".
   static RobotModel fromUrdfFile(const std::string& path);
   // `source` names the text in error messages.
-  static RobotModel fromUrdfString(const std::string& xml,
-                                   const std::string& source = "<string>");
+  static RobotModel fromUrdfString(const std::string& xml, const std::string& source = "<string>");
 
   const std::vector<Link>& links() const { return links_; }
   int linkIndex(const std::string& name) const;  // -1 if absent
   int plateLink() const { return plate_link_; }
+
+  // Link pairs allowed to touch besides parent/child (<allow_collision>).
+  const std::vector<std::pair<int, int>>& allowedCollisions() const { return allowed_; }
 
   const JointLimits& limits(int joint) const { return limits_[joint]; }
   const std::array<JointLimits, kNumJoints>& allLimits() const { return limits_; }
@@ -100,14 +103,15 @@ class RobotModel {
 
   // Arm dimensions read from the URDF (for reach checks and heuristics).
   struct ArmGeometry {
-    Eigen::Vector3d yaw_origin;  // arm_1 axis origin, in base_link
-    double shoulder_height;      // arm_2 above arm_1 origin
+    Eigen::Vector3d yaw_origin;             // arm_1 axis origin, in base_link
+    double shoulder_height;                 // arm_2 above arm_1 origin
     double upper = 0, fore = 0, plate = 0;  // arm_2->arm_3, arm_3->arm_4, arm_4->plate
   };
   const ArmGeometry& arm() const { return arm_; }
 
  private:
   std::vector<Link> links_;  // parents before children
+  std::vector<std::pair<int, int>> allowed_;
   std::array<JointLimits, kNumJoints> limits_{};
   int plate_link_ = -1;
   ArmGeometry arm_{};

@@ -49,7 +49,7 @@ class Trajectory {
     double accel = 0.0;       // d2s/dt2
   };
   std::vector<Config> waypoints_;
-  std::vector<Profile> profiles_;     // one per segment
+  std::vector<Profile> profiles_;    // one per segment
   std::vector<double> start_times_;  // one per waypoint
 };
 

@@ -1,0 +1,172 @@
+#include "arastar_planner.hpp"
+
+#include <chrono>
+
+#include "lattice/robot_lattice.hpp"
+
+namespace plr::arastar {
+
+using sim::Config;
+using sim::PlanMode;
+using sim::PlanResult;
+using sim::PlanStatus;
+
+namespace {
+
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+PlanResult fail(PlanStatus status, std::string message) {
+  PlanResult r;
+  r.status = status;
+  r.message = std::move(message);
+  return r;
+}
+
+}  // namespace
+
+Planner::Planner(LatticeConfig config) : config_(std::move(config)) {}
+
+Planner::Escape Planner::escape(const Config& start, sim::CollisionChecker& checker,
+                                double time_limit_s, sim::PlanStats& stats) {
+  JointLattice graph(config_.modes.at(PlanMode::kEscape), checker, start, std::monostate{}, true);
+  search::ZeroHeuristic zero;
+  search::SearchOptions o;
+  o.time_limit_s = time_limit_s;
+  o.first_solution_only = true;
+  const auto r = search_.search(graph, zero, graph.start(), o);
+  stats.expansions += r.expansions;
+  Escape e;
+  if (r.status == search::SearchStatus::kSolved) {
+    e.status = PlanStatus::kSolved;
+    for (auto id : r.path) e.path.push_back(graph.config(id));
+  } else {
+    e.status =
+        r.status == search::SearchStatus::kTimeout ? PlanStatus::kTimeout : PlanStatus::kNoPath;
+  }
+  return e;
+}
+
+PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& checker) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const sim::RobotModel& robot = checker.robot();
+  if (const std::string err = sim::validateQuery(query, robot); !err.empty()) {
+    return fail(PlanStatus::kInvalidRequest, err);
+  }
+  const sim::QueryScope scope(checker, query);
+  checker.resetStats();
+  PlanResult result;
+  auto finish = [&](PlanResult r) {
+    r.stats.planning_time_s = secondsSince(t0);
+    r.stats.collision_checks = checker.stats().state_checks + checker.stats().sweep_checks;
+    return r;
+  };
+
+  // Leave a start in collision first (M6), then plan from there.
+  std::vector<Config> prefix;
+  Config start = query.start;
+  if (!robot.withinLimits(start)) {
+    return finish(fail(PlanStatus::kStartInvalid, "start: " + checker.describeCollision(start)));
+  }
+  if (query.mode == PlanMode::kEscape || !checker.isValid(start)) {
+    if (query.mode != PlanMode::kEscape && !query.escape_if_start_invalid) {
+      return finish(fail(PlanStatus::kStartInvalid,
+                         "start in collision: " + checker.describeCollision(start)));
+    }
+    const std::string why = checker.describeCollision(start);
+    Escape e = escape(start, checker, query.time_limit_s, result.stats);
+    result.stats.escaped = query.mode != PlanMode::kEscape || !why.empty();
+    result.stats.escape_time_s = secondsSince(t0);
+    if (e.status != PlanStatus::kSolved) {
+      PlanResult r = fail(PlanStatus::kStartInvalid,
+                          "start in collision (" + why + ") and no escape found: " +
+                              (e.status == PlanStatus::kTimeout ? "timeout" : "none"));
+      r.stats = result.stats;
+      return finish(r);
+    }
+    prefix = e.path;
+    start = prefix.back();
+    if (query.mode == PlanMode::kEscape) {
+      result.status = PlanStatus::kSolved;
+      result.path = prefix;
+      result.stats.first_solution_s = secondsSince(t0);
+      result.trajectory = sim::Trajectory::fromWaypoints(result.path, robot.allLimits());
+      return finish(result);
+    }
+    prefix.pop_back();  // the query's path starts with this state
+  }
+
+  const ModeLattice& lattice = config_.modes.at(query.mode);
+  // Goals that can be judged before searching.
+  if (const auto* jg = std::get_if<sim::JointGoal>(&query.goal)) {
+    Config g = start;
+    for (int j : lattice.joints) g[j] = jg->q[j];
+    if (!checker.isValid(g))
+      return finish(fail(PlanStatus::kGoalInvalid, "goal: " + checker.describeCollision(g)));
+  } else if (const auto* pg = std::get_if<sim::PoseGoal>(&query.goal);
+             pg && query.mode != PlanMode::kArmBase) {
+    const auto sols = robot.armIk(pg->target, start);
+    if (sols.empty())
+      return finish(fail(PlanStatus::kGoalInvalid, "goal: no arm IK solution within joint limits"));
+    bool any = false;
+    for (const Config& q : sols) any = any || checker.isValid(q);
+    if (!any) {
+      return finish(fail(
+          PlanStatus::kGoalInvalid,
+          "goal: every IK solution collides (" + checker.describeCollision(sols.front()) + ")"));
+    }
+  }
+
+  const double remaining = query.time_limit_s - secondsSince(t0);
+  search::SearchOptions o;
+  o.time_limit_s = std::max(0.0, remaining);
+  o.improve_time_s = query.improve_time_s;
+  o.eps_initial = query.eps_initial;
+  o.eps_final = query.eps_final;
+  o.eps_decrement = query.eps_decrement;
+  search::SearchResult sr;
+  std::vector<Config> path;
+  const double before = secondsSince(t0);
+  if (query.mode == PlanMode::kArmCartesian) {
+    LineLattice graph(lattice, checker, start, std::get<sim::PoseGoal>(query.goal));
+    GraphHeuristic<LineLattice> h(graph);
+    // One dimension: the first solution is optimal at ε = 1 and cheap.
+    o.eps_initial = o.eps_final = 1.0;
+    sr = search_.search(graph, h, graph.start(), o);
+    for (auto id : sr.path) path.push_back(graph.config(id));
+    if (sr.status != search::SearchStatus::kSolved && graph.brokenAt() >= 0) {
+      result.message = "the line leaves the arm's reach or IK branch at " +
+                       std::to_string(graph.brokenAt() * lattice.resolution[0]) + " m";
+    }
+  } else {
+    JointLattice graph(lattice, checker, start, query.goal, false);
+    GraphHeuristic<JointLattice> h(graph);
+    sr = search_.search(graph, h, graph.start(), o);
+    for (auto id : sr.path) path.push_back(graph.config(id));
+  }
+  result.stats.expansions += sr.expansions;
+  result.stats.final_eps = sr.final_eps;
+  result.stats.suboptimality_bound = sr.suboptimality_bound;
+  if (sr.status != search::SearchStatus::kSolved) {
+    result.status =
+        sr.status == search::SearchStatus::kTimeout ? PlanStatus::kTimeout : PlanStatus::kNoPath;
+    if (result.message.empty()) {
+      result.message = sr.status == search::SearchStatus::kTimeout
+                           ? "no solution within the time limit"
+                           : "no path: the lattice was exhausted";
+    }
+    return finish(result);
+  }
+  result.status = PlanStatus::kSolved;
+  result.stats.first_solution_s = before + sr.first_solution_time_s;
+  result.stats.cost = sr.cost;
+  // The line must stay a line; elsewhere drop lattice detours.
+  if (query.mode != PlanMode::kArmCartesian) path = sim::shortcutPath(path, checker);
+  result.path = prefix;
+  result.path.insert(result.path.end(), path.begin(), path.end());
+  result.trajectory = sim::Trajectory::fromWaypoints(result.path, robot.allLimits());
+  return finish(result);
+}
+
+}  // namespace plr::arastar

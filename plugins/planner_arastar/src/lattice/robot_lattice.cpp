@@ -1,0 +1,225 @@
+#include "lattice/robot_lattice.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace plr::arastar {
+
+using search::StateId;
+using sim::Config;
+
+// ---- JointLattice -------------------------------------------------------
+
+JointLattice::JointLattice(const ModeLattice& lattice, const sim::CollisionChecker& checker,
+                           const Config& start, const Goal& goal, bool escape)
+    : lattice_(lattice),
+      checker_(checker),
+      robot_(checker.robot()),
+      goal_(goal),
+      escape_(escape),
+      start_(start) {
+  if (const auto* jg = std::get_if<sim::JointGoal>(&goal_)) {
+    joint_goal_ = start;
+    for (int j : lattice_.joints) joint_goal_[j] = jg->q[j];
+  }
+  states_.reserve(4096);
+  intern(Key{}, start);
+}
+
+double JointLattice::time(const Config& a, const Config& b) const {
+  double t = 0.0;
+  for (int j : lattice_.joints) t = std::max(t, std::abs(b[j] - a[j]) / robot_.limits(j).velocity);
+  return t;
+}
+
+void JointLattice::fillPlate(State& st) const {
+  if (!std::holds_alternative<sim::PoseGoal>(goal_)) return;
+  const sim::PlateTarget t = robot_.plateTarget(st.q);
+  st.plate = t.position;
+  st.pitch = t.pitch;
+}
+
+bool JointLattice::withinGoal(const State& st) const {
+  if (const auto* jg = std::get_if<sim::JointGoal>(&goal_)) {
+    for (int j : lattice_.joints) {
+      if (std::abs(st.q[j] - jg->q[j]) > jg->tolerance) return false;
+    }
+    return true;
+  }
+  if (const auto* pg = std::get_if<sim::PoseGoal>(&goal_)) {
+    return (st.plate - pg->target.position).norm() <= pg->position_tolerance &&
+           std::abs(std::remainder(st.pitch - pg->target.pitch, 2.0 * M_PI)) <= pg->pitch_tolerance;
+  }
+  return false;
+}
+
+StateId JointLattice::intern(const Key& key, const Config& q) {
+  const auto it = index_.find(key);
+  if (it != index_.end()) return it->second;
+  const auto id = static_cast<StateId>(states_.size());
+  State st;
+  st.q = q;
+  st.key = key;
+  fillPlate(st);
+  st.goal = !escape_ && withinGoal(st);
+  states_.push_back(st);
+  index_.emplace(key, id);
+  return id;
+}
+
+StateId JointLattice::addGoalState(const Config& q) {
+  for (StateId id : snapped_) {
+    if ((states_[static_cast<std::size_t>(id)].q - q).norm() < 1e-9) return id;
+  }
+  State st;
+  st.q = q;
+  fillPlate(st);
+  st.goal = true;
+  st.snapped = true;
+  st.valid = 1;  // checked by the caller
+  states_.push_back(st);
+  snapped_.push_back(static_cast<StateId>(states_.size() - 1));
+  return snapped_.back();
+}
+
+bool JointLattice::valid(StateId s) {
+  State& st = states_[static_cast<std::size_t>(s)];
+  if (st.valid < 0) st.valid = checker_.isValid(st.q) ? 1 : 0;
+  return st.valid == 1;
+}
+
+bool JointLattice::isGoal(StateId s) {
+  if (escape_) return valid(s);
+  return states_[static_cast<std::size_t>(s)].goal;
+}
+
+double JointLattice::heuristic(StateId s) const {
+  const State& st = states_[static_cast<std::size_t>(s)];
+  if (std::holds_alternative<sim::JointGoal>(goal_)) return time(st.q, joint_goal_);
+  if (const auto* pg = std::get_if<sim::PoseGoal>(&goal_)) {
+    return (st.plate - pg->target.position).norm() / lattice_.ee_speed;
+  }
+  return 0.0;
+}
+
+void JointLattice::successors(StateId s, std::vector<search::Successor>& out) {
+  // Copy: interning may reallocate states_.
+  const State from = states_[static_cast<std::size_t>(s)];
+  if (from.snapped) return;
+
+  // Adaptive primitives first: straight to the goal when it is near.
+  if (const auto* pg = std::get_if<sim::PoseGoal>(&goal_)) {
+    if ((from.plate - pg->target.position).norm() <= lattice_.snap_distance) {
+      for (const Config& q : robot_.armIk(pg->target, from.q)) {
+        if (!checker_.isValid(q) || !checker_.isMotionValid(from.q, q, false)) continue;
+        out.push_back({addGoalState(q), std::max(time(from.q, q), 1e-6)});
+      }
+    }
+  } else if (!escape_ && std::holds_alternative<sim::JointGoal>(goal_) &&
+             time(from.q, joint_goal_) <= lattice_.snap_time &&
+             checker_.isMotionValid(from.q, joint_goal_,
+                                    false)) {  // goal validity checked before the search
+    // The straight move costs exactly the heuristic, a lower bound on any
+    // path from here: no other successor can lead to a cheaper path.
+    out.push_back({addGoalState(joint_goal_), std::max(time(from.q, joint_goal_), 1e-6)});
+    return;
+  }
+
+  const std::size_t dims = lattice_.joints.size();
+  for (const auto& prim : lattice_.primitives) {
+    Key key = from.key;
+    Config q = from.q;
+    bool inside = true;
+    for (std::size_t d = 0; d < dims && inside; ++d) {
+      if (prim[d] == 0) continue;
+      const int j = lattice_.joints[d];
+      key[d] += prim[d];
+      q[j] = start_[j] + key[d] * lattice_.resolution[d];
+      inside = q[j] >= robot_.limits(j).lower && q[j] <= robot_.limits(j).upper;
+    }
+    if (!inside) continue;
+    const StateId id = intern(key, q);
+    if (!escape_) {
+      if (!valid(id) || !checker_.isMotionValid(from.q, q, false)) continue;
+    }
+    out.push_back({id, std::max(time(from.q, q), 1e-6)});
+  }
+}
+
+// ---- LineLattice --------------------------------------------------------
+
+LineLattice::LineLattice(const ModeLattice& lattice, const sim::CollisionChecker& checker,
+                         const Config& start, const sim::PoseGoal& goal)
+    : lattice_(lattice), checker_(checker), robot_(checker.robot()) {
+  from_ = robot_.plateTarget(start);
+  to_ = goal.target;
+  // Pitch moves the shorter way round.
+  to_.pitch = from_.pitch + std::remainder(to_.pitch - from_.pitch, 2.0 * M_PI);
+  const double length = (to_.position - from_.position).norm();
+  count_ = std::max(2, static_cast<int>(std::ceil(length / lattice_.resolution[0])) + 1);
+  configs_.reserve(static_cast<std::size_t>(count_));
+  configs_.push_back(start);
+  valid_.assign(static_cast<std::size_t>(count_), -1);
+}
+
+sim::PlateTarget LineLattice::targetAt(int i) const {
+  const double s = static_cast<double>(i) / (count_ - 1);
+  return {from_.position + s * (to_.position - from_.position),
+          from_.pitch + s * (to_.pitch - from_.pitch)};
+}
+
+bool LineLattice::ensure(int i) {
+  while (static_cast<int>(configs_.size()) <= i) {
+    if (broken_at_ >= 0) return false;
+    const int k = static_cast<int>(configs_.size());
+    const Config& prev = configs_.back();
+    const auto sols = robot_.armIk(targetAt(k), prev);
+    // Nearest solution; a large jump means the IK changed branch.
+    if (sols.empty() || (sols.front() - prev).cwiseAbs().maxCoeff() > 0.25) {
+      broken_at_ = k;
+      return false;
+    }
+    configs_.push_back(sols.front());
+  }
+  return true;
+}
+
+bool LineLattice::staysOnLine(int i, int j) const {
+  const Config& a = configs_[static_cast<std::size_t>(i)];
+  const Config& b = configs_[static_cast<std::size_t>(j)];
+  const Eigen::Vector3d p0 = from_.position, dir = (to_.position - from_.position).normalized();
+  for (double f : {0.25, 0.5, 0.75}) {
+    const Eigen::Vector3d p = robot_.platePose(a + f * (b - a)).translation();
+    const Eigen::Vector3d off = p - p0;
+    if ((off - off.dot(dir) * dir).norm() > lattice_.line_tolerance) return false;
+  }
+  return true;
+}
+
+double LineLattice::heuristic(StateId s) const {
+  return (count_ - 1 - s) * lattice_.resolution[0] / lattice_.ee_speed;
+}
+
+void LineLattice::successors(StateId s, std::vector<search::Successor>& out) {
+  const int i = s;
+  int last_j = i;
+  for (const auto& prim : lattice_.primitives) {
+    if (prim[0] <= 0) continue;  // forward only
+    const int j = std::min(i + prim[0], count_ - 1);
+    if (j == last_j || !ensure(j)) continue;
+    last_j = j;
+    if (!staysOnLine(i, j)) continue;
+    std::int8_t& v = valid_[static_cast<std::size_t>(j)];
+    if (v < 0) v = checker_.isValid(configs_[static_cast<std::size_t>(j)]) ? 1 : 0;
+    if (v == 0) continue;
+    const Config& a = configs_[static_cast<std::size_t>(i)];
+    const Config& b = configs_[static_cast<std::size_t>(j)];
+    if (!checker_.isMotionValid(a, b, false)) continue;
+    double t = 0.0;
+    for (int q : lattice_.joints)
+      t = std::max(t, std::abs(b[q] - a[q]) / robot_.limits(q).velocity);
+    out.push_back({j, std::max(t, 1e-6)});
+  }
+}
+
+}  // namespace plr::arastar

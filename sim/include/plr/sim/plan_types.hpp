@@ -1,0 +1,124 @@
+// Motion-planning queries and results shared by every planner (ARA*
+// lattice, OMPL) and by whoever calls them. Planners link plr_sim_robot and
+// take a CollisionChecker built on the current world W.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "plr/sim/collision.hpp"
+#include "plr/sim/robot_model.hpp"
+#include "plr/sim/trajectory.hpp"
+#include "plr/sim/world.hpp"
+
+namespace plr::sim {
+
+// The planner modes of the paper's Table I.
+enum class PlanMode : int {
+  kArm = 1,           // M1: the 4 arm joints
+  kArmBase = 2,       // M2: base_x + the 4 arm joints
+  kNose = 3,          // M3: the 3 nose joints
+  kArmCartesian = 4,  // M4: plate along a straight line (1 DOF: progress)
+  kBaseLine = 5,      // M5: base_x alone, straight along the trailer axis
+  kEscape = 6,        // M6: Dijkstra to the nearest collision-free state
+};
+
+// "M1 arm", ... ; "unknown" for values outside the enum.
+const char* toString(PlanMode mode);
+
+// Joints a mode plans (configuration indices). M4 moves the arm joints but
+// plans one progress variable; M6 alone plans base and arm (+ nose lift).
+std::vector<int> plannedJoints(PlanMode mode);
+
+// Reach these values of the mode's planned joints (others are ignored and
+// stay at their start values).
+struct JointGoal {
+  Config q = Config::Zero();
+  double tolerance = 1e-3;  // per joint, rad or m
+};
+
+// Put the plate at a position with a pitch (see PlateTarget).
+struct PoseGoal {
+  PlateTarget target;
+  double position_tolerance = 0.005;  // m
+  double pitch_tolerance = 0.01;      // rad
+};
+
+struct PlanQuery {
+  PlanMode mode = PlanMode::kArm;
+  Config start = Config::Zero();
+  // M3 and M5 take joint goals, M4 pose goals, M1 and M2 either; M6 none.
+  std::variant<std::monostate, JointGoal, PoseGoal> goal;
+
+  double time_limit_s = 5.0;  // for the whole query, escape included
+  // After the first solution, keep improving (ARA*: lower ε; OMPL:
+  // shortcutting) for at most this long, within time_limit_s.
+  double improve_time_s = 0.1;
+  double eps_initial = 5.0;
+  double eps_final = 1.0;
+  double eps_decrement = 2.0;
+
+  // Start in collision: run M6 first and plan from where it ends.
+  bool escape_if_start_invalid = true;
+  // Boxes held by the plate at `start` (world poses); they move with the arm.
+  std::vector<Box> held_boxes;
+  // World boxes not to collide with (e.g. the one the plate approaches).
+  std::vector<std::uint32_t> ignored_boxes;
+};
+
+enum class PlanStatus {
+  kSolved,
+  kTimeout,         // no solution within time_limit_s
+  kStartInvalid,    // start in collision (and no escape) or beyond limits
+  kGoalInvalid,     // goal in collision, beyond limits or out of reach
+  kNoPath,          // the search space was exhausted
+  kInvalidRequest,  // malformed query; message says what
+};
+
+const char* toString(PlanStatus status);
+
+struct PlanStats {
+  std::size_t expansions = 0;
+  double first_solution_s = 0.0;  // includes the escape, if any
+  double planning_time_s = 0.0;   // total wall time of the query
+  double final_eps = 0.0;
+  double suboptimality_bound = 0.0;
+  double cost = 0.0;                   // the search's cost: estimated execution time (s)
+  std::uint64_t collision_checks = 0;  // states + sweeps
+  bool escaped = false;                // M6 ran first
+  double escape_time_s = 0.0;
+};
+
+struct PlanResult {
+  PlanStatus status = PlanStatus::kNoPath;
+  std::string message;       // why, when not solved
+  std::vector<Config> path;  // waypoints, start .. goal (full configurations)
+  Trajectory trajectory;     // path timed within velocity/acceleration limits
+  PlanStats stats;
+};
+
+// Empty if the query is well formed for this robot, else what is wrong
+// (e.g. "M3 nose needs a joint goal"). Checks types, finite values, limits
+// and time budgets; not collisions.
+std::string validateQuery(const PlanQuery& query, const RobotModel& robot);
+
+// Applies a query's held and ignored boxes to a checker for the lifetime of
+// the scope, then removes them again.
+class QueryScope {
+ public:
+  QueryScope(CollisionChecker& checker, const PlanQuery& query);
+  ~QueryScope();
+  QueryScope(const QueryScope&) = delete;
+  QueryScope& operator=(const QueryScope&) = delete;
+
+ private:
+  CollisionChecker& checker_;
+};
+
+// Greedy deterministic shortcut: from each kept waypoint, jump to the
+// farthest later waypoint reachable by a valid straight motion.
+std::vector<Config> shortcutPath(const std::vector<Config>& path, const CollisionChecker& checker);
+
+}  // namespace plr::sim

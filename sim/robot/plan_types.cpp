@@ -1,0 +1,158 @@
+#include "plr/sim/plan_types.hpp"
+
+#include <cmath>
+
+namespace plr::sim {
+
+const char* toString(PlanMode mode) {
+  switch (mode) {
+    case PlanMode::kArm:
+      return "M1 arm";
+    case PlanMode::kArmBase:
+      return "M2 arm+base";
+    case PlanMode::kNose:
+      return "M3 nose";
+    case PlanMode::kArmCartesian:
+      return "M4 arm line";
+    case PlanMode::kBaseLine:
+      return "M5 base line";
+    case PlanMode::kEscape:
+      return "M6 escape";
+  }
+  return "unknown";
+}
+
+const char* toString(PlanStatus status) {
+  switch (status) {
+    case PlanStatus::kSolved:
+      return "solved";
+    case PlanStatus::kTimeout:
+      return "timeout";
+    case PlanStatus::kStartInvalid:
+      return "start invalid";
+    case PlanStatus::kGoalInvalid:
+      return "goal invalid";
+    case PlanStatus::kNoPath:
+      return "no path";
+    case PlanStatus::kInvalidRequest:
+      return "invalid request";
+  }
+  return "unknown";
+}
+
+std::vector<int> plannedJoints(PlanMode mode) {
+  switch (mode) {
+    case PlanMode::kArm:
+    case PlanMode::kArmCartesian:
+      return {kArm1, kArm2, kArm3, kArm4};
+    case PlanMode::kArmBase:
+      return {kBaseX, kArm1, kArm2, kArm3, kArm4};
+    case PlanMode::kNose:
+      return {kNose1, kNose2, kNose3};
+    case PlanMode::kBaseLine:
+      return {kBaseX};
+    case PlanMode::kEscape:
+      return {kBaseX, kArm1, kArm2, kArm3, kArm4, kNose1};
+  }
+  return {};
+}
+
+std::string validateQuery(const PlanQuery& q, const RobotModel& robot) {
+  const std::string mode = toString(q.mode);
+  if (mode == "unknown") return "unknown plan mode " + std::to_string(static_cast<int>(q.mode));
+  if (!q.start.allFinite()) return "start configuration has a non-finite value";
+  if (!(q.time_limit_s > 0.0) || !std::isfinite(q.time_limit_s))
+    return "time_limit_s must be positive and finite";
+  if (!(q.improve_time_s >= 0.0)) return "improve_time_s must be >= 0";
+  if (!(q.eps_initial >= 1.0) || !(q.eps_final >= 1.0) || q.eps_final > q.eps_initial ||
+      !(q.eps_decrement > 0.0)) {
+    return "epsilon schedule needs eps_initial >= eps_final >= 1 and eps_decrement > 0";
+  }
+  const bool joint = std::holds_alternative<JointGoal>(q.goal);
+  const bool pose = std::holds_alternative<PoseGoal>(q.goal);
+  switch (q.mode) {
+    case PlanMode::kNose:
+    case PlanMode::kBaseLine:
+      if (!joint) return mode + " needs a joint goal";
+      break;
+    case PlanMode::kArmCartesian:
+      if (!pose) return mode + " needs a pose goal";
+      break;
+    case PlanMode::kArm:
+    case PlanMode::kArmBase:
+      if (!joint && !pose) return mode + " needs a joint or pose goal";
+      break;
+    case PlanMode::kEscape:
+      if (joint || pose) return mode + " takes no goal";
+      break;
+  }
+  if (joint) {
+    const JointGoal& g = std::get<JointGoal>(q.goal);
+    if (!g.q.allFinite()) return "joint goal has a non-finite value";
+    if (!(g.tolerance > 0.0)) return "joint goal tolerance must be positive";
+    for (int j : plannedJoints(q.mode)) {
+      const JointLimits& l = robot.limits(j);
+      if (g.q[j] < l.lower || g.q[j] > l.upper) {
+        return std::string("joint goal ") + kJointNames[j] + " = " + std::to_string(g.q[j]) +
+               " is beyond limits [" + std::to_string(l.lower) + ", " + std::to_string(l.upper) +
+               "]";
+      }
+    }
+  }
+  if (pose) {
+    const PoseGoal& g = std::get<PoseGoal>(q.goal);
+    if (!g.target.position.allFinite() || !std::isfinite(g.target.pitch))
+      return "pose goal has a non-finite value";
+    if (!(g.position_tolerance > 0.0) || !(g.pitch_tolerance > 0.0))
+      return "pose goal tolerances must be positive";
+  }
+  for (const Box& b : q.held_boxes) {
+    if (!(b.size.minCoeff() > 0.0) || !b.size.allFinite())
+      return "held box " + std::to_string(b.id) + " has a bad size";
+  }
+  return {};
+}
+
+QueryScope::QueryScope(CollisionChecker& checker, const PlanQuery& query) : checker_(checker) {
+  checker_.detachAll();
+  checker_.clearIgnoredBoxes();
+  for (std::uint32_t id : query.ignored_boxes) checker_.ignoreBox(id);
+  for (const Box& b : query.held_boxes) checker_.attachBox(b, query.start);
+}
+
+QueryScope::~QueryScope() {
+  checker_.detachAll();
+  checker_.clearIgnoredBoxes();
+}
+
+std::vector<Config> shortcutPath(const std::vector<Config>& input,
+                                 const CollisionChecker& checker) {
+  // Lattice paths repeat primitives: drop waypoints inside straight runs
+  // first (exact, no check needed), which leaves few candidates.
+  std::vector<Config> path;
+  for (const Config& q : input) {
+    if (!path.empty() && (q - path.back()).norm() < 1e-12) continue;
+    if (path.size() >= 2) {
+      const Config d1 = path.back() - path[path.size() - 2], d2 = q - path.back();
+      if (d1.normalized().dot(d2.normalized()) > 1.0 - 1e-9) path.pop_back();
+    }
+    path.push_back(q);
+  }
+  if (path.size() <= 2) return path;
+  std::vector<Config> out{path.front()};
+  std::size_t i = 0;
+  while (i + 1 < path.size()) {
+    std::size_t next = i + 1;
+    for (std::size_t j = path.size() - 1; j > i + 1; --j) {
+      if (checker.isMotionValid(path[i], path[j])) {
+        next = j;
+        break;
+      }
+    }
+    out.push_back(path[next]);
+    i = next;
+  }
+  return out;
+}
+
+}  // namespace plr::sim

@@ -1,0 +1,329 @@
+// Planner benchmark: seeded queries per mode, drawn from what the strategy
+// executor asks for during Pick and Sweep actions on generated walls (A1) and
+// piles (B1); ARA* lattice planner and RRTConnect side by side.
+//   bench_planner [--quick] [--json] [--seed N]
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "arastar_planner.hpp"
+#include "ompl_planner.hpp"
+#include "plr/sim/collision.hpp"
+#include "plr/sim/generators.hpp"
+#include "plr/sim/octree.hpp"
+#include "plr/sim/plan_types.hpp"
+
+using namespace plr::sim;
+
+namespace {
+
+// Paper's Table I: mean time to the first solution (ms) per mode.
+const std::map<PlanMode, double> kPaperMs = {
+    {PlanMode::kArm, 90.9},         {PlanMode::kArmBase, 1104.8}, {PlanMode::kNose, 374.6},
+    {PlanMode::kArmCartesian, 6.1}, {PlanMode::kBaseLine, 2.8},   {PlanMode::kEscape, 70.9}};
+
+Config home(double base) {
+  Config q;
+  q << base, 0.0, -1.0, 2.0, -1.0, 0.5, 0.0, 0.0;
+  return q;
+}
+
+Config withNose(Config q, double lift, double pitch, double ext) {
+  q[kNose1] = lift;
+  q[kNose2] = pitch;
+  q[kNose3] = ext;
+  return q;
+}
+
+struct Scene {
+  std::string name;
+  World world;
+  std::unique_ptr<CollisionChecker> checker;
+  std::vector<PlanQuery> queries;
+};
+
+Eigen::AlignedBox3d aabb(const Box& b) {
+  Eigen::AlignedBox3d out;
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d c((i & 1 ? 0.5 : -0.5) * b.size.x(), (i & 2 ? 0.5 : -0.5) * b.size.y(),
+                            (i & 4 ? 0.5 : -0.5) * b.size.z());
+    out.extend(b.pose * c);
+  }
+  return out;
+}
+
+PlanQuery poseQuery(PlanMode mode, const Config& start, const Eigen::Vector3d& p, double pitch) {
+  PlanQuery q;
+  q.mode = mode;
+  q.start = start;
+  PoseGoal g;
+  g.target = {p, pitch};
+  q.goal = g;
+  return q;
+}
+
+PlanQuery jointQuery(PlanMode mode, const Config& start, const Config& goal) {
+  PlanQuery q;
+  q.mode = mode;
+  q.start = start;
+  JointGoal g;
+  g.q = goal;
+  q.goal = g;
+  return q;
+}
+
+// First collision-free IK solution (with held/ignored boxes of `scope_q`).
+bool solveIk(CollisionChecker& cc, const PlanQuery& scope_q, const PlateTarget& t,
+             const Config& seed, Config& out) {
+  const QueryScope scope(cc, scope_q);
+  for (const Config& q : cc.robot().armIk(t, seed)) {
+    if (cc.isValid(q)) {
+      out = q;
+      return true;
+    }
+  }
+  return false;
+}
+
+bool startValid(CollisionChecker& cc, const PlanQuery& q) {
+  const QueryScope scope(cc, q);
+  return cc.isValid(q.start);
+}
+
+// Executor-like queries for one scene: picks of front boxes and a sweep.
+void makeQueries(Scene& s, std::mt19937_64& rng, int picks) {
+  CollisionChecker& cc = *s.checker;
+  const RobotModel& robot = cc.robot();
+  double front = s.world.trailer.depth;
+  for (const Box& b : s.world.boxes) front = std::min(front, aabb(b).min().x());
+  const double b0 = front - 1.35;
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const Config nose_down = withNose(home(b0), 0.0, 0.05, 0.3);
+
+  // Boxes whose front face is exposed: nothing in front of them.
+  std::vector<const Box*> exposed;
+  for (const Box& b : s.world.boxes) {
+    const auto bb = aabb(b);
+    bool hidden = false;
+    for (const Box& o : s.world.boxes) {
+      const auto ob = aabb(o);
+      if (&o != &b && ob.max().x() < bb.min().x() + 0.02 && ob.max().y() > bb.center().y() &&
+          ob.min().y() < bb.center().y() && ob.max().z() > bb.center().z() &&
+          ob.min().z() < bb.center().z()) {
+        hidden = true;
+        break;
+      }
+    }
+    if (!hidden && bb.min().x() < front + 1.0) exposed.push_back(&b);
+  }
+  if (exposed.empty()) return;
+
+  // Nose and base moves of Pick and Sweep.
+  s.queries.push_back(jointQuery(PlanMode::kNose, home(b0), nose_down));
+  s.queries.push_back(jointQuery(PlanMode::kNose, nose_down, home(b0)));
+  s.queries.push_back(jointQuery(PlanMode::kNose, home(b0 - 0.5),
+                                 withNose(home(b0 - 0.5), 0.1 * u(rng), 0.05, 0.5)));
+  s.queries.push_back(jointQuery(PlanMode::kBaseLine, home(b0), home(b0 - 0.4 - 0.8 * u(rng))));
+  s.queries.push_back(jointQuery(PlanMode::kBaseLine, home(b0 - 1.0), home(b0 - 0.05 * u(rng))));
+  s.queries.push_back(
+      jointQuery(PlanMode::kBaseLine, nose_down, withNose(home(b0 - 1.5), 0.0, 0.05, 0.3)));
+
+  for (int k = 0; k < picks; ++k) {
+    const Box& box = *exposed[static_cast<std::size_t>(u(rng) * exposed.size()) % exposed.size()];
+    const auto bb = aabb(box);
+    const Eigen::Vector3d face(bb.min().x(), bb.center().y(), bb.center().z());
+    const double far = b0 - 0.3 - 0.7 * u(rng);
+    PlanQuery scope;  // target box ignored while approaching
+    scope.ignored_boxes = {box.id};
+    Config pre, contact, back;
+    const PlateTarget pre_t{face - Eigen::Vector3d(0.08, 0, 0), 0.0};
+    if (!solveIk(cc, PlanQuery{}, pre_t, nose_down, pre)) continue;
+    if (!solveIk(cc, scope, {face - Eigen::Vector3d(0.005, 0, 0), 0.0}, pre, contact)) continue;
+    // M2: from home (further back, nose down) to the pre-grasp pose.
+    s.queries.push_back(
+        poseQuery(PlanMode::kArmBase, withNose(home(far), 0.0, 0.05, 0.3), pre_t.position, 0.0));
+    // M1: arm alone to the pre-grasp pose.
+    s.queries.push_back(poseQuery(PlanMode::kArm, nose_down, pre_t.position, 0.0));
+    // M4 approach (target ignored) and retract holding it.
+    PlanQuery approach =
+        poseQuery(PlanMode::kArmCartesian, pre, face - Eigen::Vector3d(0.005, 0, 0), 0.0);
+    approach.ignored_boxes = {box.id};
+    s.queries.push_back(approach);
+    PlanQuery retract =
+        poseQuery(PlanMode::kArmCartesian, contact, face - Eigen::Vector3d(0.35, 0, -0.03), 0.0);
+    retract.held_boxes = {box};
+    if (startValid(cc, retract)) s.queries.push_back(retract);
+    PlanQuery held_scope;
+    held_scope.held_boxes = {box};
+    held_scope.start = contact;
+    if (!solveIk(cc, held_scope, {face - Eigen::Vector3d(0.35, 0, -0.03), 0.0}, contact, back))
+      continue;
+    // M1: drop-off over the nose, holding the box (plate facing down).
+    const double drop_z = 0.25 + box.size.x() + 0.15;
+    PlanQuery drop =
+        poseQuery(PlanMode::kArm, back, Eigen::Vector3d(b0 + 0.6, 0.0, drop_z), M_PI / 2);
+    drop.held_boxes = {box};
+    s.queries.push_back(drop);
+    // M1: back home from the drop-off.
+    Config dropped;
+    held_scope.start = back;
+    if (solveIk(cc, PlanQuery{}, {Eigen::Vector3d(b0 + 0.6, 0.0, drop_z), M_PI / 2}, back,
+                dropped)) {
+      s.queries.push_back(jointQuery(PlanMode::kArm, dropped, nose_down));
+    }
+    // M6: the plate pressed 8 mm into the box (light contact): escape, and an
+    // M1 query that has to escape first.
+    Config pressed;
+    PlanQuery none;
+    none.ignored_boxes = {box.id};
+    if (solveIk(cc, none, {face + Eigen::Vector3d(0.008, 0, 0), 0.0}, contact, pressed) &&
+        !cc.isValid(pressed)) {
+      PlanQuery esc;
+      esc.mode = PlanMode::kEscape;
+      esc.start = pressed;
+      s.queries.push_back(esc);
+      PlanQuery home_from_contact = jointQuery(PlanMode::kArm, pressed, nose_down);
+      s.queries.push_back(home_from_contact);
+    }
+  }
+  (void)robot;
+}
+
+struct Row {
+  std::vector<double> first_ms, exec_s;
+  int queries = 0, failures = 0;
+  std::map<std::string, int> why;
+};
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  const double idx = p * (v.size() - 1);
+  const auto lo = static_cast<std::size_t>(std::floor(idx)),
+             hi = static_cast<std::size_t>(std::ceil(idx));
+  return v[lo] + (idx - lo) * (v[hi] - v[lo]);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  bool quick = false, json = false;
+  std::uint64_t seed = 1;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--quick") == 0) {
+      quick = true;
+    } else if (std::strcmp(argv[i], "--json") == 0) {
+      json = true;
+    } else if (std::strcmp(argv[i], "--seed") == 0 && i + 1 < argc) {
+      seed = std::stoull(argv[++i]);
+    } else {
+      std::fprintf(stderr, "usage: bench_planner [--quick] [--json] [--seed N]\n");
+      return 2;
+    }
+  }
+  const RobotModel robot = RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
+  plr::arastar::Planner arastar(plr::arastar::LatticeConfig::fromFile(PLR_ARASTAR_PRIMITIVES));
+  plr::ompl_planner::Planner rrt({0.0, static_cast<std::uint32_t>(seed)});
+
+  std::mt19937_64 rng(seed);
+  std::vector<Scene> scenes;
+  const int walls = quick ? 2 : 6, piles = quick ? 1 : 3, picks = quick ? 3 : 6;
+  for (int i = 0; i < walls + piles; ++i) {
+    Scene s;
+    const bool wall = i < walls;
+    s.world = generate_world(wall ? EnvFamily::kA1 : EnvFamily::kB1, seed * 100 + i);
+    s.name = std::string(wall ? "A1" : "B1") + "/" + std::to_string(seed * 100 + i);
+    std::shared_ptr<const octomap::OcTree> tree = build_trailer_octree(s.world.trailer);
+    s.checker = std::make_unique<CollisionChecker>(robot, s.world, tree);
+    makeQueries(s, rng, picks);
+    scenes.push_back(std::move(s));
+  }
+
+  std::map<PlanMode, std::map<std::string, Row>> rows;
+  std::map<PlanMode, std::vector<double>> exec_ratio;  // ARA* / RRTConnect, both solved
+  for (Scene& s : scenes) {
+    for (const PlanQuery& q : s.queries) {
+      double exec[2] = {NAN, NAN};
+      for (int p = 0; p < 2; ++p) {
+        if (p == 1 && (q.mode == PlanMode::kEscape || !startValid(*s.checker, q))) continue;
+        const PlanResult r = p == 0 ? arastar.plan(q, *s.checker) : rrt.plan(q, *s.checker);
+        // M6 inside another mode counts for M6: its escape time.
+        Row& row = rows[q.mode][p == 0 ? "ARA*" : "RRTConnect"];
+        ++row.queries;
+        if (r.status != PlanStatus::kSolved) {
+          ++row.failures;
+          ++row.why[std::string(toString(r.status)) + ": " + r.message.substr(0, 60)];
+          continue;
+        }
+        if (p == 0 && r.stats.escaped && q.mode != PlanMode::kEscape) {
+          rows[PlanMode::kEscape]["ARA* (in other modes)"].first_ms.push_back(
+              1e3 * r.stats.escape_time_s);
+          ++rows[PlanMode::kEscape]["ARA* (in other modes)"].queries;
+        }
+        row.first_ms.push_back(1e3 * r.stats.first_solution_s);
+        row.exec_s.push_back(r.trajectory.duration());
+        exec[p] = r.trajectory.duration();
+      }
+      if (std::isfinite(exec[0]) && std::isfinite(exec[1]) && exec[1] > 0) {
+        exec_ratio[q.mode].push_back(exec[0] / exec[1]);
+      }
+    }
+  }
+
+  nlohmann::json out = nlohmann::json::array();
+  if (!json) {
+    std::printf("%zu scenes (A1 walls, B1 piles), seed %llu%s\n", scenes.size(),
+                static_cast<unsigned long long>(seed), quick ? ", quick" : "");
+    std::printf("%-13s %-22s %7s %5s %10s %10s %8s %10s %10s %10s\n", "mode", "planner", "queries",
+                "fail", "median_ms", "p95_ms", "p95/med", "exec_s", "paper_ms", "target_ms");
+  }
+  for (auto& [mode, by_planner] : rows) {
+    for (auto& [planner, row] : by_planner) {
+      const double med = percentile(row.first_ms, 0.5), p95 = percentile(row.first_ms, 0.95);
+      double exec = 0.0;
+      for (double e : row.exec_s) exec += e;
+      exec = row.exec_s.empty() ? NAN : exec / row.exec_s.size();
+      const double paper = kPaperMs.at(mode);
+      if (json) {
+        out.push_back({{"mode", toString(mode)},
+                       {"planner", planner},
+                       {"queries", row.queries},
+                       {"failures", row.failures},
+                       {"median_ms", med},
+                       {"p95_ms", p95},
+                       {"mean_exec_s", exec},
+                       {"paper_ms", paper},
+                       {"target_ms", paper / 10.0},
+                       {"median_meets_target", med <= paper / 10.0},
+                       {"failure_reasons", row.why}});
+      } else {
+        std::printf("%-13s %-22s %7d %5d %10.3f %10.3f %8.2f %10.2f %10.1f %10.2f\n",
+                    toString(mode), planner.c_str(), row.queries, row.failures, med, p95, p95 / med,
+                    exec, paper, paper / 10.0);
+        for (const auto& [w, n] : row.why) std::printf("%38s %dx %s\n", "", n, w.c_str());
+      }
+    }
+  }
+  nlohmann::json ratios;
+  for (auto& [mode, v] : exec_ratio) {
+    const double med = percentile(v, 0.5), worst = *std::max_element(v.begin(), v.end());
+    if (json) {
+      ratios[toString(mode)] = {{"median", med}, {"max", worst}, {"pairs", v.size()}};
+    } else {
+      std::printf("exec time ARA*/RRTConnect %-13s median %.2f  max %.2f  (%zu pairs)\n",
+                  toString(mode), med, worst, v.size());
+    }
+  }
+  if (json)
+    std::printf("%s\n", nlohmann::json{{"rows", out}, {"exec_ratio", ratios}}.dump().c_str());
+  return 0;
+}
