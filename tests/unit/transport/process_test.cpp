@@ -101,6 +101,41 @@ TEST_F(ProcessTest, KilledSubscriberHoldingSlotsIsReclaimed) {
   for (int i = 0; i < 8; ++i) ASSERT_TRUE(send(*pub, 100 + i, kNoWait));
 }
 
+// Keep-last never blocks, so nothing forces a reclaim there: a new subscriber
+// that finds the table full frees the dead reader's entry and slots itself.
+TEST_F(ProcessTest, NewSubscriberReclaimsDeadReaderOfFullTable) {
+  TopicConfig c;
+  c.slot_count = 2;
+  c.slot_size = 4096;
+  c.max_subscribers = 1;
+  auto pub = PublisherBuilder().run_id(run_).topic(kTopic).config(c).create();
+  ASSERT_TRUE(pub.has_value());
+  ASSERT_TRUE(send(*pub, 1));
+  test::Pipe ready, holding;
+  const pid_t child = test::fork_child([&] {
+    auto sub = make_sub();
+    if (!sub) return 10;
+    ready.signal();
+    auto held = sub->take(5s);
+    if (!held) return 11;
+    holding.signal();
+    ::pause();
+    return 0;
+  });
+  ASSERT_EQ(ready.wait(), 'x');
+  ASSERT_TRUE(send(*pub, 2));
+  ASSERT_EQ(holding.wait(), 'x');
+  EXPECT_EQ(make_sub().error(), Error::kTooManySubscribers);
+  ::kill(child, SIGKILL);
+  EXPECT_EQ(test::wait_child(child), 128 + SIGKILL);
+  auto sub = make_sub();
+  ASSERT_TRUE(sub.has_value()) << to_string(sub.error());
+  // Both slots free again: two loans at once.
+  auto l1 = pub->loan(16);
+  auto l2 = pub->loan(16);
+  EXPECT_TRUE(l1.has_value() && l2.has_value());
+}
+
 TEST_F(ProcessTest, SubscriberSeesPublisherDeath) {
   test::Pipe ready;
   const pid_t child = test::fork_child([&] {

@@ -91,7 +91,9 @@ TEST(StressTest, FourProcessesMillionMessagesReliable) {
     std::memcpy(l->data(), &i, 8);
     std::memcpy(l->data() + kPayload - 8, &z, 8);
     ASSERT_TRUE(pub->publish(std::move(*l), MessageType{1, 1}, 0, kPayload).has_value());
-    if (i % 250'000 == 0) ASSERT_EQ(segment_bytes(run), ring_bytes) << "memory must not grow";
+    if (i % 250'000 == 0) {
+      ASSERT_EQ(segment_bytes(run), ring_bytes) << "memory must not grow";
+    }
   }
   for (int i = 0; i < kSubscribers; ++i) ASSERT_EQ(done.wait(), 'x');
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

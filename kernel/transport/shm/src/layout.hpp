@@ -19,6 +19,7 @@ inline constexpr std::uint32_t kMaxSubscribers = 63;  // one reader bit each in 
 inline constexpr std::uint64_t kWriterBit = 1ULL << 63;
 inline constexpr std::uint64_t kNeverWritten = ~0ULL;
 inline constexpr std::size_t kNameBytes = 128;
+inline constexpr std::int32_t kReclaiming = -1;  // SubscriberEntry::pid while being freed
 
 static_assert(std::atomic<std::uint64_t>::is_always_lock_free);
 static_assert(std::atomic<std::uint32_t>::is_always_lock_free);

@@ -178,23 +178,32 @@ Result<std::uint64_t> Producer::publish(std::uint32_t slot, MessageType type,
 }
 
 std::size_t Producer::reclaim_dead_readers() noexcept {
+  return reclaim_dead(ring_);
+}
+
+// Any process may reclaim: the entry is first claimed (pid -> kReclaiming) so
+// two reclaimers never both free it, and a new reader cannot take it until
+// its slots are clean.
+std::size_t reclaim_dead(const Ring& ring) noexcept {
   std::size_t n = 0;
-  for (std::uint32_t i = 0; i < ring_.geo.max_subscribers; ++i) {
-    SubscriberEntry& e = ring_.subs[i];
-    const pid_t pid = e.pid.load(std::memory_order_acquire);
-    if (pid == 0) continue;
+  for (std::uint32_t i = 0; i < ring.geo.max_subscribers; ++i) {
+    SubscriberEntry& e = ring.subs[i];
+    std::int32_t pid = e.pid.load(std::memory_order_acquire);
+    if (pid <= 0) continue;
     // start_time 0: the reader died (or is) between claiming and stamping; pid alone decides.
     const ProcessStamp who{pid, e.start_time.load(std::memory_order_acquire)};
     if (who.alive()) continue;
+    if (!e.pid.compare_exchange_strong(pid, kReclaiming, std::memory_order_acq_rel)) continue;
     e.active.store(0, std::memory_order_seq_cst);
     const std::uint64_t bit = 1ULL << i;
-    for (std::uint32_t s = 0; s < ring_.geo.slot_count; ++s) {
-      ring_.slot(s).readers.fetch_and(~bit, std::memory_order_seq_cst);
+    for (std::uint32_t s = 0; s < ring.geo.slot_count; ++s) {
+      ring.slot(s).readers.fetch_and(~bit, std::memory_order_seq_cst);
     }
     e.start_time.store(0, std::memory_order_relaxed);
     e.pid.store(0, std::memory_order_release);
     ++n;
   }
+  if (n > 0) notify(ring.header->space);
   return n;
 }
 
@@ -206,9 +215,12 @@ Result<void> Consumer::attach(const ProcessStamp& me) noexcept {
     std::int32_t free = 0;
     if (!e.pid.compare_exchange_strong(free, me.pid, std::memory_order_acq_rel)) continue;
     e.start_time.store(me.start_time, std::memory_order_release);
+    e.cursor.store(ring_.header->head.load(std::memory_order_seq_cst), std::memory_order_seq_cst);
+    e.active.store(1, std::memory_order_seq_cst);
+    // Re-read the head now that the publisher sees us: every message from
+    // here on is kept for us (the publisher may have missed us before).
     cursor_ = ring_.header->head.load(std::memory_order_seq_cst);
     e.cursor.store(cursor_, std::memory_order_seq_cst);
-    e.active.store(1, std::memory_order_seq_cst);
     index_ = i;
     bit_ = 1ULL << i;
     return {};

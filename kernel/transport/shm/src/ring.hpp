@@ -127,6 +127,9 @@ class Consumer {
   std::atomic<std::uint64_t> received_{0}, dropped_slow_{0}, dropped_invalid_{0};
 };
 
+// Frees the table entries and held slots of readers whose process is gone.
+std::size_t reclaim_dead(const Ring& ring) noexcept;
+
 // Clears bit from a slot's reader word and wakes a publisher waiting for space.
 void release_slot(SlotHeader& slot, std::uint64_t bit, Notifier& space) noexcept;
 

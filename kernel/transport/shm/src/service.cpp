@@ -87,6 +87,7 @@ struct ServiceServer::Impl {
   std::unique_ptr<detail::Consumer[]> requests;
   std::unique_ptr<detail::Producer[]> replies;
   std::uint32_t next = 0;
+  std::uint32_t calls = 0;
   ProcessStamp me = ProcessStamp::self();
 
   Ring ring(std::uint32_t c, bool reply) const {
@@ -184,6 +185,8 @@ Result<Request> ServiceServer::take_request(Timeout timeout) noexcept {
     }
     return false;
   };
+  // A server that is never idle still frees departed clients' channels.
+  if (++im.calls % 1024 == 0) im.reap();
   for (;;) {
     for (std::uint32_t k = 0; k < n; ++k) {
       const std::uint32_t c = (im.next + k) % n;

@@ -202,7 +202,10 @@ Result<Subscriber> SubscriberBuilder::create() const {
   }
   const Ring ring = Ring::view(seg->data() + kRingOffset, g, nullptr);
   auto impl = std::make_unique<Subscriber::Impl>(std::move(*seg), ring);
-  if (auto ok = impl->consumer.attach(ProcessStamp::self()); !ok) return unexpected(ok.error());
+  auto ok = impl->consumer.attach(ProcessStamp::self());
+  // A full table may hold readers that died: free those and try once more.
+  if (!ok && detail::reclaim_dead(ring) > 0) ok = impl->consumer.attach(ProcessStamp::self());
+  if (!ok) return unexpected(ok.error());
   return Subscriber(std::move(impl));
 }
 
