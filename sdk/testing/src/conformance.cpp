@@ -18,10 +18,32 @@ using namespace std::chrono_literals;
     ASSERT_TRUE(plr_s_) << #expr << " failed: " << plr_s_.error().message; \
   } while (0)
 
+const char* status_name(plr_status s) {
+  switch (s) {
+    case PLR_OK:
+      return "PLR_OK";
+    case PLR_ERR_STATE:
+      return "PLR_ERR_STATE";
+    case PLR_ERR_INVALID:
+      return "PLR_ERR_INVALID";
+    case PLR_ERR_TIMEOUT:
+      return "PLR_ERR_TIMEOUT";
+    case PLR_ERR_UNAVAILABLE:
+      return "PLR_ERR_UNAVAILABLE";
+    case PLR_ERR_CANCELLED:
+      return "PLR_ERR_CANCELLED";
+    case PLR_ERR_INTERNAL:
+      return "PLR_ERR_INTERNAL";
+  }
+  return "an unknown status";
+}
+
 // A refusal must carry the right code and a one-line reason.
 void expect_refused(const Status& s, plr_status code, const std::string& what) {
-  ASSERT_FALSE(s) << what << " was accepted; it must be refused with code " << code;
-  EXPECT_EQ(s.error().code, code) << what << " refused with the wrong code: " << s.error().message;
+  ASSERT_FALSE(s) << what << " was accepted; it must be refused with " << status_name(code);
+  EXPECT_EQ(s.error().code, code) << what << " refused with " << status_name(s.error().code)
+                                  << " instead of " << status_name(code) << ": "
+                                  << s.error().message;
   EXPECT_FALSE(s.error().message.empty()) << what << " refused without an error text";
   EXPECT_EQ(s.error().message.find('\n'), std::string::npos)
       << what << ": the error text must be one line: " << s.error().message;
