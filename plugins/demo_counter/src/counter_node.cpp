@@ -1,6 +1,6 @@
 // Demo: counts up, publishes each value on `count`, asks the `double` service
 // for twice the value, and publishes the answer on `doubled`. Stops after
-// `limit` values (0 = forever).
+// `limit` values (0 = forever) and announces on `pipeline/done` that it is finished.
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
@@ -19,13 +19,17 @@ class CounterNode : public plr::Node {
     params().allow_only({"period_ms", "limit"});
     period_ = std::chrono::milliseconds(params().get<int>("period_ms", 100));
     limit_ = params().get<std::int64_t>("limit", 0);
-    if (period_.count() < 0) return plr::make_error(PLR_ERR_INVALID, "param 'period_ms': must be >= 0");
+    if (period_.count() < 0)
+      return plr::make_error(PLR_ERR_INVALID, "param 'period_ms': must be >= 0");
     auto count = ctx().advertise<plr::msg::Count>("count");
     if (!count) return count.error();
     auto doubled = ctx().advertise<plr::msg::Count>("doubled");
     if (!doubled) return doubled.error();
+    auto done = ctx().advertise<plr::msg::PipelineDone>("pipeline/done");
+    if (!done) return done.error();
     count_ = *count;
     doubled_ = *doubled;
+    done_ = *done;
     return {};
   }
 
@@ -50,7 +54,10 @@ class CounterNode : public plr::Node {
 
       flatbuffers::FlatBufferBuilder req;
       req.Finish(plr::msg::CreateDoubleRequest(req, i));
-      auto reply = ctx().call<plr::msg::DoubleRequest, plr::msg::DoubleReply>("double", req, std::chrono::seconds(2)).get();
+      auto reply = ctx()
+                       .call<plr::msg::DoubleRequest, plr::msg::DoubleReply>(
+                           "double", req, std::chrono::seconds(2))
+                       .get();
       if (reply) {
         flatbuffers::FlatBufferBuilder out;
         out.Finish(plr::msg::CreateCount(out, reply.value()->value()));
@@ -62,6 +69,12 @@ class CounterNode : public plr::Node {
       next_ = i + 1;
       std::this_thread::sleep_for(period_);
     }
+    if (limit_ != 0 && next_ >= limit_) {
+      flatbuffers::FlatBufferBuilder fbb;
+      fbb.Finish(plr::msg::CreatePipelineDoneDirect(fbb, true,
+                                                    fmt::format("counted to {}", limit_).c_str()));
+      (void)done_.publish(fbb);
+    }
   }
 
   std::chrono::milliseconds period_{100};
@@ -69,6 +82,7 @@ class CounterNode : public plr::Node {
   std::int64_t next_ = 0;
   plr::Publisher<plr::msg::Count> count_;
   plr::Publisher<plr::msg::Count> doubled_;
+  plr::Publisher<plr::msg::PipelineDone> done_;
   std::atomic<bool> stop_{false};
   std::thread worker_;
 };

@@ -14,8 +14,9 @@ class DoublerNode : public plr::Node {
     params().allow_only({"factor"});
     factor_ = params().get<std::int64_t>("factor", 2);
     if (auto s = ctx().provide<plr::msg::DoubleRequest, plr::msg::DoubleReply>(
-            "double", [this](const plr::Message<plr::msg::DoubleRequest>& req,
-                             flatbuffers::FlatBufferBuilder& out) -> plr::Status {
+            "double",
+            [this](const plr::Message<plr::msg::DoubleRequest>& req,
+                   flatbuffers::FlatBufferBuilder& out) -> plr::Status {
               out.Finish(plr::msg::CreateDoubleReply(out, req->value() * factor_));
               return {};
             });

@@ -184,8 +184,8 @@ class Responder {
   }
   Status fail(plr_status code, const std::string& why) {
     const auto token = std::exchange(token_, 0);
-    return detail::to_status(
-        api_->respond(api_->ctx, token, code, nullptr, 0, 0, why.c_str()), "respond failed");
+    return detail::to_status(api_->respond(api_->ctx, token, code, nullptr, 0, 0, why.c_str()),
+                             "respond failed");
   }
 
  private:
@@ -224,15 +224,15 @@ class Context {
   template <class Req, class Rep>
   Status provide(const std::string& service,
                  std::function<Status(const Message<Req>&, flatbuffers::FlatBufferBuilder&)> fn) {
-    return provide_async<Req, Rep>(
-        service, [fn = std::move(fn)](const Message<Req>& req, Responder<Rep> r) {
-          flatbuffers::FlatBufferBuilder fbb;
-          if (auto s = fn(req, fbb); s) {
-            (void)r.reply(fbb);
-          } else {
-            (void)r.fail(s.error().code, s.error().message);
-          }
-        });
+    return provide_async<Req, Rep>(service,
+                                   [fn = std::move(fn)](const Message<Req>& req, Responder<Rep> r) {
+                                     flatbuffers::FlatBufferBuilder fbb;
+                                     if (auto s = fn(req, fbb); s) {
+                                       (void)r.reply(fbb);
+                                     } else {
+                                       (void)r.fail(s.error().code, s.error().message);
+                                     }
+                                   });
   }
 
   // An asynchronous provider: keep the Responder and answer later, from any thread.

@@ -18,7 +18,7 @@ struct Error {
 template <class T>
 class [[nodiscard]] Expected {
  public:
-  Expected(T value) : v_(std::move(value)) {}  // NOLINT: implicit by design
+  Expected(T value) : v_(std::move(value)) {}      // NOLINT: implicit by design
   Expected(Error error) : v_(std::move(error)) {}  // NOLINT
   bool has_value() const { return v_.index() == 0; }
   explicit operator bool() const { return has_value(); }
@@ -50,6 +50,8 @@ class [[nodiscard]] Expected<void> {
 
 using Status = Expected<void>;
 
-inline Error make_error(plr_status code, std::string message) { return Error{code, std::move(message)}; }
+inline Error make_error(plr_status code, std::string message) {
+  return Error{code, std::move(message)};
+}
 
 }  // namespace plr

@@ -33,7 +33,8 @@ struct MessageTraits {
 // Verifies untrusted bytes as a T before anyone reads them.
 template <class T>
 bool verify(const std::uint8_t* data, std::size_t size) {
-  if (data == nullptr || size < sizeof(flatbuffers::uoffset_t) || size > FLATBUFFERS_MAX_BUFFER_SIZE)
+  if (data == nullptr || size < sizeof(flatbuffers::uoffset_t) ||
+      size > FLATBUFFERS_MAX_BUFFER_SIZE)
     return false;
   flatbuffers::Verifier verifier(data, size);
   return verifier.VerifyBuffer<T>(nullptr);

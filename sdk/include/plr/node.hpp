@@ -14,9 +14,12 @@ enum class NodeState { Unconfigured, Configured, Active };
 
 inline const char* to_string(NodeState s) {
   switch (s) {
-    case NodeState::Unconfigured: return "unconfigured";
-    case NodeState::Configured: return "configured";
-    case NodeState::Active: return "active";
+    case NodeState::Unconfigured:
+      return "unconfigured";
+    case NodeState::Configured:
+      return "configured";
+    case NodeState::Active:
+      return "active";
   }
   return "unknown";
 }
@@ -28,14 +31,21 @@ class Node {
   Node(const Node&) = delete;
   Node& operator=(const Node&) = delete;
 
-  Status configure() { return transition("configure", NodeState::Unconfigured, NodeState::Configured, &Node::on_configure); }
-  Status activate() { return transition("activate", NodeState::Configured, NodeState::Active, &Node::on_activate); }
+  Status configure() {
+    return transition("configure", NodeState::Unconfigured, NodeState::Configured,
+                      &Node::on_configure);
+  }
+  Status activate() {
+    return transition("activate", NodeState::Configured, NodeState::Active, &Node::on_activate);
+  }
   // Deactivating a node that is not active is a no-op, so shutdown paths can call it freely.
   Status deactivate() {
     if (state_ != NodeState::Active) return {};
     return transition("deactivate", NodeState::Active, NodeState::Configured, &Node::on_deactivate);
   }
-  Status cleanup() { return transition("cleanup", NodeState::Configured, NodeState::Unconfigured, &Node::on_cleanup); }
+  Status cleanup() {
+    return transition("cleanup", NodeState::Configured, NodeState::Unconfigured, &Node::on_cleanup);
+  }
 
   NodeState state() const { return state_; }
 

@@ -71,11 +71,16 @@ class Params {
 
   template <class T>
   static std::string type_name() {
-    if constexpr (std::is_same_v<T, bool>) return "a boolean";
-    else if constexpr (std::is_unsigned_v<T>) return "a non-negative number";
-    else if constexpr (std::is_arithmetic_v<T>) return "a number";
-    else if constexpr (std::is_same_v<T, std::string>) return "a string";
-    else return "a value of another type";
+    if constexpr (std::is_same_v<T, bool>)
+      return "a boolean";
+    else if constexpr (std::is_unsigned_v<T>)
+      return "a non-negative number";
+    else if constexpr (std::is_arithmetic_v<T>)
+      return "a number";
+    else if constexpr (std::is_same_v<T, std::string>)
+      return "a string";
+    else
+      return "a value of another type";
   }
 
   nlohmann::json values_ = nlohmann::json::object();

@@ -5,8 +5,8 @@
 // Exceptions and C++ types stop here; only the C descriptor leaves the library.
 #pragma once
 
-#include <plr/node.hpp>
 #include <plr/plugin_abi.h>
+#include <plr/node.hpp>
 
 #include <cstdio>
 #include <new>
@@ -45,12 +45,17 @@ struct PluginTrampolines {
 
 }  // namespace plr::detail
 
-#define PLR_PLUGIN(Class, Name, Version, Kind, Description)                                 \
-  extern "C" __attribute__((visibility("default"))) const plr_plugin_descriptor*            \
-  plr_plugin_entry(void) {                                                                  \
-    using T = ::plr::detail::PluginTrampolines<Class>;                                      \
-    static const plr_plugin_descriptor descriptor = {                                       \
-        PLR_ABI_MAJOR, PLR_ABI_MINOR, Name,        Version,       Description, Kind,        \
-        {&T::create,   &T::destroy,   &T::configure, &T::activate, &T::deactivate, &T::cleanup}}; \
-    return &descriptor;                                                                     \
+#define PLR_PLUGIN(Class, Name, Version, Kind, Description)                                        \
+  extern "C" __attribute__((visibility("default"))) const plr_plugin_descriptor* plr_plugin_entry( \
+      void) {                                                                                      \
+    using T = ::plr::detail::PluginTrampolines<Class>;                                             \
+    static const plr_plugin_descriptor descriptor = {                                              \
+        PLR_ABI_MAJOR,                                                                             \
+        PLR_ABI_MINOR,                                                                             \
+        Name,                                                                                      \
+        Version,                                                                                   \
+        Description,                                                                               \
+        Kind,                                                                                      \
+        {&T::create, &T::destroy, &T::configure, &T::activate, &T::deactivate, &T::cleanup}};      \
+    return &descriptor;                                                                            \
   }

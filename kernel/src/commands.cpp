@@ -1,0 +1,221 @@
+#include "commands.hpp"
+
+#include "config.hpp"
+#include "control.hpp"
+#include "kernel.hpp"
+#include "plugin_loader.hpp"
+
+#include <plr/plugin_abi.h>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <nlohmann/json.hpp>
+
+#include <dirent.h>
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <csignal>
+#include <ctime>
+#include <iostream>
+
+namespace plr::kernel {
+
+namespace {
+
+int fail(const std::string& message, int code = 1) {
+  std::cerr << "plr: " << message << "\n";
+  return code;
+}
+
+Expected<Config> load(const std::string& file, const std::vector<std::string>& overrides) {
+  std::vector<Override> parsed;
+  for (const auto& o : overrides) {
+    auto p = parse_override(o);
+    if (!p) return p.error();
+    parsed.push_back(*p);
+  }
+  return load_config(file, parsed);
+}
+
+// The pipeline to talk to: the named one, or the only one running.
+Expected<std::string> find_socket(const std::string& pipeline) {
+  if (!pipeline.empty()) return control_socket_path(pipeline);
+  auto dir = control_dir();
+  if (!dir) return dir.error();
+  std::vector<std::string> found;
+  if (DIR* d = ::opendir(dir->c_str())) {
+    while (auto* e = ::readdir(d)) {
+      std::string name = e->d_name;
+      if (name.size() > 5 && name.ends_with(".sock")) found.push_back(*dir + "/" + name);
+    }
+    ::closedir(d);
+  }
+  std::vector<std::string> live;
+  for (const auto& f : found)
+    if (control_request(f, {{"cmd", "ping"}}, 500)) live.push_back(f);
+  if (live.size() == 1) return live.front();
+  if (live.empty()) return make_error(PLR_ERR_UNAVAILABLE, "no pipeline is running");
+  return make_error(PLR_ERR_INVALID, "several pipelines are running; name one with --pipeline");
+}
+
+}  // namespace
+
+int run_pipeline(const RunOptions& options) {
+  spdlog::set_level(options.verbose ? spdlog::level::debug : spdlog::level::info);
+  auto config = load(options.config, options.overrides);
+  if (!config) return fail(config.error().message, 2);
+
+  // Signals are taken synchronously by this thread only; every thread started
+  // from here on inherits the mask.
+  sigset_t signals;
+  sigemptyset(&signals);
+  for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&signals, s);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  Kernel kernel(*config, options.host);
+  std::atomic<bool> finished{false};
+  std::atomic<bool> finished_ok{true};
+  std::string finish_reason;
+  std::mutex reason_mutex;
+  if (auto s = kernel.on_pipeline_done([&](bool ok, std::string reason) {
+        {
+          std::lock_guard lock(reason_mutex);
+          finish_reason = std::move(reason);
+        }
+        finished_ok = ok;
+        finished = true;
+      });
+      !s)
+    return fail(s.error().message);
+
+  std::atomic<bool> stop_requested{false};
+  std::unique_ptr<ControlServer> control;
+  if (options.host == "main") {
+    auto path = control_socket_path(config->pipeline);
+    if (!path) return fail(path.error().message);
+    control =
+        std::make_unique<ControlServer>(*path, [&](const nlohmann::json& req) -> nlohmann::json {
+          const auto cmd = req.value("cmd", "");
+          if (cmd == "ping") return {{"ok", true}, {"pipeline", config->pipeline}};
+          if (cmd == "status")
+            return {{"ok", true}, {"telemetry", nlohmann::json::parse(kernel.telemetry_json())}};
+          if (cmd == "stop") {
+            stop_requested = true;
+            return {{"ok", true}};
+          }
+          if (cmd == "swap") {
+            auto s = kernel.swap(req.value("node", ""), req.value("plugin", ""));
+            if (!s) return {{"ok", false}, {"error", s.error().message}};
+            return {{"ok", true}};
+          }
+          return {{"ok", false}, {"error", "unknown command '" + cmd + "'"}};
+        });
+    if (auto s = control->start(); !s) return fail(s.error().message);
+  }
+
+  if (auto s = kernel.start(); !s) return fail(s.error().message);
+  spdlog::info("pipeline '{}' running ({} nodes); Ctrl-C stops it", config->pipeline,
+               kernel.nodes().size());
+
+  const auto started = std::chrono::steady_clock::now();
+  int exit_code = 0;
+  for (;;) {
+    timespec tick{0, 50'000'000};
+    const int sig = sigtimedwait(&signals, nullptr, &tick);
+    if (sig > 0) {
+      spdlog::info("signal {}: stopping", sig);
+      break;
+    }
+    if (finished) {
+      std::lock_guard lock(reason_mutex);
+      spdlog::info("pipeline done: {}", finish_reason);
+      exit_code = finished_ok ? 0 : 1;
+      break;
+    }
+    if (stop_requested) break;
+    if (options.duration_s > 0 && std::chrono::steady_clock::now() - started >
+                                      std::chrono::duration<double>(options.duration_s))
+      break;
+  }
+  kernel.stop();
+  control.reset();
+  return exit_code;
+}
+
+int validate(const std::string& file, const std::vector<std::string>& overrides) {
+  auto config = load(file, overrides);
+  if (!config) return fail(config.error().message, 2);
+  PluginLoader loader(plugin_search_paths(*config));
+  int bad = 0;
+  for (const auto& n : config->nodes) {
+    auto lib = loader.load(n.plugin);
+    if (!lib) {
+      std::cerr << "plr: " << n.where.str() << ": nodes." << n.name
+                << ".plugin: " << lib.error().message << "\n";
+      ++bad;
+    }
+  }
+  if (bad) return 2;
+  std::cout << fmt::format("{}: ok ({} nodes, {} hosts)\n", file, config->nodes.size(),
+                           config->hosts.size());
+  return 0;
+}
+
+int list_plugins(const PluginsOptions& options) {
+  std::vector<std::string> paths{default_plugin_path()};
+  if (!options.config.empty()) {
+    auto config = load(options.config, {});
+    if (!config) return fail(config.error().message, 2);
+    paths = plugin_search_paths(*config);
+  }
+  PluginLoader loader(paths);
+  std::vector<std::string> errors;
+  const auto infos = loader.list(&errors);
+  if (options.json) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& p : infos)
+      out.push_back({{"name", p.name},
+                     {"version", p.version},
+                     {"kind", p.kind},
+                     {"description", p.description},
+                     {"path", p.path},
+                     {"abi", fmt::format("{}.{}", p.abi_major, p.abi_minor)}});
+    std::cout << out.dump(2) << "\n";
+  } else {
+    std::cout << fmt::format("{:<22} {:<10} {:<10} {}\n", "NAME", "VERSION", "KIND", "DESCRIPTION");
+    for (const auto& p : infos)
+      std::cout << fmt::format("{:<22} {:<10} {:<10} {}\n", p.name, p.version, p.kind,
+                               p.description);
+  }
+  for (const auto& e : errors) std::cerr << "plr: " << e << "\n";
+  return 0;
+}
+
+int swap_plugin(const SwapOptions& options) {
+  auto path = find_socket(options.pipeline);
+  if (!path) return fail(path.error().message);
+  auto reply = control_request(
+      *path, {{"cmd", "swap"}, {"node", options.node}, {"plugin", options.plugin}}, 60000);
+  if (!reply) return fail(reply.error().message);
+  if (!reply->value("ok", false)) return fail(reply->value("error", "swap failed"));
+  std::cout << fmt::format("node '{}' now runs '{}'\n", options.node, options.plugin);
+  return 0;
+}
+
+int status(const std::string& pipeline) {
+  auto path = find_socket(pipeline);
+  if (!path) return fail(path.error().message);
+  auto reply = control_request(*path, {{"cmd", "status"}}, 5000);
+  if (!reply) return fail(reply.error().message);
+  std::cout << (*reply)["telemetry"].dump(2) << "\n";
+  return 0;
+}
+
+int print_version() {
+  std::cout << fmt::format("plr {} (plug-in ABI {}.{})\n", PLR_VERSION, PLR_ABI_MAJOR,
+                           PLR_ABI_MINOR);
+  return 0;
+}
+
+}  // namespace plr::kernel

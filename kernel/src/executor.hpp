@@ -1,0 +1,44 @@
+// One thread per node instance: its callbacks and life-cycle hooks run there,
+// one at a time, so a plug-in needs no locks of its own for them.
+#pragma once
+
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <string>
+#include <thread>
+
+namespace plr::kernel {
+
+class Executor {
+ public:
+  explicit Executor(std::string name, std::size_t max_queued = 4096);
+  ~Executor();  // runs what is queued, then stops
+  Executor(const Executor&) = delete;
+  Executor& operator=(const Executor&) = delete;
+
+  // False when the queue is full or the executor is stopping.
+  bool post(std::function<void()> task);
+  // Runs `task` on the executor thread and waits for it (inline when called from there).
+  void run_sync(const std::function<void()>& task);
+  // Waits until everything queued so far has run.
+  void drain();
+  bool on_this_thread() const { return std::this_thread::get_id() == thread_.get_id(); }
+  std::size_t queued() const;
+
+ private:
+  void loop();
+
+  std::string name_;
+  std::size_t max_queued_;
+  mutable std::mutex m_;
+  std::condition_variable cv_;
+  std::condition_variable idle_cv_;
+  std::deque<std::function<void()>> queue_;
+  bool busy_ = false;
+  bool stop_ = false;
+  std::thread thread_;
+};
+
+}  // namespace plr::kernel

@@ -1,0 +1,219 @@
+#include "kernel.hpp"
+
+#include <plr/message.hpp>
+#include <plr/messages.hpp>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <thread>
+
+namespace plr::kernel {
+
+// The kernel's own endpoint on the bus, for the clock subscription.
+class Kernel::Internal final : public Endpoint {
+ public:
+  Internal() : executor_("kernel") {}
+  Executor& executor() override { return executor_; }
+  const std::string& endpoint_name() const override { return name_; }
+
+ private:
+  std::string name_ = "kernel";
+  Executor executor_;
+};
+
+std::vector<std::string> plugin_search_paths(const Config& config) {
+  auto paths = config.plugin_paths;
+  paths.push_back(default_plugin_path());
+  return paths;
+}
+
+Kernel::Kernel(Config config, std::string host)
+    : config_(std::move(config)),
+      host_(std::move(host)),
+      loader_(plugin_search_paths(config_)),
+      clock_(config_.clock == "sim"),
+      bus_([this](const std::string& topic) { return config_.topic(topic); }),
+      internal_(std::make_unique<Internal>()) {
+  for (const auto& n : config_.nodes) {
+    if (n.host != host_) continue;
+    auto s = std::make_unique<Slot>();
+    s->config = n;
+    slots_.push_back(std::move(s));
+  }
+  bus_.set_live(internal_.get(), true);
+}
+
+Kernel::~Kernel() {
+  stop();
+  bus_.remove_endpoint(internal_.get());
+  internal_->executor().drain();
+}
+
+Expected<std::unique_ptr<NodeInstance>> Kernel::bring_up(const NodeConfig& config) {
+  auto lib = loader_.load(config.plugin);
+  if (!lib)
+    return make_error(lib.error().code, fmt::format("{}: node '{}': {}", config.where.str(),
+                                                    config.name, lib.error().message));
+  auto inst = std::make_unique<NodeInstance>(bus_, config, *lib, clock_);
+  for (auto step : {&NodeInstance::create, &NodeInstance::configure, &NodeInstance::activate}) {
+    if (auto s = (inst.get()->*step)(); !s) return s.error();
+  }
+  return inst;
+}
+
+Status Kernel::start() {
+  if (config_.clock == "sim")
+    if (auto s = follow_sim_clock(); !s) return s;
+  for (auto& s : slots_) {
+    auto inst = bring_up(s->config);
+    if (!inst) {
+      stop();
+      return inst.error();
+    }
+    // Live only once active, so nothing reaches a half-started node.
+    bus_.set_live(inst->get(), true);
+    spdlog::info("node '{}' active ({} {})", s->config.name, (*inst)->library().name(),
+                 (*inst)->library().descriptor().version);
+    s->instance = std::move(*inst);
+  }
+  started_ = true;
+  return {};
+}
+
+void Kernel::stop() {
+  for (auto it = slots_.rbegin(); it != slots_.rend(); ++it) {
+    auto& s = **it;
+    std::lock_guard lock(s.swap_mutex);
+    if (!s.instance) continue;
+    if (auto r = s.instance->deactivate(); !r) spdlog::warn("{}", r.error().message);
+  }
+  for (auto it = slots_.rbegin(); it != slots_.rend(); ++it) {
+    auto& s = **it;
+    std::lock_guard lock(s.swap_mutex);
+    if (!s.instance) continue;
+    if (auto r = s.instance->cleanup(); !r) spdlog::warn("{}", r.error().message);
+    s.instance.reset();
+  }
+  started_ = false;
+}
+
+Kernel::Slot* Kernel::slot(const std::string& name) {
+  for (auto& s : slots_)
+    if (s->config.name == name) return s.get();
+  return nullptr;
+}
+
+Status Kernel::swap(const std::string& node, const std::string& plugin) {
+  Slot* s = slot(node);
+  if (s == nullptr)
+    return make_error(PLR_ERR_INVALID, fmt::format("swap: no node '{}' in this pipeline", node));
+  std::lock_guard lock(s->swap_mutex);
+  if (!s->instance)
+    return make_error(PLR_ERR_STATE, fmt::format("swap: node '{}' is not running", node));
+
+  NodeConfig next = s->config;
+  next.plugin = plugin;
+  auto fresh = bring_up(next);
+  if (!fresh)
+    return make_error(fresh.error().code,
+                      fmt::format("swap of '{}' to '{}' failed, '{}' keeps running: {}", node,
+                                  plugin, s->config.plugin, fresh.error().message));
+
+  std::unique_ptr<NodeInstance> old = std::move(s->instance);
+  bus_.swap_live(old.get(), fresh->get());
+  // The old instance answers what it already accepted before it goes.
+  old->executor().drain();
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (bus_.pending_for(old.get()) > 0 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  if (auto r = old->deactivate(); !r) spdlog::warn("swap: {}", r.error().message);
+  s->instance = std::move(*fresh);
+  s->config = next;
+  old.reset();
+  spdlog::info("node '{}' swapped to {} {}", node, plugin,
+               s->instance->library().descriptor().version);
+  return {};
+}
+
+Status Kernel::follow_sim_clock() {
+  auto sub = bus_.subscribe(
+      internal_.get(), "clock", MessageTraits<msg::Clock>::type_id(),
+      [](void* user, const plr_msg* m) {
+        const auto v = msg_view(m);
+        if (!verify<msg::Clock>(v.data, v.size)) return;
+        static_cast<PipelineClock*>(user)->set_sim_ns(
+            flatbuffers::GetRoot<msg::Clock>(v.data)->time_ns());
+      },
+      &clock_);
+  if (!sub) return sub.error();
+  return {};
+}
+
+Status Kernel::on_pipeline_done(std::function<void(bool, std::string)> fn) {
+  on_done_ = std::move(fn);
+  auto sub = bus_.subscribe(
+      internal_.get(), "pipeline/done", MessageTraits<msg::PipelineDone>::type_id(),
+      [](void* user, const plr_msg* m) {
+        const auto v = msg_view(m);
+        if (!verify<msg::PipelineDone>(v.data, v.size)) return;
+        const auto* done = flatbuffers::GetRoot<msg::PipelineDone>(v.data);
+        static_cast<Kernel*>(user)->on_done_(done->ok(),
+                                             done->reason() ? done->reason()->str() : "");
+      },
+      this);
+  if (!sub) return sub.error();
+  return {};
+}
+
+std::vector<NodeStatus> Kernel::nodes() const {
+  std::vector<NodeStatus> out;
+  for (const auto& s : slots_) {
+    NodeStatus n;
+    n.name = s->config.name;
+    n.plugin = s->config.plugin;
+    n.host = s->config.host;
+    n.state = "unloaded";
+    if (s->instance) {
+      const auto& d = s->instance->library().descriptor();
+      n.version = d.version;
+      n.kind = plr_kind_name(d.kind);
+      n.state = to_string(s->instance->state());
+    }
+    out.push_back(std::move(n));
+  }
+  return out;
+}
+
+std::string Kernel::telemetry_json() {
+  nlohmann::json j;
+  j["pipeline"] = config_.pipeline;
+  j["host"] = host_;
+  j["nodes"] = nlohmann::json::array();
+  for (const auto& n : nodes())
+    j["nodes"].push_back({{"name", n.name},
+                          {"plugin", n.plugin},
+                          {"version", n.version},
+                          {"kind", n.kind},
+                          {"state", n.state},
+                          {"host", n.host}});
+  j["topics"] = nlohmann::json::array();
+  for (const auto& t : bus_.topic_stats())
+    j["topics"].push_back({{"name", t.name},
+                           {"messages", t.messages},
+                           {"drops", t.drops},
+                           {"invalid", t.invalid},
+                           {"rate_hz", t.rate_hz},
+                           {"latency_mean_us", t.latency_mean_us},
+                           {"latency_max_us", t.latency_max_us},
+                           {"subscribers", t.subscribers}});
+  j["services"] = nlohmann::json::array();
+  for (const auto& s : bus_.services())
+    j["services"].push_back({{"name", s.name}, {"providers", s.providers}});
+  j["invalid_messages"] = bus_.invalid_total();
+  return j.dump();
+}
+
+}  // namespace plr::kernel

@@ -1,0 +1,88 @@
+// The kernel of one process: loads the plug-ins of its nodes, runs their life
+// cycle, owns the bus, swaps plug-ins while the pipeline runs, and publishes
+// telemetry. It knows nothing about robots.
+#pragma once
+
+#include "bus.hpp"
+#include "config.hpp"
+#include "node_instance.hpp"
+#include "plugin_loader.hpp"
+
+#include <plr/expected.hpp>
+
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace plr::kernel {
+
+struct NodeStatus {
+  std::string name;
+  std::string plugin;
+  std::string version;
+  std::string kind;
+  std::string state;
+  std::string host;
+};
+
+class Kernel {
+ public:
+  // `host` selects the nodes this process runs ("main" for the supervisor).
+  explicit Kernel(Config config, std::string host = "main");
+  ~Kernel();  // stops everything still running
+  Kernel(const Kernel&) = delete;
+  Kernel& operator=(const Kernel&) = delete;
+
+  // Loads, creates, configures and activates every node of this host. On an
+  // error, whatever was started is stopped again and the error names the node.
+  Status start();
+  // Deactivates (reverse order), cleans up and unloads every node.
+  void stop();
+
+  // Replaces the plug-in behind a running node. The new one is loaded,
+  // configured and activated beside the old; then the node's topics and
+  // services move to it in one step; the old one answers what it already
+  // accepted, and is then deactivated and unloaded. On failure the old one
+  // keeps running and the error says why.
+  Status swap(const std::string& node, const std::string& plugin);
+
+  // Binds the pipeline clock to the simulator's `clock` topic (clock: sim).
+  Status follow_sim_clock();
+  // Calls `fn(ok, reason)` when a node announces on `pipeline/done` that the job is over.
+  Status on_pipeline_done(std::function<void(bool, std::string)> fn);
+
+  Bus& bus() { return bus_; }
+  const Config& config() const { return config_; }
+  const PipelineClock& clock() const { return clock_; }
+  PluginLoader& loader() { return loader_; }
+  std::vector<NodeStatus> nodes() const;
+  // Telemetry as JSON (nodes, topics, services), for `plr monitor` and the control socket.
+  std::string telemetry_json();
+
+ private:
+  struct Slot {
+    NodeConfig config;
+    std::unique_ptr<NodeInstance> instance;
+    std::mutex swap_mutex;
+  };
+  class Internal;
+
+  Expected<std::unique_ptr<NodeInstance>> bring_up(const NodeConfig& config);
+  Slot* slot(const std::string& name);
+
+  Config config_;
+  std::string host_;
+  PluginLoader loader_;
+  PipelineClock clock_;
+  Bus bus_;
+  std::vector<std::unique_ptr<Slot>> slots_;
+  std::unique_ptr<Internal> internal_;
+  std::function<void(bool, std::string)> on_done_;
+  bool started_ = false;
+};
+
+std::vector<std::string> plugin_search_paths(const Config& config);
+
+}  // namespace plr::kernel

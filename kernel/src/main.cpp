@@ -1,0 +1,61 @@
+// `plr`: the command line of the kernel.
+#include "commands.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+int main(int argc, char** argv) {
+  using namespace plr::kernel;
+  CLI::App app{"PLR: plans, learns and reasons for a truck-unloading robot"};
+  app.require_subcommand(1);
+
+  RunOptions run;
+  auto* run_cmd = app.add_subcommand("run", "Run a pipeline until it finishes or Ctrl-C");
+  run_cmd->add_option("config", run.config, "Pipeline config (YAML)")->required();
+  run_cmd
+      ->add_option("--set", run.overrides, "Override a config value: nodes.NODE.params.KEY=VALUE")
+      ->type_name("KEY=VALUE");
+  run_cmd->add_option("--duration", run.duration_s, "Stop after this many seconds (0: no limit)");
+  run_cmd->add_option("--report", run.report_dir, "Folder for the run's report");
+  run_cmd->add_option("--host", run.host, "Run only this host's nodes (used by the supervisor)");
+  run_cmd->add_option("--run-id", run.run_id, "Shared-memory run id (used by the supervisor)");
+  run_cmd->add_flag("-v,--verbose", run.verbose, "Debug logging");
+
+  std::string validate_config;
+  std::vector<std::string> validate_overrides;
+  auto* validate_cmd =
+      app.add_subcommand("validate", "Check a config (and its plug-ins) without running it");
+  validate_cmd->add_option("config", validate_config, "Pipeline config (YAML)")->required();
+  validate_cmd->add_option("--set", validate_overrides, "Override a config value")
+      ->type_name("KEY=VALUE");
+
+  PluginsOptions plugins;
+  auto* plugins_cmd = app.add_subcommand("plugins", "List the plug-ins found in the search paths");
+  plugins_cmd->add_option("--config", plugins.config, "Use this config's plug-in paths");
+  plugins_cmd->add_flag("--json", plugins.json, "One JSON array");
+
+  SwapOptions swap;
+  auto* swap_cmd =
+      app.add_subcommand("swap", "Replace the plug-in behind a node of a running pipeline");
+  swap_cmd->add_option("node", swap.node, "Node name")->required();
+  swap_cmd->add_option("plugin", swap.plugin, "Plug-in to load in its place")->required();
+  swap_cmd->add_option("--pipeline", swap.pipeline,
+                       "Pipeline name (default: the only one running)");
+
+  std::string status_pipeline;
+  auto* status_cmd = app.add_subcommand("status", "Nodes and topics of a running pipeline (JSON)");
+  status_cmd->add_option("--pipeline", status_pipeline,
+                         "Pipeline name (default: the only one running)");
+
+  app.add_subcommand("version", "Print the version and the plug-in ABI");
+
+  CLI11_PARSE(app, argc, argv);
+
+  if (*run_cmd) return run_pipeline(run);
+  if (*validate_cmd) return validate(validate_config, validate_overrides);
+  if (*plugins_cmd) return list_plugins(plugins);
+  if (*swap_cmd) return swap_plugin(swap);
+  if (*status_cmd) return status(status_pipeline);
+  return print_version();
+}

@@ -1,0 +1,56 @@
+// The kernel's message buffer behind the SDK's opaque plr_msg: one heap block,
+// reference-counted, immutable once published, shared by every in-process reader.
+#pragma once
+
+#include <plr/plugin_abi.h>
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+
+struct plr_msg {
+  std::atomic<std::uint32_t> refs{1};
+  std::unique_ptr<std::uint8_t[]> storage;
+  std::size_t capacity = 0;
+  std::size_t offset = 0;
+  std::size_t size = 0;
+  std::uint64_t type_id = 0;
+  std::uint32_t schema_version = 0;
+  std::int64_t stamp_ns = 0;
+  const void* topic = nullptr;  // the bus topic it was published on, for counters
+};
+
+namespace plr::kernel {
+
+plr_msg* msg_alloc(std::size_t capacity, std::uint8_t** data);
+// A buffer holding a copy of bytes that arrived from elsewhere.
+plr_msg* msg_copy(const std::uint8_t* data, std::size_t size, std::uint64_t type_id,
+                  std::uint32_t schema_version, std::int64_t stamp_ns);
+void msg_retain(const plr_msg* msg);
+void msg_release(const plr_msg* msg);
+plr_msg_view msg_view(const plr_msg* msg);
+// Live buffers in this process; tests use it to prove nothing leaked.
+std::int64_t live_messages();
+
+// Owns one reference.
+struct MsgRef {
+  MsgRef() = default;
+  explicit MsgRef(plr_msg* m) : msg(m) {}  // adopts
+  MsgRef(const MsgRef& o) : msg(o.msg) {
+    if (msg) msg_retain(msg);
+  }
+  MsgRef(MsgRef&& o) noexcept : msg(o.msg) { o.msg = nullptr; }
+  MsgRef& operator=(MsgRef o) noexcept {
+    std::swap(msg, o.msg);
+    return *this;
+  }
+  ~MsgRef() {
+    if (msg) msg_release(msg);
+  }
+  plr_msg* msg = nullptr;
+};
+
+std::int64_t wall_now_ns();
+
+}  // namespace plr::kernel

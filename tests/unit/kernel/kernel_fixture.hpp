@@ -1,0 +1,55 @@
+// Shared pieces of the kernel tests: an endpoint the test thread drives, and
+// configs that find the test plug-ins.
+#pragma once
+
+#include "bus.hpp"
+#include "config.hpp"
+
+#include <plr/message.hpp>
+#include <plr/messages.hpp>
+
+#include <condition_variable>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace plr::kernel::testing {
+
+class TestEndpoint final : public Endpoint {
+ public:
+  explicit TestEndpoint(std::string name = "test") : name_(std::move(name)), executor_(name_) {}
+  Executor& executor() override { return executor_; }
+  const std::string& endpoint_name() const override { return name_; }
+
+ private:
+  std::string name_;
+  Executor executor_;
+};
+
+// A config whose plug-in path is the test plug-in folder.
+Config config_from_yaml(const std::string& yaml);
+
+template <class T>
+plr_msg* make_msg(const flatbuffers::FlatBufferBuilder& fbb) {
+  return msg_copy(fbb.GetBufferPointer(), fbb.GetSize(), MessageTraits<T>::type_id(),
+                  MessageTraits<T>::schema_version, 0);
+}
+
+plr_msg* make_double_request(std::int64_t value);
+
+// Collects the source strings of `lifecycle` reports, in arrival order.
+class EventLog {
+ public:
+  static void on_message(void* user, const plr_msg* m);
+  std::vector<std::string> wait_for(std::size_t n, int timeout_ms = 5000);
+
+ private:
+  std::mutex m_;
+  std::condition_variable cv_;
+  std::vector<std::string> events_;
+};
+
+// Runs a shell command, returns its exit code and what it printed (stdout+stderr).
+int run_command(const std::string& command, std::string* output);
+
+}  // namespace plr::kernel::testing
