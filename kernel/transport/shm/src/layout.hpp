@@ -104,6 +104,7 @@ constexpr std::uint64_t desc_seq(std::uint64_t d) {
 constexpr std::uint32_t desc_slot(std::uint64_t d) {
   return static_cast<std::uint32_t>(d & 0xffff);
 }
+inline constexpr std::uint64_t kNoDesc = ~0ULL;  // never matches a cursor
 
 }  // namespace plr::shm::detail
 

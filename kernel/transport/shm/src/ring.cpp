@@ -62,7 +62,9 @@ Ring Ring::init(std::byte* base, const RingGeometry& g, Notifier* doorbell) noex
   h->geo = g;
   Ring r = view(base, g, doorbell);
   for (std::uint32_t i = 0; i < g.max_subscribers; ++i) new (&r.subs[i]) SubscriberEntry{};
-  for (std::uint32_t i = 0; i < g.slot_count; ++i) new (&r.desc[i]) std::atomic<std::uint64_t>(0);
+  for (std::uint32_t i = 0; i < g.slot_count; ++i) {
+    new (&r.desc[i]) std::atomic<std::uint64_t>(kNoDesc);
+  }
   for (std::uint32_t i = 0; i < g.slot_count; ++i) {
     auto* s = new (r.slots + i * r.stride) SlotHeader{};
     s->seq.store(kNeverWritten, std::memory_order_relaxed);
@@ -74,7 +76,7 @@ void Ring::reset() noexcept {
   for (std::uint32_t i = 0; i < geo.slot_count; ++i) {
     slot(i).readers.store(0, std::memory_order_relaxed);
     slot(i).seq.store(kNeverWritten, std::memory_order_relaxed);
-    desc[i].store(0, std::memory_order_relaxed);
+    desc[i].store(kNoDesc, std::memory_order_relaxed);
   }
   for (std::uint32_t i = 0; i < geo.max_subscribers; ++i) {
     subs[i].active.store(0, std::memory_order_relaxed);
@@ -91,6 +93,7 @@ void Producer::bind(const Ring& r) noexcept {
   ring_ = r;
   next_seq_ = r.header->head.load(std::memory_order_acquire);
   scan_ = 0;
+  min_cache_ = 0;
 }
 
 std::uint64_t Producer::min_cursor() const noexcept {
@@ -108,21 +111,28 @@ std::uint64_t Producer::min_cursor() const noexcept {
 // reader has moved past.
 bool Producer::find_slot(std::uint32_t& out) noexcept {
   const bool reliable = ring_.geo.policy == Policy::kReliable;
-  const std::uint64_t min = reliable ? min_cursor() : 0;
   const std::uint32_t n = ring_.geo.slot_count;
-  for (std::uint32_t k = 0; k < n; ++k) {
-    const std::uint32_t i = (scan_ + k) % n;
-    SlotHeader& s = ring_.slot(i);
-    if (reliable) {
-      const std::uint64_t seq = s.seq.load(std::memory_order_relaxed);
-      if (seq != kNeverWritten && seq >= min) continue;
+  // Reader cursors only grow (a new reader starts at the head), so an old
+  // minimum stays a safe bound: re-read the cursors only when it blocks us.
+  for (int pass = 0; pass < 2; ++pass) {
+    for (std::uint32_t k = 0; k < n; ++k) {
+      const std::uint32_t i = (scan_ + k) % n;
+      SlotHeader& s = ring_.slot(i);
+      if (reliable) {
+        const std::uint64_t seq = s.seq.load(std::memory_order_relaxed);
+        if (seq != kNeverWritten && seq >= min_cache_) continue;
+      }
+      std::uint64_t expected = 0;
+      if (s.readers.compare_exchange_strong(expected, kWriterBit, std::memory_order_seq_cst)) {
+        scan_ = (i + 1) % n;
+        out = i;
+        return true;
+      }
     }
-    std::uint64_t expected = 0;
-    if (s.readers.compare_exchange_strong(expected, kWriterBit, std::memory_order_seq_cst)) {
-      scan_ = (i + 1) % n;
-      out = i;
-      return true;
-    }
+    if (!reliable) return false;
+    const std::uint64_t m = std::min(min_cursor(), next_seq_);
+    if (m == min_cache_) return false;
+    min_cache_ = m;
   }
   return false;
 }
@@ -241,8 +251,12 @@ void Consumer::detach() noexcept {
   notify(ring_.header->space);
 }
 
+// The descriptor is checked first: a poller then spins on the line it reads
+// next anyway. The head (seq_cst) is what pairs with the publisher's wake-up.
 bool Consumer::has_data() const noexcept {
-  return ring_.header->head.load(std::memory_order_seq_cst) > cursor_;
+  const std::uint64_t d =
+      ring_.desc[cursor_ % ring_.geo.slot_count].load(std::memory_order_acquire);
+  return desc_seq(d) == cursor_ || ring_.header->head.load(std::memory_order_seq_cst) > cursor_;
 }
 
 void Consumer::advance(std::uint64_t to) noexcept {
@@ -265,12 +279,20 @@ void release_slot(SlotHeader& slot, std::uint64_t bit, Notifier& space) noexcept
 Result<Taken> Consumer::try_take() noexcept {
   const std::uint32_t n = ring_.geo.slot_count;
   for (;;) {
-    const std::uint64_t head = ring_.header->head.load(std::memory_order_seq_cst);
-    if (cursor_ >= head) return unexpected(Error::kNoData);
-    const std::uint64_t d = ring_.desc[cursor_ % n].load(std::memory_order_acquire);
-    const std::uint64_t dseq = desc_seq(d);
-    const std::uint32_t idx = desc_slot(d);
+    // Fast path: the descriptor of the next message is there (it is written
+    // before the head). Otherwise the head says whether there is anything.
+    std::uint64_t d = ring_.desc[cursor_ % n].load(std::memory_order_acquire);
+    std::uint64_t dseq = desc_seq(d);
+    std::uint32_t idx = desc_slot(d);
     if (dseq != cursor_ || idx >= n) {
+      const std::uint64_t head = ring_.header->head.load(std::memory_order_seq_cst);
+      if (cursor_ >= head) return unexpected(Error::kNoData);
+      d = ring_.desc[cursor_ % n].load(std::memory_order_acquire);
+      dseq = desc_seq(d);
+      idx = desc_slot(d);
+    }
+    if (dseq != cursor_ || idx >= n) {
+      const std::uint64_t head = ring_.header->head.load(std::memory_order_seq_cst);
       if (dseq > cursor_ && dseq < head && idx < n) {
         // Overrun: the publisher lapped this reader; resume at the oldest kept message.
         const std::uint64_t next = std::max(cursor_ + 1, head > n ? head - n : 0);

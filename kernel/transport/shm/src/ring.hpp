@@ -83,6 +83,7 @@ class Producer {
   Ring ring_;
   std::uint64_t next_seq_ = 0;
   std::uint32_t scan_ = 0;
+  std::uint64_t min_cache_ = 0;  // a lower bound of every reader's cursor (reliable)
   std::atomic<std::uint64_t> published_{0};
 };
 
