@@ -62,10 +62,11 @@ std::string join(const std::vector<std::string>& items) {
   return out;
 }
 
+// Whether `path` is `prefix` or lies below it ("a.b" is below "a", so is "a[0]").
 bool starts_with_path(const std::string& path, const std::string& prefix) {
   return path == prefix ||
          (path.size() > prefix.size() && path.compare(0, prefix.size(), prefix) == 0 &&
-          path[prefix.size()] == '.');
+          (path[prefix.size()] == '.' || path[prefix.size()] == '['));
 }
 
 std::string child_path(const std::string& path, const std::string& key) {
@@ -227,7 +228,7 @@ class Checker {
     if (mark.is_null()) {
       // Maps created on the way to an override's target have no mark.
       for (auto o = overrides_.rbegin(); o != overrides_.rend(); ++o)
-        if (path.empty() || starts_with_path(*o, path)) return {"--set " + *o, 0, 0};
+        if (!path.empty() && starts_with_path(*o, path)) return {"--set " + *o, 0, 0};
       return {file_, 1, 1};
     }
     return {file_, mark.line + 1, mark.column + 1};

@@ -297,6 +297,12 @@ TEST(Config, OverrideErrorsNameTheOverride) {
             "--set nodes.sim.params.seed: nodes.sim.params.seed: invalid YAML value '[1, 2': end "
             "of sequence flow not found");
   EXPECT_EQ(error_of(yaml, {{"nodes..x", "1"}}), "--set nodes..x: empty key in the path");
+  EXPECT_EQ(error_of(yaml, {{"remote.dds.export", "[ok, \"a;b\"]"}}),
+            "--set remote.dds.export: remote.dds.export[1]: 'a;b' may contain only letters, "
+            "digits, '_', '/' and '*'");
+  // A problem outside every override still points into the file.
+  EXPECT_EQ(error_of("pipeline: p\n", {{"topics.t.depth", "1"}}),
+            "configs/x.yaml:1:1: missing required key 'nodes'");
 }
 
 TEST(Config, ParseOverride) {
