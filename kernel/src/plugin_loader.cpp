@@ -84,6 +84,7 @@ Expected<std::shared_ptr<PluginLibrary>> PluginLoader::load(const std::string& n
   const fs::path real = fs::canonical(found, ec);
   if (ec) return refuse(file, "cannot resolve the path: " + ec.message());
 
+  std::lock_guard lock(mutex_);
   std::erase_if(loaded_, [](const Loaded& l) { return l.library.expired(); });
   for (const auto& l : loaded_) {
     if (l.file != real.string()) continue;

@@ -6,6 +6,7 @@
 #include <plr/plugin_abi.h>
 
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -67,6 +68,7 @@ class PluginLoader {
     std::weak_ptr<PluginLibrary> library;
   };
   std::vector<std::string> paths_;
+  std::mutex mutex_;  // guards loaded_: swaps of different nodes may load at once
   std::vector<Loaded> loaded_;
 };
 

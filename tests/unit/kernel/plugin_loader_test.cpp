@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <thread>
 
 namespace plr::kernel {
 namespace {
@@ -86,6 +87,28 @@ TEST(PluginLoader, SameNameFromSameFileIsOneLibraryUntilReleased) {
   auto again = loader.load("valid_plugin");
   ASSERT_TRUE(again) << again.error().message;
   EXPECT_EQ((*again)->name(), "valid_plugin");
+}
+
+TEST(PluginLoader, ConcurrentLoadsShareOneLibrary) {
+  PluginLoader loader({kBrokenPlugins, kDemoPlugins});
+  auto held = loader.load("valid_plugin");
+  ASSERT_TRUE(held) << held.error().message;
+  std::vector<std::string> failures[2];
+  std::vector<std::thread> threads;
+  for (auto& failed : failures) {
+    threads.emplace_back([&loader, &held, &failed] {
+      for (int i = 0; i < 200; ++i) {
+        auto library = loader.load(i % 2 == 0 ? "valid_plugin" : "demo_counter");
+        if (!library)
+          failed.push_back(library.error().message);
+        else if (i % 2 == 0 && library->get() != held->get())
+          failed.push_back("a second copy of valid_plugin");
+      }
+    });
+  }
+  for (auto& t : threads) t.join();
+  for (const auto& failed : failures)
+    EXPECT_TRUE(failed.empty()) << failed.size() << " failures, first: " << failed.front();
 }
 
 TEST(PluginLoader, MissingFileListsSearchPaths) {
