@@ -159,7 +159,9 @@ struct Kernel {
   std::map<std::string, std::uint64_t> topic_types;
   std::map<std::uint64_t, Pub> pubs;
   std::map<std::uint64_t, Sub> subs;
-  std::map<std::string, Provider> services;
+  // Several nodes may provide a service (as during a hot swap); the first
+  // active one answers.
+  std::map<std::string, std::vector<Provider>> services;
   std::map<std::uint64_t, Pending> pending;  // by call id, which is also the token
   std::deque<Work> queue;
   std::vector<Sample> samples;
@@ -217,7 +219,9 @@ struct Kernel {
     std::lock_guard lock(m);
     std::erase_if(pubs, [&](const auto& e) { return e.second.owner == s; });
     std::erase_if(subs, [&](const auto& e) { return e.second.owner == s; });
-    std::erase_if(services, [&](const auto& e) { return e.second.owner == s; });
+    for (auto& [name, providers] : services)
+      std::erase_if(providers, [&](const Provider& p) { return p.owner == s; });
+    std::erase_if(services, [](const auto& e) { return e.second.empty(); });
   }
 
   // Fails what a node being destroyed still has in flight, while its code is loaded.
@@ -239,7 +243,8 @@ struct Kernel {
 
   plr_status call(Slot* s, const char* service_name, std::uint64_t request_type, plr_msg* request,
                   std::size_t offset, std::size_t size, std::int64_t timeout_ns, plr_reply_fn fn,
-                  void* user, std::uint64_t* call_id);
+                  void* user, std::uint64_t* call_id,
+                  std::string* error = nullptr);  // receives why a call is refused
   bool spin_once();
 };
 
@@ -379,14 +384,20 @@ plr_status h_provide(void* ctx, const char* service, std::uint64_t request_type,
   Kernel& k = *s->k;
   const std::string name = s->resolve(service);
   std::unique_lock lock(k.m);
-  auto [it, fresh] =
-      k.services.emplace(name, Kernel::Provider{s, request_type, reply_type, fn, user, {}});
-  if (!fresh) {
-    const std::string other = it->second.owner ? it->second.owner->name : "the test";
+  auto& providers = k.services[name];
+  for (const auto& p : providers) {
+    std::string error;
+    if (p.owner == s)
+      error = "service '" + name + "' is already provided by this node";
+    else if (p.request_type != request_type || p.reply_type != reply_type)
+      error = "service '" + name + "' is provided by '" + (p.owner ? p.owner->name : "the test") +
+              "' with other message types";
+    if (error.empty()) continue;
     lock.unlock();
-    k.log(s->name, PLR_LOG_ERROR, "provide '" + name + "': already provided by " + other);
+    k.log(s->name, PLR_LOG_ERROR, error);
     return PLR_ERR_INVALID;
   }
+  providers.push_back({s, request_type, reply_type, fn, user, {}});
   return PLR_OK;
 }
 
@@ -462,7 +473,7 @@ plr_host_api host_api(Slot* s) {
 plr_status Kernel::call(Slot* s, const char* service_name, std::uint64_t request_type,
                         plr_msg* request, std::size_t offset, std::size_t size,
                         std::int64_t timeout_ns, plr_reply_fn fn, void* user,
-                        std::uint64_t* call_id) {
+                        std::uint64_t* call_id, std::string* error) {
   Msg* msg = nullptr;
   if (fn == nullptr) {
     release(request);
@@ -475,34 +486,36 @@ plr_status Kernel::call(Slot* s, const char* service_name, std::uint64_t request
 
   std::unique_lock lock(m);
   const std::uint64_t id = next_id++;
-  *call_id = id;
   requests[service].push_back(sample_of(*msg, s->name, service));
   const std::int64_t t = now.load();
   const std::int64_t deadline = timeout_ns > std::numeric_limits<std::int64_t>::max() - t
                                     ? std::numeric_limits<std::int64_t>::max()
                                     : t + timeout_ns;
   Pending p{s, service, 0, deadline, fn, user, nullptr};
-  auto it = services.find(service);
-  std::string error;
-  plr_status status = PLR_ERR_UNAVAILABLE;
-  if (it == services.end()) {
-    error = "service '" + service + "': no provider";
-  } else if (it->second.request_type != kAnyType && it->second.request_type != request_type) {
-    error = "service '" + service + "': request type differs from the provider's";
-    status = PLR_ERR_INVALID;
-  } else if (it->second.owner != nullptr && !it->second.owner->active()) {
-    error = "service '" + service + "': provider '" + it->second.owner->name + "' is not active";
-  }
-  if (!error.empty()) {
+  const Provider* chosen = nullptr;
+  if (auto it = services.find(service); it != services.end())
+    for (const auto& candidate : it->second)
+      if (candidate.owner == nullptr || candidate.owner->active()) {
+        chosen = &candidate;
+        break;
+      }
+  // Refused calls never complete: the caller learns it from the status.
+  if (chosen == nullptr ||
+      (chosen->request_type != kAnyType && chosen->request_type != request_type)) {
     lock.unlock();
     release(to_plr(msg));
-    finish(p, status, nullptr, error);
-    return PLR_OK;
+    if (chosen == nullptr) {
+      if (error != nullptr) *error = "no provider for service '" + service + "'";
+      return PLR_ERR_UNAVAILABLE;
+    }
+    if (error != nullptr) *error = "service '" + service + "' takes another request type";
+    return PLR_ERR_INVALID;
   }
-  p.reply_type = it->second.reply_type;
-  if (it->second.owner == nullptr) {
+  *call_id = id;
+  p.reply_type = chosen->reply_type;
+  if (chosen->owner == nullptr) {
     // A fake service answers now, on the caller's thread.
-    FakeFn fake = it->second.fake;
+    FakeFn fake = chosen->fake;
     lock.unlock();
     const Sample req = sample_of(*msg, s->name, service);
     release(to_plr(msg));
@@ -519,7 +532,7 @@ plr_status Kernel::call(Slot* s, const char* service_name, std::uint64_t request
     finish(p, PLR_OK, reply, {});
     return PLR_OK;
   }
-  p.provider = it->second.owner;
+  p.provider = chosen->owner;
   pending.emplace(id, std::move(p));
   queue.push_back({true, id, msg});
   return PLR_OK;
@@ -558,9 +571,11 @@ bool Kernel::spin_once() {
     release(to_plr(w.msg));
     return true;
   }
-  auto svc = services.find(p->second.service);
-  if (svc == services.end() || svc->second.owner != p->second.provider ||
-      !p->second.provider->active()) {
+  const Provider* provider = nullptr;
+  if (auto svc = services.find(p->second.service); svc != services.end())
+    for (const auto& candidate : svc->second)
+      if (candidate.owner == p->second.provider) provider = &candidate;
+  if (provider == nullptr || !p->second.provider->active()) {
     const std::string text = "service '" + p->second.service + "': provider gone";
     lock.unlock();
     release(to_plr(w.msg));
@@ -568,9 +583,10 @@ bool Kernel::spin_once() {
     return true;
   }
   p->second.delivered = true;
-  const Provider provider = svc->second;
+  const plr_service_fn fn = provider->fn;
+  void* user = provider->user;
   lock.unlock();
-  provider.fn(provider.user, to_plr(w.msg), w.id);
+  fn(user, to_plr(w.msg), w.id);
   release(to_plr(w.msg));
   return true;
 }
@@ -821,22 +837,19 @@ std::size_t FakeKernel::publishers(const std::string& topic) const {
 void FakeKernel::add_fake_service(const std::string& service, std::uint64_t request_type,
                                   std::uint64_t reply_type, detail::FakeFn fn) {
   std::lock_guard lock(k_->m);
-  auto [it, fresh] = k_->services.emplace(
-      service, Kernel::Provider{nullptr, request_type, reply_type, nullptr, nullptr, fn});
-  if (!fresh) throw std::invalid_argument("fake_service '" + service + "': already provided");
+  auto& providers = k_->services[service];
+  if (!providers.empty())
+    throw std::invalid_argument("fake_service '" + service + "': already provided");
+  providers.push_back({nullptr, request_type, reply_type, nullptr, nullptr, std::move(fn)});
 }
 
 void FakeKernel::fake_service_error(const std::string& service, plr_status code,
                                     const std::string& message) {
-  std::lock_guard lock(k_->m);
   // Any request type: the call fails before its bytes matter.
-  auto [it, fresh] = k_->services.emplace(
-      service,
-      Kernel::Provider{nullptr, detail::kAnyType, detail::kAnyType, nullptr, nullptr,
-                       [code, message](const Sample&, flatbuffers::FlatBufferBuilder&) -> Status {
-                         return make_error(code, message);
-                       }});
-  if (!fresh) throw std::invalid_argument("fake_service_error '" + service + "': already provided");
+  add_fake_service(service, detail::kAnyType, detail::kAnyType,
+                   [code, message](const Sample&, flatbuffers::FlatBufferBuilder&) -> Status {
+                     return make_error(code, message);
+                   });
 }
 
 std::vector<Sample> FakeKernel::requests(const std::string& service) const {
@@ -870,14 +883,15 @@ std::shared_ptr<detail::CallState> FakeKernel::start_call(
     s.reply = reply;
   };
   std::uint64_t id = 0;
+  std::string error;
   const plr_status s = k_->call(k_->test, service.c_str(), request_type, detail::to_plr(msg), 0,
-                                request.GetSize(), timeout.count(), done, holder, &id);
+                                request.GetSize(), timeout.count(), done, holder, &id, &error);
   if (s != PLR_OK) {
     delete holder;
     std::lock_guard lock(state->m);
     state->done = true;
     state->status = s;
-    state->error = "call '" + service + "' refused";
+    state->error = error;
   }
   return state;
 }

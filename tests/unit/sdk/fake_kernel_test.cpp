@@ -160,7 +160,33 @@ TEST(FakeKernel, CallWithoutProviderFailsWithItsName) {
   auto reply = k.call<DoubleRequest, DoubleReply>("nope", double_request(1));
   ASSERT_FALSE(reply);
   EXPECT_EQ(reply.error().code, PLR_ERR_UNAVAILABLE);
-  EXPECT_EQ(reply.error().message, "service 'nope': no provider");
+  EXPECT_EQ(reply.error().message, "no provider for service 'nope'");
+}
+
+TEST(FakeKernel, NodeCallWithoutProviderIsRefused) {
+  FakeKernel k;
+  auto echo = active_echo(k);
+  ASSERT_TRUE(k.publish<Count>("ask", count(4)));
+  k.spin();
+  ASSERT_TRUE(echo.get<Echo>().remote_error.has_value());
+  EXPECT_EQ(echo.get<Echo>().remote_error->code, PLR_ERR_UNAVAILABLE);
+  EXPECT_EQ(echo.get<Echo>().remote_error->message, "call 'remote' refused");
+  EXPECT_EQ(k.pending_calls(), 0u);
+}
+
+std::int64_t doubled(FakeKernel& k, std::int64_t v) {
+  auto reply = k.call<DoubleRequest, DoubleReply>("double", double_request(v));
+  return reply ? reply.value()->value() : -1;
+}
+
+TEST(FakeKernel, FirstActiveProviderAnswers) {
+  FakeKernel k;
+  auto a = active_echo(k, NodeOptions().with_name("a").with_params(R"({"factor": 2})"));
+  auto b = active_echo(k, NodeOptions().with_name("b").with_params(R"({"factor": 5})"));
+  EXPECT_EQ(doubled(k, 1), 2);
+  ASSERT_TRUE(a.deactivate());
+  EXPECT_EQ(doubled(k, 1), 5);
+  EXPECT_EQ(b.state(), plr::NodeState::Active);
 }
 
 TEST(FakeKernel, FakeServiceAnswersANodeSynchronously) {

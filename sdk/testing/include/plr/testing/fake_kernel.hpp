@@ -16,8 +16,12 @@
 // - A node that is unconfigured (after cleanup or a failed configure) holds no
 //   publishers, subscriptions or services: the kernel drops them.
 // - publish/call/respond take ownership of the message even when they fail.
-// - Every call completes exactly once: reply, provider error, timeout,
-//   cancellation, or "provider gone"; possibly before call() returns.
+// - A call with no active provider, or of the wrong request type, is refused:
+//   call() returns the error and the reply callback never runs. Every other
+//   call completes exactly once: reply, provider error, timeout, cancellation,
+//   or "provider gone"; possibly before call() returns.
+// - Several nodes may provide one service (as during a hot swap); the first
+//   active one answers.
 #pragma once
 
 #include <plr/plugin_abi.h>
