@@ -1,0 +1,67 @@
+// Semantic observation of a world: what structure stands in front of the
+// robot (a pile on the floor or a wall of stacked boxes), how high it is, and
+// on which side its top box lies — one of the 18 plr::msg::Observation values.
+//
+// Boxes are split by stack height: a box whose column (the boxes overlapping
+// its footprint, itself included) tops out below h_pile belongs to the pile,
+// otherwise to a wall. The first wall is the wall boxes whose front face lies
+// within wall_depth of the nearest wall face; the pile that counts is the one
+// in front of it. Sides follow the frame of world.hpp: y > 0 is left.
+#pragma once
+
+#include <plr/msg/world_generated.h>
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "plr/sim/strategy.hpp"
+#include "plr/sim/world.hpp"
+
+namespace plr::sim {
+
+struct ObservationParams {
+  double h_pile = 0.55;         // m; columns lower than this are pile
+  double wall_depth = 0.7;      // m; depth of the first wall from its nearest face
+  double min_pile_depth = 0.3;  // m; a thinner pile in front of a wall is not "the" structure
+  double pile_mid = 0.25;       // m; pile top at or above this is mid
+  double pile_high = 0.4;       // m; ... high
+  double wall_mid = 1.2;        // m; first-wall top at or above this is mid
+  double wall_high = 1.9;       // m; ... high
+  double side_band = 1.0 / 3;   // centre band as a fraction of the trailer width
+
+  // Empty if consistent, else one line naming the offending parameter.
+  std::string check() const;
+};
+
+// World-frame axis-aligned bounds of a (possibly rotated) box.
+struct Bounds {
+  double x0 = 0, x1 = 0, y0 = 0, y1 = 0, z0 = 0, z1 = 0;
+};
+Bounds bounds(const Box& box);
+
+struct SceneAnalysis {
+  std::vector<std::uint32_t> pile;        // every pile box
+  std::vector<std::uint32_t> wall;        // every wall box
+  std::vector<std::uint32_t> front_pile;  // pile boxes in front of the first wall
+  std::vector<std::uint32_t> first_wall;  // the wall boxes of the first wall
+
+  double pile_near_x = 0;  // front of the front pile (smallest x)
+  double pile_far_x = 0;   // its far end
+  double pile_depth = 0;   // d_pile = pile_far_x - pile_near_x (0 without a pile)
+  double pile_height = 0;  // top of the front pile
+  double wall_near_x = 0;  // front face of the first wall
+  double wall_height = 0;  // h_W, top of the first wall (0 without a wall)
+
+  // The semantic observation; nullopt when the trailer is empty.
+  std::optional<Observation> observation;
+  std::uint32_t top_box = 0;  // the structure's top box (valid with an observation)
+};
+
+SceneAnalysis analyse(const World& world, const ObservationParams& params = {});
+std::optional<Observation> classify(const World& world, const ObservationParams& params = {});
+
+// The perceived world in a WorldState message (masses as given, usually 0).
+World world_from_message(const plr::msg::WorldState& state);
+
+}  // namespace plr::sim

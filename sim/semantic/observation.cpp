@@ -1,0 +1,155 @@
+#include "plr/sim/observation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace plr::sim {
+
+namespace {
+
+// Footprints are shrunk by this much before testing overlap, so boxes that
+// merely touch a neighbour (or lean on it by a few millimetres) are not
+// counted as part of its column.
+constexpr double kFootprintMargin = 0.03;
+
+bool footprints_overlap(const Bounds& a, const Bounds& b) {
+  const double m = kFootprintMargin;
+  return a.x0 + m < b.x1 - m && b.x0 + m < a.x1 - m && a.y0 + m < b.y1 - m && b.y0 + m < a.y1 - m;
+}
+
+Height classify_height(double top, double mid, double high) {
+  if (top >= high) return Height::kHigh;
+  if (top >= mid) return Height::kMid;
+  return Height::kLow;
+}
+
+}  // namespace
+
+std::string ObservationParams::check() const {
+  auto positive = [](double v) { return std::isfinite(v) && v > 0; };
+  if (!positive(h_pile)) return "h_pile: must be > 0";
+  if (!positive(wall_depth)) return "wall_depth: must be > 0";
+  if (!std::isfinite(min_pile_depth) || min_pile_depth < 0) return "min_pile_depth: must be >= 0";
+  if (!positive(pile_mid) || !(pile_high > pile_mid))
+    return "pile_mid/pile_high: need 0 < mid < high";
+  if (!positive(wall_mid) || !(wall_high > wall_mid))
+    return "wall_mid/wall_high: need 0 < mid < high";
+  if (!(side_band > 0 && side_band < 1)) return "side_band: must be in (0, 1)";
+  return {};
+}
+
+Bounds bounds(const Box& box) {
+  const Eigen::Matrix3d r = box.pose.linear().cwiseAbs();
+  const Eigen::Vector3d half = r * (box.size / 2);
+  const Eigen::Vector3d c = box.pose.translation();
+  return {c.x() - half.x(), c.x() + half.x(), c.y() - half.y(),
+          c.y() + half.y(), c.z() - half.z(), c.z() + half.z()};
+}
+
+SceneAnalysis analyse(const World& world, const ObservationParams& p) {
+  SceneAnalysis a;
+  const auto& boxes = world.boxes;
+  const std::size_t n = boxes.size();
+  if (n == 0) return a;
+
+  std::vector<Bounds> b(n);
+  for (std::size_t i = 0; i < n; ++i) b[i] = bounds(boxes[i]);
+
+  // Column tops; O(n^2) is a few hundred thousand cheap tests for a full trailer.
+  std::vector<bool> is_wall(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    double top = b[i].z1;
+    for (std::size_t j = 0; j < n; ++j)
+      if (j != i && b[j].z1 > top && footprints_overlap(b[i], b[j])) top = b[j].z1;
+    is_wall[i] = top >= p.h_pile;
+    (is_wall[i] ? a.wall : a.pile).push_back(boxes[i].id);
+  }
+
+  std::vector<std::size_t> first_wall, front_pile;
+  if (!a.wall.empty()) {
+    a.wall_near_x = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < n; ++i)
+      if (is_wall[i]) a.wall_near_x = std::min(a.wall_near_x, b[i].x0);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (is_wall[i] && b[i].x0 <= a.wall_near_x + p.wall_depth) {
+        first_wall.push_back(i);
+        a.first_wall.push_back(boxes[i].id);
+        a.wall_height = std::max(a.wall_height, b[i].z1);
+      }
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const double cx = (b[i].x0 + b[i].x1) / 2;
+    if (!is_wall[i] && (a.wall.empty() || cx < a.wall_near_x)) {
+      front_pile.push_back(i);
+      a.front_pile.push_back(boxes[i].id);
+    }
+  }
+  if (!front_pile.empty()) {
+    a.pile_near_x = std::numeric_limits<double>::infinity();
+    a.pile_far_x = -std::numeric_limits<double>::infinity();
+    for (auto i : front_pile) {
+      a.pile_near_x = std::min(a.pile_near_x, b[i].x0);
+      a.pile_far_x = std::max(a.pile_far_x, b[i].x1);
+      a.pile_height = std::max(a.pile_height, b[i].z1);
+    }
+    a.pile_depth = a.pile_far_x - a.pile_near_x;
+  }
+
+  Structure st = Structure::kWall;
+  const std::vector<std::size_t>* members = &first_wall;
+  if (!front_pile.empty() && (first_wall.empty() || a.pile_depth >= p.min_pile_depth)) {
+    st = Structure::kPile;
+    members = &front_pile;
+  }
+  std::size_t top = members->front();
+  for (auto i : *members) {
+    if (b[i].z1 > b[top].z1 + 1e-6 ||
+        (std::abs(b[i].z1 - b[top].z1) <= 1e-6 && b[i].x0 < b[top].x0))
+      top = i;
+  }
+  a.top_box = boxes[top].id;
+  const Height h = st == Structure::kPile ? classify_height(a.pile_height, p.pile_mid, p.pile_high)
+                                          : classify_height(a.wall_height, p.wall_mid, p.wall_high);
+  const double y = boxes[top].pose.translation().y();
+  const double band = p.side_band * world.trailer.width / 2;
+  const Side s = y > band ? Side::kLeft : (y < -band ? Side::kRight : Side::kCenter);
+  a.observation = make_observation(st, h, s);
+  return a;
+}
+
+std::optional<Observation> classify(const World& world, const ObservationParams& params) {
+  return analyse(world, params).observation;
+}
+
+World world_from_message(const plr::msg::WorldState& state) {
+  World w;
+  if (const auto* t = state.trailer_size()) {
+    w.trailer.width = t->x();
+    w.trailer.height = t->y();
+    w.trailer.depth = t->z();
+  }
+  if (const auto* boxes = state.boxes()) {
+    w.boxes.reserve(boxes->size());
+    for (const auto* m : *boxes) {
+      Box box;
+      box.id = m->id();
+      box.size = {m->size().x(), m->size().y(), m->size().z()};
+      const auto& pos = m->pose().position();
+      const auto& q = m->pose().orientation();
+      Eigen::Quaterniond quat(q.w(), q.x(), q.y(), q.z());
+      // An all-zero quaternion (a default-built pose) means "not rotated".
+      if (quat.norm() < 1e-9) quat = Eigen::Quaterniond::Identity();
+      box.pose = Eigen::Isometry3d::Identity();
+      box.pose.linear() = quat.normalized().toRotationMatrix();
+      box.pose.translation() = Eigen::Vector3d(pos.x(), pos.y(), pos.z());
+      box.mass = m->mass();
+      w.boxes.push_back(box);
+    }
+  }
+  return w;
+}
+
+}  // namespace plr::sim

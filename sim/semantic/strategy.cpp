@@ -1,0 +1,365 @@
+#include "plr/sim/strategy.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <fstream>
+#include <sstream>
+
+#include "atomic_write.hpp"
+
+namespace plr::sim {
+
+namespace {
+
+constexpr std::array<const char*, 3> kHeights = {"low", "mid", "high"};
+constexpr std::array<const char*, 3> kSides = {"left", "center", "right"};
+
+template <std::size_t N>
+std::optional<int> index_of(const std::array<const char*, N>& names, std::string_view s) {
+  for (std::size_t i = 0; i < N; ++i)
+    if (s == names[i]) return static_cast<int>(i);
+  return std::nullopt;
+}
+
+std::string trim(std::string_view s) {
+  std::string out;
+  for (char c : s)
+    if (!std::isspace(static_cast<unsigned char>(c)))
+      out.push_back(static_cast<char>(std::tolower(static_cast<unsigned char>(c))));
+  return out;
+}
+
+bool valid_action(Action a) {
+  return static_cast<int>(a) < kNumActions;
+}
+bool valid_observation(Observation o) {
+  return static_cast<int>(o) < kNumObservations;
+}
+
+}  // namespace
+
+const char* to_string(Height h) {
+  return kHeights[static_cast<int>(h)];
+}
+const char* to_string(Side s) {
+  return kSides[static_cast<int>(s)];
+}
+const char* to_string(Structure s) {
+  return s == Structure::kPile ? "pile" : "wall";
+}
+
+Action make_pick(Height h, Side s) {
+  return static_cast<Action>(static_cast<int>(h) * 3 + static_cast<int>(s));
+}
+Action make_sweep(Height h) {
+  return static_cast<Action>(static_cast<int>(Action::SweepLow) + static_cast<int>(h));
+}
+ActionKind kind(Action a) {
+  return static_cast<int>(a) >= static_cast<int>(Action::SweepLow) ? ActionKind::kSweep
+                                                                   : ActionKind::kPick;
+}
+Height height(Action a) {
+  const int i = static_cast<int>(a);
+  if (kind(a) == ActionKind::kSweep)
+    return static_cast<Height>(i - static_cast<int>(Action::SweepLow));
+  return static_cast<Height>(i / 3);
+}
+Side side(Action a) {
+  if (kind(a) == ActionKind::kSweep) return Side::kCenter;
+  return static_cast<Side>(static_cast<int>(a) % 3);
+}
+
+std::string to_string(Action a) {
+  if (!valid_action(a)) return "Action(" + std::to_string(static_cast<int>(a)) + ")";
+  if (kind(a) == ActionKind::kSweep) return std::string("Sweep(") + to_string(height(a)) + ")";
+  return std::string("Pick(") + to_string(height(a)) + ", " + to_string(side(a)) + ")";
+}
+
+std::optional<Action> parse_action(std::string_view text) {
+  const std::string t = trim(text);
+  const auto open = t.find('(');
+  if (open == std::string::npos || t.back() != ')') return std::nullopt;
+  const std::string verb = t.substr(0, open);
+  const std::string args = t.substr(open + 1, t.size() - open - 2);
+  if (verb == "sweep") {
+    const auto h = index_of(kHeights, args);
+    if (!h) return std::nullopt;
+    return make_sweep(static_cast<Height>(*h));
+  }
+  if (verb != "pick") return std::nullopt;
+  const auto comma = args.find(',');
+  if (comma == std::string::npos) return std::nullopt;
+  const auto h = index_of(kHeights, std::string_view(args).substr(0, comma));
+  const auto s = index_of(kSides, std::string_view(args).substr(comma + 1));
+  if (!h || !s) return std::nullopt;
+  return make_pick(static_cast<Height>(*h), static_cast<Side>(*s));
+}
+
+Observation make_observation(Structure st, Height h, Side s) {
+  return static_cast<Observation>(static_cast<int>(st) * 9 + static_cast<int>(h) * 3 +
+                                  static_cast<int>(s));
+}
+Structure structure(Observation o) {
+  return static_cast<int>(o) >= 9 ? Structure::kWall : Structure::kPile;
+}
+Height height(Observation o) {
+  return static_cast<Height>(static_cast<int>(o) % 9 / 3);
+}
+Side side(Observation o) {
+  return static_cast<Side>(static_cast<int>(o) % 3);
+}
+
+std::string to_string(Observation o) {
+  if (!valid_observation(o)) return "Observation(" + std::to_string(static_cast<int>(o)) + ")";
+  return std::string(to_string(structure(o))) + "/" + to_string(height(o)) + "/" +
+         to_string(side(o));
+}
+
+std::optional<Observation> parse_observation(std::string_view text) {
+  const std::string t = trim(text);
+  const auto a = t.find('/');
+  const auto b = a == std::string::npos ? a : t.find('/', a + 1);
+  if (b == std::string::npos) return std::nullopt;
+  const std::string st = t.substr(0, a);
+  if (st != "pile" && st != "wall") return std::nullopt;
+  const auto h = index_of(kHeights, std::string_view(t).substr(a + 1, b - a - 1));
+  const auto s = index_of(kSides, std::string_view(t).substr(b + 1));
+  if (!h || !s) return std::nullopt;
+  return make_observation(st == "pile" ? Structure::kPile : Structure::kWall,
+                          static_cast<Height>(*h), static_cast<Side>(*s));
+}
+
+std::optional<std::uint32_t> Strategy::next(std::uint32_t node, Observation observation) const {
+  if (node >= nodes.size()) return std::nullopt;
+  for (const auto& [o, child] : nodes[node].children)
+    if (o == observation) return child;
+  return std::nullopt;
+}
+
+std::size_t Strategy::depth() const {
+  if (nodes.empty()) return 0;
+  // Breadth-first by levels; validate() guarantees a tree, so this ends.
+  std::vector<std::uint32_t> level{root};
+  std::size_t d = 0;
+  while (!level.empty()) {
+    ++d;
+    std::vector<std::uint32_t> next_level;
+    for (auto n : level)
+      for (const auto& edge : nodes[n].children) next_level.push_back(edge.second);
+    level = std::move(next_level);
+  }
+  return d;
+}
+
+Strategy single_action(Action action, std::string name) {
+  Strategy s;
+  s.name = std::move(name);
+  s.nodes.push_back(StrategyNode{action, {}});
+  return s;
+}
+
+std::string validate(const Strategy& s) {
+  if (s.nodes.empty()) return "strategy has no nodes";
+  if (s.root >= s.nodes.size())
+    return "root " + std::to_string(s.root) + " out of range (" + std::to_string(s.nodes.size()) +
+           " nodes)";
+  std::vector<int> parents(s.nodes.size(), 0);
+  for (std::size_t i = 0; i < s.nodes.size(); ++i) {
+    const auto& n = s.nodes[i];
+    if (!valid_action(n.action))
+      return "node " + std::to_string(i) + ": invalid action " +
+             std::to_string(static_cast<int>(n.action));
+    std::array<bool, kNumObservations> seen{};
+    for (const auto& [o, child] : n.children) {
+      if (!valid_observation(o))
+        return "node " + std::to_string(i) + ": invalid observation " +
+               std::to_string(static_cast<int>(o));
+      if (seen[static_cast<int>(o)])
+        return "node " + std::to_string(i) + ": two edges for " + to_string(o);
+      seen[static_cast<int>(o)] = true;
+      if (child >= s.nodes.size())
+        return "node " + std::to_string(i) + ": child " + std::to_string(child) + " out of range";
+      ++parents[child];
+    }
+  }
+  if (parents[s.root] != 0) return "root " + std::to_string(s.root) + " has a parent";
+  for (std::size_t i = 0; i < s.nodes.size(); ++i) {
+    if (i != s.root && parents[i] != 1)
+      return "node " + std::to_string(i) + " has " + std::to_string(parents[i]) +
+             " parents (a tree needs exactly one)";
+  }
+  // One parent each and a parentless root can still hide a cycle cut off from
+  // the root; count what the root reaches.
+  std::vector<std::uint32_t> stack{s.root};
+  std::size_t reached = 0;
+  while (!stack.empty() && reached <= s.nodes.size()) {
+    const auto n = stack.back();
+    stack.pop_back();
+    ++reached;
+    for (const auto& edge : s.nodes[n].children) stack.push_back(edge.second);
+  }
+  if (reached != s.nodes.size())
+    return std::to_string(s.nodes.size() - std::min(reached, s.nodes.size())) +
+           " nodes are not reachable from the root";
+  return {};
+}
+
+flatbuffers::Offset<plr::msg::Strategy> build(flatbuffers::FlatBufferBuilder& fbb,
+                                              const Strategy& s) {
+  std::vector<flatbuffers::Offset<plr::msg::StrategyNode>> nodes;
+  nodes.reserve(s.nodes.size());
+  for (const auto& n : s.nodes) {
+    std::vector<flatbuffers::Offset<plr::msg::StrategyEdge>> edges;
+    for (const auto& [o, child] : n.children)
+      edges.push_back(plr::msg::CreateStrategyEdge(fbb, o, child));
+    nodes.push_back(plr::msg::CreateStrategyNodeDirect(fbb, n.action, &edges));
+  }
+  return plr::msg::CreateStrategyDirect(fbb, s.name.c_str(), s.root, &nodes);
+}
+
+Strategy from_message(const plr::msg::Strategy& m, const std::string& origin) {
+  Strategy s;
+  if (m.name() != nullptr) s.name = m.name()->str();
+  s.root = m.root();
+  if (m.nodes() != nullptr) {
+    for (const auto* n : *m.nodes()) {
+      if (n == nullptr) throw StrategyFileError(origin + ": null node");
+      StrategyNode node{n->action(), {}};
+      if (n->children() != nullptr)
+        for (const auto* e : *n->children())
+          if (e != nullptr) node.children.emplace_back(e->observation(), e->child());
+      s.nodes.push_back(std::move(node));
+    }
+  }
+  if (const auto err = validate(s); !err.empty()) throw StrategyFileError(origin + ": " + err);
+  return s;
+}
+
+std::vector<std::uint8_t> serialize(const Strategy& s) {
+  flatbuffers::FlatBufferBuilder fbb;
+  plr::msg::FinishStrategyBuffer(fbb, build(fbb, s));
+  return {fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()};
+}
+
+Strategy deserialize(const std::uint8_t* data, std::size_t size, const std::string& origin) {
+  if (size < 8 || !flatbuffers::BufferHasIdentifier(data, plr::msg::StrategyIdentifier()))
+    throw StrategyFileError(origin + ": not a strategy file (no \"PLRS\" identifier)");
+  flatbuffers::Verifier verifier(data, size);
+  if (!plr::msg::VerifyStrategyBuffer(verifier))
+    throw StrategyFileError(origin + ": corrupt strategy file (verification failed)");
+  return from_message(*plr::msg::GetStrategy(data), origin);
+}
+
+std::string format_yaml(const Strategy& s) {
+  YAML::Emitter out;
+  out << YAML::BeginMap << YAML::Key << "format" << YAML::Value << "plr-strategy";
+  out << YAML::Key << "version" << YAML::Value << 1;
+  out << YAML::Key << "name" << YAML::Value << s.name;
+  out << YAML::Key << "root" << YAML::Value << s.root;
+  out << YAML::Key << "nodes" << YAML::Value << YAML::BeginSeq;
+  for (const auto& n : s.nodes) {
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "action" << YAML::Value
+        << to_string(n.action);
+    if (!n.children.empty()) {
+      out << YAML::Key << "children" << YAML::Value << YAML::BeginMap;
+      for (const auto& [o, child] : n.children)
+        out << YAML::Key << to_string(o) << YAML::Value << child;
+      out << YAML::EndMap;
+    }
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+Strategy parse_yaml(const std::string& text, const std::string& origin) {
+  auto fail = [&](const YAML::Node& at, const std::string& why) -> StrategyFileError {
+    const auto mark = at.Mark();
+    return StrategyFileError(origin + (mark.line >= 0 ? ":" + std::to_string(mark.line + 1) : "") +
+                             ": " + why);
+  };
+  YAML::Node doc;
+  try {
+    doc = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw StrategyFileError(origin + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+  if (!doc.IsMap()) throw fail(doc, "expected a map with format: plr-strategy");
+  if (!doc["format"] || doc["format"].as<std::string>("") != "plr-strategy")
+    throw fail(doc, "format: expected plr-strategy");
+  if (!doc["version"] || doc["version"].as<int>(0) != 1) throw fail(doc, "version: expected 1");
+  Strategy s;
+  try {
+    s.name = doc["name"] ? doc["name"].as<std::string>() : "";
+    s.root = doc["root"] ? doc["root"].as<std::uint32_t>() : 0;
+  } catch (const YAML::Exception& e) {
+    throw fail(doc, "name/root: " + e.msg);
+  }
+  const YAML::Node nodes = doc["nodes"];
+  if (!nodes || !nodes.IsSequence()) throw fail(doc, "nodes: expected a list");
+  for (const auto& n : nodes) {
+    if (!n.IsMap() || !n["action"]) throw fail(n, "nodes: each node needs an action");
+    const auto a = parse_action(n["action"].as<std::string>(""));
+    if (!a)
+      throw fail(n["action"],
+                 "action: '" + n["action"].as<std::string>("") + "' is not Pick(h, s) or Sweep(h)");
+    StrategyNode node{*a, {}};
+    if (const YAML::Node ch = n["children"]) {
+      if (!ch.IsMap()) throw fail(ch, "children: expected a map observation -> node index");
+      for (const auto& kv : ch) {
+        const auto o = parse_observation(kv.first.as<std::string>(""));
+        if (!o)
+          throw fail(kv.first, "children: '" + kv.first.as<std::string>("") +
+                                   "' is not pile|wall/low|mid|high/left|center|right");
+        std::uint32_t child = 0;
+        try {
+          child = kv.second.as<std::uint32_t>();
+        } catch (const YAML::Exception&) {
+          throw fail(kv.second, "children: expected a node index");
+        }
+        node.children.emplace_back(*o, child);
+      }
+    }
+    s.nodes.push_back(std::move(node));
+  }
+  if (const auto err = validate(s); !err.empty()) throw StrategyFileError(origin + ": " + err);
+  return s;
+}
+
+namespace {
+bool is_yaml(const std::filesystem::path& file) {
+  const auto ext = file.extension().string();
+  return ext == ".yaml" || ext == ".yml";
+}
+}  // namespace
+
+void save_strategy(const Strategy& s, const std::filesystem::path& file) {
+  if (const auto err = validate(s); !err.empty())
+    throw StrategyFileError(file.string() + ": refusing to write an invalid strategy: " + err);
+  std::string content;
+  if (is_yaml(file)) {
+    content = format_yaml(s);
+  } else {
+    const auto bytes = serialize(s);
+    content.assign(bytes.begin(), bytes.end());
+  }
+  if (const auto err = write_atomically(file, content); !err.empty())
+    throw StrategyFileError(file.string() + ": " + err);
+}
+
+Strategy load_strategy(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw StrategyFileError(file.string() + ": cannot open");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) throw StrategyFileError(file.string() + ": read error");
+  const std::string content = ss.str();
+  if (is_yaml(file)) return parse_yaml(content, file.string());
+  return deserialize(reinterpret_cast<const std::uint8_t*>(content.data()), content.size(),
+                     file.string());
+}
+
+}  // namespace plr::sim
