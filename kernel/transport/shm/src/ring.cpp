@@ -146,14 +146,15 @@ Result<std::uint32_t> Producer::loan(std::size_t max_size, Timeout timeout, Chec
     if (reclaim_dead_readers() > 0 && find_slot(slot)) return slot;
     return unexpected(Error::kSlotsExhausted);
   }
-  // Back-pressure means the readers are slower anyway: sleep, never spin.
+  if (timeout == kNoWait) return unexpected(Error::kTimeout);
   auto r = wait_until(
-      ring_.header->space, WaitMode::kBlocking, deadline_after(timeout),
+      ring_.header->space, ring_.geo.wait_mode, deadline_after(timeout),
       [&] { return find_slot(slot); },
       [&]() -> Result<void> {
         reclaim_dead_readers();
         return check != nullptr ? check(ctx) : Result<void>{};
-      });
+      },
+      kSpaceSpins);
   if (!r) return unexpected(r.error());
   return slot;
 }

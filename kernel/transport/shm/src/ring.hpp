@@ -24,9 +24,14 @@ void notify(Notifier& n) noexcept;
 // Waits until ready() is true, the deadline passes (kTimeout) or check() — run
 // every kLivenessSlice — returns an error, which is passed on. Returns as soon
 // as ready() is true once (it may claim something).
+// spin_first: busy checks before the first sleep (0 = sleep at once).
 template <class Ready, class Check>
 Result<void> wait_until(Notifier& n, WaitMode mode, Clock::time_point deadline, Ready ready,
-                        Check check) noexcept;
+                        Check check, std::uint32_t spin_first = 0) noexcept;
+
+// A reliable publisher that finds the ring full usually gets a slot back
+// within a microsecond or two: spin that long before paying for a futex sleep.
+inline constexpr std::uint32_t kSpaceSpins = 2000;
 
 struct Ring {
   RingGeometry geo{};

@@ -11,9 +11,13 @@ namespace plr::shm::detail {
 
 template <class Ready, class Check>
 Result<void> wait_until(Notifier& n, WaitMode mode, Clock::time_point deadline, Ready ready,
-                        Check check) noexcept {
+                        Check check, std::uint32_t spin_first) noexcept {
   auto next_check = Clock::now() + kLivenessSlice;
   std::uint32_t spins = 0;
+  for (std::uint32_t i = 0; i < spin_first; ++i) {
+    if (ready()) return {};
+    cpu_relax();
+  }
   for (;;) {
     if (ready()) return {};
     if (mode == WaitMode::kPolling) {
