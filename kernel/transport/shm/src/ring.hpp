@@ -111,7 +111,6 @@ class Consumer {
   Result<void> attach(const ProcessStamp& me) noexcept;
   // Releases every slot still held and frees the table entry.
   void detach() noexcept;
-  bool attached() const noexcept { return bit_ != 0; }
 
   // Pins the next valid message (sets this reader's bit in its slot) or kNoData.
   Result<Taken> try_take() noexcept;
