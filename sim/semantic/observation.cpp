@@ -98,25 +98,33 @@ SceneAnalysis analyse(const World& world, const ObservationParams& p) {
     a.pile_depth = a.pile_far_x - a.pile_near_x;
   }
 
-  Structure st = Structure::kWall;
-  const std::vector<std::size_t>* members = &first_wall;
-  if (!front_pile.empty() && (first_wall.empty() || a.pile_depth >= p.min_pile_depth)) {
-    st = Structure::kPile;
-    members = &front_pile;
-  }
-  std::size_t top = members->front();
-  for (auto i : *members) {
-    if (b[i].z1 > b[top].z1 + 1e-6 ||
-        (std::abs(b[i].z1 - b[top].z1) <= 1e-6 && b[i].x0 < b[top].x0))
-      top = i;
-  }
-  a.top_box = boxes[top].id;
-  const Height h = st == Structure::kPile ? classify_height(a.pile_height, p.pile_mid, p.pile_high)
-                                          : classify_height(a.wall_height, p.wall_mid, p.wall_high);
-  const double y = boxes[top].pose.translation().y();
   const double band = p.side_band * world.trailer.width / 2;
-  const Side s = y > band ? Side::kLeft : (y < -band ? Side::kRight : Side::kCenter);
-  a.observation = make_observation(st, h, s);
+  // Top box (ties: the nearer, then the more central one), its side; y > 0 is left.
+  auto top_of = [&](const std::vector<std::size_t>& members, std::uint32_t& id, Side& side) {
+    if (members.empty()) return;
+    std::size_t top = members.front();
+    for (auto i : members) {
+      const double dz = b[i].z1 - b[top].z1, dx = b[i].x0 - b[top].x0;
+      const double dy =
+          std::abs(boxes[i].pose.translation().y()) - std::abs(boxes[top].pose.translation().y());
+      if (dz > 1e-6 || (dz > -1e-6 && (dx < -1e-6 || (dx < 1e-6 && dy < -1e-6)))) top = i;
+    }
+    id = boxes[top].id;
+    const double y = boxes[top].pose.translation().y();
+    side = y > band ? Side::kLeft : (y < -band ? Side::kRight : Side::kCenter);
+  };
+  top_of(front_pile, a.pile_top_box, a.pile_side);
+  top_of(first_wall, a.wall_top_box, a.wall_side);
+  a.pile_class = classify_height(a.pile_height, p.pile_mid, p.pile_high);
+  a.wall_class = classify_height(a.wall_height, p.wall_mid, p.wall_high);
+
+  if (!front_pile.empty() && (first_wall.empty() || a.pile_depth >= p.min_pile_depth)) {
+    a.observation = make_observation(Structure::kPile, a.pile_class, a.pile_side);
+    a.top_box = a.pile_top_box;
+  } else {
+    a.observation = make_observation(Structure::kWall, a.wall_class, a.wall_side);
+    a.top_box = a.wall_top_box;
+  }
   return a;
 }
 

@@ -53,6 +53,12 @@ struct SceneAnalysis {
   double wall_near_x = 0;  // front face of the first wall
   double wall_height = 0;  // h_W, top of the first wall (0 without a wall)
 
+  // Height class and top-box side of each structure, whichever is in front
+  // (meaningful only when that structure has boxes).
+  Height pile_class = Height::kLow, wall_class = Height::kLow;
+  Side pile_side = Side::kCenter, wall_side = Side::kCenter;
+  std::uint32_t pile_top_box = 0, wall_top_box = 0;
+
   // The semantic observation; nullopt when the trailer is empty.
   std::optional<Observation> observation;
   std::uint32_t top_box = 0;  // the structure's top box (valid with an observation)

@@ -1,0 +1,86 @@
+// Strategy H: the hand-written rule of thumb the executor falls back on.
+//
+// Boxes in columns lower than h_pile form the pile, the others walls. If the
+// pile in front of the first wall is deeper than d_min, sweep it; else if the
+// first wall is higher than h_min, pick from it — from its top box's height
+// and side, which is how the executor's pick-point choice ends up preferring
+// boxes near the robot and high up. Otherwise what is left is low: sweep a
+// pile, pick a low wall.
+#include <plr/messages.hpp>
+#include <plr/node.hpp>
+#include <plr/plugin.hpp>
+
+#include "plr/sim/observation.hpp"
+#include "plr/sim/strategy.hpp"
+
+namespace {
+
+class HardcodedStrategy : public plr::Node {
+ public:
+  using Node::Node;
+
+ protected:
+  plr::Status on_configure() override {
+    params().allow_only({"h_pile", "h_min", "d_min", "wall_depth", "pile_mid", "pile_high",
+                         "wall_mid", "wall_high"});
+    obs_.h_pile = params().get<double>("h_pile", obs_.h_pile);
+    obs_.wall_depth = params().get<double>("wall_depth", obs_.wall_depth);
+    obs_.pile_mid = params().get<double>("pile_mid", obs_.pile_mid);
+    obs_.pile_high = params().get<double>("pile_high", obs_.pile_high);
+    obs_.wall_mid = params().get<double>("wall_mid", obs_.wall_mid);
+    obs_.wall_high = params().get<double>("wall_high", obs_.wall_high);
+    h_min_ = params().get<double>("h_min", 0.5);
+    d_min_ = params().get<double>("d_min", 0.5);
+    if (const auto err = obs_.check(); !err.empty())
+      return plr::make_error(PLR_ERR_INVALID, "param '" + err.substr(0, err.find(':')) + "'" +
+                                                  err.substr(err.find(':')));
+    if (!(h_min_ >= 0)) return plr::make_error(PLR_ERR_INVALID, "param 'h_min': must be >= 0");
+    if (!(d_min_ >= 0)) return plr::make_error(PLR_ERR_INVALID, "param 'd_min': must be >= 0");
+    return ctx().provide<plr::msg::NextStrategyRequest, plr::msg::NextStrategyReply>(
+        "strategy/next",
+        [this](const plr::Message<plr::msg::NextStrategyRequest>& request,
+               flatbuffers::FlatBufferBuilder& reply) { return next(*request, reply); });
+  }
+
+ private:
+  plr::Status next(const plr::msg::NextStrategyRequest& request,
+                   flatbuffers::FlatBufferBuilder& reply) {
+    const auto* bytes = request.world();
+    if (bytes == nullptr || bytes->size() == 0)
+      return plr::make_error(PLR_ERR_INVALID, "strategy/next: request carries no world");
+    if (!plr::verify<plr::msg::WorldState>(bytes->data(), bytes->size()))
+      return plr::make_error(PLR_ERR_INVALID, "strategy/next: world is not a valid WorldState");
+    const auto world =
+        plr::sim::world_from_message(*flatbuffers::GetRoot<plr::msg::WorldState>(bytes->data()));
+    const auto scene = plr::sim::analyse(world, obs_);
+    if (!scene.observation)
+      return plr::make_error(PLR_ERR_INVALID, "strategy/next: the trailer is empty");
+    const auto action = decide(scene);
+    log().debug("{}: d_pile {:.2f} m, h_W {:.2f} m -> {}", plr::sim::to_string(*scene.observation),
+                scene.pile_depth, scene.wall_height, plr::sim::to_string(action));
+    const auto strategy = plr::sim::single_action(action, "H");
+    reply.Finish(plr::msg::CreateNextStrategyReply(reply, plr::sim::build(reply, strategy),
+                                                   reply.CreateString("hardcoded")));
+    return {};
+  }
+
+  plr::sim::Action decide(const plr::sim::SceneAnalysis& scene) const {
+    using plr::sim::make_pick;
+    using plr::sim::make_sweep;
+    if (!scene.front_pile.empty() && scene.pile_depth > d_min_) return make_sweep(scene.pile_class);
+    if (!scene.first_wall.empty() && scene.wall_height > h_min_)
+      return make_pick(scene.wall_class, scene.wall_side);
+    // Only low things are left: a shallow pile, or a wall no higher than h_min.
+    if (!scene.front_pile.empty()) return make_sweep(scene.pile_class);
+    return make_pick(scene.wall_class, scene.wall_side);
+  }
+
+  plr::sim::ObservationParams obs_;
+  double h_min_ = 0.5;
+  double d_min_ = 0.5;
+};
+
+}  // namespace
+
+PLR_PLUGIN(HardcodedStrategy, "strategy_hardcoded", "1.0.0", PLR_KIND_CHOOSER,
+           "Strategy H: sweep a deep pile, else pick from a high enough wall")
