@@ -1,0 +1,39 @@
+// Seeded environment families (the paper's A1, A2: stacked walls; B1, B2:
+// unstructured piles). Every call seeds its own std::mt19937_64; the same
+// (family, seed) always gives the same world on one machine.
+//
+// Boxes fill the trailer from the front wall (x = depth) towards the rear;
+// the rear part stays free for the robot. Walls come out resting (boxes touch
+// without interpenetration). Piles come out as a drop configuration: boxes
+// hover a few millimetres apart and still have to fall and settle — use
+// plr::sim::make_environment (physics.hpp) for a settled pile.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "plr/sim/world.hpp"
+
+namespace plr::sim {
+
+enum class EnvFamily { kA1, kA2, kB1, kB2 };
+
+std::string_view to_string(EnvFamily family);
+// "A1", "a1", ... ; nullopt for anything else.
+std::optional<EnvFamily> parse_env_family(std::string_view name);
+
+World generate_world(EnvFamily family, std::uint64_t seed, const Trailer& trailer = {});
+
+// Pairs of box ids whose volumes overlap by more than `tolerance` (m), and
+// boxes that stick out of the trailer's floor, walls or ceiling by more than it
+// (reported as pair (id, id)).
+std::vector<std::pair<std::uint32_t, std::uint32_t>> find_interpenetrations(const World& world,
+                                                                            double tolerance);
+
+// The perceived world W: same boxes without masses.
+World without_masses(const World& world);
+
+}  // namespace plr::sim

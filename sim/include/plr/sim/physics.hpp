@@ -1,0 +1,164 @@
+// Rigid-body simulation of the boxes in the trailer (the true state W^t).
+//
+// Boxes are free bodies with gravity, penalty contact and friction among
+// themselves, with the trailer (floor, side walls, ceiling, front wall; the
+// rear is open) and with robot shapes. Robot shapes are kinematic: they follow
+// the poses they are given whatever the boxes do. Simbody integrates the
+// boxes that move; boxes at rest sleep (cost nothing) until something moving
+// touches them, so cost follows the active region. Same world, same options
+// and same calls give bit-identical results on one machine.
+//
+// Simbody types stay behind the pimpl: this header is plain C++17 + Eigen.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "plr/sim/generators.hpp"
+#include "plr/sim/world.hpp"
+
+namespace plr::sim {
+
+// One kinematic robot shape (a link's collision geometry), world frame.
+struct LinkGeometry {
+  enum class Shape { kBox, kCylinder };
+  Shape shape = Shape::kBox;
+  // Box: full extents. Cylinder: x = radius, z = length along its local z axis.
+  Eigen::Vector3d size{0.1, 0.1, 0.1};
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  // Conveyor belt on this shape: its surface moves along the shape's local -x
+  // axis at this speed (m/s). Boxes carried past the local -x end of a belt
+  // are handed to the robot's body conveyor and count as unloaded.
+  double belt_speed = 0.0;
+};
+
+// The suction gripper: a grid of cups on a plate.
+struct SuctionPlate {
+  // Centre of the cup face; local +z points out of the plate towards what it grips.
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  Eigen::Vector2d extent{0.6, 0.4};  // cup field, local x and y (m)
+  int cups_x = 4;
+  int cups_y = 3;
+  double cup_force = 45.0;  // N a cup holds
+  double reach = 0.02;      // largest gap between cup face and box face that still grips
+  double max_tilt = 0.26;   // rad between the plate normal and the box face normal
+};
+
+struct PhysicsOptions {
+  double step = 5e-4;  // s; fixed
+  double gravity = 9.81;
+  double friction_box = 0.5;  // Coulomb coefficients
+  double friction_trailer = 0.4;
+  double friction_robot = 0.6;
+  // Penalty contact: a pair's stiffness is reduced_mass * contact_omega^2, so
+  // light and heavy boxes ring at the same frequency (stable at this step).
+  double contact_omega = 600.0;  // rad/s
+  double damping_ratio = 0.5;
+  bool sleeping = true;
+  double sleep_speed = 0.01;  // m/s at the box's corners
+  double sleep_time = 0.25;   // s below sleep_speed before a box freezes
+  double wake_speed = 0.05;   // m/s of a box touching a sleeping one that wakes it
+  double wake_depth = 0.003;  // m of penetration by something slower that wakes a box
+};
+
+struct UnloadEvent {
+  std::uint32_t box_id = 0;
+  double time = 0.0;
+};
+
+struct SuctionEvent {
+  enum class Kind { kGripped, kRefused, kDropped, kReleased };
+  std::uint32_t box_id = 0;
+  double time = 0.0;
+  Kind kind = Kind::kGripped;
+  double load = 0.0;      // N the cups had to hold
+  double capacity = 0.0;  // N they could hold
+};
+
+struct PhysicsStats {
+  std::int64_t steps = 0;          // fixed steps taken
+  std::int64_t dynamic_steps = 0;  // steps that ran Simbody (some box awake)
+  std::int64_t body_steps = 0;     // sum over steps of awake boxes
+  std::int64_t rebuilds = 0;       // Simbody systems built for a new awake set
+  double wall_seconds = 0.0;       // time spent in step()
+  int awake = 0, asleep = 0, held = 0, removed = 0;
+};
+
+class Snapshot {
+ public:
+  Snapshot();
+  ~Snapshot();
+  Snapshot(const Snapshot&);
+  Snapshot& operator=(const Snapshot&);
+  double time() const;
+
+ private:
+  friend class Simulation;
+  struct Data;
+  std::shared_ptr<const Data> data_;
+};
+
+class Simulation {
+ public:
+  explicit Simulation(const World& world, const PhysicsOptions& options = {});
+  ~Simulation();
+  Simulation(Simulation&&) noexcept;
+  Simulation& operator=(Simulation&&) noexcept;
+
+  // Advances by `duration` (rounded to whole steps). Robot shapes and the
+  // suction plate move from their previous poses to the last ones set,
+  // linearly over this call.
+  void step(double duration);
+  double time() const;
+
+  // Current true state: boxes still in the trailer (held ones included), with
+  // masses. Unloaded and removed boxes are gone.
+  World world() const;
+  const Trailer& trailer() const;
+
+  // Target poses for the next step(); same count and order as before to move
+  // smoothly, otherwise the shapes are replaced at once (no velocity).
+  void set_robot_links(std::vector<LinkGeometry> links);
+  const std::vector<LinkGeometry>& robot_links() const;
+
+  void set_suction_plate(const SuctionPlate& plate);
+  // Grips every box facing the plate within reach that the covering cups can
+  // hold (load = mass * g); boxes too heavy are refused. Returns the ids gripped.
+  std::vector<std::uint32_t> suction_on();
+  void suction_off();
+  std::vector<std::uint32_t> held_boxes() const;
+
+  // Takes a box out by hand (not counted as unloaded); what touched it wakes.
+  void remove_box(std::uint32_t id);
+
+  const std::vector<UnloadEvent>& unloaded() const;
+  const std::vector<SuctionEvent>& suction_events() const;
+
+  // True when no box moves (all asleep, or held).
+  bool at_rest() const;
+  // Steps until at rest or `max_time` more seconds passed; returns the time it
+  // took, or a negative value if the boxes still move.
+  double settle(double max_time);
+
+  // A snapshot is a copy of the plain state plus Simbody's coordinates of
+  // the moving boxes; restore copies it back and rebuilds Simbody's system
+  // lazily at the next step. Restored runs repeat bit for bit.
+  Snapshot snapshot() const;
+  void restore(const Snapshot& snapshot);
+
+  PhysicsStats stats() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// generate_world, then let the boxes fall and come to rest (at most
+// `max_settle` simulated seconds): piles tumble into shape, walls sink into
+// their contact equilibrium (tenths of a millimetre).
+World make_environment(EnvFamily family, std::uint64_t seed, const Trailer& trailer = {},
+                       double max_settle = 6.0);
+
+}  // namespace plr::sim

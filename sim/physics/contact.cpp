@@ -1,0 +1,274 @@
+#include "contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace plr::sim::detail {
+namespace {
+
+constexpr std::uint8_t kBoxBox = 0, kBoxLink = 1, kBoxPlane = 2;
+constexpr double kWakeMargin = 0.01;  // m around a moving box within which sleepers wake
+
+bool disjoint(const Eigen::Vector3d& lo1, const Eigen::Vector3d& hi1, const Eigen::Vector3d& lo2,
+              const Eigen::Vector3d& hi2) {
+  return (lo1.array() > hi2.array()).any() || (lo2.array() > hi1.array()).any();
+}
+
+}  // namespace
+
+Contacts::Contacts(const PhysicsOptions& options, const Trailer& trailer)
+    : options_(options), trailer_(trailer), request_(8, true) {}
+
+void Contacts::set_boxes(const std::vector<Body>& bodies) {
+  box_shapes_.clear();
+  box_shapes_.reserve(bodies.size());
+  for (const Body& b : bodies) box_shapes_.emplace_back(b.box.size);
+  lo_.resize(bodies.size());
+  hi_.resize(bodies.size());
+}
+
+void Contacts::set_links(const std::vector<LinkGeometry>& links) {
+  link_shapes_.clear();
+  link_half_.clear();
+  for (const LinkGeometry& l : links) {
+    if (l.shape == LinkGeometry::Shape::kCylinder) {
+      link_shapes_.push_back(std::make_unique<fcl::Cylinderd>(l.size.x(), l.size.z()));
+      link_half_.emplace_back(l.size.x(), l.size.x(), 0.5 * l.size.z());
+    } else {
+      link_shapes_.push_back(std::make_unique<fcl::Boxd>(l.size));
+      link_half_.push_back(0.5 * l.size);
+    }
+  }
+}
+
+bool Contacts::collide(const fcl::CollisionGeometryd& ga, const Eigen::Isometry3d& pa,
+                       const fcl::CollisionGeometryd& gb, const Eigen::Isometry3d& pb) {
+  fcl::CollisionResultd result;
+  fcl::collide(&ga, pa, &gb, pb, request_, result);
+  points_.clear();
+  for (std::size_t i = 0; i < result.numContacts(); ++i) {
+    const auto& c = result.getContact(i);
+    // FCL's normal points from a to b; the force on a pushes along -normal.
+    if (c.penetration_depth > 0.0) points_.push_back({c.pos, -c.normal, c.penetration_depth});
+  }
+  return !points_.empty();
+}
+
+void Contacts::apply(State& state, int a, int b, const Other& o, const PairKey& key, double mu,
+                     double dt, std::vector<Wrench>& wrenches) {
+  Body& body = state.bodies[static_cast<std::size_t>(a)];
+  const double ma = body.box.mass;
+  // Box pairs use the reduced mass whether the other box is awake or not, so
+  // a neighbour falling asleep does not change the force (and kick this box).
+  const double m = o.mass > 0.0 ? ma * o.mass / (ma + o.mass) : ma;
+  const double omega = options_.contact_omega;
+  const double n_points = static_cast<double>(points_.size());
+  const double k = m * omega * omega / n_points;
+  const double c = 2.0 * options_.damping_ratio * m * omega / n_points;
+  const Eigen::Vector3d ca = body.box.pose.translation();
+  const auto relative_velocity = [&](const Eigen::Vector3d& p) -> Eigen::Vector3d {
+    return (body.v + body.w.cross(p - ca)) - (o.v + o.w.cross(p - o.centre) + o.belt);
+  };
+  Wrench on_a, on_b;
+  double normal_sum = 0.0;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::Zero();
+  for (const Point& pt : points_) {
+    const double vn = relative_velocity(pt.p).dot(pt.n);
+    const double fn = std::max(0.0, k * pt.depth - c * vn);
+    const Eigen::Vector3d f = fn * pt.n;
+    on_a.force += f;
+    on_a.torque += (pt.p - ca).cross(f);
+    on_b.force -= f;
+    on_b.torque -= (pt.p - o.centre).cross(f);
+    normal_sum += fn;
+    centroid += pt.p;
+    normal += pt.n;
+  }
+  centroid /= n_points;
+  normal.normalize();
+  // Friction: a tangential spring-damper at the contact centroid plus a
+  // torsional one about the normal, each capped by Coulomb's law; the springs
+  // keep resting boxes from creeping or spinning.
+  if (normal_sum > 0.0) {
+    const Eigen::Vector3d vr = relative_velocity(centroid);
+    const Eigen::Vector3d vt = vr - normal * normal.dot(vr);
+    Eigen::Vector3d s = Eigen::Vector3d::Zero();
+    double twist = 0.0;
+    const auto old =
+        std::lower_bound(old_pairs_.begin(), old_pairs_.end(), key,
+                         [](const PairState& p, const PairKey& k2) { return p.key < k2; });
+    if (old != old_pairs_.end() && old->key == key) {
+      s = old->bristle - normal * normal.dot(old->bristle);
+      twist = old->twist;
+    }
+    s += vt * dt;
+    const double kt = 0.5 * k * n_points, ct = 0.5 * c * n_points;
+    Eigen::Vector3d ft = -kt * s - ct * vt;
+    const double limit = mu * normal_sum;
+    if (ft.norm() > limit) {
+      ft *= limit / ft.norm();
+      s = -ft / kt;  // slipping: the spring stays at the Coulomb limit
+    }
+    on_a.force += ft;
+    on_a.torque += (centroid - ca).cross(ft);
+    on_b.force -= ft;
+    on_b.torque -= (centroid - o.centre).cross(ft);
+
+    double arm = 0.0, arm2 = 0.0;  // contact patch size around the centroid
+    for (const Point& pt : points_) {
+      const Eigen::Vector3d r = pt.p - centroid;
+      const double d2 = (r - normal * normal.dot(r)).squaredNorm();
+      arm += std::sqrt(d2) / n_points;
+      arm2 += d2 / n_points;
+    }
+    if (arm > 1e-4) {
+      const double spin = normal.dot(body.w - o.w);
+      twist += spin * dt;
+      double torque = -(kt * twist + ct * spin) * arm2;
+      const double torque_limit = mu * normal_sum * arm;
+      if (std::abs(torque) > torque_limit) {
+        torque = std::copysign(torque_limit, torque);
+        twist = -torque / (kt * arm2);
+      }
+      on_a.torque += torque * normal;
+      on_b.torque -= torque * normal;
+    } else {
+      twist = 0.0;
+    }
+    state.pairs.push_back({key, s, twist});
+  }
+  Wrench& wa = wrenches[static_cast<std::size_t>(a)];
+  wa.force += on_a.force;
+  wa.torque += on_a.torque;
+  if (b >= 0) {
+    Wrench& wb = wrenches[static_cast<std::size_t>(b)];
+    wb.force += on_b.force;
+    wb.torque += on_b.torque;
+  }
+}
+
+void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
+                       std::vector<Wrench>& wrenches, std::vector<int>& wake) {
+  std::vector<Body>& bodies = state.bodies;
+  const int n = static_cast<int>(bodies.size());
+  wrenches.assign(bodies.size(), Wrench{});
+  old_pairs_.swap(state.pairs);
+  state.pairs.clear();
+  for (int i = 0; i < n; ++i) {
+    const Body& b = bodies[static_cast<std::size_t>(i)];
+    if (b.mode == Mode::kGone) continue;
+    const Eigen::Vector3d e = b.box.pose.linear().cwiseAbs() * (0.5 * b.box.size);
+    lo_[static_cast<std::size_t>(i)] = b.box.pose.translation() - e;
+    hi_[static_cast<std::size_t>(i)] = b.box.pose.translation() + e;
+  }
+  const auto corner_speed = [](const Body& b) { return b.v.norm() + b.w.norm() * b.radius; };
+  const auto deepest = [&]() {
+    double depth = 0.0;
+    for (const Point& pt : points_) depth = std::max(depth, pt.depth);
+    return depth;
+  };
+
+  // Trailer planes: floor, ceiling, side walls, front wall (the rear is open).
+  const double hw = 0.5 * trailer_.width;
+  const std::array<std::pair<Eigen::Vector3d, double>, 5> planes{{
+      {Eigen::Vector3d::UnitZ(), 0.0},
+      {-Eigen::Vector3d::UnitZ(), -trailer_.height},
+      {Eigen::Vector3d::UnitY(), -hw},
+      {-Eigen::Vector3d::UnitY(), -hw},
+      {-Eigen::Vector3d::UnitX(), -trailer_.depth},
+  }};
+  const Other ground{0.0, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                     Eigen::Vector3d::Zero()};
+
+  for (int i = 0; i < n; ++i) {
+    Body& a = bodies[static_cast<std::size_t>(i)];
+    if (a.mode != Mode::kAwake) continue;
+    const std::size_t ai = static_cast<std::size_t>(i);
+    for (std::size_t p = 0; p < planes.size(); ++p) {
+      const auto& [normal, offset] = planes[p];
+      // Quick reject: the AABB is on the inner side.
+      const Eigen::Vector3d probe = (normal.array() > 0).select(lo_[ai], hi_[ai]);
+      if (normal.dot(probe) >= offset) continue;
+      points_.clear();
+      for (int corner = 0; corner < 8; ++corner) {
+        const Eigen::Vector3d local(((corner & 1) ? 0.5 : -0.5) * a.box.size.x(),
+                                    ((corner & 2) ? 0.5 : -0.5) * a.box.size.y(),
+                                    ((corner & 4) ? 0.5 : -0.5) * a.box.size.z());
+        const Eigen::Vector3d x = a.box.pose * local;
+        const double depth = offset - normal.dot(x);
+        if (depth > 0.0) points_.push_back({x + 0.5 * depth * normal, normal, depth});
+      }
+      if (!points_.empty()) {
+        apply(state, i, -1, ground, {a.box.id, static_cast<std::uint32_t>(p), kBoxPlane},
+              options_.friction_trailer, dt, wrenches);
+      }
+    }
+    // A box moving fast wakes the sleeping boxes next to it even without
+    // contact: a support falling away leaves the box above it hanging.
+    const bool fast = corner_speed(a) > options_.wake_speed;
+    const Eigen::Vector3d margin = Eigen::Vector3d::Constant(kWakeMargin);
+    for (int j = 0; j < n; ++j) {
+      const std::size_t bj = static_cast<std::size_t>(j);
+      const Body& b = bodies[bj];
+      if (j == i || b.mode == Mode::kGone || (b.mode == Mode::kAwake && j < i)) continue;
+      if (fast && b.mode == Mode::kAsleep &&
+          !disjoint(lo_[ai] - margin, hi_[ai] + margin, lo_[bj], hi_[bj])) {
+        wake.push_back(j);
+      }
+      if (disjoint(lo_[ai], hi_[ai], lo_[bj], hi_[bj])) continue;
+      if (!collide(box_shapes_[ai], a.box.pose, box_shapes_[bj], b.box.pose)) continue;
+      // Pressed into hard by a slow box (e.g. a growing load): wake up too.
+      if (b.mode == Mode::kAsleep && deepest() > options_.wake_depth) wake.push_back(j);
+      const Other other{b.box.mass, b.box.pose.translation(), b.v, b.w, Eigen::Vector3d::Zero()};
+      const PairKey key{std::min(a.box.id, b.box.id), std::max(a.box.id, b.box.id), kBoxBox};
+      // Held boxes take the reaction too: the cups feel it.
+      apply(state, i, b.mode == Mode::kAsleep ? -1 : j, other, key, options_.friction_box, dt,
+            wrenches);
+    }
+  }
+
+  // Robot shapes against boxes.
+  for (std::size_t l = 0; l < links.size(); ++l) {
+    const Mover& link = links[l];
+    const Eigen::Vector3d e = link.pose.linear().cwiseAbs() * link_half_[l];
+    const Eigen::Vector3d llo = link.pose.translation() - e, lhi = link.pose.translation() + e;
+    const bool moving = link.speed > 1e-6 || link.belt.squaredNorm() > 0.0;
+    for (int j = 0; j < n; ++j) {
+      const std::size_t bj = static_cast<std::size_t>(j);
+      const Body& b = bodies[bj];
+      if (b.mode == Mode::kGone || b.mode == Mode::kHeld) continue;
+      if (b.mode == Mode::kAsleep && !moving) continue;
+      if (disjoint(llo, lhi, lo_[bj], hi_[bj])) continue;
+      if (!collide(box_shapes_[bj], b.box.pose, *link_shapes_[l], link.pose)) continue;
+      if (b.mode == Mode::kAsleep) {
+        wake.push_back(j);
+        continue;
+      }
+      const Other other{0.0, link.pose.translation(), link.v, link.w, link.belt};
+      apply(state, j, -1, other, {b.box.id, static_cast<std::uint32_t>(l), kBoxLink},
+            options_.friction_robot, dt, wrenches);
+    }
+  }
+
+  // Held boxes that move wake the sleeping boxes next to them.
+  for (int i = 0; i < n; ++i) {
+    const Body& h = bodies[static_cast<std::size_t>(i)];
+    if (h.mode != Mode::kHeld || corner_speed(h) <= 1e-6) continue;
+    for (int j = 0; j < n; ++j) {
+      const std::size_t bj = static_cast<std::size_t>(j);
+      const Body& b = bodies[bj];
+      if (b.mode != Mode::kAsleep) continue;
+      const Eigen::Vector3d margin = Eigen::Vector3d::Constant(kWakeMargin);
+      if (!disjoint(lo_[static_cast<std::size_t>(i)] - margin,
+                    hi_[static_cast<std::size_t>(i)] + margin, lo_[bj], hi_[bj])) {
+        wake.push_back(j);
+      }
+    }
+  }
+  std::sort(state.pairs.begin(), state.pairs.end(),
+            [](const PairState& x, const PairState& y) { return x.key < y.key; });
+  std::sort(wake.begin(), wake.end());
+  wake.erase(std::unique(wake.begin(), wake.end()), wake.end());
+}
+
+}  // namespace plr::sim::detail

@@ -1,0 +1,146 @@
+// The only translation unit that includes Simbody. No `using namespace
+// SimTK`: its generic operators would capture Eigen expressions.
+#include "multibody.hpp"
+
+#include <Simbody.h>
+
+#include <cmath>
+
+namespace plr::sim::detail {
+namespace {
+
+// Adds the contact wrenches computed outside Simbody (FCL penalty contact).
+class BufferedForce : public SimTK::Force::Custom::Implementation {
+ public:
+  BufferedForce(const std::vector<SimTK::MobilizedBodyIndex>* index,
+                const std::vector<SimTK::SpatialVec>* wrench)
+      : index_(index), wrench_(wrench) {}
+  void calcForce(const SimTK::State&, SimTK::Vector_<SimTK::SpatialVec>& body_forces,
+                 SimTK::Vector_<SimTK::Vec3>&, SimTK::Vector&) const override {
+    for (std::size_t i = 0; i < index_->size(); ++i) body_forces[(*index_)[i]] += (*wrench_)[i];
+  }
+  SimTK::Real calcPotentialEnergy(const SimTK::State&) const override { return 0.0; }
+
+ private:
+  const std::vector<SimTK::MobilizedBodyIndex>* index_;
+  const std::vector<SimTK::SpatialVec>* wrench_;
+};
+
+SimTK::Vec3 to_simtk(const Eigen::Vector3d& v) {
+  return SimTK::Vec3(v.x(), v.y(), v.z());
+}
+Eigen::Vector3d to_eigen(const SimTK::Vec3& v) {
+  return Eigen::Vector3d(v[0], v[1], v[2]);
+}
+
+}  // namespace
+
+struct Multibody::Impl {
+  std::unique_ptr<SimTK::MultibodySystem> system;
+  SimTK::SimbodyMatterSubsystem* matter = nullptr;
+  std::unique_ptr<SimTK::SimbodyMatterSubsystem> matter_owner;
+  std::unique_ptr<SimTK::GeneralForceSubsystem> forces;
+  std::vector<SimTK::MobilizedBody::Free> bodies;
+  std::vector<SimTK::MobilizedBodyIndex> index;
+  std::vector<SimTK::SpatialVec> wrench;
+  SimTK::State state;
+  SimTK::Vector qdot;
+};
+
+Multibody::Multibody() : impl_(std::make_unique<Impl>()) {}
+Multibody::~Multibody() = default;
+
+void Multibody::build(const std::vector<FreeBody>& bodies, double gravity, double time) {
+  auto next = std::make_unique<Impl>();
+  Impl& m = *next;
+  m.system = std::make_unique<SimTK::MultibodySystem>();
+  m.matter_owner = std::make_unique<SimTK::SimbodyMatterSubsystem>(*m.system);
+  m.matter = m.matter_owner.get();
+  m.forces = std::make_unique<SimTK::GeneralForceSubsystem>(*m.system);
+  SimTK::Force::Gravity(*m.forces, *m.matter, SimTK::Vec3(0, 0, -gravity));
+  for (const FreeBody& b : bodies) {
+    const SimTK::Vec3 half = to_simtk(0.5 * b.size);
+    SimTK::Body::Rigid body(SimTK::MassProperties(
+        b.mass, SimTK::Vec3(0), SimTK::UnitInertia::brick(half[0], half[1], half[2])));
+    m.bodies.emplace_back(m.matter->Ground(), SimTK::Transform(), body, SimTK::Transform());
+    m.index.push_back(m.bodies.back().getMobilizedBodyIndex());
+  }
+  m.wrench.assign(bodies.size(), SimTK::SpatialVec(SimTK::Vec3(0), SimTK::Vec3(0)));
+  SimTK::Force::Custom(*m.forces, new BufferedForce(&m.index, &m.wrench));
+  m.state = m.system->realizeTopology();
+  m.system->realizeModel(m.state);
+  m.state.setTime(time);
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    const FreeBody& b = bodies[i];
+    const SimTK::MobilizedBody::Free& mb = m.bodies[i];
+    if (b.q.size() == 7 && b.u.size() == 6) {
+      const int q0 = mb.getFirstQIndex(m.state), u0 = mb.getFirstUIndex(m.state);
+      for (int k = 0; k < 7; ++k) m.state.updQ()[q0 + k] = b.q[static_cast<std::size_t>(k)];
+      for (int k = 0; k < 6; ++k) m.state.updU()[u0 + k] = b.u[static_cast<std::size_t>(k)];
+    } else {
+      const Eigen::Matrix3d r = b.pose.linear();
+      SimTK::Mat33 rm;
+      for (int row = 0; row < 3; ++row) {
+        for (int col = 0; col < 3; ++col) rm(row, col) = r(row, col);
+      }
+      mb.setQToFitTransform(
+          m.state, SimTK::Transform(SimTK::Rotation(rm, true), to_simtk(b.pose.translation())));
+      mb.setUToFitVelocity(m.state, SimTK::SpatialVec(to_simtk(b.w), to_simtk(b.v)));
+    }
+  }
+  m.system->realize(m.state, SimTK::Stage::Velocity);
+  impl_ = std::move(next);
+}
+
+int Multibody::size() const {
+  return static_cast<int>(impl_->bodies.size());
+}
+
+void Multibody::coordinates(int i, std::vector<double>& q, std::vector<double>& u) const {
+  const auto& mb = impl_->bodies[static_cast<std::size_t>(i)];
+  const int q0 = mb.getFirstQIndex(impl_->state), u0 = mb.getFirstUIndex(impl_->state);
+  q.resize(7);
+  u.resize(6);
+  for (int k = 0; k < 7; ++k) q[static_cast<std::size_t>(k)] = impl_->state.getQ()[q0 + k];
+  for (int k = 0; k < 6; ++k) u[static_cast<std::size_t>(k)] = impl_->state.getU()[u0 + k];
+}
+
+void Multibody::read(int i, Eigen::Isometry3d& pose, Eigen::Vector3d& v, Eigen::Vector3d& w) const {
+  const auto& mb = impl_->bodies[static_cast<std::size_t>(i)];
+  const SimTK::Transform& x = mb.getBodyTransform(impl_->state);
+  const SimTK::SpatialVec& vel = mb.getBodyVelocity(impl_->state);
+  pose = Eigen::Isometry3d::Identity();
+  for (int row = 0; row < 3; ++row) {
+    for (int col = 0; col < 3; ++col) pose.linear()(row, col) = x.R().asMat33()(row, col);
+  }
+  pose.translation() = to_eigen(x.p());
+  w = to_eigen(vel[0]);
+  v = to_eigen(vel[1]);
+}
+
+void Multibody::set_wrench(int i, const Eigen::Vector3d& force, const Eigen::Vector3d& torque) {
+  impl_->wrench[static_cast<std::size_t>(i)] = SimTK::SpatialVec(to_simtk(torque), to_simtk(force));
+}
+
+void Multibody::step(double dt) {
+  Impl& m = *impl_;
+  SimTK::State& s = m.state;
+  m.system->realize(s, SimTK::Stage::Acceleration);
+  const SimTK::Vector u = s.getU() + dt * s.getUDot();
+  s.updU() = u;
+  m.matter->multiplyByN(s, false, u, m.qdot);
+  SimTK::Vector& q = s.updQ();
+  q += dt * m.qdot;
+  // Free mobilizers use quaternions (first 4 q); keep them unit length.
+  for (const auto& mb : m.bodies) {
+    const int q0 = mb.getFirstQIndex(s);
+    double n = 0.0;
+    for (int k = 0; k < 4; ++k) n += q[q0 + k] * q[q0 + k];
+    n = 1.0 / std::sqrt(n);
+    for (int k = 0; k < 4; ++k) q[q0 + k] *= n;
+  }
+  s.updTime() += dt;
+  m.system->realize(s, SimTK::Stage::Velocity);
+}
+
+}  // namespace plr::sim::detail

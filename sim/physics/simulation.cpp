@@ -1,0 +1,529 @@
+// Orchestrates one fixed step: move robot shapes and held boxes, compute
+// contact, let Simbody integrate the awake boxes, then sleep, wake, unload
+// and check the suction hold.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "contact.hpp"
+#include "multibody.hpp"
+#include "plr/sim/physics.hpp"
+#include "state.hpp"
+
+namespace plr::sim {
+
+using detail::Body;
+using detail::Mode;
+using detail::Mover;
+using detail::State;
+using detail::Wrench;
+
+struct Snapshot::Data {
+  State state;
+};
+
+Snapshot::Snapshot() = default;
+Snapshot::~Snapshot() = default;
+Snapshot::Snapshot(const Snapshot&) = default;
+Snapshot& Snapshot::operator=(const Snapshot&) = default;
+double Snapshot::time() const {
+  return data_ ? data_->state.time : 0.0;
+}
+
+namespace {
+
+constexpr double kLoadFilter = 0.02;  // s; cups are compliant, contact spikes are not felt
+
+Eigen::Isometry3d interpolate(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double s) {
+  Eigen::Isometry3d x = Eigen::Isometry3d::Identity();
+  x.linear() = Eigen::Quaterniond(a.rotation())
+                   .slerp(s, Eigen::Quaterniond(b.rotation()))
+                   .toRotationMatrix();
+  x.translation() = (1.0 - s) * a.translation() + s * b.translation();
+  return x;
+}
+
+// Constant twist that carries pose a to pose b in `duration`.
+void twist(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double duration,
+           Eigen::Vector3d& v, Eigen::Vector3d& w) {
+  v = (b.translation() - a.translation()) / duration;
+  const Eigen::AngleAxisd r(b.rotation() * a.rotation().transpose());
+  w = r.axis() * r.angle() / duration;
+}
+
+double bounding_radius(const LinkGeometry& l) {
+  return l.shape == LinkGeometry::Shape::kCylinder ? std::hypot(l.size.x(), 0.5 * l.size.z())
+                                                   : 0.5 * l.size.norm();
+}
+
+}  // namespace
+
+struct Simulation::Impl {
+  PhysicsOptions options;
+  Trailer trailer;
+  State state;
+  detail::Contacts contacts;
+  detail::Multibody multibody;
+  std::vector<int> slots;  // body index of each Simbody body
+  bool rebuild = true;     // the awake set changed
+  // Set by restore(): the Simbody system to rebuild before the next step.
+  struct Pending {
+    std::vector<int> slots;
+    std::vector<double> q, u;
+  };
+  std::optional<Pending> pending;
+  PhysicsStats stats;  // work done; not part of the simulated state
+  // Scratch, reused every step.
+  std::vector<Mover> movers;
+  std::vector<Wrench> wrenches;
+  std::vector<int> wake;
+
+  Impl(const World& world, const PhysicsOptions& o)
+      : options(o), trailer(world.trailer), contacts(o, world.trailer) {
+    if (!(o.step > 0.0) || !(o.contact_omega > 0.0)) {
+      throw std::invalid_argument("PhysicsOptions: step and contact_omega must be > 0");
+    }
+    for (const Box& b : world.boxes) {
+      if (!(b.mass > 0.0)) {
+        throw std::invalid_argument("Simulation: box " + std::to_string(b.id) +
+                                    " has no mass (the simulator needs the true world)");
+      }
+      Body body;
+      body.box = b;
+      body.radius = 0.5 * b.size.norm();
+      state.bodies.push_back(body);
+    }
+    contacts.set_boxes(state.bodies);
+  }
+
+  void wake_body(int i) {
+    Body& b = state.bodies[static_cast<std::size_t>(i)];
+    if (b.mode != Mode::kAsleep) return;
+    b.mode = Mode::kAwake;
+    b.still = 0.0;
+    rebuild = true;
+  }
+
+  // Simbody system for `members` (body indices). Bodies already integrated
+  // keep their exact coordinates; `q`, `u` (from a snapshot) override them.
+  void build_multibody(const std::vector<int>& members, const std::vector<double>* q,
+                       const std::vector<double>* u) {
+    std::vector<detail::FreeBody> free;
+    std::vector<int> old_slot(state.bodies.size(), -1);
+    for (std::size_t s = 0; s < slots.size(); ++s) {
+      old_slot[static_cast<std::size_t>(slots[s])] = static_cast<int>(s);
+    }
+    for (const int i : members) {
+      const Body& b = state.bodies[static_cast<std::size_t>(i)];
+      detail::FreeBody f{b.box.mass, b.box.size, b.box.pose, b.v, b.w, {}, {}};
+      if (q != nullptr) {
+        const auto k = static_cast<long>(free.size());
+        f.q.assign(q->begin() + 7 * k, q->begin() + 7 * k + 7);
+        f.u.assign(u->begin() + 6 * k, u->begin() + 6 * k + 6);
+      } else if (old_slot[static_cast<std::size_t>(i)] >= 0) {
+        multibody.coordinates(old_slot[static_cast<std::size_t>(i)], f.q, f.u);
+      }
+      free.push_back(std::move(f));
+    }
+    slots = members;
+    if (!slots.empty()) multibody.build(free, options.gravity, state.time);
+  }
+
+  void rebuild_awake() {
+    std::vector<int> members;
+    for (std::size_t i = 0; i < state.bodies.size(); ++i) {
+      if (state.bodies[i].mode == Mode::kAwake) members.push_back(static_cast<int>(i));
+    }
+    build_multibody(members, nullptr, nullptr);
+    rebuild = false;
+    ++stats.rebuilds;
+  }
+
+  void place_held(const Eigen::Isometry3d& plate, const Eigen::Vector3d& v,
+                  const Eigen::Vector3d& w) {
+    for (Body& b : state.bodies) {
+      if (b.mode != Mode::kHeld) continue;
+      b.box.pose = plate * b.grip;
+      b.w = w;
+      b.v = v + w.cross(b.box.pose.translation() - plate.translation());
+    }
+  }
+
+  bool unloaded_by_belt(const Body& b) const {
+    for (const LinkGeometry& l : state.links) {
+      if (l.belt_speed <= 0.0) continue;
+      const Eigen::Vector3d local = l.pose.inverse() * b.box.pose.translation();
+      if (local.x() < -0.5 * l.size.x() && std::abs(local.y()) < 0.5 * l.size.y() &&
+          local.z() > 0.0 && local.z() < 0.5 * l.size.z() + 1.0) {
+        return true;
+      }
+    }
+    return false;
+  }
+
+  void remove(int i) {
+    Body& b = state.bodies[static_cast<std::size_t>(i)];
+    const bool was_awake = b.mode == Mode::kAwake;
+    b.mode = Mode::kGone;
+    if (was_awake) rebuild = true;
+    // What rested on or leaned against it must notice that it is gone.
+    const Eigen::Vector3d e =
+        b.box.pose.linear().cwiseAbs() * (0.5 * b.box.size) + Eigen::Vector3d::Constant(0.02);
+    const Eigen::Vector3d lo = b.box.pose.translation() - e, hi = b.box.pose.translation() + e;
+    for (std::size_t j = 0; j < state.bodies.size(); ++j) {
+      const Body& o = state.bodies[j];
+      if (o.mode != Mode::kAsleep) continue;
+      const Eigen::Vector3d oe = o.box.pose.linear().cwiseAbs() * (0.5 * o.box.size);
+      const Eigen::Vector3d olo = o.box.pose.translation() - oe;
+      const Eigen::Vector3d ohi = o.box.pose.translation() + oe;
+      if ((olo.array() <= hi.array()).all() && (lo.array() <= ohi.array()).all()) {
+        wake_body(static_cast<int>(j));
+      }
+    }
+  }
+
+  void fixed_step(double dt, double fraction, double duration,
+                  const std::vector<LinkGeometry>& from_links,
+                  const std::optional<SuctionPlate>& from_plate, const Eigen::Vector3d& plate_a) {
+    // Robot shapes and plate at the start of this step, moving at constant twist.
+    const bool links_move = !from_links.empty();
+    movers.resize(state.links.size());
+    for (std::size_t l = 0; l < state.links.size(); ++l) {
+      Mover& m = movers[l];
+      const LinkGeometry& target = state.links[l];
+      if (links_move) {
+        m.pose = interpolate(from_links[l].pose, target.pose, fraction);
+        twist(from_links[l].pose, target.pose, duration, m.v, m.w);
+      } else {
+        m.pose = target.pose;
+        m.v.setZero();
+        m.w.setZero();
+      }
+      m.belt = -target.belt_speed * m.pose.linear().col(0);
+      m.speed = m.v.norm() + m.w.norm() * bounding_radius(target);
+    }
+    bool anything_moves = false;
+    if (state.plate) {
+      Eigen::Isometry3d plate = state.plate->pose;
+      Eigen::Vector3d v = Eigen::Vector3d::Zero(), w = Eigen::Vector3d::Zero();
+      if (from_plate) {
+        plate = interpolate(from_plate->pose, state.plate->pose, fraction);
+        twist(from_plate->pose, state.plate->pose, duration, v, w);
+      }
+      place_held(plate, v, w);
+      anything_moves = v.squaredNorm() + w.squaredNorm() > 0.0;
+    }
+    for (const Mover& m : movers) {
+      anything_moves = anything_moves || m.speed > 0.0 || m.belt.squaredNorm() > 0.0;
+    }
+    if (pending) {
+      slots.clear();
+      build_multibody(pending->slots, &pending->q, &pending->u);
+      pending.reset();
+    }
+    if (rebuild) rebuild_awake();
+    anything_moves = anything_moves || !slots.empty();
+
+    wake.clear();
+    if (anything_moves) {
+      contacts.compute(state, movers, dt, wrenches, wake);
+    } else {
+      state.pairs.clear();
+      wrenches.assign(state.bodies.size(), Wrench{});
+    }
+
+    if (!slots.empty()) {
+      for (std::size_t s = 0; s < slots.size(); ++s) {
+        const Wrench& w = wrenches[static_cast<std::size_t>(slots[s])];
+        multibody.set_wrench(static_cast<int>(s), w.force, w.torque);
+      }
+      multibody.step(dt);
+      for (std::size_t s = 0; s < slots.size(); ++s) {
+        Body& b = state.bodies[static_cast<std::size_t>(slots[s])];
+        multibody.read(static_cast<int>(s), b.box.pose, b.v, b.w);
+      }
+      ++stats.dynamic_steps;
+      stats.body_steps += static_cast<std::int64_t>(slots.size());
+    }
+    state.time += dt;
+    ++stats.steps;
+
+    for (const int i : wake) wake_body(i);
+    const Eigen::Vector3d gravity(0.0, 0.0, -options.gravity);
+    for (std::size_t i = 0; i < state.bodies.size(); ++i) {
+      Body& b = state.bodies[i];
+      if (b.mode == Mode::kHeld) {
+        // What the cups must supply: the box's inertia and weight plus what
+        // its neighbours push on it.
+        const Eigen::Vector3d need = b.box.mass * (plate_a - gravity) - wrenches[i].force;
+        b.load += (need.norm() - b.load) * std::min(1.0, dt / kLoadFilter);
+        if (b.load > b.capacity) {
+          b.mode = Mode::kAwake;
+          b.still = 0.0;
+          rebuild = true;
+          state.suction_events.push_back(
+              {b.box.id, state.time, SuctionEvent::Kind::kDropped, b.load, b.capacity});
+        }
+        continue;
+      }
+      if (b.mode == Mode::kGone) continue;
+      if (b.box.pose.translation().x() < 0.0 || unloaded_by_belt(b)) {
+        state.unloaded.push_back({b.box.id, state.time});
+        remove(static_cast<int>(i));
+        continue;
+      }
+      if (b.mode != Mode::kAwake || !options.sleeping) continue;
+      if (b.v.norm() + b.w.norm() * b.radius < options.sleep_speed) {
+        b.still += dt;
+        if (b.still >= options.sleep_time) {
+          b.mode = Mode::kAsleep;
+          b.v.setZero();
+          b.w.setZero();
+          rebuild = true;
+        }
+      } else {
+        b.still = 0.0;
+      }
+    }
+  }
+};
+
+Simulation::Simulation(const World& world, const PhysicsOptions& options)
+    : impl_(std::make_unique<Impl>(world, options)) {}
+Simulation::~Simulation() = default;
+Simulation::Simulation(Simulation&&) noexcept = default;
+Simulation& Simulation::operator=(Simulation&&) noexcept = default;
+
+void Simulation::step(double duration) {
+  Impl& m = *impl_;
+  const auto start = std::chrono::steady_clock::now();
+  const long n = std::lround(duration / m.options.step);
+  if (n <= 0) return;
+  const double total = static_cast<double>(n) * m.options.step;
+  State& s = m.state;
+  // Poses at the start of this call; the targets were set by the caller.
+  std::vector<LinkGeometry> from_links;
+  if (s.links.size() == s.link_targets.size() && !s.links.empty()) {
+    from_links = s.links;
+  }
+  s.links = s.link_targets;
+  std::optional<SuctionPlate> from_plate = s.plate;
+  s.plate = s.plate_target;
+  Eigen::Vector3d plate_v = Eigen::Vector3d::Zero();
+  if (from_plate && s.plate) {
+    plate_v = (s.plate->pose.translation() - from_plate->pose.translation()) / total;
+  }
+  const Eigen::Vector3d plate_a = (plate_v - s.plate_velocity) / total;
+  for (long k = 0; k < n; ++k) {
+    m.fixed_step(m.options.step, static_cast<double>(k) / static_cast<double>(n), total, from_links,
+                 from_plate, plate_a);
+  }
+  s.plate_velocity = plate_v;
+  m.stats.wall_seconds +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+double Simulation::time() const {
+  return impl_->state.time;
+}
+
+World Simulation::world() const {
+  World w;
+  w.trailer = impl_->trailer;
+  for (const Body& b : impl_->state.bodies) {
+    if (b.mode != Mode::kGone) w.boxes.push_back(b.box);
+  }
+  return w;
+}
+
+const Trailer& Simulation::trailer() const {
+  return impl_->trailer;
+}
+
+void Simulation::set_robot_links(std::vector<LinkGeometry> links) {
+  State& s = impl_->state;
+  // A new set of shapes appears where it is; a known set moves there in step().
+  if (links.size() != s.links.size()) s.links = links;
+  impl_->contacts.set_links(links);
+  s.link_targets = std::move(links);
+}
+
+const std::vector<LinkGeometry>& Simulation::robot_links() const {
+  return impl_->state.link_targets;
+}
+
+void Simulation::set_suction_plate(const SuctionPlate& plate) {
+  State& s = impl_->state;
+  if (!s.plate) s.plate = plate;
+  s.plate_target = plate;
+}
+
+std::vector<std::uint32_t> Simulation::suction_on() {
+  Impl& m = *impl_;
+  State& s = m.state;
+  std::vector<std::uint32_t> gripped;
+  if (!s.plate) return gripped;
+  // Grip at the pose the plate will have when the next step starts.
+  const SuctionPlate& plate = s.plate_target ? *s.plate_target : *s.plate;
+  const Eigen::Vector3d z = plate.pose.linear().col(2);
+  std::vector<Eigen::Vector3d> cups;
+  for (int i = 0; i < plate.cups_x; ++i) {
+    for (int j = 0; j < plate.cups_y; ++j) {
+      const Eigen::Vector3d local(
+          (i + 0.5) / plate.cups_x * plate.extent.x() - 0.5 * plate.extent.x(),
+          (j + 0.5) / plate.cups_y * plate.extent.y() - 0.5 * plate.extent.y(), 0.0);
+      cups.push_back(plate.pose * local);
+    }
+  }
+  std::vector<bool> used(cups.size(), false);
+  const double g = m.options.gravity;
+  for (std::size_t i = 0; i < s.bodies.size(); ++i) {
+    Body& b = s.bodies[i];
+    if (b.mode == Mode::kGone || b.mode == Mode::kHeld) continue;
+    int covered = 0;
+    for (int axis = 0; axis < 3 && covered == 0; ++axis) {
+      for (const double side : {-1.0, 1.0}) {
+        const Eigen::Vector3d n = side * b.box.pose.linear().col(axis);
+        if (n.dot(-z) < std::cos(plate.max_tilt)) continue;
+        const Eigen::Vector3d centre = b.box.pose.translation() + n * (0.5 * b.box.size[axis]);
+        for (std::size_t c = 0; c < cups.size(); ++c) {
+          if (used[c]) continue;
+          const double gap = (centre - cups[c]).dot(n) / z.dot(n);
+          if (std::abs(gap) > plate.reach) continue;
+          const Eigen::Vector3d local = b.box.pose.inverse() * (cups[c] + gap * z);
+          bool inside = true;
+          for (int k = 0; k < 3; ++k) {
+            if (k != axis && std::abs(local[k]) > 0.5 * b.box.size[k]) inside = false;
+          }
+          if (!inside) continue;
+          used[c] = true;
+          ++covered;
+        }
+        if (covered > 0) break;
+      }
+    }
+    if (covered == 0) continue;
+    const double capacity = covered * plate.cup_force;
+    const double load = b.box.mass * g;
+    if (load > capacity) {
+      s.suction_events.push_back({b.box.id, s.time, SuctionEvent::Kind::kRefused, load, capacity});
+      continue;
+    }
+    if (b.mode == Mode::kAwake) m.rebuild = true;
+    b.mode = Mode::kHeld;
+    b.grip = plate.pose.inverse() * b.box.pose;
+    b.capacity = capacity;
+    b.load = load;
+    b.v.setZero();
+    b.w.setZero();
+    s.suction_events.push_back({b.box.id, s.time, SuctionEvent::Kind::kGripped, load, capacity});
+    gripped.push_back(b.box.id);
+  }
+  return gripped;
+}
+
+void Simulation::suction_off() {
+  Impl& m = *impl_;
+  for (Body& b : m.state.bodies) {
+    if (b.mode != Mode::kHeld) continue;
+    b.mode = Mode::kAwake;
+    b.still = 0.0;
+    m.rebuild = true;
+    m.state.suction_events.push_back(
+        {b.box.id, m.state.time, SuctionEvent::Kind::kReleased, b.load, b.capacity});
+  }
+}
+
+std::vector<std::uint32_t> Simulation::held_boxes() const {
+  std::vector<std::uint32_t> ids;
+  for (const Body& b : impl_->state.bodies) {
+    if (b.mode == Mode::kHeld) ids.push_back(b.box.id);
+  }
+  return ids;
+}
+
+void Simulation::remove_box(std::uint32_t id) {
+  for (std::size_t i = 0; i < impl_->state.bodies.size(); ++i) {
+    const Body& b = impl_->state.bodies[i];
+    if (b.box.id == id && b.mode != Mode::kGone) {
+      impl_->remove(static_cast<int>(i));
+      return;
+    }
+  }
+  throw std::invalid_argument("remove_box: no box " + std::to_string(id));
+}
+
+const std::vector<UnloadEvent>& Simulation::unloaded() const {
+  return impl_->state.unloaded;
+}
+const std::vector<SuctionEvent>& Simulation::suction_events() const {
+  return impl_->state.suction_events;
+}
+
+bool Simulation::at_rest() const {
+  return std::none_of(impl_->state.bodies.begin(), impl_->state.bodies.end(),
+                      [](const Body& b) { return b.mode == Mode::kAwake; });
+}
+
+double Simulation::settle(double max_time) {
+  const double start = time();
+  while (!at_rest()) {
+    if (time() - start >= max_time - 1e-9) return -1.0;
+    step(std::min(0.01, max_time - (time() - start)));
+  }
+  return time() - start;
+}
+
+Snapshot Simulation::snapshot() const {
+  const Impl& m = *impl_;
+  auto data = std::make_shared<Snapshot::Data>();
+  data->state = m.state;
+  State& s = data->state;
+  s.rebuild = m.rebuild;
+  if (m.pending) {
+    s.slots = m.pending->slots;
+    s.q = m.pending->q;
+    s.u = m.pending->u;
+    Snapshot snap;
+    snap.data_ = std::move(data);
+    return snap;
+  }
+  s.slots = m.slots;
+  std::vector<double> q, u;
+  for (std::size_t k = 0; k < m.slots.size(); ++k) {
+    m.multibody.coordinates(static_cast<int>(k), q, u);
+    s.q.insert(s.q.end(), q.begin(), q.end());
+    s.u.insert(s.u.end(), u.begin(), u.end());
+  }
+  Snapshot snap;
+  snap.data_ = std::move(data);
+  return snap;
+}
+
+void Simulation::restore(const Snapshot& snapshot) {
+  if (!snapshot.data_) throw std::invalid_argument("restore: empty snapshot");
+  Impl& m = *impl_;
+  const State& saved = snapshot.data_->state;
+  m.state = saved;
+  m.state.slots.clear();
+  m.state.q.clear();
+  m.state.u.clear();
+  m.contacts.set_links(m.state.links);
+  // Simbody is rebuilt lazily at the next step, from the exact coordinates.
+  m.pending = Impl::Pending{saved.slots, saved.q, saved.u};
+  m.rebuild = saved.rebuild;
+}
+
+PhysicsStats Simulation::stats() const {
+  PhysicsStats s = impl_->stats;
+  for (const Body& b : impl_->state.bodies) {
+    s.awake += b.mode == Mode::kAwake;
+    s.asleep += b.mode == Mode::kAsleep;
+    s.held += b.mode == Mode::kHeld;
+    s.removed += b.mode == Mode::kGone;
+  }
+  return s;
+}
+
+}  // namespace plr::sim

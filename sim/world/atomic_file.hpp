@@ -1,0 +1,13 @@
+// Internal: crash-safe file replacement shared by world files and pictures.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+namespace plr::sim {
+
+// Temporary file, fsync, rename over `file`, fsync of the directory. Throws
+// WorldFileError naming the file on failure.
+void write_file_atomically(const std::filesystem::path& file, const std::string& content);
+
+}  // namespace plr::sim

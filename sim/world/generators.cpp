@@ -1,0 +1,270 @@
+// Environment families. Walls are built column by column from the front wall
+// backwards; piles are built by dropping boxes onto a height map.
+#include <fcl/fcl.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include "plr/sim/generators.hpp"
+
+namespace plr::sim {
+namespace {
+
+constexpr double kGap = 0.01;  // between neighbouring columns, slabs and walls
+
+struct WallParams {
+  std::vector<double> depths;                           // box extent along x, per slab
+  std::vector<double> widths;                           // column widths
+  std::vector<double> heights;                          // box heights
+  double stack_min, stack_max;                          // column height limits
+  double mass_median, mass_spread, mass_min, mass_max;  // log-normal, clipped
+  int min_slabs;
+  std::size_t min_boxes;
+};
+
+struct PileParams {
+  int count_min, count_max;
+  double size_min, size_max;
+  double flat_share;  // share of flat boxes (height halved)
+  double mass_median, mass_spread, mass_min, mass_max;
+  double region;      // m of trailer (from the front wall) the pile covers
+  double front_bias;  // > 1 packs boxes towards the front wall
+};
+
+WallParams wall_params(EnvFamily family) {
+  if (family == EnvFamily::kA1) {
+    return {{0.40, 0.45, 0.50},
+            {0.40, 0.45, 0.50, 0.55},
+            {0.30, 0.35, 0.40},
+            2.0,
+            2.4,
+            6.0,
+            0.35,
+            2.0,
+            15.0,
+            6,
+            150};
+  }
+  return {{0.35, 0.55, 0.60},
+          {0.30, 0.35, 0.60, 0.70},
+          {0.25, 0.30, 0.45, 0.50},
+          1.4,
+          2.4,
+          9.0,
+          0.6,
+          1.0,
+          30.0,
+          5,
+          100};
+}
+
+PileParams pile_params(EnvFamily family) {
+  if (family == EnvFamily::kB1) {
+    return {70, 90, 0.25, 0.50, 0.0, 6.0, 0.4, 1.5, 15.0, 3.0, 1.5};
+  }
+  return {90, 120, 0.20, 0.60, 0.3, 8.0, 0.7, 1.0, 35.0, 4.0, 1.0};
+}
+
+double draw_mass(std::mt19937_64& rng, double median, double spread, double lo, double hi) {
+  std::lognormal_distribution<double> dist(std::log(median), spread);
+  return std::clamp(dist(rng), lo, hi);
+}
+
+template <typename T>
+const T& pick(std::mt19937_64& rng, const std::vector<T>& values) {
+  std::uniform_int_distribution<std::size_t> dist(0, values.size() - 1);
+  return values[dist(rng)];
+}
+
+World make_wall(EnvFamily family, std::uint64_t seed, const Trailer& trailer) {
+  const WallParams p = wall_params(family);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::uniform_real_distribution<double> jitter(-0.4 * kGap, 0.4 * kGap);
+  World world;
+  world.trailer = trailer;
+  std::uint32_t next_id = 1;
+  double front = trailer.depth - kGap;  // x of the current slab's front face
+  for (int slab = 0; slab < p.min_slabs || world.boxes.size() < p.min_boxes; ++slab) {
+    const double depth = pick(rng, p.depths);
+    if (front - depth < 0.5 * trailer.depth) break;  // keep the rear half free
+    // Columns across the width; leftover width becomes even gaps.
+    std::vector<double> columns;
+    double used = kGap;
+    for (;;) {
+      const double w = pick(rng, p.widths);
+      if (used + w + kGap > trailer.width) {
+        const double narrowest = *std::min_element(p.widths.begin(), p.widths.end());
+        if (used + narrowest + kGap > trailer.width) break;
+        continue;
+      }
+      columns.push_back(w);
+      used += w + kGap;
+    }
+    const double spare = (trailer.width - used) / static_cast<double>(columns.size() + 1);
+    double y = -0.5 * trailer.width + kGap + spare;
+    for (const double w : columns) {
+      const double limit =
+          std::min(p.stack_min + (p.stack_max - p.stack_min) * unit(rng), trailer.height - 0.2);
+      double z = 0.0;
+      for (;;) {
+        const double h = pick(rng, p.heights);
+        if (z + h > limit) break;
+        Box box;
+        box.id = next_id++;
+        box.size = {depth, w, h};
+        box.pose = Eigen::Isometry3d::Identity();
+        box.pose.translation() = Eigen::Vector3d(front - 0.5 * depth + jitter(rng),
+                                                 y + 0.5 * w + jitter(rng), z + 0.5 * h);
+        box.mass = draw_mass(rng, p.mass_median, p.mass_spread, p.mass_min, p.mass_max);
+        world.boxes.push_back(box);
+        z += h;
+      }
+      y += w + kGap + spare;
+    }
+    front -= depth + kGap;
+  }
+  return world;
+}
+
+// Height map over the trailer floor, cells of kCell metres.
+class HeightMap {
+ public:
+  static constexpr double kCell = 0.02;
+  explicit HeightMap(const Trailer& t)
+      : t_(t),
+        nx_(static_cast<int>(std::ceil(t.depth / kCell))),
+        ny_(static_cast<int>(std::ceil(t.width / kCell))),
+        h_(static_cast<std::size_t>(nx_ * ny_), 0.0) {}
+
+  template <typename F>
+  void for_cells(const Box& box, F&& f) {
+    // Footprint of the (yawed) box, inflated by one cell so that rasterising
+    // never misses an edge.
+    const Eigen::Matrix3d r = box.pose.linear();
+    const Eigen::Vector2d c = box.pose.translation().head<2>();
+    const Eigen::Vector2d half = 0.5 * box.size.head<2>() + Eigen::Vector2d::Constant(kCell);
+    const Eigen::Vector2d ext = r.topLeftCorner<2, 2>().cwiseAbs() * half;
+    const int x0 = std::max(0, static_cast<int>((c.x() - ext.x()) / kCell));
+    const int x1 = std::min(nx_ - 1, static_cast<int>((c.x() + ext.x()) / kCell));
+    const int y0 = std::max(0, static_cast<int>((c.y() - ext.y() + 0.5 * t_.width) / kCell));
+    const int y1 = std::min(ny_ - 1, static_cast<int>((c.y() + ext.y() + 0.5 * t_.width) / kCell));
+    for (int i = x0; i <= x1; ++i) {
+      for (int j = y0; j <= y1; ++j) {
+        const Eigen::Vector2d cell((i + 0.5) * kCell, (j + 0.5) * kCell - 0.5 * t_.width);
+        const Eigen::Vector2d local = r.topLeftCorner<2, 2>().transpose() * (cell - c);
+        if (std::abs(local.x()) <= half.x() && std::abs(local.y()) <= half.y()) {
+          f(h_[static_cast<std::size_t>(i * ny_ + j)]);
+        }
+      }
+    }
+  }
+
+ private:
+  Trailer t_;
+  int nx_, ny_;
+  std::vector<double> h_;
+};
+
+World make_pile(EnvFamily family, std::uint64_t seed, const Trailer& trailer) {
+  const PileParams p = pile_params(family);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::uniform_int_distribution<int> count_dist(p.count_min, p.count_max);
+  World world;
+  world.trailer = trailer;
+  HeightMap map(trailer);
+  std::vector<fcl::Boxd> shapes;
+  shapes.reserve(static_cast<std::size_t>(p.count_max));
+  const int count = count_dist(rng);
+  fcl::CollisionRequestd request;
+  for (int n = 0, tries = 0; n < count && tries < 20 * count; ++tries) {
+    Box box;
+    box.id = static_cast<std::uint32_t>(world.boxes.size() + 1);
+    for (int k = 0; k < 3; ++k) box.size[k] = p.size_min + (p.size_max - p.size_min) * unit(rng);
+    if (unit(rng) < p.flat_share) box.size.z() *= 0.5;
+    box.mass = draw_mass(rng, p.mass_median, p.mass_spread, p.mass_min, p.mass_max);
+    const double yaw = M_PI * (unit(rng) - 0.5);
+    box.pose = Eigen::Isometry3d::Identity();
+    box.pose.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const Eigen::Vector3d ext = box.pose.linear().cwiseAbs() * (0.5 * box.size);
+    const double x_hi = trailer.depth - ext.x() - kGap;
+    const double x_lo = std::max(trailer.depth - p.region + ext.x(), 0.5 * trailer.depth);
+    const double y_lim = 0.5 * trailer.width - ext.y() - kGap;
+    if (x_hi <= x_lo || y_lim <= 0.0) continue;
+    const double x = x_hi - (x_hi - x_lo) * std::pow(unit(rng), p.front_bias);
+    const double y = y_lim * (2.0 * unit(rng) - 1.0);
+    box.pose.translation() = Eigen::Vector3d(x, y, 0.0);
+    double base = 0.0;
+    map.for_cells(box, [&](double& h) { base = std::max(base, h); });
+    // Only keep drops whose centre is supported near the landing height:
+    // boxes balanced on one corner would tumble for seconds.
+    Box core = box;
+    core.size.head<2>() *= 0.3;
+    double centre = 0.0;
+    map.for_cells(core, [&](double& h) { centre = std::max(centre, h); });
+    if (centre < base - 0.03) continue;
+    // Hover a little above the support so the drop starts free of contact.
+    double z = base + 0.5 * box.size.z() + 0.003;
+    const fcl::Boxd shape(box.size);
+    for (bool clear = false; !clear;) {
+      box.pose.translation().z() = z;
+      clear = true;
+      for (std::size_t i = 0; i < world.boxes.size() && clear; ++i) {
+        fcl::CollisionResultd result;
+        clear =
+            fcl::collide(&shape, box.pose, &shapes[i], world.boxes[i].pose, request, result) == 0;
+      }
+      if (!clear) z += 0.01;
+    }
+    if (z + 0.5 * box.size.z() > trailer.height - 0.1) continue;
+    const double top = z + 0.5 * box.size.z();
+    map.for_cells(box, [&](double& h) { h = std::max(h, top); });
+    world.boxes.push_back(box);
+    shapes.emplace_back(box.size);
+    ++n;
+  }
+  return world;
+}
+
+}  // namespace
+
+std::string_view to_string(EnvFamily family) {
+  switch (family) {
+    case EnvFamily::kA1:
+      return "A1";
+    case EnvFamily::kA2:
+      return "A2";
+    case EnvFamily::kB1:
+      return "B1";
+    case EnvFamily::kB2:
+      return "B2";
+  }
+  return "?";
+}
+
+std::optional<EnvFamily> parse_env_family(std::string_view name) {
+  for (EnvFamily f : {EnvFamily::kA1, EnvFamily::kA2, EnvFamily::kB1, EnvFamily::kB2}) {
+    const std::string_view s = to_string(f);
+    if (name.size() == 2 && std::toupper(static_cast<unsigned char>(name[0])) == s[0] &&
+        name[1] == s[1]) {
+      return f;
+    }
+  }
+  return std::nullopt;
+}
+
+World generate_world(EnvFamily family, std::uint64_t seed, const Trailer& trailer) {
+  if (trailer.width < 1.0 || trailer.height < 1.0 || trailer.depth < 4.0) {
+    throw std::invalid_argument("generate_world: trailer smaller than 1 x 1 x 4 m");
+  }
+  if (family == EnvFamily::kA1 || family == EnvFamily::kA2) {
+    return make_wall(family, seed, trailer);
+  }
+  return make_pile(family, seed, trailer);
+}
+
+}  // namespace plr::sim

@@ -1,0 +1,97 @@
+#include <gtest/gtest.h>
+
+#include <numeric>
+
+#include "plr/sim/generators.hpp"
+
+namespace plr::sim {
+namespace {
+
+const std::array<EnvFamily, 4> kFamilies{EnvFamily::kA1, EnvFamily::kA2, EnvFamily::kB1,
+                                         EnvFamily::kB2};
+
+double mean_mass(const World& w) {
+  double s = 0.0;
+  for (const Box& b : w.boxes) s += b.mass;
+  return s / static_cast<double>(w.boxes.size());
+}
+
+TEST(Generators, A1HasAtLeast150Boxes) {
+  for (std::uint64_t seed = 0; seed < 30; ++seed) {
+    EXPECT_GE(generate_world(EnvFamily::kA1, seed).boxes.size(), 150u) << seed;
+  }
+}
+
+TEST(Generators, SameSeedSameWorldOtherSeedOtherWorld) {
+  for (EnvFamily f : kFamilies) {
+    const World a = generate_world(f, 9), b = generate_world(f, 9), c = generate_world(f, 10);
+    ASSERT_EQ(a.boxes.size(), b.boxes.size());
+    for (std::size_t i = 0; i < a.boxes.size(); ++i) {
+      EXPECT_EQ(a.boxes[i].pose.matrix(), b.boxes[i].pose.matrix());
+      EXPECT_EQ(a.boxes[i].mass, b.boxes[i].mass);
+    }
+    EXPECT_NE(mean_mass(a), mean_mass(c)) << to_string(f);
+  }
+}
+
+TEST(Generators, BoxesFillFromTheFrontAndLeaveTheRearFree) {
+  for (EnvFamily f : kFamilies) {
+    for (std::uint64_t seed = 0; seed < 10; ++seed) {
+      const World w = generate_world(f, seed);
+      double max_x = 0.0, min_x = 1e9;
+      for (const Box& b : w.boxes) {
+        max_x = std::max(max_x, b.pose.translation().x());
+        min_x = std::min(min_x, b.pose.translation().x());
+        EXPECT_GT(b.mass, 0.0);
+      }
+      EXPECT_GT(max_x, w.trailer.depth - 0.5) << to_string(f);
+      EXPECT_GT(min_x, 0.5 * w.trailer.depth) << to_string(f);
+    }
+  }
+}
+
+TEST(Generators, NoInterpenetration) {
+  for (EnvFamily f : kFamilies) {
+    for (std::uint64_t seed = 0; seed < 20; ++seed) {
+      EXPECT_TRUE(find_interpenetrations(generate_world(f, seed), 1e-6).empty())
+          << to_string(f) << " seed " << seed;
+    }
+  }
+}
+
+TEST(Generators, FamiliesDifferInSizesAndMasses) {
+  double a1 = 0, a2 = 0, sizes1 = 0, sizes2 = 0;
+  for (std::uint64_t seed = 0; seed < 10; ++seed) {
+    const World w1 = generate_world(EnvFamily::kA1, seed),
+                w2 = generate_world(EnvFamily::kA2, seed);
+    a1 += mean_mass(w1);
+    a2 += mean_mass(w2);
+    sizes1 += static_cast<double>(w1.boxes.size());
+    sizes2 += static_cast<double>(w2.boxes.size());
+  }
+  EXPECT_GT(a2, 1.2 * a1);          // A2 is heavier
+  EXPECT_LT(sizes2, 0.9 * sizes1);  // with fewer, larger boxes
+}
+
+TEST(Generators, FindsInterpenetrationAndBoxesOutsideTheTrailer) {
+  World w = generate_world(EnvFamily::kA1, 1);
+  w.boxes[1].pose.translation() = w.boxes[0].pose.translation() + Eigen::Vector3d(0.05, 0, 0);
+  w.boxes[2].pose.translation().z() = -0.1;
+  const auto found = find_interpenetrations(w, 1e-3);
+  EXPECT_NE(std::find(found.begin(), found.end(), std::make_pair(w.boxes[0].id, w.boxes[1].id)),
+            found.end());
+  EXPECT_NE(std::find(found.begin(), found.end(), std::make_pair(w.boxes[2].id, w.boxes[2].id)),
+            found.end());
+}
+
+TEST(Generators, NamesAndPerception) {
+  EXPECT_EQ(parse_env_family("b2"), EnvFamily::kB2);
+  EXPECT_EQ(parse_env_family("A1"), EnvFamily::kA1);
+  EXPECT_FALSE(parse_env_family("C1").has_value());
+  EXPECT_FALSE(parse_env_family("A").has_value());
+  const World w = without_masses(generate_world(EnvFamily::kB1, 2));
+  for (const Box& b : w.boxes) EXPECT_EQ(b.mass, 0.0);
+}
+
+}  // namespace
+}  // namespace plr::sim

@@ -1,0 +1,138 @@
+// Suction gripping, holding by load, and the conveyor.
+#include <gtest/gtest.h>
+
+#include "plr/sim/physics.hpp"
+
+namespace plr::sim {
+namespace {
+
+World one_box(double mass) {
+  World w;
+  Box b;
+  b.id = 1;
+  b.size = {0.4, 0.4, 0.4};
+  b.pose.translation() = Eigen::Vector3d(10.0, 0.0, 0.2);
+  b.mass = mass;
+  w.boxes.push_back(b);
+  return w;
+}
+
+// Cup face on the box's top face, pointing down. 4 x 3 cups over 0.6 x 0.4 m:
+// six of them lie over a 0.4 m box (capacity 6 * 45 N = 270 N).
+SuctionPlate plate_at(double z) {
+  SuctionPlate p;
+  p.pose = Eigen::Translation3d(10.0, 0.0, z) * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX());
+  return p;
+}
+
+// Lifts the plate with constant acceleration `a` until `height` above the start.
+void lift(Simulation& sim, double a, double height) {
+  double z = 0.4, v = 0.0;
+  const double dt = 0.01;
+  while (z < 0.4 + height) {
+    v += a * dt;
+    z += v * dt;
+    sim.set_suction_plate(plate_at(z));
+    sim.step(dt);
+  }
+}
+
+TEST(Suction, LiftsAFiveKilogramBox) {
+  Simulation sim(one_box(5.0));
+  ASSERT_GE(sim.settle(1.0), 0.0);
+  sim.set_suction_plate(plate_at(0.4));
+  EXPECT_EQ(sim.suction_on(), std::vector<std::uint32_t>{1});
+  lift(sim, 2.0, 0.5);
+  sim.step(0.5);  // hold still in the air
+  ASSERT_EQ(sim.held_boxes(), std::vector<std::uint32_t>{1});
+  EXPECT_GT(sim.world().boxes[0].pose.translation().z(), 0.68);
+  const SuctionEvent& e = sim.suction_events().front();
+  EXPECT_EQ(e.kind, SuctionEvent::Kind::kGripped);
+  EXPECT_NEAR(e.capacity, 270.0, 1e-9);
+  // Released, it falls back to the floor.
+  sim.suction_off();
+  EXPECT_GE(sim.settle(2.0), 0.0);
+  EXPECT_NEAR(sim.world().boxes[0].pose.translation().z(), 0.2, 0.004);
+}
+
+TEST(Suction, RefusesABoxOverCapacity) {
+  Simulation sim(one_box(30.0));  // 294 N > 270 N
+  sim.set_suction_plate(plate_at(0.4));
+  EXPECT_TRUE(sim.suction_on().empty());
+  ASSERT_EQ(sim.suction_events().size(), 1u);
+  EXPECT_EQ(sim.suction_events()[0].kind, SuctionEvent::Kind::kRefused);
+  lift(sim, 2.0, 0.3);
+  EXPECT_NEAR(sim.world().boxes[0].pose.translation().z(), 0.2, 0.004);  // not lifted
+}
+
+TEST(Suction, DropsABoxWhenAccelerationOverloadsTheCups) {
+  Simulation sim(one_box(20.0));  // 196 N at rest, 276 N at 4 m/s^2 upwards
+  sim.set_suction_plate(plate_at(0.4));
+  ASSERT_EQ(sim.suction_on().size(), 1u);
+  lift(sim, 4.0, 0.4);
+  ASSERT_FALSE(sim.suction_events().empty());
+  EXPECT_EQ(sim.suction_events().back().kind, SuctionEvent::Kind::kDropped);
+  EXPECT_TRUE(sim.held_boxes().empty());
+  EXPECT_GE(sim.settle(2.0), 0.0);
+  EXPECT_NEAR(sim.world().boxes[0].pose.translation().z(), 0.2, 0.01);
+}
+
+TEST(Suction, MissesABoxOutOfReach) {
+  Simulation sim(one_box(5.0));
+  sim.set_suction_plate(plate_at(0.45));  // 5 cm above the top face
+  EXPECT_TRUE(sim.suction_on().empty());
+  EXPECT_TRUE(sim.suction_events().empty());
+}
+
+TEST(Conveyor, CarriesABoxOutAndCountsIt) {
+  World w = one_box(6.0);
+  w.boxes[0].pose.translation() = Eigen::Vector3d(3.0, 0.0, 0.5 + 0.2 + 0.002);
+  Simulation sim(w);
+  // A 2 m belt lying at x 2..4 with its surface at z = 0.5, running towards the rear.
+  LinkGeometry belt;
+  belt.size = {2.0, 0.8, 0.1};
+  belt.pose.translation() = Eigen::Vector3d(3.0, 0.0, 0.45);
+  belt.belt_speed = 0.8;
+  sim.set_robot_links({belt});
+  sim.step(0.5);
+  ASSERT_EQ(sim.world().boxes.size(), 1u);
+  EXPECT_LT(sim.world().boxes[0].pose.translation().x(), 2.9);  // moving with the belt
+  sim.step(2.0);
+  ASSERT_EQ(sim.unloaded().size(), 1u);
+  EXPECT_EQ(sim.unloaded()[0].box_id, 1u);
+  EXPECT_GT(sim.unloaded()[0].time, 1.0);
+  EXPECT_LT(sim.unloaded()[0].time, 2.5);
+  EXPECT_TRUE(sim.world().boxes.empty());
+}
+
+TEST(Conveyor, StoppedBeltHoldsTheBox) {
+  World w = one_box(6.0);
+  w.boxes[0].pose.translation() = Eigen::Vector3d(3.0, 0.0, 0.5 + 0.2 + 0.002);
+  Simulation sim(w);
+  LinkGeometry belt;
+  belt.size = {2.0, 0.8, 0.1};
+  belt.pose.translation() = Eigen::Vector3d(3.0, 0.0, 0.45);
+  sim.set_robot_links({belt});
+  sim.step(2.0);
+  ASSERT_EQ(sim.world().boxes.size(), 1u);
+  EXPECT_NEAR(sim.world().boxes[0].pose.translation().x(), 3.0, 0.005);
+  EXPECT_TRUE(sim.unloaded().empty());
+}
+
+TEST(Conveyor, BoxLeavingThroughTheRearIsUnloaded) {
+  World w = one_box(6.0);
+  w.boxes[0].pose.translation() = Eigen::Vector3d(0.5, 0.0, 0.2);
+  Simulation sim(w);
+  LinkGeometry pusher;
+  pusher.size = {0.1, 0.4, 0.3};
+  for (int k = 0; k <= 100; ++k) {
+    pusher.pose.translation() = Eigen::Vector3d(0.76 - 0.01 * k, 0.0, 0.2);
+    sim.set_robot_links({pusher});
+    sim.step(0.01);
+  }
+  ASSERT_EQ(sim.unloaded().size(), 1u);
+  EXPECT_TRUE(sim.world().boxes.empty());
+}
+
+}  // namespace
+}  // namespace plr::sim

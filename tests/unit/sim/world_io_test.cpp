@@ -1,0 +1,129 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "plr/sim/generators.hpp"
+#include "plr/sim/world_io.hpp"
+
+namespace plr::sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+class WorldIo : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("plr_world_io_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+            "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  fs::path write(const std::string& name, const std::string& text) {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << text;
+    return p;
+  }
+
+  std::string error_of(const std::string& text) {
+    const fs::path p = write("bad.yaml", text);
+    try {
+      load_world(p);
+    } catch (const WorldFileError& e) {
+      const std::string msg = e.what();
+      const std::string prefix = p.string() + ":";
+      EXPECT_EQ(msg.rfind(prefix, 0), 0u) << msg;
+      return msg.substr(prefix.size());
+    }
+    ADD_FAILURE() << "no error for:\n" << text;
+    return {};
+  }
+
+  fs::path dir_;
+};
+
+const char* kHeader =
+    "format: plr-world\nversion: 1\ntrailer: {width: 2.5, height: 2.7, depth: 16}\n";
+
+TEST_F(WorldIo, RoundTripIsExact) {
+  const World w = generate_world(EnvFamily::kA2, 42);
+  const fs::path p = dir_ / "w.yaml";
+  save_world(w, p);
+  const World r = load_world(p);
+  ASSERT_EQ(r.boxes.size(), w.boxes.size());
+  EXPECT_EQ(r.trailer.depth, w.trailer.depth);
+  for (std::size_t i = 0; i < w.boxes.size(); ++i) {
+    EXPECT_EQ(r.boxes[i].id, w.boxes[i].id);
+    EXPECT_EQ(r.boxes[i].size, w.boxes[i].size);
+    EXPECT_EQ(r.boxes[i].mass, w.boxes[i].mass);
+    EXPECT_TRUE(r.boxes[i].pose.isApprox(w.boxes[i].pose, 1e-14));
+  }
+  // Nothing but the file remains: the temporary file was renamed.
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1);
+}
+
+TEST_F(WorldIo, OrientationIsOptionalAndMassMayBeZero) {
+  const fs::path p =
+      write("w.yaml",
+            std::string(kHeader) + "boxes:\n  - {id: 3, size: [1, 2, 3], position: [4, 0, 1.5]}\n");
+  const World w = load_world(p);
+  ASSERT_EQ(w.boxes.size(), 1u);
+  EXPECT_EQ(w.boxes[0].id, 3u);
+  EXPECT_EQ(w.boxes[0].mass, 0.0);
+  EXPECT_TRUE(w.boxes[0].pose.linear().isIdentity());
+}
+
+TEST_F(WorldIo, ErrorsNameLineAndKey) {
+  EXPECT_EQ(error_of(std::string(kHeader) +
+                     "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5]}\n"
+                     "  - {id: 2, position: [3, 0, 0.5]}\n"),
+            "6: boxes[1].size: missing");
+  EXPECT_EQ(
+      error_of(std::string(kHeader) + "boxes:\n  - {id: 1, size: [1, 1], position: [1, 0, 0.5]}\n"),
+      "5: boxes[0].size: expected a list of 3 numbers");
+  EXPECT_EQ(error_of(std::string(kHeader) +
+                     "boxes:\n  - id: 1\n    size: [1, 1, 1]\n    position: [1, 0, 0.5]\n"
+                     "    mass: heavy\n"),
+            "8: boxes[0].mass: expected a number, got 'heavy'");
+  EXPECT_EQ(error_of(std::string(kHeader) +
+                     "boxes:\n  - {id: 1, size: [1, -1, 1], position: [1, 0, 0.5]}\n"),
+            "5: boxes[0].size[1]: must be > 0");
+  EXPECT_EQ(error_of(std::string(kHeader) +
+                     "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5]}\n"
+                     "  - {id: 1, size: [1, 1, 1], position: [3, 0, 0.5]}\n"),
+            "6: boxes[1].id: duplicate id 1");
+  EXPECT_EQ(error_of("format: plr-world\nversion: 1\ntrailer: {width: 2.5, height: 0, depth: 16}\n"
+                     "boxes: []\n"),
+            "3: trailer.height: must be > 0, got 0");
+  EXPECT_EQ(error_of("format: plr-world\nversion: 2\n"),
+            "2: version: unsupported, this reader knows 1");
+  EXPECT_EQ(error_of("format: something\n"), "1: format: expected 'plr-world'");
+  EXPECT_EQ(error_of(std::string(kHeader) + "boxes: [\n"),
+            "5: (syntax): end of sequence flow not found");
+}
+
+TEST_F(WorldIo, MissingFileIsReported) {
+  try {
+    load_world(dir_ / "nope.yaml");
+    FAIL();
+  } catch (const WorldFileError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              (dir_ / "nope.yaml").string() + ":0: (file): cannot open: No such file or directory");
+  }
+}
+
+TEST_F(WorldIo, SaveIntoMissingDirectoryFailsCleanly) {
+  const fs::path p = dir_ / "no" / "such" / "w.yaml";
+  try {
+    save_world(World{}, p);
+    FAIL();
+  } catch (const WorldFileError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              p.string() + ":0: (file): cannot create temporary file: No such file or directory");
+  }
+}
+
+}  // namespace
+}  // namespace plr::sim
