@@ -31,7 +31,7 @@ Result<void> wait_until(Notifier& n, WaitMode mode, Clock::time_point deadline, 
 
 // A reliable publisher that finds the ring full usually gets a slot back
 // within a microsecond or two: spin that long before paying for a futex sleep.
-inline constexpr std::uint32_t kSpaceSpins = 2000;
+inline constexpr std::uint32_t kSpaceSpins = 4000;
 
 struct Ring {
   RingGeometry geo{};

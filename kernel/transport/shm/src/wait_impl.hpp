@@ -14,9 +14,10 @@ Result<void> wait_until(Notifier& n, WaitMode mode, Clock::time_point deadline, 
                         Check check, std::uint32_t spin_first) noexcept {
   auto next_check = Clock::now() + kLivenessSlice;
   std::uint32_t spins = 0;
-  for (std::uint32_t i = 0; i < spin_first; ++i) {
+  // Check every few pauses only: each check reads lines the peer is writing.
+  for (std::uint32_t i = 0; i < spin_first; i += 8) {
     if (ready()) return {};
-    cpu_relax();
+    for (int k = 0; k < 8; ++k) cpu_relax();
   }
   for (;;) {
     if (ready()) return {};
