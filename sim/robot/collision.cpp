@@ -57,79 +57,104 @@ struct RobotShape {
   std::unique_ptr<fcl::CollisionObjectd> exact;
   std::shared_ptr<fcl::Boxd> swept_box;
   std::unique_ptr<fcl::CollisionObjectd> swept;
+  // Links a mode does not move keep their pose from check to check: their
+  // last collision-free placement is remembered and not checked again.
+  // Epochs change whenever the placement does; self pairs remember the
+  // epochs at which they were free.
+  using Placement = Eigen::Matrix<double, 3, 5>;  // pose (3x4) + box sides
+  Placement exact_at = Placement::Constant(std::nan(""));
+  Placement swept_at = Placement::Constant(std::nan(""));
+  std::uint64_t exact_epoch = 0, swept_epoch = 0;
+  bool exact_world_free = false, swept_world_free = false;
+  Placement swept_world_free_at = Placement::Constant(std::nan(""));
 };
+
+RobotShape::Placement placement(const Eigen::Isometry3d& pose, const Eigen::Vector3d& side) {
+  RobotShape::Placement p;
+  p.leftCols<4>() = pose.matrix().topRows<3>();
+  p.col(4) = side;
+  return p;
+}
 
 struct WorldBox {
   std::uint32_t id = 0;
   std::unique_ptr<fcl::CollisionObjectd> obj;
 };
 
-// Coarse cells holding any occupied octree leaf: a shape whose AABB touches
-// none of them cannot hit the octree, which spares FCL's descent from the
-// root for links in free space (most checks).
+// Occupied octree leaves counted in a 3-D prefix-sum table at the octree's
+// resolution: whether an AABB overlaps any occupied voxel is eight lookups.
+// Shapes whose AABB touches none cannot hit the octree, which spares FCL's
+// descent from the root for links in free space (most checks).
 class OccupancyGrid {
  public:
-  static constexpr double kCell = 0.25;
-
   explicit OccupancyGrid(const octomap::OcTree& tree) {
     double x0, y0, z0, x1, y1, z1;
     tree.getMetricMin(x0, y0, z0);
     tree.getMetricMax(x1, y1, z1);
     origin_ = Eigen::Vector3d(x0, y0, z0);
-    for (int i = 0; i < 3; ++i) {
-      const double span = (i == 0 ? x1 - x0 : i == 1 ? y1 - y0 : z1 - z0);
-      dims_[i] = std::max(1, static_cast<int>(std::ceil(span / kCell)) + 1);
-    }
-    bits_.assign(static_cast<std::size_t>(dims_[0]) * dims_[1] * dims_[2], 0);
+    const Eigen::Vector3d span(x1 - x0, y1 - y0, z1 - z0);
+    // Voxel-sized cells, coarser if the table would get large.
+    cell_ = tree.getResolution();
+    while ((span / cell_).prod() > 2e7) cell_ *= 2.0;
+    for (int i = 0; i < 3; ++i)
+      dims_[i] = std::max(1, static_cast<int>(std::ceil(span[i] / cell_ - 1e-9)));
+    sum_.assign(static_cast<std::size_t>(dims_[0] + 1) * (dims_[1] + 1) * (dims_[2] + 1), 0);
     for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
       if (!tree.isNodeOccupied(*it)) continue;
       const double h = it.getSize() / 2.0;
       const Eigen::Vector3d c(it.getX(), it.getY(), it.getZ());
-      mark(c - Eigen::Vector3d::Constant(h), c + Eigen::Vector3d::Constant(h));
+      Eigen::Vector3i lo, hi;
+      if (!range(c - Eigen::Vector3d::Constant(h), c + Eigen::Vector3d::Constant(h), lo, hi))
+        continue;
+      for (int x = lo[0]; x <= hi[0]; ++x) {
+        for (int y = lo[1]; y <= hi[1]; ++y) {
+          for (int z = lo[2]; z <= hi[2]; ++z) at(x + 1, y + 1, z + 1) = 1;
+        }
+      }
+    }
+    for (int x = 1; x <= dims_[0]; ++x) {
+      for (int y = 1; y <= dims_[1]; ++y) {
+        for (int z = 1; z <= dims_[2]; ++z) {
+          at(x, y, z) += at(x - 1, y, z) + at(x, y - 1, z) + at(x, y, z - 1) - at(x - 1, y - 1, z) -
+                         at(x - 1, y, z - 1) - at(x, y - 1, z - 1) + at(x - 1, y - 1, z - 1);
+        }
+      }
     }
   }
 
   bool mayHit(const fcl::AABBd& box) const {
     Eigen::Vector3i lo, hi;
     if (!range(box.min_, box.max_, lo, hi)) return false;
-    for (int x = lo[0]; x <= hi[0]; ++x) {
-      for (int y = lo[1]; y <= hi[1]; ++y) {
-        for (int z = lo[2]; z <= hi[2]; ++z) {
-          if (bits_[index(x, y, z)]) return true;
-        }
-      }
-    }
-    return false;
+    const int x0 = lo[0], y0 = lo[1], z0 = lo[2], x1 = hi[0] + 1, y1 = hi[1] + 1, z1 = hi[2] + 1;
+    const std::int64_t n = get(x1, y1, z1) - get(x0, y1, z1) - get(x1, y0, z1) - get(x1, y1, z0) +
+                           get(x0, y0, z1) + get(x0, y1, z0) + get(x1, y0, z0) - get(x0, y0, z0);
+    return n > 0;
   }
 
  private:
-  std::size_t index(int x, int y, int z) const {
-    return (static_cast<std::size_t>(x) * dims_[1] + y) * dims_[2] + z;
+  std::int32_t& at(int x, int y, int z) {
+    return sum_[(static_cast<std::size_t>(x) * (dims_[1] + 1) + y) * (dims_[2] + 1) + z];
   }
+  std::int64_t get(int x, int y, int z) const {
+    return sum_[(static_cast<std::size_t>(x) * (dims_[1] + 1) + y) * (dims_[2] + 1) + z];
+  }
+  // Cells whose interior overlaps [a, b]; false if none.
   bool range(const Eigen::Vector3d& a, const Eigen::Vector3d& b, Eigen::Vector3i& lo,
              Eigen::Vector3i& hi) const {
     for (int i = 0; i < 3; ++i) {
-      const double l = std::floor((a[i] - origin_[i]) / kCell),
-                   h = std::floor((b[i] - origin_[i]) / kCell);
-      if (h < 0 || l >= dims_[i]) return false;
+      const double l = std::floor((a[i] - origin_[i]) / cell_ + 1e-9);
+      const double h = std::ceil((b[i] - origin_[i]) / cell_ - 1e-9) - 1.0;
+      if (h < 0 || l >= dims_[i] || h < l) return false;
       lo[i] = static_cast<int>(std::max(0.0, l));
       hi[i] = static_cast<int>(std::min<double>(dims_[i] - 1, h));
     }
     return true;
   }
-  void mark(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-    Eigen::Vector3i lo, hi;
-    if (!range(a, b, lo, hi)) return;
-    for (int x = lo[0]; x <= hi[0]; ++x) {
-      for (int y = lo[1]; y <= hi[1]; ++y) {
-        for (int z = lo[2]; z <= hi[2]; ++z) bits_[index(x, y, z)] = 1;
-      }
-    }
-  }
 
   Eigen::Vector3d origin_;
+  double cell_ = 0.05;
   std::array<int, 3> dims_{};
-  std::vector<std::uint8_t> bits_;
+  std::vector<std::int32_t> sum_;  // (dims + 1)^3, zero border
 };
 
 bool collide(const fcl::CollisionObjectd* a, const fcl::CollisionObjectd* b) {
@@ -156,9 +181,11 @@ struct CollisionChecker::Impl {
   int robot_shape_count = 0;                    // shapes beyond this are held boxes
   std::vector<std::vector<bool>> allowed;       // [link][link]
   std::vector<std::pair<int, int>> self_pairs;  // shape index pairs checked
-  // reach[l][j]: bound on how far a point of link l moves per unit of joint j.
-  std::vector<std::array<double, kNumJoints>> reach;
+  // Per self pair: the shapes' epochs when last found free.
+  mutable std::vector<std::pair<std::uint64_t, std::uint64_t>> pair_free_exact, pair_free_swept;
+  mutable std::uint64_t next_epoch = 1;
   mutable std::vector<Eigen::Isometry3d> poses;
+  mutable std::vector<double> d_self;  // per shape, from motionBounds()
   mutable CollisionStats stats;
 
   void addShape(int link, const Eigen::Isometry3d& origin,
@@ -175,7 +202,17 @@ struct CollisionChecker::Impl {
     shapes.push_back(std::move(s));
   }
 
-  void rebuildPairsAndReach() {
+  // Forget every cached "free" result (the world or the shapes changed).
+  void invalidate() {
+    for (auto& sh : shapes) {
+      sh.exact_world_free = sh.swept_world_free = false;
+      sh.exact_at = sh.swept_at = RobotShape::Placement::Constant(std::nan(""));
+    }
+    pair_free_exact.assign(self_pairs.size(), {0, 0});
+    pair_free_swept.assign(self_pairs.size(), {0, 0});
+  }
+
+  void rebuildPairs() {
     self_pairs.clear();
     for (std::size_t i = 0; i < shapes.size(); ++i) {
       for (std::size_t j = i + 1; j < shapes.size(); ++j) {
@@ -184,35 +221,19 @@ struct CollisionChecker::Impl {
           self_pairs.emplace_back(static_cast<int>(i), static_cast<int>(j));
       }
     }
-    // A point of link l is at most (sum of joint offsets down the chain +
-    // its distance from l's frame) away from an ancestor joint's origin, in
-    // any configuration; prismatic joints count at full extension.
-    const auto& links = robot->links();
-    std::vector<double> extent(links.size(), 0.0);
-    for (const auto& s : shapes) {
-      extent[s.link] = std::max(extent[s.link], s.origin.translation().norm() + s.half.norm());
-    }
-    reach.assign(links.size(), {});
-    for (std::size_t l = 0; l < links.size(); ++l) {
-      double dist = extent[l];
-      for (int k = static_cast<int>(l); k >= 0; k = links[k].parent_link) {
-        const Link& lk = links[k];
-        if (lk.joint >= 0) {
-          reach[l][lk.joint] = lk.joint_type == JointType::kPrismatic ? 1.0 : dist;
-          if (lk.joint_type == JointType::kPrismatic) {
-            const JointLimits& lim = robot->limits(lk.joint);
-            dist += std::max(std::abs(lim.lower), std::abs(lim.upper));
-          }
-        }
-        dist += lk.origin.translation().norm();
-      }
-    }
+    invalidate();
   }
 
   void place(const Config& q) const {
     robot->forwardKinematics(q, poses);
-    for (const auto& s : shapes) {
-      s.exact->setTransform(toFcl(poses[s.link] * s.origin));
+    for (auto& s : const_cast<std::vector<RobotShape>&>(shapes)) {
+      const Eigen::Isometry3d pose = poses[s.link] * s.origin;
+      const RobotShape::Placement at = placement(pose, Eigen::Vector3d::Zero());
+      if (at == s.exact_at) continue;
+      s.exact_at = at;
+      s.exact_epoch = next_epoch++;
+      s.exact_world_free = false;
+      s.exact->setTransform(toFcl(pose));
       s.exact->computeAABB();
     }
   }
@@ -250,13 +271,20 @@ struct CollisionChecker::Impl {
     return {};
   }
 
-  bool anyHit(bool swept) const {
-    auto obj = [&](const RobotShape& s) { return swept ? s.swept.get() : s.exact.get(); };
-    for (const auto& s : shapes) {
-      if (hitsOctree(obj(s)) || hitBox(obj(s)) >= 0) return true;
+  // Exact shapes as placed by place().
+  bool anyHit() const {
+    for (auto& s : const_cast<std::vector<RobotShape>&>(shapes)) {
+      if (s.exact_world_free) continue;
+      if (hitsOctree(s.exact.get()) || hitBox(s.exact.get()) >= 0) return true;
+      s.exact_world_free = true;
     }
-    for (const auto& [i, j] : self_pairs) {
-      if (collide(obj(shapes[i]), obj(shapes[j]))) return true;
+    for (std::size_t k = 0; k < self_pairs.size(); ++k) {
+      const RobotShape& a = shapes[self_pairs[k].first];
+      const RobotShape& b = shapes[self_pairs[k].second];
+      const std::pair<std::uint64_t, std::uint64_t> epochs{a.exact_epoch, b.exact_epoch};
+      if (pair_free_exact[k] == epochs) continue;
+      if (collide(a.exact.get(), b.exact.get())) return true;
+      pair_free_exact[k] = epochs;
     }
     return false;
   }
@@ -265,48 +293,95 @@ struct CollisionChecker::Impl {
     ++stats.state_checks;
     if (!robot->withinLimits(q, options.limit_tolerance)) return false;
     place(q);
-    return !anyHit(false);
+    return !anyHit();
   }
 
   // Sweep of the motion a->b (a, b valid) with midpoint m: every shape
   // inflated by its travel bound over half the segment. base_x moves every
   // link alike, so it does not count for self-collision: robot pairs are
   // checked with the boxes inflated by the other joints' part only.
-  bool sweepFree(const Config& mid, const Config& half_step) const {
+  // Bounds, per shape, how far any of its points moves relative to the base
+  // over half a segment around `mid` (FK at mid must be in `poses`).
+  // Walking the chain from the shape up: joint j moves a point by at most
+  // |dq_j| times its distance from j's axis, and that distance can itself
+  // grow by what the joints below j move it: D += |dq_j| (r_j + D).
+  // Returns the largest bound plus the base's travel.
+  double motionBounds(const Config& half_step) const {
+    double worst = 0.0;
+    d_self.resize(shapes.size());
+    const auto& links = robot->links();
+    for (std::size_t i = 0; i < shapes.size(); ++i) {
+      const RobotShape& s = shapes[i];
+      const Eigen::Vector3d c = poses[s.link] * s.origin.translation();
+      const double extent = s.half.norm();
+      double d = 0.0;
+      for (int k = s.link; k >= 0; k = links[k].parent_link) {
+        const Link& lk = links[k];
+        if (lk.joint <= kBaseX) continue;
+        const double dq = std::abs(half_step[lk.joint]);
+        if (dq == 0.0) continue;
+        if (lk.joint_type == JointType::kPrismatic) {
+          d += dq;
+        } else {
+          const Eigen::Vector3d axis = poses[k].linear() * lk.axis;
+          const Eigen::Vector3d v = c - poses[k].translation();
+          const double r = (v - v.dot(axis) * axis).norm() + extent;
+          d += dq * (r + d);
+        }
+      }
+      d_self[i] = d;
+      worst = std::max(worst, d);
+    }
+    return worst + std::abs(half_step[kBaseX]);
+  }
+
+  bool sweepFree(const Config& half_step) const {
     ++stats.sweep_checks;
-    robot->forwardKinematics(mid, poses);
-    for (auto& s : shapes) {
-      double d_self = 0.0;
-      for (int j = 1; j < kNumJoints; ++j) d_self += reach[s.link][j] * std::abs(half_step[j]);
+    for (std::size_t i = 0; i < shapes.size(); ++i) {
+      RobotShape& s = const_cast<RobotShape&>(shapes[i]);
+      const double d = d_self[i];
       const Eigen::Isometry3d pose = poses[s.link] * s.origin;
       // The base translates along world x: stretch the box along that
       // direction only (exact for a translation), in the shape's frame.
       const Eigen::Vector3d base_shift =
           (pose.linear().transpose() * Eigen::Vector3d::UnitX()).cwiseAbs() *
           std::abs(half_step[kBaseX]);
-      s.swept_box->side = 2.0 * (s.half + Eigen::Vector3d::Constant(d_self) + base_shift);
-      s.swept_box->computeLocalAABB();
-      s.swept->setTransform(toFcl(pose));
-      s.swept->computeAABB();
-      if (hitsOctree(s.swept.get()) || hitBox(s.swept.get()) >= 0) return false;
-      s.swept_box->side = 2.0 * (s.half + Eigen::Vector3d::Constant(d_self));
-      s.swept_box->computeLocalAABB();
-      s.swept->computeAABB();
+      const Eigen::Vector3d world_side = 2.0 * (s.half + Eigen::Vector3d::Constant(d) + base_shift);
+      const Eigen::Vector3d self_side = 2.0 * (s.half + Eigen::Vector3d::Constant(d));
+      const RobotShape::Placement world_at = placement(pose, world_side);
+      if (!(s.swept_world_free && world_at == s.swept_world_free_at)) {
+        s.swept_box->side = world_side;
+        s.swept_box->computeLocalAABB();
+        s.swept->setTransform(toFcl(pose));
+        s.swept->computeAABB();
+        if (hitsOctree(s.swept.get()) || hitBox(s.swept.get()) >= 0) {
+          s.swept_at =
+              RobotShape::Placement::Constant(std::nan(""));  // object now differs from swept_at
+          return false;
+        }
+        s.swept_world_free = true;
+        s.swept_world_free_at = world_at;
+        s.swept_at = RobotShape::Placement::Constant(std::nan(""));
+      }
+      const RobotShape::Placement self_at = placement(pose, self_side);
+      if (self_at != s.swept_at) {
+        s.swept_at = self_at;
+        s.swept_epoch = next_epoch++;
+        s.swept_box->side = self_side;
+        s.swept_box->computeLocalAABB();
+        s.swept->setTransform(toFcl(pose));
+        s.swept->computeAABB();
+      }
     }
-    for (const auto& [i, j] : self_pairs) {
-      if (collide(shapes[i].swept.get(), shapes[j].swept.get())) return false;
+    for (std::size_t k = 0; k < self_pairs.size(); ++k) {
+      const RobotShape& a = shapes[self_pairs[k].first];
+      const RobotShape& b = shapes[self_pairs[k].second];
+      const std::pair<std::uint64_t, std::uint64_t> epochs{a.swept_epoch, b.swept_epoch};
+      if (pair_free_swept[k] == epochs) continue;
+      if (collide(a.swept.get(), b.swept.get())) return false;
+      pair_free_swept[k] = epochs;
     }
     return true;
-  }
-
-  double travel(const Config& step) const {
-    double worst = 0.0;
-    for (const auto& r : reach) {
-      double d = 0.0;
-      for (int j = 0; j < kNumJoints; ++j) d += r[j] * std::abs(step[j]);
-      worst = std::max(worst, d);
-    }
-    return worst;
   }
 };
 
@@ -368,7 +443,7 @@ CollisionChecker::CollisionChecker(const RobotModel& robot, const World& world,
     }
   }
   for (const auto& [a, b] : robot.allowedCollisions()) m.allowed[a][b] = m.allowed[b][a] = true;
-  m.rebuildPairsAndReach();
+  m.rebuildPairs();
 }
 
 CollisionChecker::~CollisionChecker() = default;
@@ -387,14 +462,16 @@ void CollisionChecker::allowCollision(const std::string& a, const std::string& b
   if (ia < 0 || ib < 0)
     throw std::invalid_argument("allowCollision: unknown link '" + (ia < 0 ? a : b) + "'");
   impl_->allowed[ia][ib] = impl_->allowed[ib][ia] = true;
-  impl_->rebuildPairsAndReach();
+  impl_->rebuildPairs();
 }
 
 void CollisionChecker::ignoreBox(std::uint32_t id) {
   impl_->ignored.insert(id);
+  impl_->invalidate();
 }
 void CollisionChecker::clearIgnoredBoxes() {
   impl_->ignored.clear();
+  impl_->invalidate();
 }
 
 void CollisionChecker::attachBox(const Box& box, const Config& q) {
@@ -404,12 +481,12 @@ void CollisionChecker::attachBox(const Box& box, const Config& q) {
   m.addShape(plate, in_plate, std::make_shared<fcl::Boxd>(box.size), box.size / 2.0,
              "held box " + std::to_string(box.id));
   m.ignored.insert(box.id);
-  m.rebuildPairsAndReach();
+  m.rebuildPairs();
 }
 
 void CollisionChecker::detachAll() {
   impl_->shapes.resize(impl_->robot_shape_count);
-  impl_->rebuildPairsAndReach();
+  impl_->rebuildPairs();
 }
 
 bool CollisionChecker::isValid(const Config& q) const {
@@ -429,12 +506,13 @@ bool CollisionChecker::isMotionValid(const Config& a, const Config& b, bool chec
     todo.pop_back();
     const Config half = (s.b - s.a) / 2.0;
     const Config mid = s.a + half;
-    if (m.travel(half) <= res / 2.0) {
+    m.robot->forwardKinematics(mid, m.poses);
+    if (m.motionBounds(half) <= res / 2.0) {
       // Down to resolution: the checked states are at most `res` apart.
       if (!m.stateValid(mid)) return false;
       continue;
     }
-    if (m.sweepFree(mid, half)) continue;
+    if (m.sweepFree(half)) continue;
     if (!m.stateValid(mid)) return false;
     todo.push_back({mid, s.b});
     todo.push_back({s.a, mid});

@@ -1,5 +1,7 @@
 #include "plr/sim/plan_types.hpp"
 
+#include <time.h>
+
 #include <cmath>
 
 namespace plr::sim {
@@ -123,6 +125,12 @@ QueryScope::QueryScope(CollisionChecker& checker, const PlanQuery& query) : chec
 QueryScope::~QueryScope() {
   checker_.detachAll();
   checker_.clearIgnoredBoxes();
+}
+
+double threadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
 std::vector<Config> shortcutPath(const std::vector<Config>& input,

@@ -50,6 +50,7 @@ Planner::Escape Planner::escape(const Config& start, sim::CollisionChecker& chec
 
 PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& checker) {
   const auto t0 = std::chrono::steady_clock::now();
+  const double cpu0 = sim::threadCpuSeconds();
   const sim::RobotModel& robot = checker.robot();
   if (const std::string err = sim::validateQuery(query, robot); !err.empty()) {
     return fail(PlanStatus::kInvalidRequest, err);
@@ -78,6 +79,7 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
     Escape e = escape(start, checker, query.time_limit_s, result.stats);
     result.stats.escaped = query.mode != PlanMode::kEscape || !why.empty();
     result.stats.escape_time_s = secondsSince(t0);
+    result.stats.escape_cpu_s = sim::threadCpuSeconds() - cpu0;
     if (e.status != PlanStatus::kSolved) {
       PlanResult r = fail(PlanStatus::kStartInvalid,
                           "start in collision (" + why + ") and no escape found: " +
@@ -91,6 +93,7 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
       result.status = PlanStatus::kSolved;
       result.path = prefix;
       result.stats.first_solution_s = secondsSince(t0);
+      result.stats.first_solution_cpu_s = sim::threadCpuSeconds() - cpu0;
       result.trajectory = sim::Trajectory::fromWaypoints(result.path, robot.allLimits());
       return finish(result);
     }
@@ -128,6 +131,7 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
   search::SearchResult sr;
   std::vector<Config> path;
   const double before = secondsSince(t0);
+  const double before_cpu = sim::threadCpuSeconds() - cpu0;
   if (query.mode == PlanMode::kArmCartesian) {
     LineLattice graph(lattice, checker, start, std::get<sim::PoseGoal>(query.goal));
     GraphHeuristic<LineLattice> h(graph);
@@ -160,6 +164,7 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
   }
   result.status = PlanStatus::kSolved;
   result.stats.first_solution_s = before + sr.first_solution_time_s;
+  result.stats.first_solution_cpu_s = before_cpu + sr.first_solution_cpu_s;
   result.stats.cost = sr.cost;
   // The line must stay a line; elsewhere drop lattice detours.
   if (query.mode != PlanMode::kArmCartesian) path = sim::shortcutPath(path, checker);

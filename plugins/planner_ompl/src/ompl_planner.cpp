@@ -141,6 +141,7 @@ Planner::Planner(const Options& options) : options_(options) {
 
 PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& checker) {
   const auto t0 = std::chrono::steady_clock::now();
+  const double cpu0 = sim::threadCpuSeconds();
   const sim::RobotModel& robot = checker.robot();
   if (const std::string err = sim::validateQuery(query, robot); !err.empty()) {
     return fail(PlanStatus::kInvalidRequest, err);
@@ -259,6 +260,7 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
     return finish(result);
   }
   result.stats.first_solution_s = secondsSince(t0);
+  result.stats.first_solution_cpu_s = sim::threadCpuSeconds() - cpu0;
   auto& path = *pdef->getSolutionPath()->as<og::PathGeometric>();
   std::vector<Config> configs;
   if (line) {

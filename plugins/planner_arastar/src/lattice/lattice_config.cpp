@@ -50,6 +50,7 @@ ModeLattice parseMode(const YAML::Node& n, sim::PlanMode mode, const std::string
   m.snap_time = n["snap_time"].as<double>(0.0);
   m.ee_speed = n["ee_speed"].as<double>(1.0);
   m.line_tolerance = n["line_tolerance"].as<double>(0.005);
+  m.plate_step = n["plate_step"].as<double>(0.0);
   if (!(m.ee_speed > 0.0) || !(m.line_tolerance > 0.0))
     fail(where, "ee_speed and line_tolerance must be positive");
   return m;

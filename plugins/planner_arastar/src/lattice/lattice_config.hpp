@@ -18,6 +18,7 @@ struct ModeLattice {
   double snap_time = 0.0;                    // s, joint goals
   double ee_speed = 1.0;                     // m/s, arm heuristic
   double line_tolerance = 0.005;             // m, M4 deviation from the line
+  double plate_step = 0.0;                   // m, M6 Cartesian plate steps (0: none)
 };
 
 struct LatticeConfig {

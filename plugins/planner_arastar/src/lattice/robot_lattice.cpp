@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 namespace plr::arastar {
 
@@ -53,13 +54,14 @@ bool JointLattice::withinGoal(const State& st) const {
   return false;
 }
 
-StateId JointLattice::intern(const Key& key, const Config& q) {
+StateId JointLattice::intern(const Key& key, const Config& q, bool off_lattice) {
   const auto it = index_.find(key);
   if (it != index_.end()) return it->second;
   const auto id = static_cast<StateId>(states_.size());
   State st;
   st.q = q;
   st.key = key;
+  st.off_lattice = off_lattice || key[sim::kNumJoints - 1] != 0;
   fillPlate(st);
   st.goal = !escape_ && withinGoal(st);
   states_.push_back(st);
@@ -134,16 +136,44 @@ void JointLattice::successors(StateId s, std::vector<search::Successor>& out) {
       if (prim[d] == 0) continue;
       const int j = lattice_.joints[d];
       key[d] += prim[d];
-      q[j] = start_[j] + key[d] * lattice_.resolution[d];
+      q[j] = from.off_lattice ? from.q[j] + prim[d] * lattice_.resolution[d]
+                              : start_[j] + key[d] * lattice_.resolution[d];
       inside = q[j] >= robot_.limits(j).lower && q[j] <= robot_.limits(j).upper;
     }
     if (!inside) continue;
-    const StateId id = intern(key, q);
+    const StateId id = intern(from.off_lattice ? offLatticeKey(q) : key, q);
     if (!escape_) {
       if (!valid(id) || !checker_.isMotionValid(from.q, q, false)) continue;
     }
     out.push_back({id, std::max(time(from.q, q), 1e-6)});
   }
+
+  // Escaping contact is mostly a matter of backing the plate off: Cartesian
+  // plate steps through the IK reach that in one move where single joint
+  // steps would need combinations.
+  if (escape_ && lattice_.plate_step > 0.0) {
+    const sim::PlateTarget here = robot_.plateTarget(from.q);
+    for (int axis = 0; axis < 3; ++axis) {
+      for (double sign : {1.0, -1.0}) {
+        sim::PlateTarget t = here;
+        t.position[axis] += sign * lattice_.plate_step;
+        const auto sols = robot_.armIk(t, from.q);
+        if (sols.empty() || (sols.front() - from.q).cwiseAbs().maxCoeff() > 0.1) continue;
+        const Config& q = sols.front();
+        out.push_back({intern(offLatticeKey(q), q, true), std::max(time(from.q, q), 1e-6)});
+      }
+    }
+  }
+}
+
+JointLattice::Key JointLattice::offLatticeKey(const Config& q) const {
+  // Off-lattice states are told apart by their configuration at 1e-5.
+  Key key{};
+  for (std::size_t d = 0; d < lattice_.joints.size(); ++d) {
+    key[d] = static_cast<std::int32_t>(std::lround(q[lattice_.joints[d]] * 1e5));
+  }
+  key[sim::kNumJoints - 1] = 1;
+  return key;
 }
 
 // ---- LineLattice --------------------------------------------------------
@@ -201,13 +231,20 @@ double LineLattice::heuristic(StateId s) const {
 }
 
 void LineLattice::successors(StateId s, std::vector<search::Successor>& out) {
+  // Along a line the longest feasible step dominates the shorter ones: its
+  // joint-space time is at most theirs summed (triangle inequality), and the
+  // states it skips can only lead to the same line. Try steps longest first.
   const int i = s;
-  int last_j = i;
+  std::vector<int> steps;
   for (const auto& prim : lattice_.primitives) {
-    if (prim[0] <= 0) continue;  // forward only
-    const int j = std::min(i + prim[0], count_ - 1);
-    if (j == last_j || !ensure(j)) continue;
-    last_j = j;
+    if (prim[0] > 0) steps.push_back(prim[0]);  // forward only
+  }
+  std::sort(steps.begin(), steps.end(), std::greater<>());
+  int tried = -1;
+  for (int step : steps) {
+    const int j = std::min(i + step, count_ - 1);
+    if (j == tried || !ensure(j)) continue;
+    tried = j;
     if (!staysOnLine(i, j)) continue;
     std::int8_t& v = valid_[static_cast<std::size_t>(j)];
     if (v < 0) v = checker_.isValid(configs_[static_cast<std::size_t>(j)]) ? 1 : 0;
@@ -219,6 +256,7 @@ void LineLattice::successors(StateId s, std::vector<search::Successor>& out) {
     for (int q : lattice_.joints)
       t = std::max(t, std::abs(b[q] - a[q]) / robot_.limits(q).velocity);
     out.push_back({j, std::max(t, 1e-6)});
+    return;
   }
 }
 

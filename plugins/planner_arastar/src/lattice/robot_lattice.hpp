@@ -62,10 +62,12 @@ class JointLattice final : public search::Graph {
     double pitch = 0.0;
     std::int8_t valid = -1;  // -1 unknown
     bool goal = false;
-    bool snapped = false;  // reached by a snap primitive (not on the lattice)
+    bool snapped = false;      // reached by a snap primitive (not on the lattice)
+    bool off_lattice = false;  // reached by a Cartesian step (M6)
   };
 
-  search::StateId intern(const Key& key, const sim::Config& q);
+  search::StateId intern(const Key& key, const sim::Config& q, bool off_lattice = false);
+  Key offLatticeKey(const sim::Config& q) const;
   search::StateId addGoalState(const sim::Config& q);
   bool valid(search::StateId s);
   bool withinGoal(const State& st) const;

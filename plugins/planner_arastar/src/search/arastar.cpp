@@ -1,9 +1,20 @@
 #include "arastar.hpp"
 
+#include <time.h>
+
 #include <algorithm>
 #include <cmath>
 
 namespace plr::search {
+namespace {
+
+double threadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+}  // namespace
 
 AraStar::Record& AraStar::record(StateId s) {
   if (static_cast<std::size_t>(s) >= records_.size())
@@ -92,6 +103,7 @@ SearchResult AraStar::search(Graph& graph, Heuristic& heuristic, StateId start,
                                  std::chrono::duration<double>(options.time_limit_s));
   auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
 
+  const double cpu0 = threadCpuSeconds();
   heuristic_ = &heuristic;
   ++search_stamp_;
   iteration_ = 1;
@@ -126,6 +138,7 @@ SearchResult AraStar::search(Graph& graph, Heuristic& heuristic, StateId start,
         std::min(eps_, std::isinf(lower) ? 1.0 : std::max(1.0, result.cost / lower));
     if (first) {
       result.first_solution_time_s = elapsed();
+      result.first_solution_cpu_s = threadCpuSeconds() - cpu0;
       result.first_solution_expansions = result.expansions;
       if (std::isfinite(options.improve_time_s)) {
         deadline = std::min(

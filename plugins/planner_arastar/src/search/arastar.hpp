@@ -42,6 +42,7 @@ struct SearchResult {
   std::size_t expansions = 0;
   std::size_t first_solution_expansions = 0;
   double first_solution_time_s = 0.0;
+  double first_solution_cpu_s = 0.0;  // this thread's CPU time
   double time_s = 0.0;
 };
 

@@ -81,14 +81,18 @@ const char* toString(PlanStatus status);
 
 struct PlanStats {
   std::size_t expansions = 0;
-  double first_solution_s = 0.0;  // includes the escape, if any
-  double planning_time_s = 0.0;   // total wall time of the query
+  double first_solution_s = 0.0;  // wall time; includes the escape, if any
+  // The same on this thread's CPU clock: what the query costs regardless of
+  // other load on the machine.
+  double first_solution_cpu_s = 0.0;
+  double planning_time_s = 0.0;  // total wall time of the query
   double final_eps = 0.0;
   double suboptimality_bound = 0.0;
   double cost = 0.0;                   // the search's cost: estimated execution time (s)
   std::uint64_t collision_checks = 0;  // states + sweeps
   bool escaped = false;                // M6 ran first
   double escape_time_s = 0.0;
+  double escape_cpu_s = 0.0;
 };
 
 struct PlanResult {
@@ -116,6 +120,9 @@ class QueryScope {
  private:
   CollisionChecker& checker_;
 };
+
+// CPU time consumed by the calling thread (s).
+double threadCpuSeconds();
 
 // Greedy deterministic shortcut: from each kept waypoint, jump to the
 // farthest later waypoint reachable by a valid straight motion.

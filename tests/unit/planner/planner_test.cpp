@@ -1,0 +1,371 @@
+// Both planners on small hand-built worlds: statuses, limits, collision-free
+// trajectories (re-checked densely with FCL directly, independently of the
+// checker's sweeps), M6 escape, bad requests.
+#include <gtest/gtest.h>
+
+#include <fcl/fcl.h>
+
+#include <cmath>
+
+#include "arastar_planner.hpp"
+#include "ompl_planner.hpp"
+#include "plr/sim/collision.hpp"
+#include "plr/sim/plan_types.hpp"
+
+using namespace plr::sim;
+
+namespace {
+
+const RobotModel& robot() {
+  static const RobotModel m = RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
+  return m;
+}
+
+Config home(double base) {
+  Config q;
+  q << base, 0.0, -1.0, 2.0, -1.0, 0.5, 0.0, 0.0;
+  return q;
+}
+
+// A wall of 0.4 m boxes across the trailer, front face at x = face; 5
+// columns, the middle one centred on the trailer axis.
+World wall(double face, int rows = 5) {
+  World w;
+  std::uint32_t id = 1;
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < 5; ++c) {
+      Box b;
+      b.id = id++;
+      b.size = Eigen::Vector3d(0.4, 0.4, 0.4);
+      b.pose.translation() = Eigen::Vector3d(face + 0.2, 0.405 * (c - 2), 0.2 + 0.405 * r);
+      w.boxes.push_back(b);
+    }
+  }
+  return w;
+}
+
+// Box in row r (from the floor), column c (0..4, 2 centred).
+const Box& at(const World& w, int r, int c) {
+  return w.boxes[static_cast<std::size_t>(5 * r + c)];
+}
+
+plr::arastar::Planner& arastar() {
+  static plr::arastar::Planner p(plr::arastar::LatticeConfig::fromFile(PLR_ARASTAR_PRIMITIVES));
+  return p;
+}
+
+PlanQuery poseQuery(PlanMode mode, const Config& start, const Eigen::Vector3d& p, double pitch) {
+  PlanQuery q;
+  q.mode = mode;
+  q.start = start;
+  PoseGoal g;
+  g.target = {p, pitch};
+  q.goal = g;
+  return q;
+}
+
+PlanQuery jointQuery(PlanMode mode, const Config& start, const Config& goal) {
+  PlanQuery q;
+  q.mode = mode;
+  q.start = start;
+  JointGoal g;
+  g.q = goal;
+  q.goal = g;
+  return q;
+}
+
+// Independent re-check: samples the trajectory every 2 ms and collides every
+// link box/cylinder with every world box and the trailer's inner walls as
+// half-spaces with FCL directly (no octree, no sweeps, no caches).
+std::string denseCollision(const Trajectory& traj, const World& world,
+                           const std::vector<std::uint32_t>& ignored) {
+  const RobotModel& m = robot();
+  std::vector<std::pair<std::shared_ptr<fcl::CollisionGeometryd>, std::uint32_t>> boxes;
+  for (const Box& b : world.boxes) {
+    if (std::find(ignored.begin(), ignored.end(), b.id) == ignored.end()) {
+      boxes.emplace_back(std::make_shared<fcl::Boxd>(b.size), b.id);
+    }
+  }
+  const double hw = world.trailer.width / 2;
+  std::vector<std::shared_ptr<fcl::CollisionGeometryd>> planes = {
+      std::make_shared<fcl::Halfspaced>(Eigen::Vector3d(0, 0, 1), -1e-3),  // floor z < 0
+      std::make_shared<fcl::Halfspaced>(Eigen::Vector3d(0, 0, -1), -world.trailer.height - 1e-3),
+      std::make_shared<fcl::Halfspaced>(Eigen::Vector3d(0, 1, 0), -hw - 1e-3),
+      std::make_shared<fcl::Halfspaced>(Eigen::Vector3d(0, -1, 0), -hw - 1e-3),
+      std::make_shared<fcl::Halfspaced>(Eigen::Vector3d(-1, 0, 0), -world.trailer.depth - 1e-3)};
+  std::vector<Eigen::Isometry3d> poses;
+  for (double t = 0.0;; t += 0.002) {
+    const Config q = traj.sample(std::min(t, traj.duration())).position;
+    m.forwardKinematics(q, poses);
+    for (std::size_t l = 0; l < m.links().size(); ++l) {
+      for (const CollisionShape& s : m.links()[l].shapes) {
+        std::shared_ptr<fcl::CollisionGeometryd> g;
+        if (s.type == CollisionShape::Type::kBox) {
+          g = std::make_shared<fcl::Boxd>(s.size);
+        } else {
+          g = std::make_shared<fcl::Cylinderd>(s.size.x(), s.size.y());
+        }
+        fcl::Transform3d tf = fcl::Transform3d::Identity();
+        const Eigen::Isometry3d p = poses[l] * s.origin;
+        tf.linear() = p.linear();
+        tf.translation() = p.translation();
+        fcl::CollisionObjectd link(g, tf);
+        for (std::size_t i = 0; i < boxes.size(); ++i) {
+          fcl::Transform3d bt = fcl::Transform3d::Identity();
+          bt.linear() = world.boxes[i].pose.linear();
+          bt.translation() = world.boxes[i].pose.translation();
+          const Box* box = nullptr;
+          for (const Box& b : world.boxes) {
+            if (b.id == boxes[i].second) box = &b;
+          }
+          bt.linear() = box->pose.linear();
+          bt.translation() = box->pose.translation();
+          fcl::CollisionObjectd other(boxes[i].first, bt);
+          fcl::CollisionRequestd req;
+          fcl::CollisionResultd res;
+          if (fcl::collide(&link, &other, req, res)) {
+            return m.links()[l].name + " - box " + std::to_string(boxes[i].second) +
+                   " at t=" + std::to_string(t);
+          }
+        }
+        // Walls only inside the trailer (x >= 0): the rear is open.
+        for (std::size_t i = 0; i < planes.size(); ++i) {
+          if (i >= 2 && p.translation().x() < 0.0) continue;
+          fcl::CollisionObjectd plane(planes[i]);
+          fcl::CollisionRequestd req;
+          fcl::CollisionResultd res;
+          if (fcl::collide(&link, &plane, req, res)) {
+            return m.links()[l].name + " - trailer plane " + std::to_string(i) +
+                   " at t=" + std::to_string(t);
+          }
+        }
+      }
+    }
+    if (t >= traj.duration()) break;
+  }
+  return {};
+}
+
+void expectWithinLimits(const Trajectory& traj) {
+  const Limits& lim = robot().allLimits();
+  for (const auto& [t, s] : traj.sampled(0.005)) {
+    for (int j = 0; j < kNumJoints; ++j) {
+      EXPECT_GE(s.position[j], lim[j].lower - 1e-9) << kJointNames[j] << " t=" << t;
+      EXPECT_LE(s.position[j], lim[j].upper + 1e-9) << kJointNames[j] << " t=" << t;
+      EXPECT_LE(std::abs(s.velocity[j]), lim[j].velocity + 1e-9) << kJointNames[j] << " t=" << t;
+      EXPECT_LE(std::abs(s.acceleration[j]), lim[j].acceleration + 1e-9)
+          << kJointNames[j] << " t=" << t;
+    }
+  }
+}
+
+class Planners : public ::testing::TestWithParam<int> {
+ protected:
+  PlanResult plan(const PlanQuery& q, CollisionChecker& cc) {
+    static plr::ompl_planner::Planner rrt;
+    return GetParam() == 0 ? arastar().plan(q, cc) : rrt.plan(q, cc);
+  }
+};
+
+}  // namespace
+
+TEST_P(Planners, ArmToPreGraspIsCollisionFreeAndWithinLimits) {
+  const World w = wall(4.0);
+  CollisionChecker cc(robot(), w);
+  const Config start = home(4.0 - 1.35);
+  // Plate 15 cm in front of a box's face (row 2, column 1), facing forward
+  // (its yaw follows the position, so off-centre it is not square to the
+  // wall: 15 cm leaves its corner clear).
+  const Eigen::Vector3d target(3.85, at(w, 2, 1).pose.translation().y(),
+                               at(w, 2, 1).pose.translation().z());
+  const PlanResult r = plan(poseQuery(PlanMode::kArm, start, target, 0.0), cc);
+  ASSERT_EQ(r.status, PlanStatus::kSolved) << r.message;
+  EXPECT_EQ(r.path.front(), start);
+  const PlateTarget reached = robot().plateTarget(r.path.back());
+  EXPECT_LT((reached.position - target).norm(), 0.005 + 1e-6);
+  EXPECT_EQ(denseCollision(r.trajectory, w, {}), "");
+  expectWithinLimits(r.trajectory);
+  // Only arm joints moved.
+  for (int j : {kBaseX, kNose1, kNose2, kNose3}) EXPECT_EQ(r.path.back()[j], start[j]);
+}
+
+TEST_P(Planners, ArmAndBaseReachFromFarBack) {
+  const World w = wall(5.0);
+  CollisionChecker cc(robot(), w);
+  const Config start = home(2.0);
+  const Eigen::Vector3d target(4.85, 0.4, 1.8);
+  const PlanResult r = plan(poseQuery(PlanMode::kArmBase, start, target, 0.0), cc);
+  ASSERT_EQ(r.status, PlanStatus::kSolved) << r.message;
+  EXPECT_GT(r.path.back()[kBaseX], start[kBaseX] + 0.3);  // had to drive
+  EXPECT_EQ(denseCollision(r.trajectory, w, {}), "");
+  expectWithinLimits(r.trajectory);
+}
+
+TEST_P(Planners, NoseDownAndBaseLine) {
+  const World w = wall(6.0);
+  CollisionChecker cc(robot(), w);
+  Config down = home(4.0);
+  down[kNose1] = 0.0;
+  down[kNose2] = 0.05;
+  down[kNose3] = 0.3;
+  const PlanResult nose = plan(jointQuery(PlanMode::kNose, home(4.0), down), cc);
+  ASSERT_EQ(nose.status, PlanStatus::kSolved) << nose.message;
+  EXPECT_LT((nose.path.back() - down).cwiseAbs().maxCoeff(), 1e-3);
+  EXPECT_EQ(denseCollision(nose.trajectory, w, {}), "");
+  expectWithinLimits(nose.trajectory);
+
+  Config back = down;
+  back[kBaseX] = 2.5;
+  const PlanResult base = plan(jointQuery(PlanMode::kBaseLine, down, back), cc);
+  ASSERT_EQ(base.status, PlanStatus::kSolved) << base.message;
+  EXPECT_EQ(denseCollision(base.trajectory, w, {}), "");
+  expectWithinLimits(base.trajectory);
+  // Straight along the trailer axis: one segment.
+  EXPECT_EQ(base.path.size(), 2u);
+}
+
+TEST_P(Planners, CartesianApproachStaysOnTheLine) {
+  const World w = wall(4.0);
+  CollisionChecker cc(robot(), w);
+  const Box& box = at(w, 2, 2);
+  const Eigen::Vector3d face(4.0, box.pose.translation().y(), box.pose.translation().z());
+  const auto pre = robot().armIk({face - Eigen::Vector3d(0.15, 0, 0), 0.0}, home(4.0 - 1.35));
+  ASSERT_FALSE(pre.empty());
+  PlanQuery q =
+      poseQuery(PlanMode::kArmCartesian, pre.front(), face - Eigen::Vector3d(0.005, 0, 0), 0.0);
+  q.ignored_boxes = {box.id};
+  const PlanResult r = plan(q, cc);
+  ASSERT_EQ(r.status, PlanStatus::kSolved) << r.message;
+  for (const auto& [t, s] : r.trajectory.sampled(0.01)) {
+    const Eigen::Vector3d p = robot().platePose(s.position).translation();
+    EXPECT_LT(std::hypot(p.y() - face.y(), p.z() - face.z()), 0.006) << "t=" << t;
+  }
+  EXPECT_EQ(denseCollision(r.trajectory, w, {box.id}), "");
+}
+
+TEST_P(Planners, GoalInCollisionIsReportedAsSuch) {
+  const World w = wall(4.0);
+  CollisionChecker cc(robot(), w);
+  Config goal = home(4.0 - 1.35);
+  goal[kBaseX] = 4.5;  // inside the wall
+  const PlanResult r = plan(jointQuery(PlanMode::kBaseLine, home(2.0), goal), cc);
+  EXPECT_EQ(r.status, PlanStatus::kGoalInvalid);
+  EXPECT_NE(r.message.find("box"), std::string::npos) << r.message;
+}
+
+TEST_P(Planners, InvalidRequestsGetClearErrors) {
+  World w;
+  CollisionChecker cc(robot(), w);
+  PlanQuery q;
+  q.mode = PlanMode::kNose;
+  q.start = home(1.0);
+  PoseGoal pg;
+  q.goal = pg;
+  PlanResult r = plan(q, cc);
+  EXPECT_EQ(r.status, PlanStatus::kInvalidRequest);
+  EXPECT_EQ(r.message, "M3 nose needs a joint goal");
+
+  q = jointQuery(PlanMode::kNose, home(1.0), home(1.0));
+  std::get<JointGoal>(q.goal).q[kNose1] = 2.0;
+  r = plan(q, cc);
+  EXPECT_EQ(r.status, PlanStatus::kInvalidRequest);
+  EXPECT_EQ(r.message.rfind("joint goal nose_1 = 2.000000 is beyond limits", 0), 0u) << r.message;
+
+  q = jointQuery(PlanMode::kArm, home(1.0), home(1.0));
+  q.time_limit_s = 0.0;
+  r = plan(q, cc);
+  EXPECT_EQ(r.status, PlanStatus::kInvalidRequest);
+  EXPECT_EQ(r.message, "time_limit_s must be positive and finite");
+
+  q.time_limit_s = 1.0;
+  q.start[kArm1] = std::nan("");
+  EXPECT_EQ(plan(q, cc).message, "start configuration has a non-finite value");
+}
+
+INSTANTIATE_TEST_SUITE_P(ArastarAndRrtConnect, Planners, ::testing::Values(0, 1),
+                         [](const auto& info) {
+                           return info.param == 0 ? "Arastar" : "RrtConnect";
+                         });
+
+TEST(Arastar, EscapesLightContactThenReachesTheGoal) {
+  const World w = wall(4.0);
+  CollisionChecker cc(robot(), w);
+  const Box& box = at(w, 2, 2);
+  const Eigen::Vector3d face(4.0, box.pose.translation().y(), box.pose.translation().z());
+  const auto pre = robot().armIk({face - Eigen::Vector3d(0.08, 0, 0), 0.0}, home(4.0 - 1.35));
+  ASSERT_FALSE(pre.empty());
+  Config pressed = pre.front();
+  pressed[kBaseX] += 0.088;  // plate 8 mm into the box
+  ASSERT_FALSE(cc.isValid(pressed));
+
+  PlanQuery esc;
+  esc.mode = PlanMode::kEscape;
+  esc.start = pressed;
+  const PlanResult e = arastar().plan(esc, cc);
+  ASSERT_EQ(e.status, PlanStatus::kSolved) << e.message;
+  EXPECT_TRUE(cc.isValid(e.path.back()));
+  EXPECT_TRUE(e.stats.escaped);
+  // The nearest free state: about 1 cm away, not a long retreat.
+  EXPECT_LT(
+      (robot().platePose(e.path.back()).translation() - robot().platePose(pressed).translation())
+          .norm(),
+      0.03);
+
+  const PlanResult r =
+      arastar().plan(jointQuery(PlanMode::kArm, pressed, home(pressed[kBaseX])), cc);
+  ASSERT_EQ(r.status, PlanStatus::kSolved) << r.message;
+  EXPECT_TRUE(r.stats.escaped);
+  EXPECT_EQ(r.path.front(), pressed);
+  EXPECT_LT((r.path.back() - home(pressed[kBaseX])).cwiseAbs().maxCoeff(), 1e-3);
+  // After the escape part, the trajectory is collision-free.
+  Trajectory rest =
+      Trajectory::fromWaypoints({r.path.begin() + 1, r.path.end()}, robot().allLimits());
+  EXPECT_EQ(denseCollision(rest, w, {}), "");
+
+  PlanQuery no_escape = jointQuery(PlanMode::kArm, pressed, home(pressed[kBaseX]));
+  no_escape.escape_if_start_invalid = false;
+  const PlanResult n = arastar().plan(no_escape, cc);
+  EXPECT_EQ(n.status, PlanStatus::kStartInvalid);
+  EXPECT_EQ(n.message, "start in collision: plate - box " + std::to_string(box.id));
+}
+
+TEST(Arastar, UnreachableGoalFailsWithinTheTimeLimit) {
+  // The plate target is inside a closed cage of boxes: valid IK, no way in.
+  World w;
+  std::uint32_t id = 1;
+  const Eigen::Vector3d c(3.6, 0.0, 1.2);
+  for (int axis = 0; axis < 3; ++axis) {
+    for (double sign : {-1.0, 1.0}) {
+      Box b;
+      b.id = id++;
+      b.size = Eigen::Vector3d::Constant(0.9);
+      b.size[axis] = 0.05;
+      b.pose.translation() = c;
+      b.pose.translation()[axis] += sign * 0.45;
+      w.boxes.push_back(b);
+    }
+  }
+  CollisionChecker cc(robot(), w);
+  PlanQuery q = poseQuery(PlanMode::kArm, home(2.0), c, 0.0);
+  q.time_limit_s = 0.5;
+  const PlanResult r = arastar().plan(q, cc);
+  EXPECT_TRUE(r.status == PlanStatus::kTimeout || r.status == PlanStatus::kNoPath ||
+              r.status == PlanStatus::kGoalInvalid)
+      << toString(r.status);
+  EXPECT_NE(r.status, PlanStatus::kSolved);
+  EXPECT_LT(r.stats.planning_time_s, 0.5 + 0.3);
+}
+
+TEST(Trajectory, TrapezoidRespectsLimitsAndReachesWaypoints) {
+  const Limits& lim = robot().allLimits();
+  const std::vector<Config> wps = {home(1.0), home(3.0), home(2.6)};
+  const Trajectory t = Trajectory::fromWaypoints(wps, lim);
+  EXPECT_NEAR(t.sample(t.waypointTime(1)).position[kBaseX], 3.0, 1e-9);
+  EXPECT_LT((t.sample(t.duration()).position - wps.back()).norm(), 1e-12);
+  // 2 m at 0.6 m/s, 0.8 m/s^2: 2/0.6 + 0.6/0.8 s.
+  EXPECT_NEAR(t.waypointTime(1), 2.0 / 0.6 + 0.6 / 0.8, 1e-9);
+  // 0.4 m: triangular (0.6^2 / 0.8 > 0.4), 2 sqrt(0.4 / 0.8) s.
+  EXPECT_NEAR(t.duration() - t.waypointTime(1), 2.0 * std::sqrt(0.4 / 0.8), 1e-9);
+  expectWithinLimits(t);
+  EXPECT_NEAR(segmentDuration(wps[0], wps[1], lim), t.waypointTime(1), 1e-12);
+}
