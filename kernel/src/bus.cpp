@@ -91,7 +91,6 @@ static Error type_mismatch(const std::string& topic, std::uint64_t has, std::uin
 
 Expected<std::uint64_t> Bus::advertise(Endpoint* owner, const std::string& topic,
                                        std::uint64_t type_id, std::uint32_t schema_version) {
-  (void)owner;
   std::lock_guard lock(m_);
   Topic& t = topic_locked(topic);
   if (t.type_id != 0 && t.type_id != type_id) return type_mismatch(topic, t.type_id, type_id);
@@ -99,6 +98,8 @@ Expected<std::uint64_t> Bus::advertise(Endpoint* owner, const std::string& topic
   t.schema_version = schema_version;
   const auto id = next_id_++;
   publishers_[id] = &t;
+  if (link_ && owner != &link_->link_endpoint())
+    link_->topic_advertised(topic, type_id, schema_version);
   return id;
 }
 
@@ -187,6 +188,7 @@ Expected<std::uint64_t> Bus::subscribe(Endpoint* owner, const std::string& topic
   sub->topic = &t;
   t.subs.push_back(sub);
   subscriptions_[sub->id] = sub;
+  if (link_ && owner != &link_->link_endpoint()) link_->topic_subscribed(topic, type_id);
   return sub->id;
 }
 
@@ -223,6 +225,7 @@ Status Bus::provide(Endpoint* owner, const std::string& service, std::uint64_t r
                                     service, p.owner->endpoint_name()));
   }
   providers.push_back({owner, request_type, reply_type, fn, user});
+  if (link_ && owner != &link_->link_endpoint()) link_->service_provided(service);
   return {};
 }
 
@@ -231,6 +234,7 @@ Status Bus::call(Endpoint* caller, const std::string& service, std::uint64_t req
                  std::uint64_t* call_id) {
   MsgRef req(request);
   Provider chosen;
+  bool remote = false;
   std::uint64_t id = 0;
   {
     std::lock_guard lock(m_);
@@ -242,20 +246,33 @@ Status Bus::call(Endpoint* caller, const std::string& service, std::uint64_t req
           break;
         }
     }
-    if (chosen.owner == nullptr)
+    // Nobody here provides it: maybe another process does.
+    remote = chosen.owner == nullptr && link_ != nullptr && caller != &link_->link_endpoint();
+    if (chosen.owner == nullptr && !remote)
       return make_error(PLR_ERR_UNAVAILABLE, fmt::format("no provider for service '{}'", service));
-    if (chosen.request_type != request_type)
+    if (!remote && chosen.request_type != request_type)
       return make_error(PLR_ERR_INVALID, fmt::format("service '{}' takes type {:016x}, not {:016x}",
                                                      service, chosen.request_type, request_type));
     id = next_id_++;
     const auto deadline = Clock::now() + timeout;
-    pending_[id] = {caller, chosen.owner, fn, user, service, deadline, timeout};
+    Endpoint* provider = remote ? &link_->link_endpoint() : chosen.owner;
+    pending_[id] = {caller, provider, fn, user, service, deadline, timeout};
     deadlines_.emplace(deadline, id);
     request->type_id = request_type;
     request->stamp_ns = wall_now_ns();
   }
   timer_cv_.notify_one();
   if (call_id) *call_id = id;
+  if (remote) {
+    if (!link_->forward_call(service, req, id)) {
+      std::lock_guard lock(m_);
+      // Still ours to withdraw unless the link answered in the meantime.
+      if (erase_pending_locked(id))
+        return make_error(PLR_ERR_UNAVAILABLE,
+                          fmt::format("no provider for service '{}'", service));
+    }
+    return {};
+  }
   const bool posted = chosen.owner->executor().post(
       [fn = chosen.fn, user = chosen.user, req, id] { fn(user, req.msg, id); });
   if (!posted)
@@ -263,6 +280,20 @@ Status Bus::call(Endpoint* caller, const std::string& service, std::uint64_t req
         id, PLR_ERR_UNAVAILABLE, nullptr,
         fmt::format("provider '{}' of '{}' is overloaded", chosen.owner->endpoint_name(), service));
   return {};
+}
+
+bool Bus::erase_pending_locked(std::uint64_t id, Pending* out) {
+  auto it = pending_.find(id);
+  if (it == pending_.end()) return false;
+  auto [b, e] = deadlines_.equal_range(it->second.deadline);
+  for (auto d = b; d != e; ++d)
+    if (d->second == id) {
+      deadlines_.erase(d);
+      break;
+    }
+  if (out) *out = std::move(it->second);
+  pending_.erase(it);
+  return true;
 }
 
 Status Bus::respond(std::uint64_t token, plr_status status, plr_msg* reply,
@@ -292,16 +323,7 @@ void Bus::complete(std::uint64_t id, plr_status status, plr_msg* reply, const st
   Pending p;
   {
     std::lock_guard lock(m_);
-    auto it = pending_.find(id);
-    if (it == pending_.end()) return;  // someone else completed it first
-    p = std::move(it->second);
-    pending_.erase(it);
-    auto [b, e] = deadlines_.equal_range(p.deadline);
-    for (auto d = b; d != e; ++d)
-      if (d->second == id) {
-        deadlines_.erase(d);
-        break;
-      }
+    if (!erase_pending_locked(id, &p)) return;  // someone else completed it first
   }
   if (status == PLR_OK && r.msg == nullptr) {
     status = PLR_ERR_INTERNAL;
@@ -389,6 +411,25 @@ void Bus::remove_endpoint(Endpoint* e) {
   }
   for (const auto& [id, why] : failed) complete(id, PLR_ERR_UNAVAILABLE, nullptr, why);
   for (auto id : cancelled) complete(id, PLR_ERR_CANCELLED, nullptr, "caller went away");
+}
+
+void Bus::attach(Link* link) {
+  std::vector<std::tuple<std::string, std::uint64_t, std::uint32_t, bool>> topics;
+  std::vector<std::string> services;
+  {
+    std::lock_guard lock(m_);
+    link_ = link;
+    if (link == nullptr) return;
+    for (const auto& [name, t] : topics_)
+      topics.emplace_back(name, t->type_id, t->schema_version, !t->subs.empty());
+    for (const auto& [name, providers] : services_)
+      if (!providers.empty()) services.push_back(name);
+  }
+  for (const auto& [name, type, version, subscribed] : topics) {
+    link->topic_advertised(name, type, version);
+    if (subscribed) link->topic_subscribed(name, type);
+  }
+  for (const auto& s : services) link->service_provided(s);
 }
 
 void Bus::count_invalid(const plr_msg* msg) {

@@ -40,6 +40,23 @@ class Endpoint {
   std::atomic<bool> live{false};
 };
 
+// A transport to other processes or machines. The bus tells it what local
+// nodes publish, subscribe and provide, and hands it calls that no local
+// node provides.
+class Link {
+ public:
+  virtual ~Link() = default;
+  virtual Endpoint& link_endpoint() = 0;
+  virtual void topic_advertised(const std::string& topic, std::uint64_t type_id,
+                                std::uint32_t schema_version) = 0;
+  virtual void topic_subscribed(const std::string& topic, std::uint64_t type_id) = 0;
+  virtual void service_provided(const std::string& service) = 0;
+  // Sends call `id` to a remote provider; false when there is none. The link
+  // answers through Bus::respond.
+  virtual bool forward_call(const std::string& service, const MsgRef& request,
+                            std::uint64_t id) = 0;
+};
+
 struct TopicStatsSnapshot {
   std::string name;
   std::uint64_t type_id = 0;
@@ -93,6 +110,10 @@ class Bus {
   // calls it made complete as cancelled, while its code is still loaded.
   void remove_endpoint(Endpoint* e);
 
+  // Attaches a transport (before nodes start); it is told about what exists
+  // already. nullptr detaches it.
+  void attach(Link* link);
+
   void count_invalid(const plr_msg* msg);
   std::vector<TopicStatsSnapshot> topic_stats();
   std::vector<ServiceInfo> services() const;
@@ -109,6 +130,7 @@ class Bus {
   Topic& topic_locked(const std::string& name);
   void deliver(const std::shared_ptr<Subscription>& sub, const MsgRef& msg);
   static void drain(const std::shared_ptr<Subscription>& sub);
+  bool erase_pending_locked(std::uint64_t id, Pending* out = nullptr);
   void complete(std::uint64_t id, plr_status status, plr_msg* reply, const std::string& error);
   void timer_loop();
 
@@ -122,6 +144,7 @@ class Bus {
   std::multimap<std::chrono::steady_clock::time_point, std::uint64_t> deadlines_;
   std::uint64_t next_id_ = 1;
   std::atomic<std::uint64_t> invalid_total_{0};
+  Link* link_ = nullptr;
 
   std::condition_variable timer_cv_;
   bool stop_ = false;

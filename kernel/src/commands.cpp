@@ -4,6 +4,10 @@
 #include "control.hpp"
 #include "kernel.hpp"
 #include "plugin_loader.hpp"
+#include "supervisor.hpp"
+#include "variables.hpp"
+
+#include <plr/shm/segments.hpp>
 
 #include <plr/plugin_abi.h>
 
@@ -12,11 +16,13 @@
 #include <nlohmann/json.hpp>
 
 #include <dirent.h>
+#include <unistd.h>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <csignal>
 #include <ctime>
+#include <filesystem>
 #include <iostream>
 
 namespace plr::kernel {
@@ -61,10 +67,38 @@ Expected<std::string> find_socket(const std::string& pipeline) {
 
 }  // namespace
 
+std::string new_run_id() {
+  return fmt::format("{}-{:x}", ::getpid(), static_cast<std::uint32_t>(wall_now_ns() / 1000));
+}
+
+// Tells the supervisor that this host's nodes are up.
+void report_ready() {
+  const char* fd = std::getenv("PLR_READY_FD");
+  if (fd == nullptr) return;
+  const int n = std::atoi(fd);
+  const char one = 1;
+  (void)!::write(n, &one, 1);
+  ::close(n);
+  ::unsetenv("PLR_READY_FD");
+}
+
 int run_pipeline(const RunOptions& options) {
   spdlog::set_level(options.verbose ? spdlog::level::debug : spdlog::level::info);
+  const bool main_host = options.host == "main";
+  // A vanished peer shows up as EPIPE where we write, not as a process kill.
+  std::signal(SIGPIPE, SIG_IGN);
+  if (!main_host) spdlog::set_pattern(fmt::format("[%H:%M:%S.%e] [%l] [host {}] %v", options.host));
   auto config = load(options.config, options.overrides);
   if (!config) return fail(config.error().message, 2);
+  const std::string run_id = options.run_id.empty() ? new_run_id() : options.run_id;
+  namespace fs = std::filesystem;
+  const auto report_dir = fs::absolute(options.report_dir.empty() ? "report" : options.report_dir);
+  if (auto s = substitute_variables(*config,
+                                    {{"report_dir", report_dir.string()},
+                                     {"config_dir", fs::path(config->file).parent_path().string()},
+                                     {"run_id", run_id}});
+      !s)
+    return fail(s.error().message, 2);
 
   // Signals are taken synchronously by this thread only; every thread started
   // from here on inherits the mask.
@@ -73,21 +107,43 @@ int run_pipeline(const RunOptions& options) {
   for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&signals, s);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
-  Kernel kernel(*config, options.host);
+  // Host processes: started and watched from the main one.
+  std::unique_ptr<Supervisor> supervisor;
+  std::vector<HostConfig> children;
+  for (const auto& h : hosts_with_nodes(*config))
+    if (h != "main") children.push_back(*config->host(h));
+  if (main_host) {
+    if (const auto n = shm::reclaim_stale_segments(); n > 0)
+      spdlog::info("removed {} shared-memory segments of dead runs", n);
+    if (!children.empty()) {
+      std::vector<std::string> command{fs::read_symlink("/proc/self/exe").string(), "run",
+                                       config->file, "--report", report_dir.string()};
+      for (const auto& o : options.overrides) {
+        command.push_back("--set");
+        command.push_back(o);
+      }
+      if (options.verbose) command.push_back("--verbose");
+      supervisor = std::make_unique<Supervisor>(command, children, run_id);
+    }
+  }
+
+  Kernel kernel(*config, options.host, run_id);
   std::atomic<bool> finished{false};
   std::atomic<bool> finished_ok{true};
   std::string finish_reason;
   std::mutex reason_mutex;
-  if (auto s = kernel.on_pipeline_done([&](bool ok, std::string reason) {
-        {
-          std::lock_guard lock(reason_mutex);
-          finish_reason = std::move(reason);
-        }
-        finished_ok = ok;
-        finished = true;
-      });
-      !s)
-    return fail(s.error().message);
+  // Only the main host ends the run; the others wait for the supervisor.
+  if (main_host)
+    if (auto s = kernel.on_pipeline_done([&](bool ok, std::string reason) {
+          {
+            std::lock_guard lock(reason_mutex);
+            finish_reason = std::move(reason);
+          }
+          finished_ok = ok;
+          finished = true;
+        });
+        !s)
+      return fail(s.error().message);
 
   std::atomic<bool> stop_requested{false};
   std::unique_ptr<ControlServer> control;
@@ -114,7 +170,21 @@ int run_pipeline(const RunOptions& options) {
     if (auto s = control->start(); !s) return fail(s.error().message);
   }
 
-  if (auto s = kernel.start(); !s) return fail(s.error().message);
+  // Hosts first: their services must be there when the main nodes start.
+  if (supervisor) {
+    if (auto s = supervisor->start(std::chrono::seconds(60)); !s) {
+      supervisor.reset();
+      (void)shm::remove_run_segments(run_id);
+      return fail(s.error().message);
+    }
+  }
+  if (auto s = kernel.start(); !s) {
+    supervisor.reset();
+    if (main_host) (void)shm::remove_run_segments(run_id);
+    return fail(s.error().message);
+  }
+  kernel.sync_transports();
+  if (!main_host) report_ready();
   spdlog::info("pipeline '{}' running ({} nodes); Ctrl-C stops it", config->pipeline,
                kernel.nodes().size());
 
@@ -134,12 +204,24 @@ int run_pipeline(const RunOptions& options) {
       break;
     }
     if (stop_requested) break;
+    if (supervisor) {
+      if (auto s = supervisor->poll(); !s) {
+        spdlog::error("{}", s.error().message);
+        exit_code = 1;
+        break;
+      }
+    }
     if (options.duration_s > 0 && std::chrono::steady_clock::now() - started >
                                       std::chrono::duration<double>(options.duration_s))
       break;
   }
   kernel.stop();
   control.reset();
+  // Hosts stop after the main nodes, so nothing waits on a vanished service.
+  supervisor.reset();
+  // The main host clears the run's shared memory; a host whose supervisor
+  // died (kill -9) does it instead.
+  if (main_host || ::getppid() == 1) (void)shm::remove_run_segments(run_id);
   return exit_code;
 }
 

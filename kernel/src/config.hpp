@@ -35,9 +35,9 @@ enum class TopicPolicy { KeepLast, Reliable };
 struct TopicConfig {
   std::string name;
   TopicPolicy policy = TopicPolicy::KeepLast;
-  std::size_t depth = 64;                  // queued messages per subscriber
-  std::size_t slot_size = 1 << 20;         // bytes, for shared memory
-  bool busy_poll = false;                  // shared-memory readers spin instead of sleeping
+  std::size_t depth = 64;           // queued messages per subscriber
+  std::size_t slot_size = 1 << 20;  // bytes, for shared memory
+  bool busy_poll = false;           // shared-memory readers spin instead of sleeping
   SourceLocation where;
 };
 
@@ -63,10 +63,11 @@ struct DdsConfig {
 struct Config {
   std::string file;      // absolute path of the YAML file
   std::string pipeline;  // name of the run; defaults to the file's stem
-  std::vector<std::string> plugin_paths;  // absolute; relative entries resolve against the file's folder
-  std::string clock = "wall";             // "wall" or "sim" (time from the `clock` topic)
+  std::vector<std::string>
+      plugin_paths;            // absolute; relative entries resolve against the file's folder
+  std::string clock = "wall";  // "wall" or "sim" (time from the `clock` topic)
   std::vector<NodeConfig> nodes;
-  std::vector<HostConfig> hosts;          // always contains "main"
+  std::vector<HostConfig> hosts;  // always contains "main"
   std::vector<TopicConfig> topics;
   DdsConfig dds;
 

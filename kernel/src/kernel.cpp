@@ -1,5 +1,8 @@
 #include "kernel.hpp"
 
+#include "shm_bridge.hpp"
+#include "supervisor.hpp"
+
 #include <plr/message.hpp>
 #include <plr/messages.hpp>
 
@@ -30,9 +33,10 @@ std::vector<std::string> plugin_search_paths(const Config& config) {
   return paths;
 }
 
-Kernel::Kernel(Config config, std::string host)
+Kernel::Kernel(Config config, std::string host, std::string run_id)
     : config_(std::move(config)),
       host_(std::move(host)),
+      run_id_(std::move(run_id)),
       loader_(plugin_search_paths(config_)),
       clock_(config_.clock == "sim"),
       bus_([this](const std::string& topic) { return config_.topic(topic); }),
@@ -48,6 +52,8 @@ Kernel::Kernel(Config config, std::string host)
 
 Kernel::~Kernel() {
   stop();
+  bus_.attach(nullptr);
+  bridge_.reset();
   bus_.remove_endpoint(internal_.get());
   internal_->executor().drain();
 }
@@ -65,6 +71,11 @@ Expected<std::unique_ptr<NodeInstance>> Kernel::bring_up(const NodeConfig& confi
 }
 
 Status Kernel::start() {
+  const auto hosts = hosts_with_nodes(config_);
+  if (!run_id_.empty() && hosts.size() > 1 && !bridge_) {
+    bridge_ = std::make_unique<ShmBridge>(bus_, config_, host_, hosts, run_id_);
+    bus_.attach(bridge_.get());
+  }
   if (config_.clock == "sim")
     if (auto s = follow_sim_clock(); !s) return s;
   for (auto& s : slots_) {
@@ -98,6 +109,10 @@ void Kernel::stop() {
     s.instance.reset();
   }
   started_ = false;
+}
+
+void Kernel::sync_transports() {
+  if (bridge_) bridge_->executor().drain();
 }
 
 Kernel::Slot* Kernel::slot(const std::string& name) {
@@ -213,6 +228,7 @@ std::string Kernel::telemetry_json() {
   for (const auto& s : bus_.services())
     j["services"].push_back({{"name", s.name}, {"providers", s.providers}});
   j["invalid_messages"] = bus_.invalid_total();
+  if (bridge_) j["shm"] = bridge_->stats();
   return j.dump();
 }
 

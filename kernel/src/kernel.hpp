@@ -30,7 +30,9 @@ struct NodeStatus {
 class Kernel {
  public:
   // `host` selects the nodes this process runs ("main" for the supervisor).
-  explicit Kernel(Config config, std::string host = "main");
+  // With a `run_id` and nodes on several hosts, the bus reaches the other
+  // hosts' processes over shared memory.
+  explicit Kernel(Config config, std::string host = "main", std::string run_id = "");
   ~Kernel();  // stops everything still running
   Kernel(const Kernel&) = delete;
   Kernel& operator=(const Kernel&) = delete;
@@ -53,6 +55,9 @@ class Kernel {
   // Calls `fn(ok, reason)` when a node announces on `pipeline/done` that the job is over.
   Status on_pipeline_done(std::function<void(bool, std::string)> fn);
 
+  // Waits until the transports have set up what the started nodes registered.
+  void sync_transports();
+
   Bus& bus() { return bus_; }
   const Config& config() const { return config_; }
   const PipelineClock& clock() const { return clock_; }
@@ -74,11 +79,13 @@ class Kernel {
 
   Config config_;
   std::string host_;
+  std::string run_id_;
   PluginLoader loader_;
   PipelineClock clock_;
   Bus bus_;
   std::vector<std::unique_ptr<Slot>> slots_;
   std::unique_ptr<Internal> internal_;
+  std::unique_ptr<class ShmBridge> bridge_;
   std::function<void(bool, std::string)> on_done_;
   bool started_ = false;
 };

@@ -30,6 +30,21 @@ plr_msg* msg_copy(const std::uint8_t* data, std::size_t size, std::uint64_t type
   return m;
 }
 
+plr_msg* msg_wrap(const std::uint8_t* data, std::size_t size, std::uint64_t type_id,
+                  std::uint32_t schema_version, std::shared_ptr<void> keep_alive) {
+  auto* m = new plr_msg;
+  m->external = data;
+  m->capacity = size;
+  m->size = size;
+  m->type_id = type_id;
+  m->schema_version = schema_version;
+  m->stamp_ns = wall_now_ns();
+  m->keep_alive = std::move(keep_alive);
+  m->foreign = true;
+  g_live.fetch_add(1, std::memory_order_relaxed);
+  return m;
+}
+
 void msg_retain(const plr_msg* msg) {
   const_cast<plr_msg*>(msg)->refs.fetch_add(1, std::memory_order_relaxed);
 }
@@ -43,7 +58,8 @@ void msg_release(const plr_msg* msg) {
 }
 
 plr_msg_view msg_view(const plr_msg* m) {
-  return {m->storage.get() + m->offset, m->size, m->type_id, m->schema_version, m->stamp_ns};
+  const std::uint8_t* base = m->external ? m->external : m->storage.get();
+  return {base + m->offset, m->size, m->type_id, m->schema_version, m->stamp_ns};
 }
 
 std::int64_t live_messages() {

@@ -19,6 +19,11 @@ struct plr_msg {
   std::uint32_t schema_version = 0;
   std::int64_t stamp_ns = 0;
   const void* topic = nullptr;  // the bus topic it was published on, for counters
+  // Bytes that live elsewhere (a shared-memory slot read in place), kept
+  // alive by `keep_alive` for as long as this message lives.
+  const std::uint8_t* external = nullptr;
+  std::shared_ptr<void> keep_alive;
+  bool foreign = false;  // arrived from another process; transports do not send it back
 };
 
 namespace plr::kernel {
@@ -27,6 +32,9 @@ plr_msg* msg_alloc(std::size_t capacity, std::uint8_t** data);
 // A buffer holding a copy of bytes that arrived from elsewhere.
 plr_msg* msg_copy(const std::uint8_t* data, std::size_t size, std::uint64_t type_id,
                   std::uint32_t schema_version, std::int64_t stamp_ns);
+// A message over bytes owned by `keep_alive` (zero copy).
+plr_msg* msg_wrap(const std::uint8_t* data, std::size_t size, std::uint64_t type_id,
+                  std::uint32_t schema_version, std::shared_ptr<void> keep_alive);
 void msg_retain(const plr_msg* msg);
 void msg_release(const plr_msg* msg);
 plr_msg_view msg_view(const plr_msg* msg);

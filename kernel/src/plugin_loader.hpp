@@ -2,8 +2,8 @@
 // them before any of their code beyond the entry point runs.
 #pragma once
 
-#include <plr/expected.hpp>
 #include <plr/plugin_abi.h>
+#include <plr/expected.hpp>
 
 #include <memory>
 #include <mutex>

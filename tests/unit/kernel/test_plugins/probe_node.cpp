@@ -1,5 +1,6 @@
 // Test plug-in: serves `double` asynchronously (answers from its own thread
-// after a short random delay, so requests are in flight during a swap) and
+// after a short random delay, so requests are in flight during a swap; one
+// chosen value slowly) and
 // reports each life-cycle hook on the `lifecycle` topic.
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
@@ -19,10 +20,12 @@ class ProbeNode : public plr::Node {
 
  protected:
   plr::Status on_configure() override {
-    params().allow_only({"factor", "max_delay_us", "fail_activate"});
+    params().allow_only({"factor", "max_delay_us", "fail_activate", "slow_value", "slow_ms"});
     factor_ = params().get<std::int64_t>("factor", 2);
     max_delay_us_ = params().get<int>("max_delay_us", 200);
     fail_activate_ = params().get<bool>("fail_activate", false);
+    slow_value_ = params().get<std::int64_t>("slow_value", -1);
+    slow_ms_ = params().get<int>("slow_ms", 0);
     auto events = ctx().advertise<plr::msg::Statistics>("lifecycle");
     if (!events) return events.error();
     events_ = *events;
@@ -84,6 +87,7 @@ class ProbeNode : public plr::Node {
       work_.pop_front();
       lock.unlock();
       std::this_thread::sleep_for(std::chrono::microseconds(delay(rng)));
+      if (value == slow_value_) std::this_thread::sleep_for(std::chrono::milliseconds(slow_ms_));
       flatbuffers::FlatBufferBuilder fbb;
       fbb.Finish(plr::msg::CreateDoubleReply(fbb, value * factor_));
       (void)responder.reply(fbb);
@@ -94,6 +98,8 @@ class ProbeNode : public plr::Node {
   std::int64_t factor_ = 2;
   int max_delay_us_ = 200;
   bool fail_activate_ = false;
+  std::int64_t slow_value_ = -1;  // answered after slow_ms, so a test can act while it is in flight
+  int slow_ms_ = 0;
   plr::Publisher<plr::msg::Statistics> events_;
   std::mutex m_;
   std::condition_variable cv_;
