@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <variant>
 #include <vector>
@@ -12,6 +13,13 @@
 #include "plr/sim/robot_model.hpp"
 #include "plr/sim/trajectory.hpp"
 #include "plr/sim/world.hpp"
+
+namespace plr::msg {
+struct PlanRequest;
+}
+namespace flatbuffers {
+class FlatBufferBuilder;
+}
 
 namespace plr::sim {
 
@@ -120,6 +128,22 @@ class QueryScope {
  private:
   CollisionChecker& checker_;
 };
+
+// ---- Messages (sdk/schemas/plan.fbs), in library plr_plan_messages ------
+
+struct DecodedPlanRequest {
+  PlanQuery query;
+  World world;
+  std::shared_ptr<const octomap::OcTree> octree;  // null: build the trailer shell
+};
+
+// Throws std::invalid_argument naming the bad field, e.g.
+// "PlanRequest.start: needs 8 joint values, got 7".
+DecodedPlanRequest decodePlanRequest(const plr::msg::PlanRequest& request);
+// Finishes `out` with a PlanResponse; the trajectory is sampled every
+// `sample_dt` seconds (plus its end).
+void encodePlanResponse(const PlanResult& result, const std::string& planner, double sample_dt,
+                        flatbuffers::FlatBufferBuilder& out);
 
 // CPU time consumed by the calling thread (s).
 double threadCpuSeconds();

@@ -1,0 +1,139 @@
+// PlanRequest/PlanResponse (sdk/schemas/plan.fbs) <-> plan types.
+#include <octomap/octomap.h>
+
+#include <cmath>
+#include <plr/messages.hpp>
+#include <sstream>
+#include <stdexcept>
+
+#include "plr/sim/plan_types.hpp"
+
+namespace plr::sim {
+namespace {
+
+[[noreturn]] void bad(const std::string& field, const std::string& why) {
+  throw std::invalid_argument("PlanRequest." + field + ": " + why);
+}
+
+Config toConfig(const flatbuffers::Vector<double>* v, const char* field) {
+  if (v == nullptr || v->size() != kNumJoints) {
+    bad(field, "needs 8 joint values, got " + std::to_string(v == nullptr ? 0 : v->size()));
+  }
+  Config q;
+  for (int i = 0; i < kNumJoints; ++i) q[i] = v->Get(static_cast<flatbuffers::uoffset_t>(i));
+  return q;
+}
+
+Eigen::Isometry3d toPose(const plr::msg::Pose& p) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.translation() = Eigen::Vector3d(p.position().x(), p.position().y(), p.position().z());
+  const auto& o = p.orientation();
+  Eigen::Quaterniond q(o.w(), o.x(), o.y(), o.z());
+  if (q.norm() < 1e-9) q = Eigen::Quaterniond::Identity();
+  t.linear() = q.normalized().toRotationMatrix();
+  return t;
+}
+
+plr::msg::PlanStatus toMsg(PlanStatus s) {
+  switch (s) {
+    case PlanStatus::kSolved:
+      return plr::msg::PlanStatus::Solved;
+    case PlanStatus::kTimeout:
+      return plr::msg::PlanStatus::Timeout;
+    case PlanStatus::kStartInvalid:
+      return plr::msg::PlanStatus::StartInvalid;
+    case PlanStatus::kGoalInvalid:
+      return plr::msg::PlanStatus::GoalInvalid;
+    case PlanStatus::kNoPath:
+      return plr::msg::PlanStatus::NoPath;
+    case PlanStatus::kInvalidRequest:
+      return plr::msg::PlanStatus::InvalidRequest;
+  }
+  return plr::msg::PlanStatus::InvalidRequest;
+}
+
+}  // namespace
+
+DecodedPlanRequest decodePlanRequest(const plr::msg::PlanRequest& r) {
+  DecodedPlanRequest d;
+  PlanQuery& q = d.query;
+  const int mode = static_cast<int>(r.mode());
+  if (mode < 1 || mode > 6) bad("mode", "unknown mode " + std::to_string(mode));
+  q.mode = static_cast<PlanMode>(mode);
+  q.start = toConfig(r.start(), "start");
+  if (r.has_goal_pose()) {
+    if (r.goal_pose() == nullptr) bad("goal_pose", "has_goal_pose is set but goal_pose is missing");
+    const Eigen::Isometry3d pose = toPose(*r.goal_pose());
+    const Eigen::Vector3d n = pose.linear().col(0);
+    PoseGoal g;
+    // The plate's yaw follows its position; only the pitch of its normal is a goal.
+    g.target = {pose.translation(), std::atan2(-n.z(), std::hypot(n.x(), n.y()))};
+    q.goal = g;
+  } else if (r.goal_joints() != nullptr && r.goal_joints()->size() > 0) {
+    JointGoal g;
+    g.q = toConfig(r.goal_joints(), "goal_joints");
+    q.goal = g;
+  }
+  q.time_limit_s = r.timeout_s();
+  if (const auto* eps = r.epsilons(); eps != nullptr && eps->size() > 0) {
+    q.eps_initial = eps->Get(0);
+    q.eps_final = eps->Get(eps->size() - 1);
+    q.eps_decrement =
+        eps->size() > 1 ? std::max(1e-3, (q.eps_initial - q.eps_final) / (eps->size() - 1)) : 1.0;
+  }
+  const plr::msg::WorldState* w = r.world();
+  if (w == nullptr) bad("world", "missing");
+  if (const auto* t = w->trailer_size()) {
+    if (t->x() > 0 && t->y() > 0 && t->z() > 0) d.world.trailer = {t->x(), t->y(), t->z()};
+  }
+  if (const auto* boxes = w->boxes()) {
+    for (const plr::msg::BoxState* b : *boxes) {
+      Box box;
+      box.id = b->id();
+      box.size = Eigen::Vector3d(b->size().x(), b->size().y(), b->size().z());
+      if (!(box.size.minCoeff() > 0.0))
+        bad("world.boxes", "box " + std::to_string(box.id) + " has a bad size");
+      box.pose = toPose(b->pose());
+      box.mass = b->mass();
+      d.world.boxes.push_back(box);
+    }
+  }
+  if (const auto* bytes = w->octree(); bytes != nullptr && bytes->size() > 0) {
+    auto tree = std::make_shared<octomap::OcTree>(
+        w->octree_resolution() > 0 ? w->octree_resolution() : 0.05);
+    std::istringstream in(std::string(reinterpret_cast<const char*>(bytes->data()), bytes->size()));
+    if (!tree->readBinary(in)) bad("world.octree", "not an OctoMap binary tree");
+    d.octree = std::move(tree);
+  }
+  if (const auto* held = r.held_box_ids()) {
+    for (std::uint32_t id : *held) {
+      const auto it = std::find_if(d.world.boxes.begin(), d.world.boxes.end(),
+                                   [&](const Box& b) { return b.id == id; });
+      if (it == d.world.boxes.end())
+        bad("held_box_ids", "box " + std::to_string(id) + " is not in the world");
+      q.held_boxes.push_back(*it);
+    }
+  }
+  return d;
+}
+
+void encodePlanResponse(const PlanResult& result, const std::string& planner, double sample_dt,
+                        flatbuffers::FlatBufferBuilder& out) {
+  std::vector<flatbuffers::Offset<plr::msg::TrajectoryPoint>> points;
+  if (!result.trajectory.empty()) {
+    for (const auto& [t, s] : result.trajectory.sampled(sample_dt)) {
+      const std::vector<double> pos(s.position.data(), s.position.data() + kNumJoints);
+      const std::vector<double> vel(s.velocity.data(), s.velocity.data() + kNumJoints);
+      points.push_back(plr::msg::CreateTrajectoryPointDirect(out, t, &pos, &vel));
+    }
+  }
+  const auto traj = plr::msg::CreateTrajectoryDirect(out, &points);
+  const auto stats =
+      plr::msg::CreatePlanStats(out, result.stats.expansions, 1e3 * result.stats.first_solution_s,
+                                1e3 * result.stats.planning_time_s, result.stats.final_eps,
+                                result.stats.cost, result.stats.escaped);
+  out.Finish(plr::msg::CreatePlanResponseDirect(out, toMsg(result.status), result.message.c_str(),
+                                                traj, stats, planner.c_str()));
+}
+
+}  // namespace plr::sim
