@@ -1,0 +1,766 @@
+// The strategy executor: walks strategies from their root, observing the
+// world between actions, and turns each abstract action into planner queries
+// (`plan`) and trajectories for the simulator (`sim/execute`). See
+// docs/executor.md for the sequence of each action and the recovery rules.
+#include <unistd.h>
+
+#include <plr/messages.hpp>
+#include <plr/node.hpp>
+#include <plr/plugin.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include "instantiate.hpp"
+#include "plr/sim/observation.hpp"
+#include "plr/sim/plan_types.hpp"
+#include "plr/sim/render.hpp"
+#include "plr/sim/robot_model.hpp"
+#include "plr/sim/strategy.hpp"
+#include "report.hpp"
+
+namespace plr::executor {
+namespace {
+
+using namespace std::chrono_literals;
+using Clock = std::chrono::steady_clock;
+using msg::Suction;
+using sim::PlanMode;
+
+// Unwinds the worker when the node is deactivated.
+struct Stopped {};
+// The simulator's host went away (sim/* answered PLR_ERR_UNAVAILABLE).
+struct SimulatorLost {
+  std::string what;
+};
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+struct Observed {
+  Message<msg::WorldState> message;
+  msg::WorldStateT state;
+  sim::World world;
+  sim::Config q = sim::Config::Zero();
+  std::vector<std::uint32_t> held;
+  std::uint32_t unloaded = 0;
+};
+
+// A goal for a sub-action: joint values for the mode's joints, or a plate pose.
+struct Goal {
+  std::vector<std::pair<int, double>> joints;
+  std::optional<sim::PlateTarget> pose;
+};
+
+struct PlanResult {
+  bool ok = false;
+  std::string message;
+  std::unique_ptr<msg::TrajectoryT> trajectory;
+};
+
+// What one action cost, committed to the statistics only when it completes
+// (an action interrupted by a simulator crash is repeated, not counted twice).
+struct ActionRun {
+  double plan_s = 0;
+  double exec_s = 0;
+  std::uint64_t contacts = 0;
+  double sim_time_s = 0;
+  bool failed_grasp = false;
+};
+
+class ExecutorNode : public plr::Node {
+ public:
+  using Node::Node;
+
+ protected:
+  plr::Status on_configure() override {
+    params().allow_only({"report_dir",
+                         "env",
+                         "seed",
+                         "world_file",
+                         "urdf",
+                         "h_pile",
+                         "wall_depth",
+                         "min_pile_depth",
+                         "pile_mid",
+                         "pile_high",
+                         "wall_mid",
+                         "wall_high",
+                         "plan_timeout_s",
+                         "execute_timeout_s",
+                         "service_wait_s",
+                         "retry_ms",
+                         "max_idle_actions",
+                         "max_actions",
+                         "pick_candidates",
+                         "settle_s",
+                         "nose_home",
+                         "nose_down",
+                         "nose_sweep",
+                         "retreat_m",
+                         "progress"});
+    report_dir_ = params().get<std::string>("report_dir", "report");
+    env_ = params().get<std::string>("env", "");
+    seed_ = params().get<std::uint64_t>("seed", 1);
+    world_file_ = params().get<std::string>("world_file", "");
+    obs_.h_pile = params().get<double>("h_pile", obs_.h_pile);
+    obs_.wall_depth = params().get<double>("wall_depth", obs_.wall_depth);
+    obs_.min_pile_depth = params().get<double>("min_pile_depth", obs_.min_pile_depth);
+    obs_.pile_mid = params().get<double>("pile_mid", obs_.pile_mid);
+    obs_.pile_high = params().get<double>("pile_high", obs_.pile_high);
+    obs_.wall_mid = params().get<double>("wall_mid", obs_.wall_mid);
+    obs_.wall_high = params().get<double>("wall_high", obs_.wall_high);
+    if (const auto err = obs_.check(); !err.empty())
+      return make_error(PLR_ERR_INVALID,
+                        "param '" + err.substr(0, err.find(':')) + "'" + err.substr(err.find(':')));
+    plan_timeout_s_ = params().get<double>("plan_timeout_s", 5.0);
+    execute_timeout_s_ = params().get<double>("execute_timeout_s", 300.0);
+    service_wait_s_ = params().get<double>("service_wait_s", 60.0);
+    retry_ = std::chrono::milliseconds(params().get<std::uint64_t>("retry_ms", 50));
+    max_idle_ = params().get<std::uint64_t>("max_idle_actions", 6);
+    max_actions_ = params().get<std::uint64_t>("max_actions", 0);
+    max_candidates_ = params().get<std::uint64_t>("pick_candidates", 4);
+    settle_s_ = params().get<double>("settle_s", 0.3);
+    retreat_m_ = params().get<double>("retreat_m", 0.3);
+    show_progress_ = params().get<bool>("progress", true);
+    for (auto [key, target] :
+         {std::pair{"nose_home", &nose_home_}, std::pair{"nose_down", &nose_down_},
+          std::pair{"nose_sweep", &nose_sweep_}}) {
+      *target = params().get<std::vector<double>>(key, *target);
+      if (target->size() != 3)
+        return make_error(PLR_ERR_INVALID,
+                          std::string("param '") + key + "': expected 3 nose joint values");
+    }
+    if (!(plan_timeout_s_ > 0) || !(execute_timeout_s_ > 0) || !(service_wait_s_ >= 0))
+      return make_error(PLR_ERR_INVALID, "param 'plan_timeout_s'/'execute_timeout_s': must be > 0");
+    if (max_idle_ == 0)
+      return make_error(PLR_ERR_INVALID, "param 'max_idle_actions': must be >= 1");
+    if (max_candidates_ == 0)
+      return make_error(PLR_ERR_INVALID, "param 'pick_candidates': must be >= 1");
+    try {
+      robot_ = sim::RobotModel::fromUrdfFile(params().get<std::string>("urdf", PLR_UNLOADER_URDF));
+    } catch (const std::exception& e) {
+      return make_error(PLR_ERR_INVALID, std::string("param 'urdf': ") + e.what());
+    }
+    auto status = ctx().advertise<msg::Statistics>("executor/status");
+    if (!status) return status.error();
+    status_ = *status;
+    auto done = ctx().advertise<msg::PipelineDone>("pipeline/done");
+    if (!done) return done.error();
+    done_ = *done;
+    tty_ = isatty(STDERR_FILENO) == 1;
+    return {};
+  }
+
+  plr::Status on_activate() override {
+    stop_ = false;
+    stats_ = {};
+    worker_ = std::thread([this] { run(); });
+    return {};
+  }
+
+  plr::Status on_deactivate() override {
+    {
+      std::lock_guard lock(m_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    if (worker_.joinable()) worker_.join();
+    return {};
+  }
+
+ private:
+  // ---- Bus helpers ---------------------------------------------------------
+
+  void pause(std::chrono::nanoseconds d) {
+    std::unique_lock lock(m_);
+    if (cv_.wait_for(lock, d, [this] { return stop_.load(); })) throw Stopped{};
+  }
+
+  template <class Req, class Rep>
+  Expected<Message<Rep>> call_once(const std::string& service,
+                                   const flatbuffers::FlatBufferBuilder& fbb, double timeout_s) {
+    auto f = ctx().call<Req, Rep>(service, fbb,
+                                  std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                      std::chrono::duration<double>(timeout_s)));
+    while (!f.wait_for(20ms)) {
+      if (stop_) {
+        f.cancel();
+        (void)f.get();
+        throw Stopped{};
+      }
+    }
+    return f.get();
+  }
+
+  // Retries while the provider is unavailable: not started yet, or being
+  // swapped. A swap is atomic in the kernel; this makes a query survive even
+  // a gap, so none is lost.
+  template <class Req, class Rep>
+  Expected<Message<Rep>> call_retry(const std::string& service,
+                                    const flatbuffers::FlatBufferBuilder& fbb, double timeout_s) {
+    const auto t0 = Clock::now();
+    for (;;) {
+      auto r = call_once<Req, Rep>(service, fbb, timeout_s);
+      if (r || r.error().code != PLR_ERR_UNAVAILABLE || seconds_since(t0) > service_wait_s_)
+        return r;
+      pause(retry_);
+    }
+  }
+
+  Observed observe() {
+    flatbuffers::FlatBufferBuilder fbb;
+    fbb.Finish(msg::CreateObserveRequest(fbb, false));
+    auto r = call_once<msg::ObserveRequest, msg::WorldState>("sim/observe", fbb, 30.0);
+    if (!r) {
+      if (r.error().code == PLR_ERR_UNAVAILABLE || r.error().code == PLR_ERR_TIMEOUT)
+        throw SimulatorLost{"sim/observe: " + r.error().message};
+      throw std::runtime_error("sim/observe: " + r.error().message);
+    }
+    Observed o;
+    o.message = std::move(r.value());
+    o.message->UnPackTo(&o.state);
+    o.world = sim::world_from_message(*o.message);
+    if (o.state.robot && o.state.robot->positions.size() == sim::kNumJoints)
+      for (int j = 0; j < sim::kNumJoints; ++j)
+        o.q[j] = o.state.robot->positions[static_cast<std::size_t>(j)];
+    o.held = o.state.held_box_ids;
+    o.unloaded = o.state.boxes_unloaded;
+    return o;
+  }
+
+  // Waits for the simulator to answer (at start, and after its host restarted).
+  Observed wait_for_simulator() {
+    const auto t0 = Clock::now();
+    for (;;) {
+      try {
+        return observe();
+      } catch (const SimulatorLost& lost) {
+        if (seconds_since(t0) > service_wait_s_)
+          throw std::runtime_error("simulator unavailable for " +
+                                   fmt::format("{:.0f}", service_wait_s_) + " s: " + lost.what);
+      }
+      pause(200ms);
+    }
+  }
+
+  void snapshot_or_restore(const char* service) {
+    flatbuffers::FlatBufferBuilder fbb;
+    fbb.Finish(msg::CreateSnapshotRequestDirect(fbb, "checkpoint"));
+    auto r = call_retry<msg::SnapshotRequest, msg::SnapshotReply>(service, fbb, 60.0);
+    if (!r) {
+      if (r.error().code == PLR_ERR_UNAVAILABLE)
+        throw SimulatorLost{std::string(service) + ": " + r.error().message};
+      log().warn("{} 'checkpoint' failed: {}", service, r.error().message);
+    } else if (!r.value()->ok()) {
+      log().warn("{} 'checkpoint' refused: {}", service,
+                 r.value()->message() ? r.value()->message()->str() : "");
+    }
+  }
+
+  // ---- Planning and execution ---------------------------------------------
+
+  void count_query(PlanMode mode, const msg::PlanResponse* rep, double wall_s) {
+    auto& ms = stats_.modes[static_cast<std::size_t>(mode)];
+    ++ms.queries;
+    if (rep == nullptr || rep->status() != msg::PlanStatus::Solved) ++ms.failures;
+    const auto* st = rep ? rep->stats() : nullptr;
+    ms.ms.add(st && st->planning_ms() > 0 ? st->planning_ms() : 1e3 * wall_s);
+    if (st && st->m6_used() && mode != PlanMode::kEscape) {
+      ++stats_.m6_implicit;
+      ++stats_.modes[static_cast<std::size_t>(PlanMode::kEscape)].queries;
+    }
+  }
+
+  PlanResult plan_once(PlanMode mode, const Observed& w, const Goal& goal,
+                       const std::vector<std::uint32_t>& leave_out, ActionRun& run) {
+    msg::PlanRequestT req;
+    req.mode = static_cast<msg::PlanMode>(mode);
+    req.start.assign(w.q.data(), w.q.data() + sim::kNumJoints);
+    if (goal.pose) {
+      const auto& t = *goal.pose;
+      // Orientation: pitch about y, yaw from the arm's axis to the target
+      // (the planner reads position + pitch; see docs/notes-executor.md).
+      const double yaw = std::atan2(t.position.y(),
+                                    t.position.x() - (w.q[sim::kBaseX] - geometry_.arm_yaw_offset));
+      const Eigen::Quaterniond q(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+                                 Eigen::AngleAxisd(t.pitch, Eigen::Vector3d::UnitY()));
+      req.goal_pose =
+          std::make_unique<msg::Pose>(msg::Vec3(t.position.x(), t.position.y(), t.position.z()),
+                                      msg::Quat(q.x(), q.y(), q.z(), q.w()));
+      req.has_goal_pose = true;
+    } else if (mode != PlanMode::kEscape) {
+      sim::Config g = w.q;
+      for (auto [j, v] : goal.joints) g[j] = v;
+      req.goal_joints.assign(g.data(), g.data() + sim::kNumJoints);
+    }
+    req.timeout_s = plan_timeout_s_;
+    req.world = std::make_unique<msg::WorldStateT>(w.state);
+    auto& boxes = req.world->boxes;
+    boxes.erase(std::remove_if(boxes.begin(), boxes.end(),
+                               [&](const msg::BoxState& b) {
+                                 return std::find(leave_out.begin(), leave_out.end(), b.id()) !=
+                                        leave_out.end();
+                               }),
+                boxes.end());
+    req.held_box_ids = w.held;
+    flatbuffers::FlatBufferBuilder fbb;
+    fbb.Finish(msg::PlanRequest::Pack(fbb, &req));
+    const auto t0 = Clock::now();
+    auto r = call_retry<msg::PlanRequest, msg::PlanResponse>("plan", fbb, plan_timeout_s_ + 10.0);
+    const double wall = seconds_since(t0);
+    run.plan_s += wall;
+    PlanResult out;
+    if (!r) {
+      count_query(mode, nullptr, wall);
+      out.message = "plan: " + r.error().message;
+      return out;
+    }
+    const auto* rep = r.value().get();
+    count_query(mode, rep, wall);
+    if (rep->status() != msg::PlanStatus::Solved || rep->trajectory() == nullptr ||
+        rep->trajectory()->points() == nullptr || rep->trajectory()->points()->size() == 0) {
+      out.message = std::string(msg::EnumNamePlanStatus(rep->status())) +
+                    (rep->message() ? ": " + rep->message()->str() : "");
+      out.ok = false;
+      last_status_ = rep->status();
+      return out;
+    }
+    out.ok = true;
+    out.trajectory = std::unique_ptr<msg::TrajectoryT>(rep->trajectory()->UnPack());
+    return out;
+  }
+
+  // Runs a trajectory; returns the outcome, or nullopt when the simulator refused it.
+  std::optional<Message<msg::ExecuteOutcome>> execute(const msg::TrajectoryT& trajectory,
+                                                      Suction before, Suction after,
+                                                      ActionRun& run) {
+    msg::ExecuteRequestT req;
+    req.trajectory = std::make_unique<msg::TrajectoryT>(trajectory);
+    req.suction_before = before;
+    req.suction_after = after;
+    req.conveyor = true;
+    req.settle_s = settle_s_;
+    flatbuffers::FlatBufferBuilder fbb;
+    fbb.Finish(msg::ExecuteRequest::Pack(fbb, &req));
+    auto r =
+        call_once<msg::ExecuteRequest, msg::ExecuteOutcome>("sim/execute", fbb, execute_timeout_s_);
+    if (!r) {
+      if (r.error().code == PLR_ERR_UNAVAILABLE)
+        throw SimulatorLost{"sim/execute: " + r.error().message};
+      log().warn("sim/execute: {}", r.error().message);
+      return std::nullopt;
+    }
+    const auto& out = r.value();
+    run.exec_s += (trajectory.points.empty() ? 0.0 : trajectory.points.back()->time_s) + settle_s_;
+    run.contacts += out->robot_trailer_contacts();
+    run.sim_time_s = out->sim_time_s();
+    if (!out->ok()) {
+      log().warn("sim/execute: {}", out->message() ? out->message()->str() : "not ok");
+      return std::nullopt;
+    }
+    return r.value();
+  }
+
+  // One sub-action: observe, plan (escaping a start in collision with M6 when
+  // the planner reports it), execute. False when it could not be done.
+  bool step(const std::string& what, PlanMode mode, const Goal& goal, Suction before, Suction after,
+            ActionRun& run, const std::vector<std::uint32_t>& leave_out = {}) {
+    report_progress(what);
+    Observed w = observe();
+    if (!goal.pose && !goal.joints.empty()) {
+      bool there = true;
+      for (auto [j, v] : goal.joints) there = there && std::abs(w.q[j] - v) < 0.01;
+      if (there && before == Suction::Keep && after == Suction::Keep) return true;
+    }
+    last_status_ = msg::PlanStatus::Solved;
+    PlanResult p = plan_once(mode, w, goal, leave_out, run);
+    if (!p.ok && last_status_ == msg::PlanStatus::StartInvalid) {
+      // The planner did not escape by itself: ask for M6 explicitly, then retry.
+      PlanResult escape = plan_once(PlanMode::kEscape, w, {}, {}, run);
+      if (escape.ok && execute(*escape.trajectory, Suction::Keep, Suction::Keep, run)) {
+        w = observe();
+        p = plan_once(mode, w, goal, leave_out, run);
+      }
+    }
+    if (!p.ok) {
+      log().info("{}: {} not planned: {}", action_name_, what, p.message);
+      return false;
+    }
+    auto out = execute(*p.trajectory, before, after, run);
+    if (!out) return false;
+    last_held_ = (*out)->held_box_ids()
+                     ? std::vector<std::uint32_t>((*out)->held_box_ids()->begin(),
+                                                  (*out)->held_box_ids()->end())
+                     : std::vector<std::uint32_t>{};
+    return true;
+  }
+
+  Goal joints(std::initializer_list<std::pair<int, double>> j) { return Goal{j, std::nullopt}; }
+  Goal nose(const std::vector<double>& n, double lift = 0.0) {
+    return Goal{{{sim::kNose1, n[0] + lift}, {sim::kNose2, n[1]}, {sim::kNose3, n[2]}},
+                std::nullopt};
+  }
+  Goal pose(const sim::PlateTarget& t) { return Goal{{}, t}; }
+
+  // ---- Actions -------------------------------------------------------------
+
+  void pick(sim::Action action, const Observed& w0, ActionRun& run) {
+    const auto scene = sim::analyse(w0.world, obs_);
+    const auto candidates =
+        pick_candidates(w0.world, scene, action, obs_, robot_, geometry_, w0.q, max_candidates_);
+    if (candidates.empty()) {
+      log().info("{}: no reachable pick point", action_name_);
+      return;
+    }
+    const PickCandidate* chosen = nullptr;
+    for (const auto& c : candidates) {
+      // Nose down before anything else in reach of the boxes moves; a pile in
+      // front may leave only a lifted nose possible.
+      if (!step("base to pick point", PlanMode::kBaseLine, joints({{sim::kBaseX, c.base_x}}),
+                Suction::Keep, Suction::Keep, run))
+        continue;
+      if (!step("nose down", PlanMode::kNose, nose(nose_down_), Suction::Keep, Suction::Keep,
+                run) &&
+          !step("nose down (lifted)", PlanMode::kNose, nose(nose_down_, 0.15), Suction::Keep,
+                Suction::Keep, run))
+        continue;
+      if (!step("pre-grasp", PlanMode::kArmBase, pose(c.pregrasp), Suction::Keep, Suction::On, run))
+        continue;
+      if (!step("approach", PlanMode::kArmCartesian, pose(c.grasp), Suction::Keep, Suction::On,
+                run))
+        continue;
+      chosen = &c;
+      break;
+    }
+    if (chosen != nullptr) {
+      if (last_held_.empty()) {
+        run.failed_grasp = true;
+        log().info("{}: grasp of box {} failed (nothing held)", action_name_, chosen->box);
+      }
+      step("retract", PlanMode::kArmCartesian, pose(chosen->retract), Suction::Keep, Suction::Keep,
+           run);
+      const Observed w = observe();
+      if (!w.held.empty() && last_held_.empty()) run.failed_grasp = false;
+      if (w.held.empty() && !run.failed_grasp) {
+        run.failed_grasp = true;
+        log().info("{}: box {} dropped while retracting", action_name_, chosen->box);
+      }
+      if (const auto drop = dropoff_target(w.world, w.held, robot_, geometry_, w.q))
+        step("drop-off", PlanMode::kArm, pose(*drop), Suction::Keep, Suction::Off, run);
+      else
+        log().warn("{}: no reachable drop-off pose", action_name_);
+    }
+    step("nose home", PlanMode::kNose, nose(nose_home_), Suction::Keep, Suction::Keep, run);
+    const Observed w = observe();
+    step("base back", PlanMode::kBaseLine, joints({{sim::kBaseX, w.q[sim::kBaseX] - retreat_m_}}),
+         Suction::Keep, Suction::Keep, run);
+  }
+
+  void sweep(sim::Action action, const Observed& w0, ActionRun& run) {
+    const auto scene = sim::analyse(w0.world, obs_);
+    const auto plan = sweep_plan(scene, action, geometry_, nose_sweep_[2], w0.q);
+    if (!plan) {
+      log().info("{}: no pile in front to sweep", action_name_);
+      return;
+    }
+    if (step("back up", PlanMode::kBaseLine, joints({{sim::kBaseX, plan->start_base_x}}),
+             Suction::Keep, Suction::Keep, run) &&
+        step("nose down", PlanMode::kNose, nose(nose_sweep_, plan->lift), Suction::Keep,
+             Suction::Keep, run)) {
+      // The scoop goes under the pile: the planner must not treat it as an obstacle.
+      step("sweep forward", PlanMode::kBaseLine, joints({{sim::kBaseX, plan->end_base_x}}),
+           Suction::Keep, Suction::Keep, run, plan->swept);
+      step("back up", PlanMode::kBaseLine, joints({{sim::kBaseX, plan->start_base_x}}),
+           Suction::Keep, Suction::Keep, run);
+    }
+    step("nose home", PlanMode::kNose, nose(nose_home_), Suction::Keep, Suction::Keep, run);
+  }
+
+  // ---- The job -------------------------------------------------------------
+
+  sim::Strategy ask_strategy(const Observed& w, sim::Observation observation) {
+    const auto view = w.message.view();
+    const std::vector<std::uint8_t> bytes(view.data, view.data + view.size);
+    flatbuffers::FlatBufferBuilder fbb;
+    fbb.Finish(msg::CreateNextStrategyRequestDirect(fbb, &bytes, observation));
+    auto r =
+        call_retry<msg::NextStrategyRequest, msg::NextStrategyReply>("strategy/next", fbb, 30.0);
+    if (!r) throw std::runtime_error("strategy/next: " + r.error().message);
+    if (r.value()->strategy() == nullptr)
+      throw std::runtime_error("strategy/next: reply without a strategy");
+    ++stats_.strategies_asked;
+    auto s = sim::from_message(*r.value()->strategy(), "strategy/next reply");
+    log().info("strategy '{}' from {} ({} nodes) for {}", s.name,
+               r.value()->source() ? r.value()->source()->str() : "?", s.nodes.size(),
+               sim::to_string(observation));
+    return s;
+  }
+
+  void checkpoint() {
+    snapshot_or_restore("sim/snapshot");
+    checkpoint_robot_time_ = stats_.robot_time_s;
+    checkpoint_curve_ = stats_.curve.size();
+  }
+
+  void recover(const std::string& why) {
+    log().warn("simulator lost ({}); waiting for it to restart", why);
+    report_progress("waiting for the simulator");
+    wait_for_simulator();
+    snapshot_or_restore("sim/restore");
+    stats_.robot_time_s = checkpoint_robot_time_;
+    stats_.curve.resize(checkpoint_curve_);
+    ++stats_.recoveries;
+    log().info("simulator back; restored 'checkpoint', repeating the interrupted action");
+  }
+
+  void run() {
+    const auto t0 = Clock::now();
+    try {
+      job(t0);
+      finish(true, t0);
+    } catch (const Stopped&) {
+      stats_.stop_reason = "stopped";
+    } catch (const std::exception& e) {
+      stats_.stop_reason = e.what();
+      log().error("executor: {}", e.what());
+      finish(false, t0);
+    } catch (const SimulatorLost& lost) {
+      stats_.stop_reason = "simulator lost: " + lost.what;
+      log().error("executor: {}", stats_.stop_reason);
+      finish(false, t0);
+    }
+  }
+
+  void job(Clock::time_point t0) {
+    Observed w = wait_for_simulator();
+    if (!env_.empty() || !world_file_.empty()) {
+      flatbuffers::FlatBufferBuilder fbb;
+      fbb.Finish(msg::CreateResetRequestDirect(fbb, env_.c_str(), seed_, world_file_.c_str()));
+      auto r = call_retry<msg::ResetRequest, msg::WorldState>("sim/reset", fbb, 120.0);
+      if (!r) throw std::runtime_error("sim/reset: " + r.error().message);
+      w = observe();
+    }
+    stats_.boxes_total = static_cast<std::uint32_t>(w.world.boxes.size()) + w.unloaded;
+    const std::uint32_t unloaded_at_start = w.unloaded;
+    log().info("{} boxes in the trailer", stats_.boxes_total);
+    checkpoint();
+
+    sim::Strategy strategy;
+    std::optional<std::uint32_t> node;
+    std::optional<sim::Action> repeat;
+    std::uint64_t idle = 0, actions = 0;
+    for (;;) {
+      try {
+        w = observe();
+      } catch (const SimulatorLost& lost) {
+        recover(lost.what);
+        continue;
+      }
+      stats_.boxes_unloaded = w.unloaded - unloaded_at_start;
+      if (w.world.boxes.empty()) {
+        stats_.stop_reason = "trailer empty";
+        break;
+      }
+      if (max_actions_ != 0 && actions >= max_actions_) {
+        stats_.stop_reason = fmt::format("action limit ({})", max_actions_);
+        break;
+      }
+      sim::Action action;
+      if (repeat) {
+        action = *repeat;
+      } else {
+        const auto observation = *sim::classify(w.world, obs_);
+        if (const auto child = node ? strategy.next(*node, observation) : std::nullopt) {
+          node = child;
+          ++stats_.strategy_steps;
+        } else {
+          strategy = ask_strategy(w, observation);
+          node = strategy.root;
+        }
+        action = strategy.nodes[*node].action;
+      }
+      action_name_ = fmt::format("#{} {}", actions + 1, sim::to_string(action));
+      ActionRun run;
+      try {
+        repeat = action;
+        if (sim::kind(action) == sim::ActionKind::kPick)
+          pick(action, w, run);
+        else
+          sweep(action, w, run);
+        w = observe();
+        repeat.reset();
+      } catch (const SimulatorLost& lost) {
+        recover(lost.what);
+        continue;
+      }
+      ++actions;
+      const std::uint32_t unloaded = w.unloaded - unloaded_at_start;
+      const std::uint32_t gained =
+          unloaded > stats_.boxes_unloaded ? unloaded - stats_.boxes_unloaded : 0;
+      stats_.boxes_unloaded = unloaded;
+      auto& as = sim::kind(action) == sim::ActionKind::kPick ? stats_.pick : stats_.sweep;
+      ++as.executions;
+      as.boxes += gained;
+      as.plan_s.add(run.plan_s);
+      as.exec_s.add(run.exec_s);
+      stats_.robot_time_s += run.plan_s + run.exec_s;
+      stats_.robot_trailer_collisions += run.contacts;
+      if (run.sim_time_s > 0) stats_.sim_time_s = run.sim_time_s;
+      stats_.failed_grasps += run.failed_grasp ? 1 : 0;
+      stats_.curve.push_back({stats_.robot_time_s, stats_.boxes_unloaded});
+      stats_.wall_time_s = seconds_since(t0);
+      report_progress(fmt::format("{}: +{} boxes", action_name_, gained), true);
+      publish_status();
+      idle = gained == 0 ? idle + 1 : 0;
+      if (idle >= max_idle_) {
+        stats_.stop_reason = fmt::format("no progress in {} actions", idle);
+        break;
+      }
+      try {
+        checkpoint();
+      } catch (const SimulatorLost& lost) {
+        recover(lost.what);
+      }
+    }
+  }
+
+  void finish(bool ok, Clock::time_point t0) {
+    stats_.wall_time_s = seconds_since(t0);
+    if (show_progress_ && tty_) std::fputs("\n", stderr);
+    log().info("done: {} of {} boxes in {:.1f} s robot time ({:.1f} s wall): {}",
+               stats_.boxes_unloaded, stats_.boxes_total, stats_.robot_time_s, stats_.wall_time_s,
+               stats_.stop_reason);
+    std::string report_error;
+    try {
+      write_report();
+    } catch (const std::exception& e) {
+      report_error = e.what();
+      log().error("report: {}", report_error);
+    }
+    publish_status();
+    flatbuffers::FlatBufferBuilder fbb;
+    const std::string reason =
+        fmt::format("{}: {}/{} boxes unloaded{}", stats_.stop_reason, stats_.boxes_unloaded,
+                    stats_.boxes_total, report_error.empty() ? "" : "; report: " + report_error);
+    fbb.Finish(msg::CreatePipelineDoneDirect(fbb, ok && report_error.empty(), reason.c_str()));
+    (void)done_.publish(fbb);
+  }
+
+  void write_report() {
+    namespace fs = std::filesystem;
+    const fs::path dir(report_dir_);
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) throw std::runtime_error(dir.string() + ": " + ec.message());
+    auto write = [&](const std::string& name, const std::string& content) {
+      if (const auto err = write_atomically(dir / name, content); !err.empty())
+        throw std::runtime_error((dir / name).string() + ": " + err);
+    };
+    write("report.json", to_json(stats_).dump(2) + "\n");
+    write("unloading.svg", curve_svg(stats_.curve, stats_.boxes_total,
+                                     fmt::format("{}: {}/{} boxes unloaded", ctx().name(),
+                                                 stats_.boxes_unloaded, stats_.boxes_total)));
+    // The final scene, with the robot's links drawn over it.
+    try {
+      const Observed w = observe();
+      sim::RenderOptions options;
+      options.title = fmt::format("final scene: {} boxes left", w.world.boxes.size());
+      std::vector<Eigen::Isometry3d> poses;
+      robot_.forwardKinematics(w.q, poses);
+      for (std::size_t i = 0; i < robot_.links().size(); ++i) {
+        for (const auto& shape : robot_.links()[i].shapes) {
+          sim::Overlay o;
+          o.pose = poses[i] * shape.origin;
+          switch (shape.type) {
+            case sim::CollisionShape::Type::kBox:
+              o.size = shape.size;
+              break;
+            case sim::CollisionShape::Type::kCylinder:
+              o.size = {2 * shape.size.x(), 2 * shape.size.x(), shape.size.y()};
+              break;
+            case sim::CollisionShape::Type::kSphere:
+              o.size = Eigen::Vector3d::Constant(2 * shape.size.x());
+              break;
+          }
+          options.robot.push_back(o);
+        }
+      }
+      sim::write_svg(dir / "scene_side.svg", w.world, sim::View::kSide, options);
+      sim::write_svg(dir / "scene_top.svg", w.world, sim::View::kTop, options);
+    } catch (const SimulatorLost& lost) {
+      log().warn("no final scene: {}", lost.what);
+    }
+  }
+
+  // ---- Progress ------------------------------------------------------------
+
+  void report_progress(const std::string& what, bool action_done = false) {
+    if (!show_progress_) return;
+    const auto line = progress_line(stats_.boxes_unloaded, stats_.boxes_total, stats_.robot_time_s,
+                                    action_done ? what : action_name_ + ": " + what);
+    if (tty_) {
+      std::fprintf(stderr, "\r\033[K%s", line.c_str());
+      std::fflush(stderr);
+    } else if (action_done) {
+      std::fprintf(stderr, "%s\n", line.c_str());
+    }
+  }
+
+  void publish_status() {
+    flatbuffers::FlatBufferBuilder fbb;
+    std::vector<flatbuffers::Offset<msg::Stat>> s;
+    auto add = [&](const char* key, double v) { s.push_back(msg::CreateStatDirect(fbb, key, v)); };
+    add("boxes_unloaded", stats_.boxes_unloaded);
+    add("boxes_total", stats_.boxes_total);
+    add("actions", static_cast<double>(stats_.pick.executions + stats_.sweep.executions));
+    add("robot_time_s", stats_.robot_time_s);
+    add("boxes_per_s", stats_.robot_time_s > 0 ? stats_.boxes_unloaded / stats_.robot_time_s : 0.0);
+    fbb.Finish(msg::CreateStatisticsDirect(fbb, ctx().name().c_str(), &s));
+    (void)status_.publish(fbb);
+  }
+
+  // Parameters.
+  std::string report_dir_, env_, world_file_;
+  std::uint64_t seed_ = 1;
+  sim::ObservationParams obs_;
+  Geometry geometry_;
+  double plan_timeout_s_ = 5, execute_timeout_s_ = 300, service_wait_s_ = 60, settle_s_ = 0.3;
+  double retreat_m_ = 0.3;
+  std::chrono::milliseconds retry_{50};
+  std::uint64_t max_idle_ = 6, max_actions_ = 0, max_candidates_ = 4;
+  std::vector<double> nose_home_{0.5, 0.0, 0.0}, nose_down_{0.0, 0.05, 0.0},
+      nose_sweep_{0.0, 0.05, 0.3};
+  bool show_progress_ = true, tty_ = false;
+  sim::RobotModel robot_;
+  Publisher<msg::Statistics> status_;
+  Publisher<msg::PipelineDone> done_;
+
+  // Worker.
+  std::thread worker_;
+  std::mutex m_;
+  std::condition_variable cv_;
+  std::atomic<bool> stop_{false};
+
+  // Run state (worker thread only).
+  RunStats stats_;
+  std::string action_name_;
+  std::vector<std::uint32_t> last_held_;
+  msg::PlanStatus last_status_ = msg::PlanStatus::Solved;
+  double checkpoint_robot_time_ = 0;
+  std::size_t checkpoint_curve_ = 0;
+};
+
+}  // namespace
+}  // namespace plr::executor
+
+PLR_PLUGIN(
+    plr::executor::ExecutorNode, "strategy_executor", "1.0.0", PLR_KIND_EXECUTOR,
+    "Walks strategies, instantiates Pick/Sweep into planner queries, runs them on the simulator")

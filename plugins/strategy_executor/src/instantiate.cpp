@@ -1,0 +1,156 @@
+#include "instantiate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <unordered_set>
+
+namespace plr::executor {
+
+namespace {
+
+constexpr double kMargin = 0.03;  // m, footprint shrink and clearances
+
+bool overlap(double a0, double a1, double b0, double b1) {
+  return a0 + kMargin < b1 - kMargin && b0 + kMargin < a1 - kMargin;
+}
+
+sim::Height height_class(double top, double mid, double high) {
+  if (top >= high) return sim::Height::kHigh;
+  if (top >= mid) return sim::Height::kMid;
+  return sim::Height::kLow;
+}
+
+sim::Side side_of(double y, const sim::World& w, const sim::ObservationParams& obs) {
+  const double band = obs.side_band * w.trailer.width / 2;
+  return y > band ? sim::Side::kLeft : (y < -band ? sim::Side::kRight : sim::Side::kCenter);
+}
+
+bool reachable(const sim::RobotModel& robot, const sim::PlateTarget& t, const sim::Config& seed) {
+  return !robot.armIk(t, seed).empty();
+}
+
+}  // namespace
+
+std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::SceneAnalysis& scene,
+                                           sim::Action action, const sim::ObservationParams& obs,
+                                           const sim::RobotModel& robot, const Geometry& g,
+                                           const sim::Config& current, std::size_t max_count) {
+  std::unordered_set<std::uint32_t> wall(scene.first_wall.begin(), scene.first_wall.end());
+  std::unordered_set<std::uint32_t> front(scene.front_pile.begin(), scene.front_pile.end());
+  std::vector<std::size_t> members;
+  std::vector<sim::Bounds> b(world.boxes.size());
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < world.boxes.size(); ++i) {
+    b[i] = sim::bounds(world.boxes[i]);
+    nearest = std::min(nearest, b[i].x0);
+    if (wall.count(world.boxes[i].id) || front.count(world.boxes[i].id)) members.push_back(i);
+  }
+
+  struct Ranked {
+    PickCandidate c;
+    int mismatches;
+    double x_bin, top, centre_distance;
+  };
+  std::vector<Ranked> ranked;
+  for (auto i : members) {
+    // The front face must be free: nothing in front of it overlapping in y and z.
+    bool hidden = false;
+    for (std::size_t j = 0; j < world.boxes.size() && !hidden; ++j) {
+      hidden = j != i && b[j].x1 <= b[i].x0 + 0.05 && b[j].x0 < b[i].x0 &&
+               overlap(b[i].y0, b[i].y1, b[j].y0, b[j].y1) &&
+               overlap(b[i].z0, b[i].z1, b[j].z0, b[j].z1);
+    }
+    if (hidden) continue;
+    const auto& box = world.boxes[i];
+    const bool is_wall = wall.count(box.id) > 0;
+    const double y = box.pose.translation().y();
+    const auto cls = is_wall ? height_class(b[i].z1, obs.wall_mid, obs.wall_high)
+                             : height_class(b[i].z1, obs.pile_mid, obs.pile_high);
+    const int mismatches =
+        (cls != sim::height(action)) + (side_of(y, world, obs) != sim::side(action));
+
+    PickCandidate c;
+    c.box = box.id;
+    c.matches = mismatches == 0;
+    // Plate centred on the face, kept inside the trailer and off the floor.
+    const double ylim = world.trailer.width / 2 - g.plate_half_width - kMargin;
+    const double zc = std::clamp((b[i].z0 + b[i].z1) / 2, g.plate_half_height + kMargin,
+                                 world.trailer.height - g.plate_half_height - kMargin);
+    const Eigen::Vector3d face(b[i].x0, std::clamp(y, -ylim, ylim), zc);
+    c.grasp = {face - Eigen::Vector3d(g.grasp_gap, 0, 0), 0.0};
+    c.pregrasp = {face - Eigen::Vector3d(g.pregrasp_distance, 0, 0), 0.0};
+    c.retract = {c.pregrasp.position + Eigen::Vector3d(0, 0, g.retract_lift), 0.0};
+    // Base: the arm at its preferred reach, the lowered nose short of every box.
+    const double by_reach = face.x() - g.pick_reach + g.arm_yaw_offset;
+    const double by_nose = nearest - g.conveyor_length - g.nose_clearance;
+    c.base_x = std::min(by_reach, by_nose);
+    sim::Config at = current;
+    at[sim::kBaseX] = c.base_x;
+    if (!reachable(robot, c.grasp, at) || !reachable(robot, c.pregrasp, at)) continue;
+    ranked.push_back({c, mismatches, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
+  }
+  std::stable_sort(ranked.begin(), ranked.end(), [](const Ranked& a, const Ranked& b) {
+    if (a.mismatches != b.mismatches) return a.mismatches < b.mismatches;
+    if (a.x_bin != b.x_bin) return a.x_bin < b.x_bin;
+    if (std::abs(a.top - b.top) > 1e-3) return a.top > b.top;
+    return a.centre_distance < b.centre_distance;
+  });
+  std::vector<PickCandidate> out;
+  for (std::size_t i = 0; i < ranked.size() && out.size() < max_count; ++i)
+    out.push_back(ranked[i].c);
+  return out;
+}
+
+std::optional<sim::PlateTarget> dropoff_target(const sim::World& world,
+                                               const std::vector<std::uint32_t>& held,
+                                               const sim::RobotModel& robot, const Geometry& g,
+                                               const sim::Config& at) {
+  // The held load sticks out of the plate along +x by its depth.
+  double depth = 0.3, height = 0.3;
+  for (const auto& box : world.boxes) {
+    if (std::find(held.begin(), held.end(), box.id) == held.end()) continue;
+    const auto bb = sim::bounds(box);
+    depth = std::max(depth, bb.x1 - bb.x0);
+    height = std::max(height, bb.z1 - bb.z0);
+  }
+  // The folded arm cannot bend enough to reach right over the nose hinge, so
+  // look further along the conveyor and higher up until the IK has a solution.
+  const double base_x = at[sim::kBaseX];
+  for (double extra_z : {0.0, 0.2, 0.4}) {
+    for (double ahead = g.dropoff_ahead; ahead <= g.conveyor_length - 0.05; ahead += 0.1) {
+      sim::PlateTarget t;
+      t.position = {base_x + ahead - depth / 2, 0.0, g.dropoff_bottom + extra_z + height / 2};
+      if (reachable(robot, t, at)) return t;
+    }
+  }
+  return std::nullopt;
+}
+
+std::optional<SweepPlan> sweep_plan(const sim::SceneAnalysis& scene, sim::Action action,
+                                    const Geometry& g, double scoop_extension,
+                                    const sim::Config& current) {
+  if (scene.front_pile.empty()) return std::nullopt;
+  const double tip = g.conveyor_length + scoop_extension;  // ahead of base_x
+  SweepPlan p;
+  p.swept = scene.front_pile;
+  p.start_base_x = std::min(current[sim::kBaseX], scene.pile_near_x - tip - g.nose_clearance);
+  double far = scene.pile_far_x + g.sweep_overshoot;
+  if (!scene.first_wall.empty()) far = std::min(far, scene.wall_near_x - kMargin);
+  p.end_base_x = std::max(p.start_base_x, far - tip);
+  // Higher sweeps skim higher: the scoop rides over what lies flat.
+  switch (sim::height(action)) {
+    case sim::Height::kLow:
+      p.lift = 0.0;
+      break;
+    case sim::Height::kMid:
+      p.lift = 0.05;
+      break;
+    case sim::Height::kHigh:
+      p.lift = 0.1;
+      break;
+  }
+  return p;
+}
+
+}  // namespace plr::executor

@@ -1,0 +1,68 @@
+// Turning abstract actions into concrete goals: pick points, base positions,
+// plate poses and sweep depths, from the perceived world W. Pure geometry, no
+// bus; the executor node turns these into planner queries.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "plr/sim/observation.hpp"
+#include "plr/sim/robot_model.hpp"
+#include "plr/sim/strategy.hpp"
+
+namespace plr::executor {
+
+// Robot dimensions the instantiation relies on (docs/notes-planner.md).
+struct Geometry {
+  double conveyor_length = 1.0;     // nose hinge (at base_x) to conveyor end
+  double arm_yaw_offset = 0.45;     // arm_1 axis behind base_x
+  double plate_half_width = 0.25;   // plate extent along y / 2
+  double plate_half_height = 0.2;   // plate extent along z / 2
+  double pick_reach = 1.5;          // preferred horizontal arm_1-axis-to-plate distance
+  double pregrasp_distance = 0.25;  // plate stand-off before the approach
+  double grasp_gap = 0.005;         // plate to box face at the grasp (suction reaches 2 cm)
+  double retract_lift = 0.03;       // lift while retracting, off the box below
+  double nose_clearance = 0.1;      // nose tip to the nearest box
+  double dropoff_bottom = 0.8;      // held box bottom over the conveyor (clears the nose at home)
+  double dropoff_ahead = 0.5;       // held box centre ahead of base_x
+  double sweep_overshoot = 0.1;     // scoop tip past the pile's far end
+};
+
+struct PickCandidate {
+  std::uint32_t box = 0;
+  double base_x = 0;
+  sim::PlateTarget pregrasp, grasp, retract;
+  bool matches = false;  // the box has the action's height class and side
+};
+
+// Pick points for Pick(height, side), best first: boxes of the structure in
+// front whose front face nothing hides, those matching the action's height
+// class and side first, then near the robot, then high up. Candidates whose
+// plate poses the arm cannot reach from their base position are left out.
+std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::SceneAnalysis& scene,
+                                           sim::Action action, const sim::ObservationParams& obs,
+                                           const sim::RobotModel& robot, const Geometry& g,
+                                           const sim::Config& current, std::size_t max_count);
+
+// Where the plate releases held boxes over the nose, for a base at base_x;
+// the first reachable of a few heights. nullopt when none is.
+std::optional<sim::PlateTarget> dropoff_target(const sim::World& world,
+                                               const std::vector<std::uint32_t>& held,
+                                               const sim::RobotModel& robot, const Geometry& g,
+                                               const sim::Config& at);
+
+struct SweepPlan {
+  double start_base_x = 0;           // behind the pile, nose lowered there
+  double end_base_x = 0;             // scoop tip at the pile's far end
+  double lift = 0;                   // nose_1 during the sweep, from the action's height
+  std::vector<std::uint32_t> swept;  // the pile boxes the sweep drives through
+};
+
+// nullopt when there is no pile in front to sweep.
+std::optional<SweepPlan> sweep_plan(const sim::SceneAnalysis& scene, sim::Action action,
+                                    const Geometry& g, double scoop_extension,
+                                    const sim::Config& current);
+
+}  // namespace plr::executor

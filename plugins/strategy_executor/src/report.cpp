@@ -1,0 +1,169 @@
+#include "report.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+
+namespace plr::executor {
+
+void Accumulator::add(double x) {
+  ++n;
+  sum += x;
+  const double d = x - mean;
+  mean += d / static_cast<double>(n);
+  m2 += d * (x - mean);
+}
+
+double Accumulator::sd() const {
+  return n > 1 ? std::sqrt(m2 / static_cast<double>(n - 1)) : 0.0;
+}
+
+namespace {
+
+nlohmann::json action_json(const ActionStats& a) {
+  const double total = a.plan_s.sum + a.exec_s.sum;
+  return {{"executions", a.executions},
+          {"boxes", a.boxes},
+          {"plan_s", a.plan_s.mean},
+          {"plan_s_sd", a.plan_s.sd()},
+          {"exec_s", a.exec_s.mean},
+          {"exec_s_sd", a.exec_s.sd()},
+          {"boxes_per_s", total > 0 ? static_cast<double>(a.boxes) / total : 0.0}};
+}
+
+}  // namespace
+
+nlohmann::json to_json(const RunStats& s) {
+  nlohmann::json modes = nlohmann::json::object();
+  static constexpr std::array<const char*, 7> kNames = {
+      "", "M1 arm", "M2 arm+base", "M3 nose", "M4 arm line", "M5 base line", "M6 escape"};
+  for (int m = 1; m <= 6; ++m) {
+    const auto& ms = s.modes[static_cast<std::size_t>(m)];
+    modes["M" + std::to_string(m)] = {
+        {"name", kNames[static_cast<std::size_t>(m)]},
+        {"queries", ms.queries},
+        {"failures", ms.failures},
+        {"failure_rate", ms.queries ? static_cast<double>(ms.failures) / ms.queries : 0.0},
+        {"mean_ms", ms.ms.mean},
+        {"sd_ms", ms.ms.sd()}};
+  }
+  modes["M6"]["implicit"] = s.m6_implicit;
+  nlohmann::json curve = nlohmann::json::array();
+  for (const auto& p : s.curve) curve.push_back({p.robot_time_s, p.boxes});
+  return {{"boxes_total", s.boxes_total},
+          {"boxes_unloaded", s.boxes_unloaded},
+          {"unloaded_fraction",
+           s.boxes_total ? static_cast<double>(s.boxes_unloaded) / s.boxes_total : 0.0},
+          {"sim_time_s", s.sim_time_s},
+          {"robot_time_s", s.robot_time_s},
+          {"wall_time_s", s.wall_time_s},
+          {"boxes_per_robot_s", s.robot_time_s > 0 ? s.boxes_unloaded / s.robot_time_s : 0.0},
+          {"robot_trailer_collisions", s.robot_trailer_collisions},
+          {"failed_grasps", s.failed_grasps},
+          {"recoveries", s.recoveries},
+          {"strategies_asked", s.strategies_asked},
+          {"strategy_steps", s.strategy_steps},
+          {"stop_reason", s.stop_reason},
+          {"planner_modes", modes},
+          {"actions", {{"pick", action_json(s.pick)}, {"sweep", action_json(s.sweep)}}},
+          {"curve", curve}};
+}
+
+std::string curve_svg(const std::vector<CurvePoint>& curve, std::uint32_t total,
+                      const std::string& title) {
+  constexpr double kW = 640, kH = 400, kL = 60, kR = 20, kT = 40, kB = 50;
+  const double t_max = std::max(1.0, curve.empty() ? 1.0 : curve.back().robot_time_s);
+  const double n_max = std::max<double>(1.0, total);
+  auto px = [&](double t) { return kL + (kW - kL - kR) * t / t_max; };
+  auto py = [&](double n) { return kH - kB - (kH - kT - kB) * n / n_max; };
+  std::string svg = fmt::format(
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" "
+      "font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" "
+      "fill=\"white\"/>\n<text x=\"{}\" y=\"24\" font-size=\"14\">{}</text>\n",
+      kW, kH, kL, title);
+  // Axes with five ticks each.
+  svg += fmt::format(
+      "<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"black\"/>\n"
+      "<line x1=\"{0}\" y1=\"{1}\" x2=\"{0}\" y2=\"{3}\" stroke=\"black\"/>\n",
+      kL, kH - kB, kW - kR, kT);
+  for (int i = 0; i <= 5; ++i) {
+    const double t = t_max * i / 5, n = n_max * i / 5;
+    svg += fmt::format(
+        "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{:.0f}</text>\n"
+        "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"end\">{:.0f}</text>\n",
+        px(t), kH - kB + 16, t, kL - 6, py(n) + 4, n);
+  }
+  svg += fmt::format(
+      "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">robot time [s]</text>\n"
+      "<text x=\"16\" y=\"{:.1f}\" transform=\"rotate(-90 16 {:.1f})\" "
+      "text-anchor=\"middle\">boxes unloaded</text>\n",
+      (kL + kW - kR) / 2, kH - 12, (kT + kH - kB) / 2, (kT + kH - kB) / 2);
+  svg += fmt::format(
+      "<line x1=\"{}\" y1=\"{:.1f}\" x2=\"{}\" y2=\"{:.1f}\" stroke=\"#bbb\" "
+      "stroke-dasharray=\"4 4\"/>\n",
+      kL, py(total), kW - kR, py(total));
+  // A step curve: the count changes at the end of each action.
+  std::string points = fmt::format("{:.1f},{:.1f}", px(0), py(0));
+  std::uint32_t last = 0;
+  for (const auto& p : curve) {
+    points += fmt::format(" {:.1f},{:.1f} {:.1f},{:.1f}", px(p.robot_time_s), py(last),
+                          px(p.robot_time_s), py(p.boxes));
+    last = p.boxes;
+  }
+  svg += "<polyline fill=\"none\" stroke=\"#c0392b\" stroke-width=\"2\" points=\"" + points +
+         "\"/>\n</svg>\n";
+  return svg;
+}
+
+std::string write_atomically(const std::filesystem::path& file, const std::string& content) {
+  const auto dir = file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
+  std::string name = (dir / ("." + file.filename().string() + ".XXXXXX")).string();
+  const int fd = mkstemp(name.data());
+  if (fd < 0) return std::string("cannot create a temporary file: ") + std::strerror(errno);
+  std::size_t done = 0;
+  while (done < content.size()) {
+    const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const std::string why = std::strerror(errno);
+      ::close(fd);
+      ::unlink(name.c_str());
+      return "write failed: " + why;
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  // mkstemp creates 0600; reports are ordinary documents.
+  if (::fchmod(fd, 0644) != 0 || ::fsync(fd) != 0 || ::close(fd) != 0) {
+    const std::string why = std::strerror(errno);
+    ::unlink(name.c_str());
+    return "cannot flush the temporary file: " + why;
+  }
+  if (std::rename(name.c_str(), file.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    ::unlink(name.c_str());
+    return "cannot rename the temporary file: " + why;
+  }
+  if (const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY); dfd >= 0) {
+    ::fsync(dfd);
+    ::close(dfd);
+  }
+  return {};
+}
+
+std::string progress_line(std::uint32_t done, std::uint32_t total, double robot_time_s,
+                          const std::string& what, int width) {
+  const double f = total ? std::min(1.0, static_cast<double>(done) / total) : 0.0;
+  const int filled = static_cast<int>(std::lround(f * width));
+  return fmt::format("[{}{}] {}/{} boxes {:3.0f}%  {:.2f} boxes/s  {}", std::string(filled, '#'),
+                     std::string(width - filled, '-'), done, total, 100 * f,
+                     robot_time_s > 0 ? done / robot_time_s : 0.0, what);
+}
+
+}  // namespace plr::executor

@@ -1,0 +1,72 @@
+// What the executor measures (the paper's Tables I and II, the unloading
+// curve) and the files it writes at the end of a run.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace plr::executor {
+
+// Running mean and spread (Welford), so no sample list is kept.
+struct Accumulator {
+  std::uint64_t n = 0;
+  double mean = 0, m2 = 0, sum = 0;
+  void add(double x);
+  double sd() const;
+};
+
+struct ModeStats {
+  std::uint64_t queries = 0;
+  std::uint64_t failures = 0;
+  Accumulator ms;  // planning time of the queries that reported one
+};
+
+struct ActionStats {
+  std::uint64_t executions = 0;
+  std::uint64_t boxes = 0;
+  Accumulator plan_s;  // per execution: planning time the robot waited for
+  Accumulator exec_s;  // per execution: simulated execution time
+};
+
+struct CurvePoint {
+  double robot_time_s = 0;  // execution + planning the robot waited for
+  std::uint32_t boxes = 0;
+};
+
+struct RunStats {
+  std::array<ModeStats, 7> modes{};  // index = plan mode 1..6
+  std::uint64_t m6_implicit = 0;     // escapes the planner ran inside another query
+  ActionStats pick, sweep;
+  std::vector<CurvePoint> curve;
+  std::uint32_t boxes_total = 0;
+  std::uint32_t boxes_unloaded = 0;
+  double sim_time_s = 0;
+  double robot_time_s = 0;
+  double wall_time_s = 0;
+  std::uint64_t robot_trailer_collisions = 0;
+  std::uint64_t failed_grasps = 0;
+  std::uint64_t recoveries = 0;        // simulator restarts survived
+  std::uint64_t strategies_asked = 0;  // strategy/next calls
+  std::uint64_t strategy_steps = 0;    // actions taken by following a branch
+  std::string stop_reason;
+};
+
+nlohmann::json to_json(const RunStats& stats);
+
+// The unloading curve: boxes unloaded against robot time.
+std::string curve_svg(const std::vector<CurvePoint>& curve, std::uint32_t total,
+                      const std::string& title);
+
+// Temporary file, fsync, rename, fsync of the folder. Empty, or why it failed.
+std::string write_atomically(const std::filesystem::path& file, const std::string& content);
+
+// One progress line: "[#####-----] 12/30 boxes  40%  0.21 boxes/s  Pick(high, left): approach".
+std::string progress_line(std::uint32_t done, std::uint32_t total, double robot_time_s,
+                          const std::string& what, int width = 24);
+
+}  // namespace plr::executor

@@ -1,0 +1,396 @@
+// The executor in the fake kernel, against a kinematic stand-in simulator
+// (robot jumps to each trajectory's end, suction grips the box the plate
+// faces, a sweep takes what the scoop reaches) and a stand-in planner (IK for
+// pose goals, straight lines). Strategy H is the real plug-in.
+#include <gtest/gtest.h>
+#include <plr/testing/fake_kernel.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include "plr/sim/observation.hpp"
+#include "plr/sim/plan_types.hpp"
+#include "plr/sim/robot_model.hpp"
+#include "plr/sim/strategy.hpp"
+#include "test_worlds.hpp"
+
+namespace plr {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::FakeKernel;
+using testing::NodeOptions;
+
+struct SimState {
+  sim::World world;
+  sim::Config q;
+  std::vector<std::uint32_t> held;
+  std::uint32_t unloaded = 0;
+  double t = 0;
+};
+
+class FakeSim {
+ public:
+  explicit FakeSim(sim::World w) {
+    s_.world = std::move(w);
+    s_.q << 1.0, 0, -1.0, 2.0, -1.0, 0.5, 0, 0;
+  }
+
+  void serve(FakeKernel& k) {
+    k.fake_service<msg::ObserveRequest, msg::WorldState>(
+        "sim/observe",
+        [this](const msg::ObserveRequest&, flatbuffers::FlatBufferBuilder& fbb) -> Status {
+          if (down_ && --observes_while_down < 0) down_ = false;
+          if (down_) return make_error(PLR_ERR_UNAVAILABLE, "no provider");
+          fbb.Finish(test::pack_world(fbb, s_.world, joints(), s_.held, s_.unloaded));
+          return {};
+        });
+    k.fake_service<msg::ExecuteRequest, msg::ExecuteOutcome>(
+        "sim/execute", [this](const msg::ExecuteRequest& r, flatbuffers::FlatBufferBuilder& fbb) {
+          return execute(r, fbb);
+        });
+    k.fake_service<msg::SnapshotRequest, msg::SnapshotReply>(
+        "sim/snapshot",
+        [this](const msg::SnapshotRequest& r, flatbuffers::FlatBufferBuilder& fbb) -> Status {
+          if (down_) return make_error(PLR_ERR_UNAVAILABLE, "no provider");
+          snapshots_[r.name()->str()] = s_;
+          fbb.Finish(msg::CreateSnapshotReplyDirect(fbb, true, "", r.name()->c_str()));
+          return {};
+        });
+    k.fake_service<msg::SnapshotRequest, msg::SnapshotReply>(
+        "sim/restore",
+        [this](const msg::SnapshotRequest& r, flatbuffers::FlatBufferBuilder& fbb) -> Status {
+          const auto it = snapshots_.find(r.name()->str());
+          if (it != snapshots_.end()) s_ = it->second;
+          ++restores_;
+          fbb.Finish(
+              msg::CreateSnapshotReplyDirect(fbb, it != snapshots_.end(), "", r.name()->c_str()));
+          return {};
+        });
+  }
+
+  bool suction_works = true;
+  int crash_at_execute = -1;  // the n-th execute dies with the host
+  int observes_while_down = 3;
+
+  const SimState& state() const { return s_; }
+  int restores() const { return restores_; }
+  int executes() const { return executes_; }
+
+ private:
+  std::vector<double> joints() const { return {s_.q.data(), s_.q.data() + sim::kNumJoints}; }
+
+  Status execute(const msg::ExecuteRequest& r, flatbuffers::FlatBufferBuilder& fbb) {
+    if (down_) return make_error(PLR_ERR_UNAVAILABLE, "no provider");
+    if (++executes_ == crash_at_execute) {
+      // The host dies mid-motion: the robot has moved and a held box fell.
+      s_.q[sim::kBaseX] += 0.2;
+      s_.held.clear();
+      down_ = true;
+      return make_error(PLR_ERR_UNAVAILABLE, "provider gone");
+    }
+    suction(r.suction_before());
+    const auto* pts = r.trajectory()->points();
+    const auto* last = pts->Get(pts->size() - 1);
+    for (int j = 0; j < sim::kNumJoints; ++j) s_.q[j] = last->positions()->Get(j);
+    s_.t += last->time_s() + r.settle_s();
+    sweep();
+    suction(r.suction_after());
+    std::vector<std::uint32_t> none;
+    fbb.Finish(msg::CreateExecuteOutcomeDirect(fbb, true, "", s_.t, &none, &none, &s_.held, 0,
+                                               static_cast<std::uint32_t>(s_.world.boxes.size())));
+    return {};
+  }
+
+  void suction(msg::Suction s) {
+    if (s == msg::Suction::Off) {
+      // Released over the nose: the conveyor takes the boxes out.
+      for (auto id : s_.held) {
+        std::erase_if(s_.world.boxes, [&](const sim::Box& b) { return b.id == id; });
+        ++s_.unloaded;
+      }
+      s_.held.clear();
+    } else if (s == msg::Suction::On && suction_works) {
+      const Eigen::Isometry3d plate = robot_.platePose(s_.q);
+      const Eigen::Vector3d p = plate.translation();
+      for (const auto& b : s_.world.boxes) {
+        const auto bb = sim::bounds(b);
+        const Eigen::Vector3d c = b.pose.translation();
+        if (bb.x0 > p.x() - 0.01 && bb.x0 < p.x() + 0.03 && std::abs(c.y() - p.y()) < 0.25 &&
+            std::abs(c.z() - p.z()) < 0.2 &&
+            std::find(s_.held.begin(), s_.held.end(), b.id) == s_.held.end())
+          s_.held.push_back(b.id);
+      }
+    }
+  }
+
+  void sweep() {
+    // A lowered, extended scoop takes every low box its tip has passed.
+    if (s_.q[sim::kNose1] > 0.12 || s_.q[sim::kNose3] < 0.2) return;
+    const double tip = s_.q[sim::kBaseX] + 1.0 + s_.q[sim::kNose3];
+    const auto before = s_.world.boxes.size();
+    std::erase_if(s_.world.boxes, [&](const sim::Box& b) {
+      const auto bb = sim::bounds(b);
+      return bb.x0 < tip && bb.z0 < 0.05;
+    });
+    s_.unloaded += static_cast<std::uint32_t>(before - s_.world.boxes.size());
+  }
+
+  sim::RobotModel robot_ = sim::RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
+  SimState s_;
+  std::map<std::string, SimState> snapshots_;
+  bool down_ = false;
+  int restores_ = 0;
+  int executes_ = 0;
+};
+
+// Straight lines to the goal; pose goals through the arm's IK.
+class FakePlanner {
+ public:
+  int unavailable_first = 0;  // calls refused as if the planner were being swapped
+
+  void serve(FakeKernel& k) {
+    k.fake_service<msg::PlanRequest, msg::PlanResponse>(
+        "plan", [this](const msg::PlanRequest& r, flatbuffers::FlatBufferBuilder& fbb) -> Status {
+          if (calls_++ < unavailable_first) return make_error(PLR_ERR_UNAVAILABLE, "swapping");
+          ++modes_[static_cast<int>(r.mode())];
+          return plan(r, fbb);
+        });
+  }
+  int answered(int mode) const { return modes_.count(mode) ? modes_.at(mode) : 0; }
+  int calls() const { return calls_; }
+
+ private:
+  Status plan(const msg::PlanRequest& r, flatbuffers::FlatBufferBuilder& fbb) {
+    EXPECT_EQ(r.start()->size(), 8u);
+    EXPECT_NE(r.world(), nullptr);
+    sim::Config start, goal;
+    for (int j = 0; j < 8; ++j) start[j] = r.start()->Get(j);
+    goal = start;
+    const auto mode = static_cast<sim::PlanMode>(r.mode());
+    if (r.has_goal_pose()) {
+      const auto& p = *r.goal_pose();
+      const Eigen::Quaterniond q(p.orientation().w(), p.orientation().x(), p.orientation().y(),
+                                 p.orientation().z());
+      sim::PlateTarget t{{p.position().x(), p.position().y(), p.position().z()},
+                         std::asin(-q.toRotationMatrix()(2, 0))};
+      const auto sols = robot_.armIk(t, start);
+      if (sols.empty()) return reply(fbb, msg::PlanStatus::GoalInvalid, {});
+      goal = sols.front();
+    } else if (mode != sim::PlanMode::kEscape) {
+      for (int j : sim::plannedJoints(mode)) goal[j] = r.goal_joints()->Get(j);
+    }
+    return reply(fbb, msg::PlanStatus::Solved, {start, goal});
+  }
+
+  Status reply(flatbuffers::FlatBufferBuilder& fbb, msg::PlanStatus status,
+               const std::vector<sim::Config>& path) {
+    std::vector<flatbuffers::Offset<msg::TrajectoryPoint>> points;
+    for (std::size_t i = 0; i < path.size(); ++i) {
+      const std::vector<double> pos(path[i].data(), path[i].data() + 8), vel(8, 0.0);
+      points.push_back(msg::CreateTrajectoryPointDirect(fbb, static_cast<double>(i), &pos, &vel));
+    }
+    const auto traj = msg::CreateTrajectoryDirect(fbb, &points);
+    const auto stats = msg::CreatePlanStats(fbb, 10, 1.0, 2.0, 1.0, 1.0, false);
+    fbb.Finish(msg::CreatePlanResponseDirect(fbb, status, "", traj, stats, "fake"));
+    return {};
+  }
+
+  sim::RobotModel robot_ = sim::RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
+  int calls_ = 0;
+  std::map<int, int> modes_;
+};
+
+class Executor : public ::testing::Test {
+ protected:
+  Executor() {
+    std::string pattern = (fs::temp_directory_path() / "plr_executor_XXXXXX").string();
+    dir_ = mkdtemp(pattern.data());
+  }
+  ~Executor() override { fs::remove_all(dir_); }
+
+  static sim::World small_wall() {
+    sim::World w;
+    test::add_wall(w, 5.0, 3, 2);  // six 0.4 m boxes, 0.8 m high
+    return w;
+  }
+
+  // Runs the executor to pipeline/done; returns the report.
+  nlohmann::json run(const std::string& extra_params = "", bool with_h = true) {
+    if (with_h) {
+      auto h = kernel_.load_node(STRATEGY_HARDCODED_SO, NodeOptions().with_name("strategy"));
+      EXPECT_TRUE(h) << h.error().message;
+      EXPECT_TRUE(h->configure());
+      EXPECT_TRUE(h->activate());
+    }
+    const std::string params = R"({"report_dir": ")" + dir_.string() +
+                               R"(", "progress": false, "retry_ms": 1, "service_wait_s": 5)" +
+                               extra_params + "}";
+    auto n = kernel_.load_node(STRATEGY_EXECUTOR_SO,
+                               NodeOptions().with_name("executor").with_params(params));
+    EXPECT_TRUE(n) << n.error().message;
+    auto c = n->configure();
+    EXPECT_TRUE(c) << c.error().message;
+    EXPECT_TRUE(n->activate());
+    // Strategy H answers from the test thread: spin until the executor is done.
+    for (int i = 0; i < 60000 && kernel_.published("pipeline/done").empty(); ++i) {
+      kernel_.spin();
+      kernel_.wait_published("pipeline/done", 1, std::chrono::milliseconds(1));
+    }
+    EXPECT_TRUE(n->deactivate());
+    const auto done = kernel_.published("pipeline/done");
+    EXPECT_EQ(done.size(), 1u);
+    if (!done.empty()) {
+      done_ok_ = done[0].as<msg::PipelineDone>()->ok();
+      done_reason_ = done[0].as<msg::PipelineDone>()->reason()->str();
+    }
+    std::ifstream in(dir_ / "report.json");
+    EXPECT_TRUE(in) << "no report.json";
+    return in ? nlohmann::json::parse(in) : nlohmann::json{};
+  }
+
+  FakeKernel kernel_;
+  fs::path dir_;
+  bool done_ok_ = false;
+  std::string done_reason_;
+};
+
+TEST_F(Executor, UnloadsASmallWallWithStrategyH) {
+  FakeSim sim(small_wall());
+  FakePlanner planner;
+  sim.serve(kernel_);
+  planner.serve(kernel_);
+  const auto report = run();
+  EXPECT_TRUE(done_ok_) << done_reason_;
+  EXPECT_EQ(done_reason_, "trailer empty: 6/6 boxes unloaded");
+  EXPECT_EQ(report["boxes_total"], 6);
+  EXPECT_EQ(report["boxes_unloaded"], 6);
+  EXPECT_EQ(sim.state().unloaded, 6u);
+  EXPECT_EQ(report["robot_trailer_collisions"], 0);
+  // The top row by picks (M5 base, M3 nose, M2 pre-grasp, M4 approach and
+  // retract, M1 drop-off), the low row left is a pile and swept.
+  EXPECT_GE(report["actions"]["pick"]["executions"], 3);
+  EXPECT_GE(report["actions"]["sweep"]["executions"], 1);
+  EXPECT_EQ(report["actions"]["pick"]["boxes"].get<int>() +
+                report["actions"]["sweep"]["boxes"].get<int>(),
+            6);
+  EXPECT_GT(report["actions"]["pick"]["boxes_per_s"], 0.0);
+  for (int m = 1; m <= 5; ++m) {
+    EXPECT_GT(planner.answered(m), 0) << "M" << m;
+    EXPECT_EQ(report["planner_modes"]["M" + std::to_string(m)]["queries"], planner.answered(m));
+    EXPECT_EQ(report["planner_modes"]["M" + std::to_string(m)]["failures"], 0);
+  }
+  EXPECT_NEAR(report["planner_modes"]["M2"]["mean_ms"].get<double>(), 2.0, 1e-9);
+  EXPECT_EQ(report["curve"].size(),
+            report["actions"]["pick"]["executions"].get<std::size_t>() +
+                report["actions"]["sweep"]["executions"].get<std::size_t>());
+  EXPECT_GT(report["robot_time_s"].get<double>(), 0.0);
+  for (const char* f : {"unloading.svg", "scene_side.svg", "scene_top.svg"})
+    EXPECT_TRUE(fs::exists(dir_ / f)) << f;
+  const auto snaps = kernel_.requests("sim/snapshot");
+  ASSERT_FALSE(snaps.empty());
+  for (const auto& s : snaps) EXPECT_EQ(s.as<msg::SnapshotRequest>()->name()->str(), "checkpoint");
+  EXPECT_FALSE(kernel_.published("executor/status").empty());
+}
+
+TEST_F(Executor, PlannerGapLosesNoQuery) {
+  FakeSim sim(small_wall());
+  FakePlanner planner;
+  planner.unavailable_first = 5;
+  sim.serve(kernel_);
+  planner.serve(kernel_);
+  const auto report = run();
+  EXPECT_TRUE(done_ok_) << done_reason_;
+  EXPECT_EQ(report["boxes_unloaded"], 6);
+  int answered = 0;
+  for (int m = 1; m <= 6; ++m) answered += planner.answered(m);
+  EXPECT_EQ(planner.calls(), answered + 5);
+  int counted = 0;
+  for (int m = 1; m <= 6; ++m)
+    counted += report["planner_modes"]["M" + std::to_string(m)]["queries"].get<int>();
+  EXPECT_EQ(counted, answered);  // each query counted once, none failed
+}
+
+TEST_F(Executor, RepeatsTheActionASimulatorCrashInterrupted) {
+  FakeSim sim(small_wall());
+  sim.crash_at_execute = 6;  // inside the first pick, with a box held
+  FakePlanner planner;
+  sim.serve(kernel_);
+  planner.serve(kernel_);
+  const auto report = run();
+  EXPECT_TRUE(done_ok_) << done_reason_;
+  EXPECT_EQ(sim.restores(), 1);
+  const auto restores = kernel_.requests("sim/restore");
+  ASSERT_EQ(restores.size(), 1u);
+  EXPECT_EQ(restores[0].as<msg::SnapshotRequest>()->name()->str(), "checkpoint");
+  EXPECT_EQ(report["recoveries"], 1);
+  // No box appeared or vanished.
+  EXPECT_EQ(report["boxes_unloaded"], 6);
+  EXPECT_EQ(sim.state().unloaded + sim.state().world.boxes.size(), 6u);
+}
+
+TEST_F(Executor, FailedGraspsEndInNoProgress) {
+  FakeSim sim(small_wall());
+  sim.suction_works = false;
+  FakePlanner planner;
+  sim.serve(kernel_);
+  planner.serve(kernel_);
+  const auto report = run(R"(, "max_idle_actions": 3)");
+  EXPECT_EQ(done_reason_, "no progress in 3 actions: 0/6 boxes unloaded");
+  EXPECT_EQ(report["boxes_unloaded"], 0);
+  EXPECT_EQ(report["failed_grasps"], 3);
+  EXPECT_EQ(report["actions"]["pick"]["executions"], 3);
+}
+
+TEST_F(Executor, FollowsTheStrategyTreeAndAsksAgainWhenItEnds) {
+  FakeSim sim(small_wall());
+  FakePlanner planner;
+  sim.serve(kernel_);
+  planner.serve(kernel_);
+  // Pick(mid, center), then on any observation Pick(mid, center) again, then the tree ends.
+  int asked = 0;
+  kernel_.fake_service<msg::NextStrategyRequest, msg::NextStrategyReply>(
+      "strategy/next",
+      [&](const msg::NextStrategyRequest& r, flatbuffers::FlatBufferBuilder& fbb) -> Status {
+        ++asked;
+        EXPECT_TRUE(verify<msg::WorldState>(r.world()->data(), r.world()->size()));
+        sim::Strategy s;
+        s.name = "tree";
+        s.nodes.push_back({sim::Action::PickMidCenter, {}});
+        for (int o = 0; o < sim::kNumObservations; ++o) {
+          s.nodes[0].children.emplace_back(static_cast<sim::Observation>(o), o + 1);
+          s.nodes.push_back({sim::Action::PickMidCenter, {}});
+        }
+        fbb.Finish(msg::CreateNextStrategyReply(fbb, sim::build(fbb, s), fbb.CreateString("test")));
+        return {};
+      });
+  const auto report = run(R"(, "max_actions": 4)", false);
+  EXPECT_EQ(done_reason_.rfind("action limit (4)", 0), 0u) << done_reason_;
+  EXPECT_EQ(asked, 2);
+  EXPECT_EQ(report["strategies_asked"], 2);
+  EXPECT_EQ(report["strategy_steps"], 2);
+  EXPECT_EQ(report["boxes_unloaded"], 4);
+}
+
+TEST_F(Executor, RefusesBadParams) {
+  auto n = kernel_.load_node(STRATEGY_EXECUTOR_SO,
+                             NodeOptions().with_params(R"({"nose_home": [0.5, 0]})"));
+  ASSERT_TRUE(n);
+  auto s = n->configure();
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().message, "param 'nose_home': expected 3 nose joint values");
+  auto m =
+      kernel_.load_node(STRATEGY_EXECUTOR_SO,
+                        NodeOptions().with_name("e2").with_params(R"({"urdf": "/no/such.urdf"})"));
+  ASSERT_TRUE(m);
+  s = m->configure();
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().message.rfind("param 'urdf': /no/such.urdf", 0), 0u) << s.error().message;
+}
+
+}  // namespace
+}  // namespace plr
