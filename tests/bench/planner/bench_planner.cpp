@@ -147,12 +147,18 @@ void makeQueries(Scene& s, std::mt19937_64& rng, int picks) {
     PlanQuery scope;  // target box ignored while approaching
     scope.ignored_boxes = {box.id};
     Config pre, contact, back;
-    const PlateTarget pre_t{face - Eigen::Vector3d(0.08, 0, 0), 0.0};
+    // The plate's yaw follows its position (4-joint arm), so off the axis its
+    // corner leads by 0.25 |sin(yaw)|: keep that corner 1.2 cm off the face.
+    const Eigen::Vector3d yaw_axis = Eigen::Vector3d(b0, 0, 0) + robot.arm().yaw_origin;
+    const double lead =
+        0.25 * std::abs(std::sin(std::atan2(face.y() - yaw_axis.y(), face.x() - yaw_axis.x())));
+    const Eigen::Vector3d touch = face - Eigen::Vector3d(0.012 + lead, 0, 0);
+    const PlateTarget pre_t{touch - Eigen::Vector3d(0.15, 0, 0), 0.0};
     if (!solveIk(cc, PlanQuery{}, pre_t, nose_down, pre)) {
       ++g_skipped["pre-grasp IK"];
       continue;
     }
-    if (!solveIk(cc, scope, {face - Eigen::Vector3d(0.012, 0, 0), 0.0}, pre, contact)) {
+    if (!solveIk(cc, scope, {touch, 0.0}, pre, contact)) {
       ++g_skipped["contact IK"];
       continue;
     }
@@ -162,19 +168,20 @@ void makeQueries(Scene& s, std::mt19937_64& rng, int picks) {
     // M1: arm alone to the pre-grasp pose.
     s.queries.push_back(poseQuery(PlanMode::kArm, nose_down, pre_t.position, 0.0));
     // M4 approach (target ignored) and retract holding it.
-    PlanQuery approach =
-        poseQuery(PlanMode::kArmCartesian, pre, face - Eigen::Vector3d(0.012, 0, 0), 0.0);
+    PlanQuery approach = poseQuery(PlanMode::kArmCartesian, pre, touch, 0.0);
     approach.ignored_boxes = {box.id};
     s.queries.push_back(approach);
-    PlanQuery retract =
-        poseQuery(PlanMode::kArmCartesian, contact, face - Eigen::Vector3d(0.35, 0, -0.03), 0.0);
-    retract.held_boxes = {box};
-    if (startValid(cc, retract)) s.queries.push_back(retract);
     PlanQuery held_scope;
     held_scope.held_boxes = {box};
     held_scope.start = contact;
-    if (!solveIk(cc, held_scope, {face - Eigen::Vector3d(0.35, 0, -0.03), 0.0}, contact, back))
+    const Eigen::Vector3d back_p = touch - Eigen::Vector3d(0.35, 0, 0);
+    if (!solveIk(cc, held_scope, {back_p, 0.0}, contact, back)) {
+      ++g_skipped["retract IK"];
       continue;
+    }
+    PlanQuery retract = poseQuery(PlanMode::kArmCartesian, contact, back_p, 0.0);
+    retract.held_boxes = {box};
+    if (startValid(cc, retract)) s.queries.push_back(retract);
     // M1: drop-off over the nose, holding the box (plate facing down).
     const double drop_z = 0.25 + box.size.x() + 0.15;
     PlanQuery drop =
@@ -207,7 +214,6 @@ void makeQueries(Scene& s, std::mt19937_64& rng, int picks) {
       s.queries.push_back(home_from_contact);
     }
   }
-  (void)robot;
 }
 
 struct Row {
