@@ -713,6 +713,10 @@ Expected<PluginRef> FakeKernel::load(const std::string& path) {
   else if (d->abi_major != PLR_ABI_MAJOR)
     error = path + ": built for SDK ABI " + std::to_string(d->abi_major) + ", kernel speaks " +
             std::to_string(PLR_ABI_MAJOR);
+  else if (d->name == nullptr || d->node.create == nullptr || d->node.destroy == nullptr ||
+           d->node.configure == nullptr || d->node.activate == nullptr ||
+           d->node.deactivate == nullptr || d->node.cleanup == nullptr)
+    error = path + ": descriptor lacks its name or a life-cycle function";
   if (!error.empty()) {
     dlclose(lib);
     return make_error(PLR_ERR_INVALID, error);

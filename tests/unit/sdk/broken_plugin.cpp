@@ -4,8 +4,6 @@
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
 
-#include <optional>
-
 namespace {
 
 #if defined(BROKEN_STATE) || defined(BROKEN_ABI)
@@ -44,8 +42,8 @@ extern "C" __attribute__((visibility("default"))) const plr_plugin_descriptor* p
 #else
 
 #ifdef BROKEN_LEAK
-// A buffer kept where destroy() never reaches it.
-std::optional<plr::Message<plr::msg::Count> > kept;
+// A buffer taken from the kernel and never released.
+plr_msg* kept = nullptr;
 #endif
 
 class Broken : public plr::Node {
@@ -61,11 +59,8 @@ class Broken : public plr::Node {
     rate_ = params().get<int>("rate", 1);
 #endif
 #ifdef BROKEN_LEAK
-    const plr_host_api* api = ctx().api();
     std::uint8_t* data = nullptr;
-    plr_msg* raw = api->msg_alloc(api->ctx, 8, &data);
-    kept.emplace(api, raw);
-    api->msg_release(raw);
+    kept = ctx().api()->msg_alloc(ctx().api()->ctx, 8, &data);
 #endif
     return {};
   }

@@ -2,7 +2,7 @@
 # sdk/template against it as an outside project would, and runs its tests
 # (fake-kernel unit test and the conformance suite).
 # cmake -DBUILD_DIR=... -DTEMPLATE_DIR=... -DWORK_DIR=... -DGENERATOR=... -DCXX=...
-#       -DBUILD_TYPE=... -DSANITIZE=<flags or empty> -P template_out_of_tree.cmake
+#       -DSANITIZE=<flags or empty> -P template_out_of_tree.cmake
 function(run)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
   if(NOT rc EQUAL 0)
@@ -32,7 +32,8 @@ if(SANITIZE)
             "-DCMAKE_MODULE_LINKER_FLAGS=${SANITIZE}")
 endif()
 run(${CMAKE_COMMAND} -S ${TEMPLATE_DIR} -B ${WORK_DIR}/build -G ${GENERATOR}
-    -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_BUILD_TYPE=${BUILD_TYPE} -DCMAKE_PREFIX_PATH=${prefix}
+    # No build type: unoptimised, the quickest to compile.
+    -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_BUILD_TYPE= -DCMAKE_PREFIX_PATH=${prefix}
     ${flags})
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/build -j 2)
 execute_process(COMMAND ${CMAKE_CTEST_COMMAND} --test-dir ${WORK_DIR}/build --output-on-failure
