@@ -98,8 +98,8 @@ Expected<std::uint64_t> Bus::advertise(Endpoint* owner, const std::string& topic
   t.schema_version = schema_version;
   const auto id = next_id_++;
   publishers_[id] = &t;
-  if (link_ && owner != &link_->link_endpoint())
-    link_->topic_advertised(topic, type_id, schema_version);
+  for (auto* l : links_)
+    if (owner != &l->link_endpoint()) l->topic_advertised(topic, type_id, schema_version);
   return id;
 }
 
@@ -188,7 +188,8 @@ Expected<std::uint64_t> Bus::subscribe(Endpoint* owner, const std::string& topic
   sub->topic = &t;
   t.subs.push_back(sub);
   subscriptions_[sub->id] = sub;
-  if (link_ && owner != &link_->link_endpoint()) link_->topic_subscribed(topic, type_id);
+  for (auto* l : links_)
+    if (owner != &l->link_endpoint()) l->topic_subscribed(topic, type_id);
   return sub->id;
 }
 
@@ -225,7 +226,8 @@ Status Bus::provide(Endpoint* owner, const std::string& service, std::uint64_t r
                                     service, p.owner->endpoint_name()));
   }
   providers.push_back({owner, request_type, reply_type, fn, user});
-  if (link_ && owner != &link_->link_endpoint()) link_->service_provided(service);
+  for (auto* l : links_)
+    if (owner != &l->link_endpoint()) l->service_provided(service);
   return {};
 }
 
@@ -235,6 +237,7 @@ Status Bus::call(Endpoint* caller, const std::string& service, std::uint64_t req
   MsgRef req(request);
   Provider chosen;
   bool remote = false;
+  std::vector<Link*> links;
   std::uint64_t id = 0;
   {
     std::lock_guard lock(m_);
@@ -247,7 +250,10 @@ Status Bus::call(Endpoint* caller, const std::string& service, std::uint64_t req
         }
     }
     // Nobody here provides it: maybe another process does.
-    remote = chosen.owner == nullptr && link_ != nullptr && caller != &link_->link_endpoint();
+    if (chosen.owner == nullptr)
+      for (auto* l : links_)
+        if (caller != &l->link_endpoint()) links.push_back(l);
+    remote = chosen.owner == nullptr && !links.empty();
     if (chosen.owner == nullptr && !remote)
       return make_error(PLR_ERR_UNAVAILABLE, fmt::format("no provider for service '{}'", service));
     if (!remote && chosen.request_type != request_type)
@@ -255,8 +261,7 @@ Status Bus::call(Endpoint* caller, const std::string& service, std::uint64_t req
                                                      service, chosen.request_type, request_type));
     id = next_id_++;
     const auto deadline = Clock::now() + timeout;
-    Endpoint* provider = remote ? &link_->link_endpoint() : chosen.owner;
-    pending_[id] = {caller, provider, fn, user, service, deadline, timeout};
+    pending_[id] = {caller, chosen.owner, fn, user, service, deadline, timeout};
     deadlines_.emplace(deadline, id);
     request->type_id = request_type;
     request->stamp_ns = wall_now_ns();
@@ -264,13 +269,19 @@ Status Bus::call(Endpoint* caller, const std::string& service, std::uint64_t req
   timer_cv_.notify_one();
   if (call_id) *call_id = id;
   if (remote) {
-    if (!link_->forward_call(service, req, id)) {
-      std::lock_guard lock(m_);
-      // Still ours to withdraw unless the link answered in the meantime.
-      if (erase_pending_locked(id))
-        return make_error(PLR_ERR_UNAVAILABLE,
-                          fmt::format("no provider for service '{}'", service));
+    for (auto* l : links) {
+      {
+        std::lock_guard lock(m_);
+        auto it = pending_.find(id);
+        if (it == pending_.end()) return {};  // answered already
+        it->second.provider = &l->link_endpoint();
+      }
+      if (l->forward_call(service, req, id)) return {};
     }
+    std::lock_guard lock(m_);
+    // Still ours to withdraw unless a link answered in the meantime.
+    if (erase_pending_locked(id))
+      return make_error(PLR_ERR_UNAVAILABLE, fmt::format("no provider for service '{}'", service));
     return {};
   }
   const bool posted = chosen.owner->executor().post(
@@ -418,8 +429,7 @@ void Bus::attach(Link* link) {
   std::vector<std::string> services;
   {
     std::lock_guard lock(m_);
-    link_ = link;
-    if (link == nullptr) return;
+    links_.push_back(link);
     for (const auto& [name, t] : topics_)
       topics.emplace_back(name, t->type_id, t->schema_version, !t->subs.empty());
     for (const auto& [name, providers] : services_)
@@ -430,6 +440,11 @@ void Bus::attach(Link* link) {
     if (subscribed) link->topic_subscribed(name, type);
   }
   for (const auto& s : services) link->service_provided(s);
+}
+
+void Bus::detach(Link* link) {
+  std::lock_guard lock(m_);
+  std::erase(links_, link);
 }
 
 void Bus::count_invalid(const plr_msg* msg) {

@@ -111,8 +111,9 @@ class Bus {
   void remove_endpoint(Endpoint* e);
 
   // Attaches a transport (before nodes start); it is told about what exists
-  // already. nullptr detaches it.
+  // already. Calls nobody here provides go to the links in attach order.
   void attach(Link* link);
+  void detach(Link* link);
 
   void count_invalid(const plr_msg* msg);
   std::vector<TopicStatsSnapshot> topic_stats();
@@ -144,7 +145,7 @@ class Bus {
   std::multimap<std::chrono::steady_clock::time_point, std::uint64_t> deadlines_;
   std::uint64_t next_id_ = 1;
   std::atomic<std::uint64_t> invalid_total_{0};
-  Link* link_ = nullptr;
+  std::vector<Link*> links_;  // tried in order for calls: local transports first
 
   std::condition_variable timer_cv_;
   bool stop_ = false;

@@ -52,7 +52,7 @@ Kernel::Kernel(Config config, std::string host, std::string run_id)
 
 Kernel::~Kernel() {
   stop();
-  bus_.attach(nullptr);
+  if (bridge_) bus_.detach(bridge_.get());
   bridge_.reset();
   bus_.remove_endpoint(internal_.get());
   internal_->executor().drain();

@@ -31,7 +31,8 @@ plr_msg* msg_copy(const std::uint8_t* data, std::size_t size, std::uint64_t type
 }
 
 plr_msg* msg_wrap(const std::uint8_t* data, std::size_t size, std::uint64_t type_id,
-                  std::uint32_t schema_version, std::shared_ptr<void> keep_alive) {
+                  std::uint32_t schema_version, std::shared_ptr<void> keep_alive,
+                  const void* origin) {
   auto* m = new plr_msg;
   m->external = data;
   m->capacity = size;
@@ -40,7 +41,7 @@ plr_msg* msg_wrap(const std::uint8_t* data, std::size_t size, std::uint64_t type
   m->schema_version = schema_version;
   m->stamp_ns = wall_now_ns();
   m->keep_alive = std::move(keep_alive);
-  m->foreign = true;
+  m->origin = origin;
   g_live.fetch_add(1, std::memory_order_relaxed);
   return m;
 }

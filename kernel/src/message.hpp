@@ -23,7 +23,9 @@ struct plr_msg {
   // alive by `keep_alive` for as long as this message lives.
   const std::uint8_t* external = nullptr;
   std::shared_ptr<void> keep_alive;
-  bool foreign = false;  // arrived from another process; transports do not send it back
+  // The transport that brought it from another process; that transport does
+  // not send it back.
+  const void* origin = nullptr;
 };
 
 namespace plr::kernel {
@@ -34,7 +36,8 @@ plr_msg* msg_copy(const std::uint8_t* data, std::size_t size, std::uint64_t type
                   std::uint32_t schema_version, std::int64_t stamp_ns);
 // A message over bytes owned by `keep_alive` (zero copy).
 plr_msg* msg_wrap(const std::uint8_t* data, std::size_t size, std::uint64_t type_id,
-                  std::uint32_t schema_version, std::shared_ptr<void> keep_alive);
+                  std::uint32_t schema_version, std::shared_ptr<void> keep_alive,
+                  const void* origin);
 void msg_retain(const plr_msg* msg);
 void msg_release(const plr_msg* msg);
 plr_msg_view msg_view(const plr_msg* msg);

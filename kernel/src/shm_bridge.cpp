@@ -36,12 +36,12 @@ std::string segment(const std::string& host, const std::string& name) {
 
 // Keeps a shared-memory sample (and so its slot) alive while a message refers to it.
 template <class T>
-plr_msg* wrap_sample(T&& holder, const shm::Sample& sample) {
+plr_msg* wrap_sample(T&& holder, const shm::Sample& sample, const void* origin) {
   const auto data = sample.data();
   const auto info = sample.info();
   auto keep = std::make_shared<std::decay_t<T>>(std::forward<T>(holder));
   return msg_wrap(reinterpret_cast<const std::uint8_t*>(data.data()), data.size(), info.type_id,
-                  info.schema_version, std::move(keep));
+                  info.schema_version, std::move(keep), origin);
 }
 
 }  // namespace
@@ -54,7 +54,7 @@ struct ShmBridge::Outgoing {
 
   static void on_local(void* user, const plr_msg* msg) {
     auto* self = static_cast<Outgoing*>(user);
-    if (msg->foreign || self->publisher.subscriber_count() == 0) return;
+    if (msg->origin == self->bridge || self->publisher.subscriber_count() == 0) return;
     const auto v = msg_view(msg);
     auto r = self->publisher.publish_copy(
         self->type, {reinterpret_cast<const std::byte*>(v.data), v.size}, self->wait);
@@ -214,7 +214,7 @@ void ShmBridge::read_remote_topic(Incoming* in) {
     }
     received_.fetch_add(1, std::memory_order_relaxed);
     const auto& ref = *sample;
-    plr_msg* m = wrap_sample(std::move(*sample), ref);
+    plr_msg* m = wrap_sample(std::move(*sample), ref, this);
     (void)bus_.publish(in->publisher, m);
   }
 }
@@ -288,7 +288,7 @@ void ShmBridge::serve_loop(Server* server) {
     const auto to = request->reply_to;
     auto* call = new ServerCall{server, to};
     const auto& sample = request->sample;
-    plr_msg* msg = wrap_sample(std::move(request->sample), sample);
+    plr_msg* msg = wrap_sample(std::move(request->sample), sample, this);
     auto s =
         bus_.call(this, server->service, info.type_id, msg, 10min, &on_local_reply, call, nullptr);
     if (!s) {
@@ -388,7 +388,7 @@ void ShmBridge::reply_loop(Client* client) {
       continue;
     }
     const auto& ref = *reply;
-    (void)bus_.respond(id, PLR_OK, wrap_sample(std::move(*reply), ref), "");
+    (void)bus_.respond(id, PLR_OK, wrap_sample(std::move(*reply), ref, this), "");
   }
 }
 
