@@ -14,7 +14,9 @@
 // Rules it shares with the kernel, so tests see the real behaviour:
 // - Topic messages and new service requests reach only active nodes.
 // - A node that is unconfigured (after cleanup or a failed configure) holds no
-//   publishers, subscriptions or services: the kernel drops them.
+//   publishers, subscriptions or services: the fake kernel drops them, so the
+//   next configure can register them again. (The kernel, for now, drops them
+//   only when it destroys the node.)
 // - publish/call/respond take ownership of the message even when they fail.
 // - A call with no active provider, or of the wrong request type, is refused:
 //   call() returns the error and the reply callback never runs. Every other
