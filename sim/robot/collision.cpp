@@ -256,17 +256,19 @@ struct CollisionChecker::Impl {
     return -1;
   }
 
-  // Index of the first colliding shape pair as text, or empty.
-  std::string firstHit(bool swept) const {
-    auto obj = [&](const RobotShape& s) { return swept ? s.swept.get() : s.exact.get(); };
+  // The first collision of the exact shapes as placed by place(), as text
+  // ("plate - box 12"), or empty.
+  std::string firstHit() const {
     for (const auto& s : shapes) {
-      if (hitsOctree(obj(s))) return s.label + " - trailer";
-      const long b = hitBox(obj(s));
+      if (hitsOctree(s.exact.get())) return s.label + " - trailer";
+      const long b = hitBox(s.exact.get());
       if (b >= 0)
         return s.label + " - box " + std::to_string(boxes[static_cast<std::size_t>(b)].id);
     }
     for (const auto& [i, j] : self_pairs) {
-      if (collide(obj(shapes[i]), obj(shapes[j]))) return shapes[i].label + " - " + shapes[j].label;
+      if (collide(shapes[i].exact.get(), shapes[j].exact.get())) {
+        return shapes[i].label + " - " + shapes[j].label;
+      }
     }
     return {};
   }
@@ -530,7 +532,7 @@ std::string CollisionChecker::describeCollision(const Config& q) const {
     }
   }
   m.place(q);
-  return m.firstHit(false);
+  return m.firstHit();
 }
 
 const CollisionStats& CollisionChecker::stats() const {

@@ -41,7 +41,6 @@ class JointLattice final : public search::Graph {
   }
   void successors(search::StateId s, std::vector<search::Successor>& out) override;
   bool isGoal(search::StateId s) override;
-  std::size_t size() const { return states_.size(); }
 
   // Execution-time lower bound to the goal (the heuristic).
   double heuristic(search::StateId s) const;
@@ -92,7 +91,6 @@ class LineLattice final : public search::Graph {
               const sim::Config& start, const sim::PoseGoal& goal);
 
   search::StateId start() const { return 0; }
-  search::StateId last() const { return count_ - 1; }
   const sim::Config& config(search::StateId s) const {
     return configs_[static_cast<std::size_t>(s)];
   }
