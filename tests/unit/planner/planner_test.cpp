@@ -329,31 +329,33 @@ TEST(Arastar, EscapesLightContactThenReachesTheGoal) {
   EXPECT_EQ(n.message, "start in collision: plate - box " + std::to_string(box.id));
 }
 
-TEST(Arastar, UnreachableGoalFailsWithinTheTimeLimit) {
-  // The plate target is inside a closed cage of boxes: valid IK, no way in.
+TEST(Arastar, UnreachableGoalGivesNoPathWithinTheTimeLimit) {
+  // A floor-to-ceiling wall across the trailer; valid goals behind it.
   World w;
-  std::uint32_t id = 1;
-  const Eigen::Vector3d c(3.6, 0.0, 1.2);
-  for (int axis = 0; axis < 3; ++axis) {
-    for (double sign : {-1.0, 1.0}) {
-      Box b;
-      b.id = id++;
-      b.size = Eigen::Vector3d::Constant(0.9);
-      b.size[axis] = 0.05;
-      b.pose.translation() = c;
-      b.pose.translation()[axis] += sign * 0.45;
-      w.boxes.push_back(b);
-    }
-  }
+  Box wall;
+  wall.id = 1;
+  wall.size = Eigen::Vector3d(0.4, 2.48, 2.68);
+  wall.pose.translation() = Eigen::Vector3d(3.2, 0.0, 1.345);
+  w.boxes.push_back(wall);
   CollisionChecker cc(robot(), w);
-  PlanQuery q = poseQuery(PlanMode::kArm, home(2.0), c, 0.0);
-  q.time_limit_s = 0.5;
-  const PlanResult r = arastar().plan(q, cc);
-  EXPECT_TRUE(r.status == PlanStatus::kTimeout || r.status == PlanStatus::kNoPath ||
-              r.status == PlanStatus::kGoalInvalid)
-      << toString(r.status);
-  EXPECT_NE(r.status, PlanStatus::kSolved);
-  EXPECT_LT(r.stats.planning_time_s, 0.5 + 0.3);
+  ASSERT_TRUE(cc.isValid(home(1.0)));
+  ASSERT_TRUE(cc.isValid(home(5.0)));
+
+  // M5: the base line is exhausted on this side of the wall.
+  PlanQuery base = jointQuery(PlanMode::kBaseLine, home(1.0), home(5.0));
+  base.time_limit_s = 2.0;
+  const PlanResult nb = arastar().plan(base, cc);
+  EXPECT_EQ(nb.status, PlanStatus::kNoPath) << nb.message;
+  EXPECT_LT(nb.stats.planning_time_s, 2.0);
+
+  // M2: the lattice is too large to exhaust; the time limit ends it.
+  PlanQuery arm = poseQuery(PlanMode::kArmBase, home(1.0), Eigen::Vector3d(5.2, 0.0, 1.2), 0.0);
+  arm.time_limit_s = 0.5;
+  const PlanResult na = arastar().plan(arm, cc);
+  EXPECT_EQ(na.status, PlanStatus::kTimeout) << na.message;
+  EXPECT_EQ(na.message, "no solution within the time limit");
+  EXPECT_LT(na.stats.planning_time_s, 0.5 + 0.2);
+  EXPECT_TRUE(na.path.empty());
 }
 
 TEST(Trajectory, TrapezoidRespectsLimitsAndReachesWaypoints) {
