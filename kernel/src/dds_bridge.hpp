@@ -1,0 +1,192 @@
+// Carries the bus between kernels on different machines over Cyclone DDS.
+// Every message is one `plr_dds::Envelope` (dds/envelope.idl) whose payload
+// is the bus message's bytes. Exported topics (config `remote.dds.export`)
+// go out on DDS topic "plr/topic/<name>" with the topic's QoS; imported ones
+// are injected into the local bus. Services a local node provides and that
+// are exported are announced; calls nobody here provides go to a live remote
+// provider, spread round-robin. Every kernel announces itself (4 Hz) and
+// publishes its telemetry (1 Hz) for `plr monitor`. Remote commands arrive on
+// "plr/control" and are refused unless remote control is on.
+//
+// Provider loss policy: when a providing kernel disappears (its announce
+// instance is disposed or loses its writer, or no announce for
+// kPeerTimeout), every call still waiting on it fails at once with
+// PLR_ERR_UNAVAILABLE naming the kernel; nothing is re-sent, because the
+// bridge cannot know whether the provider acted on the request.
+#pragma once
+
+#include "bus.hpp"
+#include "config.hpp"
+#include "executor.hpp"
+
+#include <plr/expected.hpp>
+
+#include <dds/dds.h>
+#include <nlohmann/json.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+struct plr_dds_Envelope;  // generated from dds/envelope.idl
+
+namespace plr::kernel {
+
+enum class EnvelopeKind : std::uint8_t {
+  kTopic = 0,
+  kRequest = 1,
+  kReply = 2,
+  kError = 3,
+  kAnnounce = 4,
+  kTelemetry = 5,
+  kCommand = 6,
+  kResult = 7,
+};
+
+inline constexpr const char* kDdsAnnounceTopic = "plr/announce";
+inline constexpr const char* kDdsTelemetryTopic = "plr/telemetry";
+inline constexpr const char* kDdsControlTopic = "plr/control";
+inline constexpr const char* kDdsRequestTopic = "plr/request";
+inline constexpr const char* kDdsReplyTopic = "plr/reply";
+inline constexpr std::chrono::milliseconds kPeerTimeout{1500};
+// Sizes an envelope may carry; larger ones are dropped and counted.
+inline constexpr std::size_t kMaxNameSize = 256;
+inline constexpr std::size_t kMaxJsonPayload = 4 << 20;
+
+// DDS topic carrying bus topic `topic` ("plr/topic/<name>", characters DDS
+// does not allow replaced by '_').
+std::string dds_topic_name(const std::string& topic);
+// Cyclone configuration for `dds`: its interfaces (multicast off and peer
+// 127.0.0.1 when only loopback), extra unicast peers from PLR_DDS_PEERS
+// (comma-separated), and DDS Security when `security_dir` is set.
+Expected<std::string> cyclone_config_xml(const DdsConfig& dds);
+// Creates the domain from that XML (once per process) and a participant on it.
+Expected<dds_entity_t> open_participant(const DdsConfig& dds);
+// "<pipeline>@<hostname>:<pid>"
+std::string make_kernel_id(const std::string& pipeline);
+bool matches_any(const std::vector<std::string>& patterns, const std::string& name);
+
+class DdsBridge final : public Endpoint, public Link {
+ public:
+  using TelemetryFn = std::function<std::string()>;
+  // Runs a remote command (JSON {"cmd": "swap", "node", "plugin"}) once it is allowed.
+  using ControlFn = std::function<Status(const nlohmann::json&)>;
+
+  static Expected<std::unique_ptr<DdsBridge>> create(Bus& bus, const Config& config,
+                                                     std::string kernel_id, TelemetryFn telemetry,
+                                                     ControlFn control);
+  ~DdsBridge() override;
+  DdsBridge(const DdsBridge&) = delete;
+  DdsBridge& operator=(const DdsBridge&) = delete;
+
+  Executor& executor() override { return executor_; }
+  const std::string& endpoint_name() const override { return name_; }
+
+  Endpoint& link_endpoint() override { return *this; }
+  void topic_advertised(const std::string& topic, std::uint64_t type_id,
+                        std::uint32_t schema_version) override;
+  void topic_subscribed(const std::string& topic, std::uint64_t type_id) override;
+  void service_provided(const std::string& service) override;
+  bool forward_call(const std::string& service, const MsgRef& request, std::uint64_t id) override;
+
+  const std::string& kernel_id() const { return kernel_id_; }
+  // Counters for telemetry, and the remote kernels seen.
+  nlohmann::json stats() const;
+
+  struct Reader;
+  struct Outgoing;
+  // A call from a remote kernel to a local provider, and its answer.
+  struct ServerCall {
+    DdsBridge* bridge;
+    std::string caller;
+    std::string service;
+    std::uint64_t corr;
+  };
+  void send_reply(const ServerCall& call, plr_status status, const plr_msg* reply,
+                  const char* error);
+
+ private:
+  DdsBridge(Bus& bus, const Config& config, std::string kernel_id, TelemetryFn telemetry,
+            ControlFn control);
+  Status open();
+  void export_topic(const std::string& topic, std::uint64_t type_id, std::uint32_t version);
+  void import_topic(const std::string& topic, std::uint64_t type_id);
+  void receive_loop();
+  void heartbeat_loop();
+  void take(Reader* r);
+  void on_data(Reader* r, const ::plr_dds_Envelope& e);
+  void on_request(const ::plr_dds_Envelope& e);
+  void on_reply(const ::plr_dds_Envelope& e);
+  void on_announce(const ::plr_dds_Envelope& e, bool alive);
+  void on_command(const ::plr_dds_Envelope& e);
+  void expire_peers();
+  void peer_gone(const std::string& kernel, const std::string& why);
+  bool write(dds_entity_t writer, const std::string& target, const std::string& name,
+             EnvelopeKind kind, std::uint64_t type_id, std::uint32_t version, std::uint64_t corr,
+             std::int32_t status, const std::uint8_t* data, std::size_t size);
+  void invalid(const char* why, const std::string& from);
+  Reader* add_reader(dds_entity_t topic, const dds_qos_t* qos, int kind, std::string bus_topic,
+                     std::uint64_t type_id);
+
+  Bus& bus_;
+  const Config& config_;
+  std::string kernel_id_;
+  std::string name_;
+  TelemetryFn telemetry_;
+  ControlFn control_;
+
+  dds_entity_t participant_ = 0;
+  dds_entity_t waitset_ = 0;
+  dds_entity_t wake_ = 0;  // guard condition: stop
+  dds_entity_t announce_writer_ = 0;
+  dds_entity_t telemetry_writer_ = 0;
+  dds_entity_t control_writer_ = 0;
+  dds_entity_t request_writer_ = 0;
+  dds_entity_t reply_writer_ = 0;
+
+  struct Peer {
+    std::chrono::steady_clock::time_point seen;
+    std::set<std::string> services;
+  };
+  struct RemoteCall {
+    std::uint64_t bus_id = 0;
+    std::string kernel;
+    std::string service;
+    std::chrono::steady_clock::time_point sent;
+  };
+
+  mutable std::mutex m_;
+  std::vector<std::unique_ptr<Reader>> readers_;
+  std::map<std::string, std::unique_ptr<Outgoing>> outgoing_;
+  std::set<std::string> imported_;
+  std::set<std::string> served_;  // exported services a local node provides
+  std::map<std::string, Peer> peers_;
+  std::map<std::uint64_t, RemoteCall> calls_;  // correlation id -> call
+  std::uint64_t next_corr_ = 1;
+  std::size_t round_robin_ = 0;
+
+  std::atomic<bool> stop_{false};
+  std::mutex stop_m_;
+  std::condition_variable stop_cv_;
+  std::thread receiver_;
+  std::thread heartbeat_;
+
+  std::atomic<std::uint64_t> sent_{0};
+  std::atomic<std::uint64_t> received_{0};
+  std::atomic<std::uint64_t> invalid_{0};
+  std::atomic<std::uint64_t> send_failures_{0};
+  std::atomic<std::uint64_t> provider_losses_{0};
+  std::atomic<std::uint64_t> commands_refused_{0};
+
+  Executor executor_;  // last: stops first, before what it works on
+};
+
+}  // namespace plr::kernel
