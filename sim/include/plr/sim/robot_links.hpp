@@ -1,0 +1,26 @@
+// Bridge from the robot model (robot_model.hpp) to the physics: the robot's
+// collision shapes at a configuration, as kinematic shapes for
+// Simulation::set_robot_links, and its suction plate.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "plr/sim/physics.hpp"
+#include "plr/sim/robot_model.hpp"
+
+namespace plr::sim {
+
+// Every collision box and cylinder of every link at q (spheres become boxes
+// of the same extent), in link order. Shapes of `conveyor_link` carry a belt
+// running at `belt_speed` towards the robot (the link's -x).
+std::vector<LinkGeometry> robot_link_geometry(const RobotModel& model, const Config& q,
+                                              double belt_speed = 0.0,
+                                              const std::string& conveyor_link = "nose_conveyor");
+
+// The suction plate at q: the model's plate frame has its normal along +x,
+// the physics' along +z. Cup layout and forces come from `cups`.
+SuctionPlate suction_plate_at(const RobotModel& model, const Config& q,
+                              const SuctionPlate& cups = {});
+
+}  // namespace plr::sim
