@@ -82,6 +82,24 @@ void report_ready() {
   ::unsetenv("PLR_READY_FD");
 }
 
+// SIGHUP: read the config again and swap every node whose plug-in changed.
+void reload(Kernel& kernel, const RunOptions& options) {
+  auto fresh = load(options.config, options.overrides);
+  if (!fresh) {
+    spdlog::error("reload refused, the pipeline keeps running: {}", fresh.error().message);
+    return;
+  }
+  for (const auto& node : fresh->nodes) {
+    const auto* running = kernel.config().node(node.name);
+    if (running == nullptr || node.host != "main") continue;
+    for (const auto& status : kernel.nodes()) {
+      if (status.name != node.name || status.plugin == node.plugin) continue;
+      if (auto s = kernel.swap(node.name, node.plugin); !s)
+        spdlog::error("reload: {}", s.error().message);
+    }
+  }
+}
+
 int run_pipeline(const RunOptions& options) {
   spdlog::set_level(options.verbose ? spdlog::level::debug : spdlog::level::info);
   const bool main_host = options.host == "main";
@@ -193,6 +211,10 @@ int run_pipeline(const RunOptions& options) {
   for (;;) {
     timespec tick{0, 50'000'000};
     const int sig = sigtimedwait(&signals, nullptr, &tick);
+    if (sig == SIGHUP && main_host) {
+      reload(kernel, options);
+      continue;
+    }
     if (sig > 0) {
       spdlog::info("signal {}: stopping", sig);
       break;

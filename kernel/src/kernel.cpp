@@ -1,5 +1,6 @@
 #include "kernel.hpp"
 
+#include "dds_bridge.hpp"
 #include "shm_bridge.hpp"
 #include "supervisor.hpp"
 
@@ -52,6 +53,8 @@ Kernel::Kernel(Config config, std::string host, std::string run_id)
 
 Kernel::~Kernel() {
   stop();
+  if (dds_) bus_.detach(dds_.get());
+  dds_.reset();
   if (bridge_) bus_.detach(bridge_.get());
   bridge_.reset();
   bus_.remove_endpoint(internal_.get());
@@ -75,6 +78,22 @@ Status Kernel::start() {
   if (!run_id_.empty() && hosts.size() > 1 && !bridge_) {
     bridge_ = std::make_unique<ShmBridge>(bus_, config_, host_, hosts, run_id_);
     bus_.attach(bridge_.get());
+  }
+  // Other machines: after shared memory, so calls try this machine's hosts first.
+  if (config_.dds.enabled && host_ == "main" && !dds_) {
+    auto dds = DdsBridge::create(
+        bus_, config_, make_kernel_id(config_.pipeline), [this] { return telemetry_json(); },
+        [this](const nlohmann::json& c) -> Status {
+          const auto text = [&](const char* key) {
+            return c.contains(key) && c[key].is_string() ? c[key].get<std::string>() : "";
+          };
+          if (text("cmd") != "swap")
+            return make_error(PLR_ERR_INVALID, "unknown remote command '" + text("cmd") + "'");
+          return swap(text("node"), text("plugin"));
+        });
+    if (!dds) return dds.error();
+    dds_ = std::move(*dds);
+    bus_.attach(dds_.get());
   }
   if (config_.clock == "sim")
     if (auto s = follow_sim_clock(); !s) return s;
@@ -113,6 +132,7 @@ void Kernel::stop() {
 
 void Kernel::sync_transports() {
   if (bridge_) bridge_->executor().drain();
+  if (dds_) dds_->executor().drain();
 }
 
 Kernel::Slot* Kernel::slot(const std::string& name) {
@@ -153,34 +173,38 @@ Status Kernel::swap(const std::string& node, const std::string& plugin) {
   return {};
 }
 
-Status Kernel::follow_sim_clock() {
-  auto sub = bus_.subscribe(
-      internal_.get(), "clock", MessageTraits<msg::Clock>::type_id(),
-      [](void* user, const plr_msg* m) {
+template <class T>
+Status Kernel::listen(const std::string& topic, std::function<void(const T&)> fn) {
+  auto handler = std::make_unique<std::function<void(const plr_msg*)>>(
+      [fn = std::move(fn), this](const plr_msg* m) {
         const auto v = msg_view(m);
-        if (!verify<msg::Clock>(v.data, v.size)) return;
-        static_cast<PipelineClock*>(user)->set_sim_ns(
-            flatbuffers::GetRoot<msg::Clock>(v.data)->time_ns());
+        if (!verify<T>(v.data, v.size)) {
+          bus_.count_invalid(m);
+          return;
+        }
+        fn(*flatbuffers::GetRoot<T>(v.data));
+      });
+  auto sub = bus_.subscribe(
+      internal_.get(), topic, MessageTraits<T>::type_id(),
+      [](void* user, const plr_msg* m) {
+        (*static_cast<std::function<void(const plr_msg*)>*>(user))(m);
       },
-      &clock_);
+      handler.get());
   if (!sub) return sub.error();
+  listeners_.push_back(std::move(handler));
   return {};
 }
 
+Status Kernel::follow_sim_clock() {
+  return listen<msg::Clock>("clock",
+                            [this](const msg::Clock& c) { clock_.set_sim_ns(c.time_ns()); });
+}
+
 Status Kernel::on_pipeline_done(std::function<void(bool, std::string)> fn) {
-  on_done_ = std::move(fn);
-  auto sub = bus_.subscribe(
-      internal_.get(), "pipeline/done", MessageTraits<msg::PipelineDone>::type_id(),
-      [](void* user, const plr_msg* m) {
-        const auto v = msg_view(m);
-        if (!verify<msg::PipelineDone>(v.data, v.size)) return;
-        const auto* done = flatbuffers::GetRoot<msg::PipelineDone>(v.data);
-        static_cast<Kernel*>(user)->on_done_(done->ok(),
-                                             done->reason() ? done->reason()->str() : "");
-      },
-      this);
-  if (!sub) return sub.error();
-  return {};
+  return listen<msg::PipelineDone>("pipeline/done",
+                                   [fn = std::move(fn)](const msg::PipelineDone& d) {
+                                     fn(d.ok(), d.reason() ? d.reason()->str() : "");
+                                   });
 }
 
 std::vector<NodeStatus> Kernel::nodes() const {
@@ -229,6 +253,7 @@ std::string Kernel::telemetry_json() {
     j["services"].push_back({{"name", s.name}, {"providers", s.providers}});
   j["invalid_messages"] = bus_.invalid_total();
   if (bridge_) j["shm"] = bridge_->stats();
+  if (dds_) j["dds"] = dds_->stats();
   return j.dump();
 }
 

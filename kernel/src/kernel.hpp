@@ -75,6 +75,8 @@ class Kernel {
   class Internal;
 
   Expected<std::unique_ptr<NodeInstance>> bring_up(const NodeConfig& config);
+  template <class T>
+  Status listen(const std::string& topic, std::function<void(const T&)> fn);
   Slot* slot(const std::string& name);
 
   Config config_;
@@ -86,7 +88,9 @@ class Kernel {
   std::vector<std::unique_ptr<Slot>> slots_;
   std::unique_ptr<Internal> internal_;
   std::unique_ptr<class ShmBridge> bridge_;
-  std::function<void(bool, std::string)> on_done_;
+  std::unique_ptr<class DdsBridge> dds_;  // main host only, when remote.dds is configured
+  // Kernel-side subscriptions (clock, pipeline/done), alive as long as the kernel.
+  std::vector<std::unique_ptr<std::function<void(const plr_msg*)>>> listeners_;
   bool started_ = false;
 };
 

@@ -1,5 +1,6 @@
 // `plr`: the command line of the kernel.
 #include "commands.hpp"
+#include "monitor.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -42,6 +43,25 @@ int main(int argc, char** argv) {
   swap_cmd->add_option("plugin", swap.plugin, "Plug-in to load in its place")->required();
   swap_cmd->add_option("--pipeline", swap.pipeline,
                        "Pipeline name (default: the only one running)");
+  RemoteSwapOptions remote_swap_options;
+  swap_cmd->add_option("--remote", remote_swap_options.kernel,
+                       "Swap on this kernel over DDS (id, pipeline@hostname or pipeline name)");
+  const auto dds_options = [](CLI::App* cmd, DdsToolOptions& o) {
+    cmd->add_option("--domain", o.domain, "DDS domain")->capture_default_str();
+    cmd->add_option("--interface", o.interfaces, "Network interfaces for DDS (default: lo)");
+    cmd->add_option("--security", o.security_dir, "DDS Security material of this tool");
+  };
+  dds_options(swap_cmd, remote_swap_options.dds);
+
+  MonitorOptions monitor_options;
+  auto* monitor_cmd =
+      app.add_subcommand("monitor", "Kernels, nodes, topics and rates seen on a DDS domain");
+  dds_options(monitor_cmd, monitor_options.dds);
+  monitor_cmd->add_flag("--once", monitor_options.once, "Print once and exit");
+  monitor_cmd->add_flag("--json", monitor_options.json, "JSON instead of a table");
+  monitor_cmd->add_option("--wait", monitor_options.wait_s,
+                          "--once: longest wait for kernels, seconds")
+      ->capture_default_str();
 
   std::string status_pipeline;
   auto* status_cmd = app.add_subcommand("status", "Nodes and topics of a running pipeline (JSON)");
@@ -55,7 +75,13 @@ int main(int argc, char** argv) {
   if (*run_cmd) return run_pipeline(run);
   if (*validate_cmd) return validate(validate_config, validate_overrides);
   if (*plugins_cmd) return list_plugins(plugins);
+  if (*swap_cmd && !remote_swap_options.kernel.empty()) {
+    remote_swap_options.node = swap.node;
+    remote_swap_options.plugin = swap.plugin;
+    return remote_swap(remote_swap_options);
+  }
   if (*swap_cmd) return swap_plugin(swap);
+  if (*monitor_cmd) return monitor(monitor_options);
   if (*status_cmd) return status(status_pipeline);
   return print_version();
 }

@@ -86,8 +86,11 @@ Status NodeInstance::step(const char* what, plr_status (*hook)(void*, char*, std
 }
 
 Status NodeInstance::configure() {
-  return step("configure", library_->descriptor().node.configure, InstanceState::Unconfigured,
-              InstanceState::Configured);
+  auto s = step("configure", library_->descriptor().node.configure, InstanceState::Unconfigured,
+                InstanceState::Configured);
+  // A failed configure may have registered some things: forget them, so a retry starts clean.
+  if (!s && s.error().code != PLR_ERR_STATE) bus_.remove_endpoint(this);
+  return s;
 }
 Status NodeInstance::activate() {
   return step("activate", library_->descriptor().node.activate, InstanceState::Configured,
@@ -101,8 +104,11 @@ Status NodeInstance::deactivate() {
 }
 Status NodeInstance::cleanup() {
   if (state_ == InstanceState::Unconfigured) return {};
-  return step("cleanup", library_->descriptor().node.cleanup, InstanceState::Configured,
-              InstanceState::Unconfigured);
+  auto s = step("cleanup", library_->descriptor().node.cleanup, InstanceState::Configured,
+                InstanceState::Unconfigured);
+  // What configure registered goes with it, so the node can be configured again.
+  if (s) bus_.remove_endpoint(this);
+  return s;
 }
 
 std::string NodeInstance::resolve(const char* name) const {

@@ -123,7 +123,11 @@ class Future {
     std::unique_lock lock(state_->m);
     return state_->cv.wait_for(lock, d, [&] { return state_->done; });
   }
-  void cancel() const { state_->api->cancel(state_->api->ctx, state_->call); }
+  // Cancels a call still in flight; a no-op once it completed or was refused.
+  void cancel() const {
+    if (!state_ || state_->api == nullptr || ready()) return;
+    state_->api->cancel(state_->api->ctx, state_->call);
+  }
 
  private:
   friend class Context;

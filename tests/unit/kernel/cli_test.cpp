@@ -102,6 +102,46 @@ TEST(Cli, CtrlCStopsCleanlyAndSwapWorksOnTheRunningPipeline) {
   EXPECT_NE(text.find("saw "), std::string::npos) << "doubler deactivated cleanly:\n" << text;
 }
 
+TEST(Cli, SighupReloadsTheConfigAndSwapsChangedPlugins) {
+  const std::string head =
+      "pipeline: cli_reload_test\nplugin_paths: [" PLR_TEST_PLUGIN_DIR "]\nnodes:\n";
+  const std::string counter = "  counter: {plugin: demo_counter, params: {period_ms: 5}}\n";
+  const auto path =
+      temp_config("cli_reload.yaml",
+                  head + "  doubler: {plugin: demo_doubler, params: {factor: 2}}\n" + counter);
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    std::freopen("/dev/null", "w", stdout);
+    std::freopen("/dev/null", "w", stderr);
+    execl(kPlr.c_str(), "plr", "run", path.c_str(), nullptr);
+    _exit(127);
+  }
+  std::string out;
+  int rc = 1;
+  for (int i = 0; i < 100 && rc != 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    out.clear();
+    rc = run_command(kPlr + " status --pipeline cli_reload_test", &out);
+  }
+  ASSERT_EQ(rc, 0) << out;
+  temp_config("cli_reload.yaml",
+              head + "  doubler: {plugin: test_probe, params: {factor: 2}}\n" + counter);
+  kill(pid, SIGHUP);
+  bool swapped = false;
+  for (int i = 0; i < 100 && !swapped; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    out.clear();
+    run_command(kPlr + " status --pipeline cli_reload_test", &out);
+    swapped = out.find("\"plugin\": \"test_probe\"") != std::string::npos;
+  }
+  EXPECT_TRUE(swapped) << out;
+  kill(pid, SIGINT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+}
+
 TEST(Cli, PluginsListsTheDemoPluginsAsJson) {
   std::string out;
   ASSERT_EQ(run_command(kPlr + " plugins --json", &out), 0) << out;

@@ -81,6 +81,12 @@ TEST(Lifecycle, OutOfOrderStepsAreRefused) {
   EXPECT_TRUE(node.deactivate()) << "deactivate is idempotent";
   ASSERT_TRUE(node.cleanup());
   EXPECT_EQ(node.state(), InstanceState::Unconfigured);
+  // Its registrations went with the cleanup, so it configures again.
+  ASSERT_TRUE(node.configure());
+  ASSERT_TRUE(node.activate());
+  EXPECT_EQ(bus.services().at(0).providers, std::vector<std::string>{"n"});
+  ASSERT_TRUE(node.deactivate());
+  ASSERT_TRUE(node.cleanup());
 }
 
 TEST(Lifecycle, BadParametersAreRefusedWithTheKey) {
