@@ -82,7 +82,9 @@ SceneAnalysis analyse(const World& world, const ObservationParams& p) {
   }
   for (std::size_t i = 0; i < n; ++i) {
     const double cx = (b[i].x0 + b[i].x1) / 2;
-    if (!is_wall[i] && (a.wall.empty() || cx < a.wall_near_x)) {
+    // Pile boxes level with the first wall (a column picked down to the
+    // floor) are reachable too; those behind it are not.
+    if (!is_wall[i] && (a.wall.empty() || cx < a.wall_near_x + p.wall_depth)) {
       front_pile.push_back(i);
       a.front_pile.push_back(boxes[i].id);
     }

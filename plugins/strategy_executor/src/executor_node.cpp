@@ -338,6 +338,26 @@ class ExecutorNode : public plr::Node {
     return out;
   }
 
+  // Free-space arm moves (M1, M2) go to joint goals from the arm's closed-form
+  // IK, nearest solution first: the lattice reaches a joint goal far sooner
+  // than it snaps onto a pose. A goal in collision tries the next solution.
+  PlanResult plan_goal(PlanMode mode, const Observed& w, const Goal& goal,
+                       const std::vector<std::uint32_t>& leave_out, ActionRun& run) {
+    if (!goal.pose || (mode != PlanMode::kArm && mode != PlanMode::kArmBase))
+      return plan_once(mode, w, goal, leave_out, run);
+    const auto solutions = robot_.armIk(*goal.pose, w.q);
+    PlanResult p;
+    p.message = "no arm IK solution for the goal pose";
+    for (std::size_t i = 0; i < solutions.size() && i < 3; ++i) {
+      Goal g;
+      for (int j : {sim::kArm1, sim::kArm2, sim::kArm3, sim::kArm4})
+        g.joints.emplace_back(j, solutions[i][j]);
+      p = plan_once(mode, w, g, leave_out, run);
+      if (p.ok || last_status_ != msg::PlanStatus::GoalInvalid) break;
+    }
+    return p;
+  }
+
   // Runs a trajectory; returns the outcome, or nullopt when the simulator refused it.
   std::optional<Message<msg::ExecuteOutcome>> execute(const msg::TrajectoryT& trajectory,
                                                       Suction before, Suction after,
@@ -381,13 +401,13 @@ class ExecutorNode : public plr::Node {
       if (there && before == Suction::Keep && after == Suction::Keep) return true;
     }
     last_status_ = msg::PlanStatus::Solved;
-    PlanResult p = plan_once(mode, w, goal, leave_out, run);
+    PlanResult p = plan_goal(mode, w, goal, leave_out, run);
     if (!p.ok && last_status_ == msg::PlanStatus::StartInvalid) {
       // The planner did not escape by itself: ask for M6 explicitly, then retry.
       PlanResult escape = plan_once(PlanMode::kEscape, w, {}, {}, run);
       if (escape.ok && execute(*escape.trajectory, Suction::Keep, Suction::Keep, run)) {
         w = observe();
-        p = plan_once(mode, w, goal, leave_out, run);
+        p = plan_goal(mode, w, goal, leave_out, run);
       }
     }
     if (!p.ok) {
@@ -432,6 +452,9 @@ class ExecutorNode : public plr::Node {
           !step("nose down (lifted)", PlanMode::kNose, nose(nose_down_, 0.15), Suction::Keep,
                 Suction::Keep, run))
         continue;
+      log().debug("{}: box {} from the {}, plate at ({:.2f}, {:.2f}, {:.2f})", action_name_, c.box,
+                  c.from_top ? "top" : "front", c.grasp.position.x(), c.grasp.position.y(),
+                  c.grasp.position.z());
       if (!step("pre-grasp", PlanMode::kArmBase, pose(c.pregrasp), Suction::Keep, Suction::On, run))
         continue;
       if (!step("approach", PlanMode::kArmCartesian, pose(c.grasp), Suction::Keep, Suction::On,
@@ -453,7 +476,8 @@ class ExecutorNode : public plr::Node {
         run.failed_grasp = true;
         log().info("{}: box {} dropped while retracting", action_name_, chosen->box);
       }
-      if (const auto drop = dropoff_target(w.world, w.held, robot_, geometry_, w.q))
+      if (const auto drop =
+              dropoff_target(w.world, w.held, robot_, geometry_, w.q, chosen->from_top))
         step("drop-off", PlanMode::kArm, pose(*drop), Suction::Keep, Suction::Off, run);
       else
         log().warn("{}: no reachable drop-off pose", action_name_);

@@ -9,7 +9,8 @@ namespace plr::executor {
 
 namespace {
 
-constexpr double kMargin = 0.03;  // m, footprint shrink and clearances
+constexpr double kMargin = 0.03;     // m, footprint shrink and clearances
+constexpr double kClearance = 0.02;  // m, the plate's distance to boxes it must not touch
 
 bool overlap(double a0, double a1, double b0, double b1) {
   return a0 + kMargin < b1 - kMargin && b0 + kMargin < a1 - kMargin;
@@ -54,14 +55,6 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
   };
   std::vector<Ranked> ranked;
   for (auto i : members) {
-    // The front face must be free: nothing in front of it overlapping in y and z.
-    bool hidden = false;
-    for (std::size_t j = 0; j < world.boxes.size() && !hidden; ++j) {
-      hidden = j != i && b[j].x1 <= b[i].x0 + 0.05 && b[j].x0 < b[i].x0 &&
-               overlap(b[i].y0, b[i].y1, b[j].y0, b[j].y1) &&
-               overlap(b[i].z0, b[i].z1, b[j].z0, b[j].z1);
-    }
-    if (hidden) continue;
     const auto& box = world.boxes[i];
     const bool is_wall = wall.count(box.id) > 0;
     const double y = box.pose.translation().y();
@@ -70,25 +63,69 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     const int mismatches =
         (cls != sim::height(action)) + (side_of(y, world, obs) != sim::side(action));
 
-    PickCandidate c;
-    c.box = box.id;
-    c.matches = mismatches == 0;
     // Plate centred on the face, kept inside the trailer and off the floor.
     const double ylim = world.trailer.width / 2 - g.plate_half_width - kMargin;
     const double zc = std::clamp((b[i].z0 + b[i].z1) / 2, g.plate_half_height + kMargin,
                                  world.trailer.height - g.plate_half_height - kMargin);
     const Eigen::Vector3d face(b[i].x0, std::clamp(y, -ylim, ylim), zc);
-    c.grasp = {face - Eigen::Vector3d(g.grasp_gap, 0, 0), 0.0};
-    c.pregrasp = {face - Eigen::Vector3d(g.pregrasp_distance, 0, 0), 0.0};
-    c.retract = {c.pregrasp.position + Eigen::Vector3d(0, 0, g.retract_lift), 0.0};
     // Base: the arm at its preferred reach, the lowered nose short of every box.
     const double by_reach = face.x() - g.pick_reach + g.arm_yaw_offset;
     const double by_nose = nearest - g.conveyor_length - g.nose_clearance;
-    c.base_x = std::min(by_reach, by_nose);
+    // A plate low enough to meet the lowered nose stays ahead of its tip.
+    const double by_plate =
+        face.z() - g.plate_half_height < g.nose_top
+            ? face.x() - g.pregrasp_distance - g.conveyor_length - g.nose_clearance
+            : by_reach;
+    const double base_x = std::min({by_reach, by_nose, by_plate});
+    const double yaw = std::atan2(face.y(), face.x() - (base_x - g.arm_yaw_offset));
     sim::Config at = current;
-    at[sim::kBaseX] = c.base_x;
-    if (!reachable(robot, c.grasp, at) || !reachable(robot, c.pregrasp, at)) continue;
-    ranked.push_back({c, mismatches, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
+    at[sim::kBaseX] = base_x;
+    // The plate is wider than many boxes: the corridor it moves through to
+    // the face (or down onto the top) must be clear of every other box.
+    const double pw = g.plate_half_width, ph = g.plate_half_height;
+    const double top_x = (b[i].x0 + b[i].x1) / 2;
+    // Facing down, the plate turns with the arm's yaw: its footprint's bounds.
+    const double top_yaw = std::abs(std::atan2(y, top_x - (base_x - g.arm_yaw_offset)));
+    const double hx = ph * std::cos(top_yaw) + pw * std::sin(top_yaw);
+    const double hy = pw * std::cos(top_yaw) + ph * std::sin(top_yaw);
+    auto near = [](double a0, double a1, double b0, double b1) {
+      return a0 - kClearance < b1 && b0 < a1 + kClearance;
+    };
+    bool face_free = true, top_free = true;
+    for (std::size_t j = 0; j < world.boxes.size(); ++j) {
+      if (j == i) continue;
+      if (near(face.x() - g.pregrasp_distance, face.x() - kMargin, b[j].x0, b[j].x1) &&
+          near(face.y() - pw, face.y() + pw, b[j].y0, b[j].y1) &&
+          near(face.z() - ph, face.z() + ph, b[j].z0, b[j].z1))
+        face_free = false;
+      if (near(b[i].z1 + kMargin, b[i].z1 + g.pregrasp_distance, b[j].z0, b[j].z1) &&
+          near(top_x - hx, top_x + hx, b[j].x0, b[j].x1) && near(y - hy, y + hy, b[j].y0, b[j].y1))
+        top_free = false;
+    }
+    auto add = [&](bool from_top) {
+      PickCandidate c;
+      c.box = box.id;
+      c.matches = mismatches == 0;
+      c.base_x = base_x;
+      c.from_top = from_top;
+      if (from_top) {
+        const Eigen::Vector3d top((b[i].x0 + b[i].x1) / 2, y, b[i].z1);
+        c.grasp = {top + Eigen::Vector3d(0, 0, g.grasp_gap), M_PI / 2};
+        c.pregrasp = {top + Eigen::Vector3d(0, 0, g.pregrasp_distance), M_PI / 2};
+        c.retract = {c.pregrasp.position + Eigen::Vector3d(0, 0, g.retract_lift), M_PI / 2};
+      } else {
+        // Off the arm's axis the plate meets the face at an angle: keep its near edge off it.
+        const double gap = g.grasp_gap + g.plate_half_width * std::sin(std::abs(yaw));
+        c.grasp = {face - Eigen::Vector3d(gap, 0, 0), 0.0};
+        c.pregrasp = {face - Eigen::Vector3d(g.pregrasp_distance, 0, 0), 0.0};
+        c.retract = {c.pregrasp.position + Eigen::Vector3d(0, 0, g.retract_lift), 0.0};
+      }
+      if (!reachable(robot, c.grasp, at) || !reachable(robot, c.pregrasp, at)) return;
+      ranked.push_back(
+          {c, mismatches, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
+    };
+    if (face_free && std::abs(yaw) <= g.max_face_yaw) add(false);
+    if (top_free) add(true);
   }
   std::stable_sort(ranked.begin(), ranked.end(), [](const Ranked& a, const Ranked& b) {
     if (a.mismatches != b.mismatches) return a.mismatches < b.mismatches;
@@ -105,8 +142,9 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
 std::optional<sim::PlateTarget> dropoff_target(const sim::World& world,
                                                const std::vector<std::uint32_t>& held,
                                                const sim::RobotModel& robot, const Geometry& g,
-                                               const sim::Config& at) {
-  // The held load sticks out of the plate along +x by its depth.
+                                               const sim::Config& at, bool from_top) {
+  // The held load sticks out of the plate by its depth (front grasp) or
+  // hangs below it by its height (top grasp).
   double depth = 0.3, height = 0.3;
   for (const auto& box : world.boxes) {
     if (std::find(held.begin(), held.end(), box.id) == held.end()) continue;
@@ -120,7 +158,10 @@ std::optional<sim::PlateTarget> dropoff_target(const sim::World& world,
   for (double extra_z : {0.0, 0.2, 0.4}) {
     for (double ahead = g.dropoff_ahead; ahead <= g.conveyor_length - 0.05; ahead += 0.1) {
       sim::PlateTarget t;
-      t.position = {base_x + ahead - depth / 2, 0.0, g.dropoff_bottom + extra_z + height / 2};
+      if (from_top)
+        t = {{base_x + ahead, 0.0, g.dropoff_bottom + extra_z + height + g.grasp_gap}, M_PI / 2};
+      else
+        t = {{base_x + ahead - depth / 2, 0.0, g.dropoff_bottom + extra_z + height / 2}, 0.0};
       if (reachable(robot, t, at)) return t;
     }
   }

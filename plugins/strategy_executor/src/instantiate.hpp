@@ -28,13 +28,18 @@ struct Geometry {
   double dropoff_bottom = 0.8;      // held box bottom over the conveyor (clears the nose at home)
   double dropoff_ahead = 0.5;       // held box centre ahead of base_x
   double sweep_overshoot = 0.1;     // scoop tip past the pile's far end
+  // The plate's yaw follows its position (4-DOF arm), so a front face off the
+  // arm's axis is seen at an angle; beyond this the box is taken from the top.
+  double max_face_yaw = 0.15;  // rad
+  double nose_top = 0.25;      // m, top of the lowered nose and conveyor
 };
 
 struct PickCandidate {
   std::uint32_t box = 0;
   double base_x = 0;
   sim::PlateTarget pregrasp, grasp, retract;
-  bool matches = false;  // the box has the action's height class and side
+  bool from_top = false;  // plate facing down on the top face, else on the front face
+  bool matches = false;   // the box has the action's height class and side
 };
 
 // Pick points for Pick(height, side), best first: boxes of the structure in
@@ -46,12 +51,13 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
                                            const sim::RobotModel& robot, const Geometry& g,
                                            const sim::Config& current, std::size_t max_count);
 
-// Where the plate releases held boxes over the nose, for a base at base_x;
-// the first reachable of a few heights. nullopt when none is.
+// Where the plate releases held boxes over the nose, for a base at base_x,
+// with the plate facing forward (front grasp) or down (top grasp); the first
+// reachable of a few places. nullopt when none is.
 std::optional<sim::PlateTarget> dropoff_target(const sim::World& world,
                                                const std::vector<std::uint32_t>& held,
                                                const sim::RobotModel& robot, const Geometry& g,
-                                               const sim::Config& at);
+                                               const sim::Config& at, bool from_top);
 
 struct SweepPlan {
   double start_base_x = 0;           // behind the pile, nose lowered there

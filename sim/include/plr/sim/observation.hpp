@@ -6,7 +6,8 @@
 // its footprint, itself included) tops out below h_pile belongs to the pile,
 // otherwise to a wall. The first wall is the wall boxes whose front face lies
 // within wall_depth of the nearest wall face; the pile that counts is the one
-// in front of it. Sides follow the frame of world.hpp: y > 0 is left.
+// in front of it or level with it (centres before wall face + wall_depth). Sides follow the frame
+// of world.hpp: y > 0 is left.
 #pragma once
 
 #include <plr/msg/world_generated.h>
@@ -43,7 +44,7 @@ Bounds bounds(const Box& box);
 struct SceneAnalysis {
   std::vector<std::uint32_t> pile;        // every pile box
   std::vector<std::uint32_t> wall;        // every wall box
-  std::vector<std::uint32_t> front_pile;  // pile boxes in front of the first wall
+  std::vector<std::uint32_t> front_pile;  // pile boxes in front of / level with the first wall
   std::vector<std::uint32_t> first_wall;  // the wall boxes of the first wall
 
   double pile_near_x = 0;  // front of the front pile (smallest x)
