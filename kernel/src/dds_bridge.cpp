@@ -171,6 +171,10 @@ Expected<std::string> cyclone_config_xml(const DdsConfig& dds) {
         lib, file("identity_ca.pem"), file("identity.pem"), file("identity_key.pem"),
         file("permissions_ca.pem"), file("governance.p7s"), file("permissions.p7s"));
   }
+  // Cyclone's own trace, for debugging discovery or security: PLR_DDS_TRACE=security,discovery
+  if (const char* trace = std::getenv("PLR_DDS_TRACE"))
+    xml += fmt::format("<Tracing><Category>{}</Category><OutputFile>stderr</OutputFile></Tracing>",
+                       xml_escape(trace));
   xml += "</Domain></CycloneDDS>";
   return xml;
 }

@@ -59,8 +59,8 @@ int main(int argc, char** argv) {
   dds_options(monitor_cmd, monitor_options.dds);
   monitor_cmd->add_flag("--once", monitor_options.once, "Print once and exit");
   monitor_cmd->add_flag("--json", monitor_options.json, "JSON instead of a table");
-  monitor_cmd->add_option("--wait", monitor_options.wait_s,
-                          "--once: longest wait for kernels, seconds")
+  monitor_cmd
+      ->add_option("--wait", monitor_options.wait_s, "--once: longest wait for kernels, seconds")
       ->capture_default_str();
 
   std::string status_pipeline;

@@ -212,7 +212,7 @@ int monitor(const MonitorOptions& options) {
     if (options.once) {
       // Done when every kernel that announced itself has sent telemetry too,
       // after a moment for discovery; or at the deadline.
-      bool complete = now - start > 1200ms;
+      bool complete = now - start > 2s;
       for (const auto& [id, t] : seen) complete = complete && kernels.count(id);
       if (complete || now - start > std::chrono::duration<double>(options.wait_s)) break;
     } else if (now >= next_draw) {

@@ -1,0 +1,321 @@
+// bench_remote: round trip of a service call between two kernels over Cyclone
+// DDS (this process: bus + DDS bridge + caller; a child `bench_remote --serve`:
+// bus + DDS bridge + echo provider), on loopback, beside Cyclone's ddsperf
+// ping/pong between the same two places (two processes, same Cyclone config).
+// Nothing is pinned: both sides float over the machine's cores alike.
+//   bench_remote [--quick] [--json]
+#include "bus.hpp"
+#include "dds_bridge.hpp"
+
+#include <plr/message.hpp>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <iostream>
+#include <optional>
+#include <regex>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace plr::kernel {
+namespace {
+
+using namespace std::chrono_literals;
+using Clock = std::chrono::steady_clock;
+constexpr std::uint64_t kEchoType = fnv1a("plr.bench.Echo");
+
+class Node final : public Endpoint {
+ public:
+  explicit Node(std::string name) : name_(std::move(name)), executor_(name_) {}
+  Executor& executor() override { return executor_; }
+  const std::string& endpoint_name() const override { return name_; }
+
+ private:
+  std::string name_;
+  Executor executor_;
+};
+
+Config bench_config(int domain, bool server) {
+  Config c;
+  c.pipeline = server ? "bench_server" : "bench_client";
+  c.dds.enabled = true;
+  c.dds.domain = domain;
+  (server ? c.dds.export_patterns : c.dds.import_patterns) = {"echo"};
+  return c;
+}
+
+int serve(int domain) {
+  const Config config = bench_config(domain, true);
+  Bus bus([&](const std::string& t) { return config.topic(t); });
+  auto bridge = DdsBridge::create(
+      bus, config, make_kernel_id(config.pipeline), [] { return std::string("{}"); },
+      [](const nlohmann::json&) -> Status { return make_error(PLR_ERR_STATE, "bench"); });
+  if (!bridge) {
+    std::cerr << bridge.error().message << "\n";
+    return 1;
+  }
+  bus.attach(bridge->get());
+  Node echo("echo");
+  bus.set_live(&echo, true);
+  struct Ctx {
+    Bus* bus;
+  } ctx{&bus};
+  (void)bus.provide(
+      &echo, "echo", kEchoType, kEchoType,
+      [](void* user, const plr_msg* req, std::uint64_t token) {
+        const auto v = msg_view(req);
+        (void)static_cast<Ctx*>(user)->bus->respond(token, PLR_OK,
+                                                    msg_copy(v.data, v.size, kEchoType, 1, 0), "");
+      },
+      &ctx);
+  // Until the parent goes.
+  while (::getppid() != 1) std::this_thread::sleep_for(100ms);
+  bus.remove_endpoint(&echo);
+  bus.detach(bridge->get());
+  return 0;
+}
+
+struct Figures {
+  double median_us = 0, mean_us = 0, p99_us = 0;
+  std::size_t count = 0;
+};
+
+Figures summarize(std::vector<double> v) {
+  Figures f;
+  if (v.empty()) return f;
+  std::sort(v.begin(), v.end());
+  f.count = v.size();
+  f.median_us = v[v.size() / 2];
+  f.p99_us = v[std::min(v.size() - 1, v.size() * 99 / 100)];
+  double sum = 0;
+  for (double x : v) sum += x;
+  f.mean_us = sum / v.size();
+  return f;
+}
+
+class Client {
+ public:
+  explicit Client(int domain)
+      : config_(bench_config(domain, false)),
+        bus_([this](const std::string& t) { return config_.topic(t); }),
+        caller_("caller") {
+    bus_.set_live(&caller_, true);
+  }
+  ~Client() {
+    bus_.remove_endpoint(&caller_);
+    if (bridge_) bus_.detach(bridge_.get());
+  }
+  std::string open() {
+    auto b = DdsBridge::create(
+        bus_, config_, make_kernel_id(config_.pipeline), [] { return std::string("{}"); },
+        [](const nlohmann::json&) -> Status { return make_error(PLR_ERR_STATE, "bench"); });
+    if (!b) return b.error().message;
+    bridge_ = std::move(*b);
+    bus_.attach(bridge_.get());
+    return "";
+  }
+  // One round trip; microseconds, or nothing when the call failed.
+  std::optional<double> call(const std::vector<std::uint8_t>& payload) {
+    done_.store(0);
+    const auto t0 = Clock::now();
+    auto s = bus_.call(&caller_, "echo", kEchoType,
+                       msg_copy(payload.data(), payload.size(), kEchoType, 1, 0), 2s,
+                       &Client::on_reply, this, nullptr);
+    if (!s) return std::nullopt;
+    done_.wait(0);
+    if (status_ != PLR_OK || reply_size_ != payload.size()) return std::nullopt;
+    return std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+  }
+
+ private:
+  static void on_reply(void* user, plr_status status, const plr_msg* reply, const char*) {
+    auto* self = static_cast<Client*>(user);
+    self->status_ = status;
+    self->reply_size_ = reply ? msg_view(reply).size : 0;
+    self->done_.store(1);
+    self->done_.notify_one();
+  }
+
+  Config config_;
+  Bus bus_;
+  Node caller_;
+  std::unique_ptr<DdsBridge> bridge_;
+  std::atomic<int> done_{0};
+  plr_status status_ = PLR_OK;
+  std::size_t reply_size_ = 0;
+};
+
+pid_t spawn(const std::vector<std::string>& argv, const std::string& uri, const char* out) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (!uri.empty()) ::setenv("CYCLONEDDS_URI", uri.c_str(), 1);
+    if (out) std::freopen(out, "w", stdout);
+    std::vector<char*> args;
+    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    ::execvp(args[0], args.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+void finish(pid_t pid) {
+  ::kill(pid, SIGTERM);
+  ::waitpid(pid, nullptr, 0);
+}
+
+// ddsperf's own round trip: its last "size N mean Xus min .. 50% Yus .. 99% Zus" line.
+std::optional<Figures> ddsperf(int domain, const std::string& uri, std::size_t size, int seconds) {
+  const pid_t pong = spawn({"ddsperf", "-i", std::to_string(domain), "pong"}, uri, "/dev/null");
+  const std::string out_file = fmt::format("/tmp/bench_remote_ddsperf_{}.txt", ::getpid());
+  const pid_t ping = spawn({"ddsperf", "-i", std::to_string(domain), "-D",
+                            std::to_string(seconds + 2), "ping", "size", std::to_string(size)},
+                           uri, out_file.c_str());
+  ::waitpid(ping, nullptr, 0);
+  finish(pong);
+  FILE* f = std::fopen(out_file.c_str(), "r");
+  if (!f) return std::nullopt;
+  std::string text;
+  char buf[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) text.append(buf, n);
+  std::fclose(f);
+  std::remove(out_file.c_str());
+  static const std::regex line(
+      R"(size (\d+) mean ([0-9.]+)us min [0-9.]+us 50% ([0-9.]+)us 90% [0-9.]+us 99% ([0-9.]+)us max [0-9.]+us cnt (\d+))");
+  std::optional<Figures> last;
+  for (std::sregex_iterator it(text.begin(), text.end(), line), end; it != end; ++it) {
+    Figures fig;
+    fig.mean_us = std::stod((*it)[2]);
+    fig.median_us = std::stod((*it)[3]);
+    fig.p99_us = std::stod((*it)[4]);
+    fig.count = std::stoul((*it)[5]);
+    last = fig;
+  }
+  return last;
+}
+
+int bench(bool quick, bool json) {
+  const int domain = 150 + ::getpid() % 50;
+  const int seconds = quick ? 1 : 3;
+  const std::vector<std::size_t> sizes{64, 64 * 1024};
+  DdsConfig dds;
+  dds.domain = domain;
+  auto xml = cyclone_config_xml(dds);
+  if (!xml) {
+    std::cerr << xml.error().message << "\n";
+    return 1;
+  }
+
+  nlohmann::json results = nlohmann::json::array();
+  const pid_t server = spawn({"/proc/self/exe", "--serve", std::to_string(domain)}, "", nullptr);
+  {
+    Client client(domain);
+    if (auto e = client.open(); !e.empty()) {
+      std::cerr << e << "\n";
+      finish(server);
+      return 1;
+    }
+    // Discovery first: until the echo service answers.
+    const auto ready_by = Clock::now() + 20s;
+    while (!client.call(std::vector<std::uint8_t>(64, 1)) && Clock::now() < ready_by)
+      std::this_thread::sleep_for(50ms);
+    for (auto size : sizes) {
+      std::vector<std::uint8_t> payload(size, 0x5a);
+      for (int i = 0; i < 200; ++i) (void)client.call(payload);  // warm-up
+      std::vector<double> rtt;
+      std::size_t failed = 0;
+      const auto until = Clock::now() + std::chrono::seconds(seconds);
+      while (Clock::now() < until) {
+        if (auto us = client.call(payload))
+          rtt.push_back(*us);
+        else
+          ++failed;
+      }
+      const auto f = summarize(rtt);
+      results.push_back({{"size", size},
+                         {"plr",
+                          {{"median_us", f.median_us},
+                           {"mean_us", f.mean_us},
+                           {"p99_us", f.p99_us},
+                           {"count", f.count},
+                           {"failed", failed}}}});
+    }
+  }
+  finish(server);
+
+  for (auto& r : results) {
+    const auto size = r["size"].get<std::size_t>();
+    if (auto f = ddsperf(domain + 50, *xml, size, seconds)) {
+      r["ddsperf"] = {{"median_us", f->median_us},
+                      {"mean_us", f->mean_us},
+                      {"p99_us", f->p99_us},
+                      {"count", f->count}};
+      r["ratio_median"] = r["plr"]["median_us"].get<double>() / f->median_us;
+    } else {
+      r["ddsperf"] = nullptr;
+    }
+  }
+
+  if (json) {
+    std::cout << nlohmann::json{{"bench", "remote"},
+                                {"transport", "cyclone dds 0.10.2, loopback, 2 processes"},
+                                {"pinning", "none"},
+                                {"seconds_per_size", seconds},
+                                {"results", results}}
+                     .dump(2)
+              << "\n";
+    return 0;
+  }
+  std::cout << fmt::format(
+      "Service round trip over Cyclone DDS, loopback, two processes, {} s per size, not pinned\n"
+      "plr = caller node -> bus -> DDS bridge ~> DDS bridge -> bus -> echo node and back;\n"
+      "ddsperf = Cyclone's own ping/pong (same Cyclone config).\n\n",
+      seconds);
+  std::cout << fmt::format("{:>8} | {:>10} {:>10} {:>10} | {:>10} {:>10} {:>10} | {:>8}\n", "size",
+                           "plr p50", "plr mean", "plr p99", "dds p50", "dds mean", "dds p99",
+                           "p50 x");
+  for (const auto& r : results) {
+    const auto& p = r["plr"];
+    const auto& d = r["ddsperf"];
+    std::cout << fmt::format(
+        "{:>8} | {:>8.1f}us {:>8.1f}us {:>8.1f}us | {:>8}   {:>8}   {:>8}   | {:>8}\n",
+        r["size"].get<std::size_t>(), p["median_us"].get<double>(), p["mean_us"].get<double>(),
+        p["p99_us"].get<double>(),
+        d.is_null() ? "-" : fmt::format("{:.1f}us", d["median_us"].get<double>()),
+        d.is_null() ? "-" : fmt::format("{:.1f}us", d["mean_us"].get<double>()),
+        d.is_null() ? "-" : fmt::format("{:.1f}us", d["p99_us"].get<double>()),
+        r.contains("ratio_median") ? fmt::format("{:.2f}", r["ratio_median"].get<double>()) : "-");
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace plr::kernel
+
+int main(int argc, char** argv) {
+  bool quick = false, json = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--serve" && i + 1 < argc) return plr::kernel::serve(std::atoi(argv[i + 1]));
+    if (a == "--quick")
+      quick = true;
+    else if (a == "--json")
+      json = true;
+    else {
+      std::cerr << "usage: bench_remote [--quick] [--json]\n";
+      return 2;
+    }
+  }
+  return plr::kernel::bench(quick, json);
+}
