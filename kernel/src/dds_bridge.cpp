@@ -198,6 +198,8 @@ Expected<dds_entity_t> open_participant(const DdsConfig& dds) {
 }
 
 struct DdsBridge::Reader {
+  DdsBridge* bridge = nullptr;
+  std::mutex m;  // Cyclone may call its listener from several receive threads
   ReaderKind kind = kDataReader;
   dds_entity_t reader = 0;
   std::string topic;          // data readers: the bus topic
@@ -243,11 +245,6 @@ Status DdsBridge::open() {
   auto p = open_participant(config_.dds);
   if (!p) return p.error();
   participant_ = *p;
-  waitset_ = dds_create_waitset(participant_);
-  wake_ = dds_create_guardcondition(participant_);
-  if (waitset_ < 0 || wake_ < 0 || dds_waitset_attach(waitset_, wake_, 0) < 0)
-    return make_error(PLR_ERR_INTERNAL, "dds: cannot create a waitset");
-
   const auto topic = [&](const char* name) {
     return dds_create_topic(participant_, &plr_dds_Envelope_desc, name, nullptr, nullptr);
   };
@@ -279,7 +276,6 @@ Status DdsBridge::open() {
                         fmt::format("dds: cannot create the endpoints of '{}'", plane.name));
   }
   bus_.set_live(this, true);
-  receiver_ = std::thread([this] { receive_loop(); });
   heartbeat_ = std::thread([this] { heartbeat_loop(); });
   spdlog::info("dds: kernel '{}' on domain {} ({})", kernel_id_, config_.dds.domain,
                fmt::join(config_.dds.interfaces, ", "));
@@ -289,9 +285,9 @@ Status DdsBridge::open() {
 DdsBridge::~DdsBridge() {
   stop_ = true;
   stop_cv_.notify_all();
-  if (wake_ > 0) dds_set_guardcondition(wake_, true);
   if (heartbeat_.joinable()) heartbeat_.join();
-  if (receiver_.joinable()) receiver_.join();
+  // Deleting a reader waits for its listener to return; none runs after this.
+  for (const auto& r : readers_) dds_delete(r->reader);
   // Calls to us fail, calls we made for remote kernels complete (their
   // error replies still go out: the participant is alive until the end).
   bus_.remove_endpoint(this);
@@ -303,20 +299,23 @@ DdsBridge::~DdsBridge() {
 DdsBridge::Reader* DdsBridge::add_reader(dds_entity_t topic, const dds_qos_t* qos, int kind,
                                          std::string bus_topic, std::uint64_t type_id) {
   auto r = std::make_unique<Reader>();
+  r->bridge = this;
   r->kind = static_cast<ReaderKind>(kind);
   r->topic = std::move(bus_topic);
   r->type_id = type_id;
   r->max_size = config_.topic(r->topic).slot_size;
-  r->reader = dds_create_reader(participant_, topic, qos, nullptr);
-  if (r->reader < 0) return nullptr;
-  const dds_entity_t cond = dds_create_readcondition(r->reader, DDS_ANY_STATE);
+  // Samples are taken in Cyclone's receive thread: no hand-off to a thread of ours.
   Reader* raw = r.get();
-  {
-    std::lock_guard lock(m_);
-    readers_.push_back(std::move(r));
-  }
-  if (cond < 0 || dds_waitset_attach(waitset_, cond, reinterpret_cast<dds_attach_t>(raw)) < 0)
-    return nullptr;
+  dds_listener_t* listener = dds_create_listener(raw);
+  dds_lset_data_available(listener, [](dds_entity_t, void* arg) {
+    auto* reader = static_cast<Reader*>(arg);
+    if (!reader->bridge->stop_) reader->bridge->take(reader);
+  });
+  r->reader = dds_create_reader(participant_, topic, qos, listener);
+  dds_delete_listener(listener);
+  if (r->reader < 0) return nullptr;
+  std::lock_guard lock(m_);
+  readers_.push_back(std::move(r));
   return raw;
 }
 
@@ -375,21 +374,11 @@ void DdsBridge::import_topic(const std::string& topic, std::uint64_t type_id) {
   if (r == nullptr) spdlog::error("dds: cannot import topic '{}'", topic);
 }
 
-void DdsBridge::receive_loop() {
-  std::vector<dds_attach_t> triggered(64);
-  while (!stop_) {
-    const dds_return_t n =
-        dds_waitset_wait(waitset_, triggered.data(), triggered.size(), DDS_MSECS(100));
-    for (dds_return_t i = 0; i < n && i < static_cast<dds_return_t>(triggered.size()); ++i)
-      if (triggered[i] != 0) take(reinterpret_cast<Reader*>(triggered[i]));
-    expire_peers();
-  }
-}
-
 void DdsBridge::take(Reader* r) {
   constexpr std::size_t kBatch = 32;
   void* samples[kBatch];
   dds_sample_info_t infos[kBatch];
+  std::lock_guard lock(r->m);
   for (;;) {
     samples[0] = nullptr;  // loaned samples: no copy out of the reader cache
     const dds_return_t n = dds_take(r->reader, samples, infos, kBatch, kBatch);
@@ -727,6 +716,7 @@ void DdsBridge::heartbeat_loop() {
       write(telemetry_writer_, "", "telemetry", EnvelopeKind::kTelemetry, 0, 0, 0, 0,
             reinterpret_cast<const std::uint8_t*>(d.data()), d.size());
     }
+    expire_peers();
     stop_cv_.wait_for(lock, 250ms, [this] { return stop_.load(); });
   }
 }

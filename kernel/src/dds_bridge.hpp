@@ -119,7 +119,6 @@ class DdsBridge final : public Endpoint, public Link {
   Status open();
   void export_topic(const std::string& topic, std::uint64_t type_id, std::uint32_t version);
   void import_topic(const std::string& topic, std::uint64_t type_id);
-  void receive_loop();
   void heartbeat_loop();
   void take(Reader* r);
   void on_data(Reader* r, const ::plr_dds_Envelope& e);
@@ -144,8 +143,6 @@ class DdsBridge final : public Endpoint, public Link {
   ControlFn control_;
 
   dds_entity_t participant_ = 0;
-  dds_entity_t waitset_ = 0;
-  dds_entity_t wake_ = 0;  // guard condition: stop
   dds_entity_t announce_writer_ = 0;
   dds_entity_t telemetry_writer_ = 0;
   dds_entity_t control_writer_ = 0;
@@ -176,7 +173,6 @@ class DdsBridge final : public Endpoint, public Link {
   std::atomic<bool> stop_{false};
   std::mutex stop_m_;
   std::condition_variable stop_cv_;
-  std::thread receiver_;
   std::thread heartbeat_;
 
   std::atomic<std::uint64_t> sent_{0};
