@@ -16,6 +16,7 @@
 #   monitor                             may only read
 # A test CA: keep the real one's key off the robots.
 set -eu
+set -f  # topic expressions are patterns, not file names
 
 out=${1:?usage: make-dds-certs.sh OUT_DIR [KERNEL_NAME...]}
 shift
