@@ -1,7 +1,6 @@
 #include "kernel.hpp"
 
 #include "dds_bridge.hpp"
-#include "dds_bridge.hpp"
 #include "shm_bridge.hpp"
 #include "supervisor.hpp"
 
@@ -53,8 +52,6 @@ Kernel::Kernel(Config config, std::string host, std::string run_id)
 }
 
 Kernel::~Kernel() {
-  if (dds_) bus_.detach(dds_.get());
-  dds_.reset();
   stop();
   if (dds_) bus_.detach(dds_.get());
   dds_.reset();
@@ -79,22 +76,6 @@ Expected<std::unique_ptr<NodeInstance>> Kernel::bring_up(const NodeConfig& confi
 Status Kernel::start() {
   const auto hosts = hosts_with_nodes(config_);
   if (!run_id_.empty() && hosts.size() > 1 && !bridge_) {
-  // Other machines: after shared memory, so calls try this machine's hosts first.
-  if (config_.dds.enabled && host_ == "main" && !dds_) {
-    auto dds = DdsBridge::create(
-        bus_, config_, make_kernel_id(config_.pipeline), [this] { return telemetry_json(); },
-        [this](const nlohmann::json& c) -> Status {
-          const auto text = [&](const char* key) {
-            return c.contains(key) && c[key].is_string() ? c[key].get<std::string>() : "";
-          };
-          if (text("cmd") != "swap")
-            return make_error(PLR_ERR_INVALID, "unknown remote command '" + text("cmd") + "'");
-          return swap(text("node"), text("plugin"));
-        });
-    if (!dds) return dds.error();
-    dds_ = std::move(*dds);
-    bus_.attach(dds_.get());
-  }
     bridge_ = std::make_unique<ShmBridge>(bus_, config_, host_, hosts, run_id_);
     bus_.attach(bridge_.get());
   }
@@ -132,7 +113,6 @@ Status Kernel::start() {
   return {};
 }
 
-  if (dds_) dds_->executor().drain();
 void Kernel::stop() {
   for (auto it = slots_.rbegin(); it != slots_.rend(); ++it) {
     auto& s = **it;
@@ -253,7 +233,6 @@ std::string Kernel::telemetry_json() {
   j["nodes"] = nlohmann::json::array();
   for (const auto& n : nodes())
     j["nodes"].push_back({{"name", n.name},
-  if (dds_) j["dds"] = dds_->stats();
                           {"plugin", n.plugin},
                           {"version", n.version},
                           {"kind", n.kind},

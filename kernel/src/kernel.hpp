@@ -89,7 +89,6 @@ class Kernel {
   std::unique_ptr<Internal> internal_;
   std::unique_ptr<class ShmBridge> bridge_;
   std::unique_ptr<class DdsBridge> dds_;  // main host only, when remote.dds is configured
-  std::unique_ptr<class DdsBridge> dds_;  // main host only, when remote.dds is configured
   // Kernel-side subscriptions (clock, pipeline/done), alive as long as the kernel.
   std::vector<std::unique_ptr<std::function<void(const plr_msg*)>>> listeners_;
   bool started_ = false;
