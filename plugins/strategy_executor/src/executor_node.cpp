@@ -274,8 +274,11 @@ class ExecutorNode : public plr::Node {
     const auto* st = rep ? rep->stats() : nullptr;
     ms.ms.add(st && st->planning_ms() > 0 ? st->planning_ms() : 1e3 * wall_s);
     if (st && st->m6_used() && mode != PlanMode::kEscape) {
+      // The escape the planner ran first counts as an M6 query of its own.
       ++stats_.m6_implicit;
-      ++stats_.modes[static_cast<std::size_t>(PlanMode::kEscape)].queries;
+      auto& m6 = stats_.modes[static_cast<std::size_t>(PlanMode::kEscape)];
+      ++m6.queries;
+      if (st->escape_ms() > 0) m6.ms.add(st->escape_ms());
     }
   }
 
@@ -564,14 +567,15 @@ class ExecutorNode : public plr::Node {
   }
 
   void job(Clock::time_point t0) {
-    Observed w = wait_for_simulator();
+    // A simulator may hold no world before its first reset: reset first when
+    // asked to (waiting for it to come up), observe only otherwise.
     if (!env_.empty() || !world_file_.empty()) {
       flatbuffers::FlatBufferBuilder fbb;
       fbb.Finish(msg::CreateResetRequestDirect(fbb, env_.c_str(), seed_, world_file_.c_str()));
       auto r = call_retry<msg::ResetRequest, msg::WorldState>("sim/reset", fbb, 120.0);
       if (!r) throw std::runtime_error("sim/reset: " + r.error().message);
-      w = observe();
     }
+    Observed w = wait_for_simulator();
     stats_.boxes_total = static_cast<std::uint32_t>(w.world.boxes.size()) + w.unloaded;
     const std::uint32_t unloaded_at_start = w.unloaded;
     log().info("{} boxes in the trailer", stats_.boxes_total);
@@ -721,6 +725,8 @@ class ExecutorNode : public plr::Node {
       sim::write_svg(dir / "scene_top.svg", w.world, sim::View::kTop, options);
     } catch (const SimulatorLost& lost) {
       log().warn("no final scene: {}", lost.what);
+    } catch (const std::runtime_error& e) {
+      log().warn("no final scene: {}", e.what());
     }
   }
 
