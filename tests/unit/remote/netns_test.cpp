@@ -86,8 +86,12 @@ struct Proc {
     }
     return -1;
   }
+  // A clean stop first, so the kernel removes its control socket.
   ~Proc() {
-    if (pid > 0) {
+    if (pid <= 0) return;
+    ::kill(pid, SIGTERM);
+    ::kill(pid, SIGCONT);
+    if (wait(5s) == -1) {
       ::kill(pid, SIGKILL);
       ::waitpid(pid, nullptr, 0);
     }
@@ -265,7 +269,6 @@ TEST(RemoteNetns, TopicAndServiceCrossProviderLossMonitorAndRefusedSwap) {
   EXPECT_NE(log.find("is gone (silent for"), std::string::npos) << log;
   EXPECT_EQ(log.find("timed out"), std::string::npos) << log;
   EXPECT_GT(last_good, gone) << "no answers after A was lost";
-  ::kill(kernel_a.pid, SIGKILL);
 }
 
 }  // namespace

@@ -78,8 +78,12 @@ struct Proc {
     }
     return -1;
   }
+  // A clean stop first, so the kernel removes its control socket.
   ~Proc() {
-    if (pid > 0) {
+    if (pid <= 0) return;
+    ::kill(pid, SIGTERM);
+    ::kill(pid, SIGCONT);
+    if (wait(5s) == -1) {
       ::kill(pid, SIGKILL);
       ::waitpid(pid, nullptr, 0);
     }
