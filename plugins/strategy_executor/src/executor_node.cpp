@@ -128,6 +128,7 @@ class ExecutorNode : public plr::Node {
     max_actions_ = params().get<std::uint64_t>("max_actions", 0);
     max_candidates_ = params().get<std::uint64_t>("pick_candidates", 4);
     settle_s_ = params().get<double>("settle_s", 0.3);
+    belt_settle_s_ = params().get<double>("belt_settle_s", 3.0);
     retreat_m_ = params().get<double>("retreat_m", 0.3);
     show_progress_ = params().get<bool>("progress", true);
     for (auto [key, target] :
@@ -363,14 +364,14 @@ class ExecutorNode : public plr::Node {
 
   // Runs a trajectory; returns the outcome, or nullopt when the simulator refused it.
   std::optional<Message<msg::ExecuteOutcome>> execute(const msg::TrajectoryT& trajectory,
-                                                      Suction before, Suction after,
-                                                      ActionRun& run) {
+                                                      Suction before, Suction after, ActionRun& run,
+                                                      double settle_s) {
     msg::ExecuteRequestT req;
     req.trajectory = std::make_unique<msg::TrajectoryT>(trajectory);
     req.suction_before = before;
     req.suction_after = after;
     req.conveyor = true;
-    req.settle_s = settle_s_;
+    req.settle_s = settle_s;
     flatbuffers::FlatBufferBuilder fbb;
     fbb.Finish(msg::ExecuteRequest::Pack(fbb, &req));
     auto r =
@@ -382,7 +383,7 @@ class ExecutorNode : public plr::Node {
       return std::nullopt;
     }
     const auto& out = r.value();
-    run.exec_s += (trajectory.points.empty() ? 0.0 : trajectory.points.back()->time_s) + settle_s_;
+    run.exec_s += (trajectory.points.empty() ? 0.0 : trajectory.points.back()->time_s) + settle_s;
     run.contacts += out->robot_trailer_contacts();
     run.sim_time_s = out->sim_time_s();
     if (!out->ok()) {
@@ -408,7 +409,7 @@ class ExecutorNode : public plr::Node {
     if (!p.ok && last_status_ == msg::PlanStatus::StartInvalid) {
       // The planner did not escape by itself: ask for M6 explicitly, then retry.
       PlanResult escape = plan_once(PlanMode::kEscape, w, {}, {}, run);
-      if (escape.ok && execute(*escape.trajectory, Suction::Keep, Suction::Keep, run)) {
+      if (escape.ok && execute(*escape.trajectory, Suction::Keep, Suction::Keep, run, settle_s_)) {
         w = observe();
         p = plan_goal(mode, w, goal, leave_out, run);
       }
@@ -417,7 +418,9 @@ class ExecutorNode : public plr::Node {
       log().info("{}: {} not planned: {}", action_name_, what, p.message);
       return false;
     }
-    auto out = execute(*p.trajectory, before, after, run);
+    // Boxes just released or scooped need the belt's time to leave the nose.
+    const bool feeds_belt = after == Suction::Off || !leave_out.empty();
+    auto out = execute(*p.trajectory, before, after, run, feeds_belt ? belt_settle_s_ : settle_s_);
     if (!out) return false;
     last_held_ = (*out)->held_box_ids()
                      ? std::vector<std::uint32_t>((*out)->held_box_ids()->begin(),
@@ -763,7 +766,7 @@ class ExecutorNode : public plr::Node {
   sim::ObservationParams obs_;
   Geometry geometry_;
   double plan_timeout_s_ = 5, execute_timeout_s_ = 300, service_wait_s_ = 60, settle_s_ = 0.3;
-  double retreat_m_ = 0.3;
+  double retreat_m_ = 0.3, belt_settle_s_ = 3.0;
   std::chrono::milliseconds retry_{50};
   std::uint64_t max_idle_ = 6, max_actions_ = 0, max_candidates_ = 4;
   std::vector<double> nose_home_{0.5, 0.0, 0.0}, nose_down_{0.0, 0.05, 0.0},
