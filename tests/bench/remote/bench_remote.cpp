@@ -10,6 +10,7 @@
 #include <plr/message.hpp>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <nlohmann/json.hpp>
 
 #include <signal.h>
@@ -304,6 +305,8 @@ int bench(bool quick, bool json) {
 }  // namespace plr::kernel
 
 int main(int argc, char** argv) {
+  // The bridges' info lines would mix with the table or the JSON on stdout.
+  spdlog::set_level(spdlog::level::warn);
   bool quick = false, json = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
