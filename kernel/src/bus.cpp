@@ -237,6 +237,7 @@ Status Bus::call(Endpoint* caller, const std::string& service, std::uint64_t req
   MsgRef req(request);
   Provider chosen;
   bool remote = false;
+  bool wake_timer = false;
   std::vector<Link*> links;
   std::uint64_t id = 0;
   {
@@ -262,11 +263,14 @@ Status Bus::call(Endpoint* caller, const std::string& service, std::uint64_t req
     id = next_id_++;
     const auto deadline = Clock::now() + timeout;
     pending_[id] = {caller, chosen.owner, fn, user, service, deadline, timeout};
+    // The timer thread sleeps until the earliest deadline: wake it only when
+    // this one comes first.
+    wake_timer = deadlines_.empty() || deadline < deadlines_.begin()->first;
     deadlines_.emplace(deadline, id);
     request->type_id = request_type;
     request->stamp_ns = wall_now_ns();
   }
-  timer_cv_.notify_one();
+  if (wake_timer) timer_cv_.notify_one();
   if (call_id) *call_id = id;
   if (remote) {
     for (auto* l : links) {
