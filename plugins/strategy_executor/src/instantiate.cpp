@@ -12,10 +12,6 @@ namespace {
 constexpr double kMargin = 0.03;     // m, footprint shrink and clearances
 constexpr double kClearance = 0.02;  // m, the plate's distance to boxes it must not touch
 
-bool overlap(double a0, double a1, double b0, double b1) {
-  return a0 + kMargin < b1 - kMargin && b0 + kMargin < a1 - kMargin;
-}
-
 sim::Height height_class(double top, double mid, double high) {
   if (top >= high) return sim::Height::kHigh;
   if (top >= mid) return sim::Height::kMid;
