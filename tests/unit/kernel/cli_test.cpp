@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <csignal>
+#include <cstdio>
 #include <fstream>
 #include <thread>
 
@@ -66,7 +67,8 @@ TEST(Cli, CtrlCStopsCleanlyAndSwapWorksOnTheRunningPipeline) {
                                 "nodes:\n"
                                 "  counter: {plugin: demo_counter, params: {period_ms: 5}}\n"
                                 "  doubler: {plugin: demo_doubler, params: {factor: 2}}\n");
-  const std::string log = ::testing::TempDir() + "cli_swap.log";
+  const std::string log = ::testing::TempDir() + "plr_test_cli_swap.log";
+  std::remove(log.c_str());  // never read a previous run's log
   const pid_t pid = fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {

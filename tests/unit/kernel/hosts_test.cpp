@@ -11,6 +11,7 @@
 #include <dirent.h>
 #include <sys/wait.h>
 #include <csignal>
+#include <cstdio>
 #include <fstream>
 #include <regex>
 #include <set>
@@ -87,7 +88,8 @@ nodes:
   doubler: {plugin: test_probe, host: b, params: {factor: 2, max_delay_us: 0, slow_value: 20, slow_ms: 1500}}
   counter: {plugin: demo_counter, params: {period_ms: 2, limit: 400}}
 )");
-  const std::string log = ::testing::TempDir() + "kill.log";
+  const std::string log = ::testing::TempDir() + "plr_test_kill.log";
+  std::remove(log.c_str());  // never read a previous run's log
   const pid_t pid = fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
@@ -126,7 +128,8 @@ nodes:
 TEST(Hosts, MalformedMessagesFromAnotherProcessAreDroppedAndCounted) {
   // Run only host b (as the supervisor would), and play host main ourselves.
   const auto config = write_config("evil.yaml", pipeline_on("b"));
-  const std::string log = ::testing::TempDir() + "evil.log";
+  const std::string log = ::testing::TempDir() + "plr_test_evil.log";
+  std::remove(log.c_str());  // never read a previous run's log
   const pid_t pid = fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
