@@ -8,7 +8,7 @@
 #include <array>
 #include <cmath>
 
-#include "atomic_file.hpp"
+#include "plr/sim/atomic_file.hpp"
 
 namespace plr::sim {
 namespace {

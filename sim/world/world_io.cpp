@@ -1,6 +1,6 @@
 #include "plr/sim/world_io.hpp"
 
-#include "atomic_file.hpp"
+#include "plr/sim/atomic_file.hpp"
 
 #include <fcntl.h>
 #include <fmt/format.h>

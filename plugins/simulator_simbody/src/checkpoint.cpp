@@ -1,33 +1,16 @@
 #include "checkpoint.hpp"
 
+#include <plr/sim/atomic_file.hpp>
 #include <plr/sim/world_io.hpp>
 
 #include <nlohmann/json.hpp>
 
-#include <fcntl.h>
-#include <unistd.h>
-#include <cstdio>
 #include <fstream>
 #include <stdexcept>
 
 namespace plr::simulator {
 
 namespace fs = std::filesystem;
-
-namespace {
-
-void write_atomically(const fs::path& file, const std::string& text) {
-  const fs::path tmp = file.string() + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
-  if (fd < 0) throw std::runtime_error(tmp.string() + ": cannot write");
-  const bool ok = ::write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size()) &&
-                  ::fsync(fd) == 0;
-  ::close(fd);
-  if (!ok) throw std::runtime_error(tmp.string() + ": write failed");
-  fs::rename(tmp, file);
-}
-
-}  // namespace
 
 void save_checkpoint(const fs::path& dir, const Checkpoint& c) {
   fs::create_directories(dir);
@@ -39,7 +22,7 @@ void save_checkpoint(const fs::path& dir, const Checkpoint& c) {
   j["boxes_total"] = c.boxes_total;
   j["boxes_unloaded"] = c.boxes_unloaded;
   // Written last: its presence marks a complete checkpoint.
-  write_atomically(dir / "state.json", j.dump());
+  sim::write_file_atomically(dir / "state.json", j.dump());
 }
 
 std::optional<Checkpoint> load_checkpoint(const fs::path& dir) {

@@ -1,4 +1,4 @@
-// Internal: crash-safe file replacement shared by world files and pictures.
+// Crash-safe file replacement, for everything sim/ and its plug-ins write.
 #pragma once
 
 #include <filesystem>
