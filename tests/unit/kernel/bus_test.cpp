@@ -235,6 +235,7 @@ TEST_F(BusTest, CancelCompletesTheCallOnce) {
   ASSERT_TRUE(bus_->cancel(id));
   ASSERT_TRUE(bus_->cancel(id));
   r.wait(1);
+  settle();  // the provider still sees the request; `s` must outlive that
   ASSERT_EQ(r.results.size(), 1u);
   EXPECT_EQ(r.results[0].first, PLR_ERR_CANCELLED);
 }

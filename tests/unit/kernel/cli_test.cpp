@@ -42,13 +42,15 @@ TEST(Cli, ValidateNamesTheUnknownPlugin) {
   EXPECT_NE(out.find("nope.so"), std::string::npos) << out;
 }
 
+// Tests run in parallel and a pipeline name is one control socket: each run
+// here gets its own name.
 TEST(Cli, RunFinishesTheDemoAndExitsZero) {
   std::string out;
-  ASSERT_EQ(
-      run_command(kPlr + " run " + kDemo +
-                      " --set nodes.counter.params.period_ms=1 --set nodes.counter.params.limit=5",
-                  &out),
-      0)
+  ASSERT_EQ(run_command(kPlr + " run " + kDemo +
+                            " --set pipeline=cli_run_demo --set nodes.counter.params.period_ms=1"
+                            " --set nodes.counter.params.limit=5",
+                        &out),
+            0)
       << out;
   EXPECT_NE(out.find("4 doubled is 8"), std::string::npos) << out;
   EXPECT_NE(out.find("pipeline done: counted to 5"), std::string::npos) << out;
@@ -57,7 +59,10 @@ TEST(Cli, RunFinishesTheDemoAndExitsZero) {
 TEST(Cli, RunRefusesABadOverride) {
   std::string out;
   EXPECT_EQ(
-      run_command(kPlr + " run " + kDemo + " --set nodes.counter.params.period_ms=fast", &out), 1);
+      run_command(kPlr + " run " + kDemo +
+                      " --set pipeline=cli_bad_override --set nodes.counter.params.period_ms=fast",
+                  &out),
+      1);
   EXPECT_NE(out.find("param 'period_ms': expected a number"), std::string::npos) << out;
 }
 
