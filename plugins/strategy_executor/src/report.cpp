@@ -1,5 +1,7 @@
 #include "report.hpp"
 
+#include <plr/sim/atomic_file.hpp>
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -123,38 +125,12 @@ std::string curve_svg(const std::vector<CurvePoint>& curve, std::uint32_t total,
 }
 
 std::string write_atomically(const std::filesystem::path& file, const std::string& content) {
-  const auto dir = file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
-  std::string name = (dir / ("." + file.filename().string() + ".XXXXXX")).string();
-  const int fd = mkstemp(name.data());
-  if (fd < 0) return std::string("cannot create a temporary file: ") + std::strerror(errno);
-  std::size_t done = 0;
-  while (done < content.size()) {
-    const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const std::string why = std::strerror(errno);
-      ::close(fd);
-      ::unlink(name.c_str());
-      return "write failed: " + why;
-    }
-    done += static_cast<std::size_t>(n);
+  try {
+    sim::write_file_atomically(file, content);
+    return {};
+  } catch (const std::exception& e) {
+    return e.what();
   }
-  // mkstemp creates 0600; reports are ordinary documents.
-  if (::fchmod(fd, 0644) != 0 || ::fsync(fd) != 0 || ::close(fd) != 0) {
-    const std::string why = std::strerror(errno);
-    ::unlink(name.c_str());
-    return "cannot flush the temporary file: " + why;
-  }
-  if (std::rename(name.c_str(), file.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    ::unlink(name.c_str());
-    return "cannot rename the temporary file: " + why;
-  }
-  if (const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY); dfd >= 0) {
-    ::fsync(dfd);
-    ::close(dfd);
-  }
-  return {};
 }
 
 std::string progress_line(std::uint32_t done, std::uint32_t total, double robot_time_s,
