@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <cstdio>
 
 #include "contact.hpp"
 #include "multibody.hpp"
@@ -150,12 +151,18 @@ struct Simulation::Impl {
     }
   }
 
+  // The nose conveyor hands boxes to the robot's body conveyor at its -x end:
+  // a box on a belt whose trailing edge reaches that end has left the trailer.
   bool unloaded_by_belt(const Body& b) const {
+    constexpr double kHandover = 0.05;  // m; the base's face stops a box this short of the end
     for (const LinkGeometry& l : state.links) {
       if (l.belt_speed <= 0.0) continue;
       const Eigen::Vector3d local = l.pose.inverse() * b.box.pose.translation();
-      if (local.x() < -0.5 * l.size.x() && std::abs(local.y()) < 0.5 * l.size.y() &&
-          local.z() > 0.0 && local.z() < 0.5 * l.size.z() + 1.0) {
+      const Eigen::Matrix3d r = l.pose.linear().transpose() * b.box.pose.linear();
+      const double reach = (r.cwiseAbs() * (0.5 * b.box.size)).x();
+      if (local.x() - reach < -0.5 * l.size.x() + kHandover &&
+          std::abs(local.y()) < 0.5 * l.size.y() && local.z() > 0.0 &&
+          local.z() < 0.5 * l.size.z() + 1.0) {
         return true;
       }
     }
@@ -259,6 +266,9 @@ struct Simulation::Impl {
         const Eigen::Vector3d need = b.box.mass * (plate_a - gravity) - wrenches[i].force;
         b.load += (need.norm() - b.load) * std::min(1.0, dt / kLoadFilter);
         if (b.load > b.capacity) {
+          fprintf(stderr, "DBG drop box %u need %.0f contact %.1f %.1f %.1f plate_a %.1f %.1f %.1f pos %.2f %.2f %.2f\n", b.box.id, need.norm(), wrenches[i].force.x(), wrenches[i].force.y(), wrenches[i].force.z(), plate_a.x(), plate_a.y(), plate_a.z(), b.box.pose.translation().x(), b.box.pose.translation().y(), b.box.pose.translation().z());
+          fprintf(stderr, "DBG t %.3f plate %.3f %.3f %.3f\n", state.time, state.plate->pose.translation().x(), state.plate->pose.translation().y(), state.plate->pose.translation().z());
+          for (auto& pr : state.pairs) if (pr.key.a == i || pr.key.b == i) fprintf(stderr, "DBG pair %u %u kind %d\n", pr.key.a, pr.key.b, pr.key.kind);
           b.mode = Mode::kAwake;
           b.still = 0.0;
           rebuild = true;
@@ -394,7 +404,8 @@ std::vector<std::uint32_t> Simulation::suction_on() {
           const Eigen::Vector3d local = b.box.pose.inverse() * (cups[c] + gap * z);
           bool inside = true;
           for (int k = 0; k < 3; ++k) {
-            if (k != axis && std::abs(local[k]) > 0.5 * b.box.size[k]) inside = false;
+            if (k != axis && std::abs(local[k]) > 0.5 * b.box.size[k] - plate.cup_radius)
+              inside = false;
           }
           if (!inside) continue;
           used[c] = true;
@@ -412,6 +423,7 @@ std::vector<std::uint32_t> Simulation::suction_on() {
     }
     if (b.mode == Mode::kAwake) m.rebuild = true;
     b.mode = Mode::kHeld;
+    fprintf(stderr, "DBG grip %u t %.3f plate %.3f %.3f %.3f box %.3f %.3f %.3f\n", b.box.id, s.time, plate.pose.translation().x(), plate.pose.translation().y(), plate.pose.translation().z(), b.box.pose.translation().x(), b.box.pose.translation().y(), b.box.pose.translation().z());
     b.grip = plate.pose.inverse() * b.box.pose;
     b.capacity = capacity;
     b.load = load;

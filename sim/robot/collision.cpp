@@ -480,7 +480,9 @@ void CollisionChecker::attachBox(const Box& box, const Config& q) {
   Impl& m = *impl_;
   const int plate = m.robot->plateLink();
   const Eigen::Isometry3d in_plate = m.robot->platePose(q).inverse() * box.pose;
-  m.addShape(plate, in_plate, std::make_shared<fcl::Boxd>(box.size), box.size / 2.0,
+  constexpr double kSlack = 0.003;  // m per side
+  const Eigen::Vector3d size = (box.size.array() - 2 * kSlack).max(kSlack).matrix();
+  m.addShape(plate, in_plate, std::make_shared<fcl::Boxd>(size), size / 2.0,
              "held box " + std::to_string(box.id));
   m.ignored.insert(box.id);
   m.rebuildPairs();

@@ -14,6 +14,7 @@
 #include <plr/sim/robot_model.hpp>
 #include <plr/sim/world_io.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <map>
 #include <memory>
@@ -193,6 +194,23 @@ class SimulatorNode : public Node {
     return false;
   }
 
+  // A box not held whose centre is over a running belt, at most a box
+  // height above its surface.
+  bool belt_loaded() const {
+    const auto held = sim_->held_boxes();
+    for (const auto& box : sim_->world().boxes) {
+      if (std::find(held.begin(), held.end(), box.id) != held.end()) continue;
+      for (const auto& link : sim_->robot_links()) {
+        if (link.belt_speed <= 0.0) continue;
+        const Eigen::Vector3d local = link.pose.inverse() * box.pose.translation();
+        if (std::abs(local.x()) < link.size.x() / 2 && std::abs(local.y()) < link.size.y() / 2 &&
+            local.z() > 0.0 && local.z() < link.size.z() / 2 + box.size.maxCoeff())
+          return true;
+      }
+    }
+    return false;
+  }
+
   void apply_suction(Suction s, std::set<std::uint32_t>& gripped) {
     if (s == Suction::On) {
       for (auto id : sim_->suction_on()) gripped.insert(id);
@@ -218,6 +236,7 @@ class SimulatorNode : public Node {
     }
     const auto before = sim_->world();
     const auto events_before = sim_->unloaded().size();
+    const auto suction_before = sim_->suction_events().size();
     const auto wall_start = std::chrono::steady_clock::now();
     std::set<std::uint32_t> gripped;
     std::uint32_t contacts = 0;
@@ -242,22 +261,12 @@ class SimulatorNode : public Node {
       }
     }
     if (!points.empty()) robot_.q = points.back().second;
-    const auto held_before_release = sim_->held_boxes();
     apply_suction(r.suction_after(), gripped);
-    for (double t = 0; t < r.settle_s(); t += period_) advance(period_, robot_.q);
-    // The belt keeps running until what was let go over it is out (a real
-    // conveyor does not stop between actions), bounded by carry_max_s.
-    if (r.conveyor() && r.suction_after() == Suction::Off) {
-      auto out_of_trailer = [&] {
-        for (auto id : held_before_release) {
-          bool gone = false;
-          for (const auto& e : sim_->unloaded()) gone = gone || e.box_id == id;
-          if (!gone) return false;
-        }
-        return true;
-      };
-      for (double t = 0; t < carry_max_ && !out_of_trailer(); t += period_)
-        advance(period_, robot_.q);
+    for (double t = 0; t < r.settle_s(); t += period_) { advance(period_, robot_.q); if (r.suction_after() == Suction::Off) for (auto& b : sim_->world().boxes) if (b.id == 21) fprintf(stderr, "DBG settle t %.2f box 21 %.3f %.3f %.3f loaded %d held %zu\n", t, b.pose.translation().x(), b.pose.translation().y(), b.pose.translation().z(), (int)belt_loaded(), sim_->held_boxes().size()); }
+    // The belt keeps running until nothing lies on it (a real conveyor does
+    // not stop between actions), bounded by carry_max_s.
+    if (r.conveyor()) {
+      for (double t = 0; t < carry_max_ && belt_loaded(); t += period_) advance(period_, robot_.q);
     }
     robot_.held = sim_->held_boxes();
 
@@ -272,6 +281,16 @@ class SimulatorNode : public Node {
     }
     const auto& events = sim_->unloaded();
     for (auto i = events_before; i < events.size(); ++i) unloaded.push_back(events[i].box_id);
+    for (const auto& b : after.boxes) if (b.pose.translation().x() < robot_.q[0] + 1.2 && b.pose.translation().z() < 0.8) fprintf(stderr, "DBG near %u at %.2f %.2f %.2f\n", b.id, b.pose.translation().x(), b.pose.translation().y(), b.pose.translation().z());
+    for (const auto& b : after.boxes) { auto it = std::find_if(before.boxes.begin(), before.boxes.end(), [&](auto& x){return x.id==b.id;}); if (it != before.boxes.end() && (it->pose.translation()-b.pose.translation()).norm() > 0.01) fprintf(stderr, "DBG moved %u to %.2f %.2f %.2f q %.2f %.2f %.2f\n", b.id, b.pose.translation().x(), b.pose.translation().y(), b.pose.translation().z(), robot_.q[0], robot_.q[5], robot_.q[6]); }
+    const auto& suction = sim_->suction_events();
+    for (auto i = suction_before; i < suction.size(); ++i) {
+      const auto& e = suction[i];
+      if (e.kind == sim::SuctionEvent::Kind::kDropped || e.kind == sim::SuctionEvent::Kind::kRefused)
+        log().info("box {} {} at t={:.2f} s: the cups had to hold {:.0f} N, can hold {:.0f} N",
+                   e.box_id, e.kind == sim::SuctionEvent::Kind::kDropped ? "dropped" : "not gripped",
+                   e.time, e.load, e.capacity);
+    }
     log().debug(
         "execute: {} points, {:.2f} s simulated in {:.2f} s, {} unloaded", points.size(),
         points.empty() ? 0.0 : points.back().first - points.front().first,

@@ -21,6 +21,7 @@
 #include "plr/sim/observation.hpp"
 #include "plr/sim/plan_types.hpp"
 #include "plr/sim/render.hpp"
+#include "plr/sim/world_io.hpp"
 #include "plr/sim/robot_model.hpp"
 #include "plr/sim/strategy.hpp"
 #include "report.hpp"
@@ -104,6 +105,7 @@ class ExecutorNode : public plr::Node {
                          "nose_home",
                          "nose_down",
                          "nose_sweep",
+                         "arm_clear",
                          "retreat_m",
                          "progress"});
     report_dir_ = params().get<std::string>("report_dir", "report");
@@ -128,7 +130,6 @@ class ExecutorNode : public plr::Node {
     max_actions_ = params().get<std::uint64_t>("max_actions", 0);
     max_candidates_ = params().get<std::uint64_t>("pick_candidates", 4);
     settle_s_ = params().get<double>("settle_s", 0.3);
-    belt_settle_s_ = params().get<double>("belt_settle_s", 3.0);
     retreat_m_ = params().get<double>("retreat_m", 0.3);
     show_progress_ = params().get<bool>("progress", true);
     for (auto [key, target] :
@@ -139,6 +140,9 @@ class ExecutorNode : public plr::Node {
         return make_error(PLR_ERR_INVALID,
                           std::string("param '") + key + "': expected 3 nose joint values");
     }
+    arm_clear_ = params().get<std::vector<double>>("arm_clear", arm_clear_);
+    if (arm_clear_.size() != 4)
+      return make_error(PLR_ERR_INVALID, "param 'arm_clear': expected 4 arm joint values");
     if (!(plan_timeout_s_ > 0) || !(execute_timeout_s_ > 0) || !(service_wait_s_ >= 0))
       return make_error(PLR_ERR_INVALID, "param 'plan_timeout_s'/'execute_timeout_s': must be > 0");
     if (max_idle_ == 0)
@@ -418,9 +422,8 @@ class ExecutorNode : public plr::Node {
       log().info("{}: {} not planned: {}", action_name_, what, p.message);
       return false;
     }
-    // Boxes just released or scooped need the belt's time to leave the nose.
-    const bool feeds_belt = after == Suction::Off || !leave_out.empty();
-    auto out = execute(*p.trajectory, before, after, run, feeds_belt ? belt_settle_s_ : settle_s_);
+    log().debug("{}: {} ({} points)", action_name_, what, p.trajectory->points.size());
+    auto out = execute(*p.trajectory, before, after, run, settle_s_);
     if (!out) return false;
     last_held_ = (*out)->held_box_ids()
                      ? std::vector<std::uint32_t>((*out)->held_box_ids()->begin(),
@@ -463,8 +466,9 @@ class ExecutorNode : public plr::Node {
                   c.grasp.position.z());
       if (!step("pre-grasp", PlanMode::kArmBase, pose(c.pregrasp), Suction::Keep, Suction::On, run))
         continue;
+      // The plate ends touching the box (a settled box may lean a little).
       if (!step("approach", PlanMode::kArmCartesian, pose(c.grasp), Suction::Keep, Suction::On,
-                run))
+                run, {c.box}))
         continue;
       chosen = &c;
       break;
@@ -474,6 +478,9 @@ class ExecutorNode : public plr::Node {
         run.failed_grasp = true;
         log().info("{}: grasp of box {} failed (nothing held)", action_name_, chosen->box);
       }
+      if (chosen->lift)
+        step("lift", PlanMode::kArmCartesian, pose(*chosen->lift), Suction::Keep, Suction::Keep,
+             run);
       step("retract", PlanMode::kArmCartesian, pose(chosen->retract), Suction::Keep, Suction::Keep,
            run);
       const Observed w = observe();
@@ -487,6 +494,10 @@ class ExecutorNode : public plr::Node {
         step("drop-off", PlanMode::kArm, pose(*drop), Suction::Keep, Suction::Off, run);
       else
         log().warn("{}: no reachable drop-off pose", action_name_);
+      step("arm clear",  PlanMode::kArm,
+           joints({{sim::kArm1, arm_clear_[0]}, {sim::kArm2, arm_clear_[1]},
+                   {sim::kArm3, arm_clear_[2]}, {sim::kArm4, arm_clear_[3]}}),
+           Suction::Keep, Suction::Keep, run);
     }
     step("nose home", PlanMode::kNose, nose(nose_home_), Suction::Keep, Suction::Keep, run);
     const Observed w = observe();
@@ -726,6 +737,8 @@ class ExecutorNode : public plr::Node {
       }
       sim::write_svg(dir / "scene_side.svg", w.world, sim::View::kSide, options);
       sim::write_svg(dir / "scene_top.svg", w.world, sim::View::kTop, options);
+      // What is left, as a world file another run can start from.
+      write("final_world.yaml", sim::format_world(w.world));
     } catch (const SimulatorLost& lost) {
       log().warn("no final scene: {}", lost.what);
     } catch (const std::runtime_error& e) {
@@ -766,11 +779,13 @@ class ExecutorNode : public plr::Node {
   sim::ObservationParams obs_;
   Geometry geometry_;
   double plan_timeout_s_ = 5, execute_timeout_s_ = 300, service_wait_s_ = 60, settle_s_ = 0.3;
-  double retreat_m_ = 0.3, belt_settle_s_ = 3.0;
+  double retreat_m_ = 0.3;
   std::chrono::milliseconds retry_{50};
   std::uint64_t max_idle_ = 6, max_actions_ = 0, max_candidates_ = 4;
   std::vector<double> nose_home_{0.5, 0.0, 0.0}, nose_down_{0.0, 0.05, 0.0},
       nose_sweep_{0.0, 0.05, 0.3};
+  // Arm folded over the base: out of the way of boxes leaving on the belt.
+  std::vector<double> arm_clear_{0.0, -1.0, 2.0, -1.0};
   bool show_progress_ = true, tty_ = false;
   sim::RobotModel robot_;
   Publisher<msg::Statistics> status_;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <unordered_set>
 
 namespace plr::executor {
@@ -11,6 +12,12 @@ namespace {
 
 constexpr double kMargin = 0.03;     // m, footprint shrink and clearances
 constexpr double kClearance = 0.02;  // m, the plate's distance to boxes it must not touch
+constexpr double kSlide = 0.05;      // m, steps of the plate off the face's centre
+constexpr double kCovered = 0.1;     // m, the plate's centre stays this far inside the face
+// The cups' rims stay this far inside the plate's outline (plus kClearance),
+// and grip faces up to this far below it.
+constexpr double kCupInset = 0.04;
+constexpr double kCupReach = 0.03;
 
 sim::Height height_class(double top, double mid, double high) {
   if (top >= high) return sim::Height::kHigh;
@@ -77,7 +84,9 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     sim::Config at = current;
     at[sim::kBaseX] = base_x;
     // The plate is wider than many boxes: the corridor it moves through to
-    // the face (or down onto the top) must be clear of every other box.
+    // the face (or down onto the top) must be clear of every other box. Where
+    // a neighbour is in the way, the plate slides off centre as long as it
+    // still covers most of the face.
     const double pw = g.plate_half_width, ph = g.plate_half_height;
     const double top_x = (b[i].x0 + b[i].x1) / 2;
     // Facing down, the plate turns with the arm's yaw: its footprint's bounds.
@@ -87,16 +96,47 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     auto near = [](double a0, double a1, double b0, double b1) {
       return a0 - kClearance < b1 && b0 < a1 + kClearance;
     };
-    bool face_free = true, top_free = true;
-    for (std::size_t j = 0; j < world.boxes.size(); ++j) {
-      if (j == i) continue;
-      if (near(face.x() - g.pregrasp_distance, face.x() - kMargin, b[j].x0, b[j].x1) &&
-          near(face.y() - pw, face.y() + pw, b[j].y0, b[j].y1) &&
-          near(face.z() - ph, face.z() + ph, b[j].z0, b[j].z1))
-        face_free = false;
-      if (near(b[i].z1 + kMargin, b[i].z1 + g.pregrasp_distance, b[j].z0, b[j].z1) &&
-          near(top_x - hx, top_x + hx, b[j].x0, b[j].x1) && near(y - hy, y + hy, b[j].y0, b[j].y1))
-        top_free = false;
+    auto clear = [&](double x0, double x1, double y0, double y1, double z0, double z1) {
+      for (std::size_t j = 0; j < world.boxes.size(); ++j) {
+        if (j != i && near(x0, x1, b[j].x0, b[j].x1) && near(y0, y1, b[j].y0, b[j].y1) &&
+            near(z0, z1, b[j].z0, b[j].z1))
+          return false;
+      }
+      return true;
+    };
+    const double half_w = (b[i].y1 - b[i].y0) / 2, half_d = (b[i].x1 - b[i].x0) / 2;
+    auto slides = [&](double half_extent) {
+      std::vector<double> out{0.0};
+      for (double d = kSlide; d <= half_extent - kCovered + 1e-9; d += kSlide) {
+        out.push_back(d);
+        out.push_back(-d);
+      }
+      return out;
+    };
+    std::optional<double> face_dy;
+    for (const double dy : slides(half_w)) {
+      const double py = std::clamp(face.y() + dy, -ylim, ylim);
+      if (clear(face.x() - g.pregrasp_distance, face.x() - kMargin, py - pw, py + pw,
+                face.z() - ph, face.z() + ph)) {
+        face_dy = py - face.y();
+        break;
+      }
+    }
+    std::optional<Eigen::Vector2d> top_offset;
+    for (const double dx : slides(half_d)) {
+      for (const double dy : slides(half_w)) {
+        const double px = top_x + dx, py = y + dy;
+        // Nothing above in the plate's way down, and no neighbour's top
+        // under its cups (they would grip it too).
+        if (clear(px - hx, px + hx, py - hy, py + hy, b[i].z1 + kMargin,
+                  b[i].z1 + g.pregrasp_distance) &&
+            clear(px - hx + kCupInset, px + hx - kCupInset, py - hy + kCupInset,
+                  py + hy - kCupInset, b[i].z1 - kCupReach, b[i].z1 + kMargin)) {
+          top_offset = Eigen::Vector2d(dx, dy);
+          break;
+        }
+      }
+      if (top_offset) break;
     }
     auto add = [&](bool from_top) {
       PickCandidate c;
@@ -105,23 +145,27 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       c.base_x = base_x;
       c.from_top = from_top;
       if (from_top) {
-        const Eigen::Vector3d top((b[i].x0 + b[i].x1) / 2, y, b[i].z1);
+        const Eigen::Vector3d top(top_x + top_offset->x(), y + top_offset->y(), b[i].z1);
         c.grasp = {top + Eigen::Vector3d(0, 0, g.grasp_gap), M_PI / 2};
         c.pregrasp = {top + Eigen::Vector3d(0, 0, g.pregrasp_distance), M_PI / 2};
         c.retract = {c.pregrasp.position + Eigen::Vector3d(0, 0, g.retract_lift), M_PI / 2};
       } else {
         // Off the arm's axis the plate meets the face at an angle: keep its near edge off it.
         const double gap = g.grasp_gap + g.plate_half_width * std::sin(std::abs(yaw));
-        c.grasp = {face - Eigen::Vector3d(gap, 0, 0), 0.0};
-        c.pregrasp = {face - Eigen::Vector3d(g.pregrasp_distance, 0, 0), 0.0};
-        c.retract = {c.pregrasp.position + Eigen::Vector3d(0, 0, g.retract_lift), 0.0};
+        const Eigen::Vector3d at_face = face + Eigen::Vector3d(0, *face_dy, 0);
+        c.grasp = {at_face - Eigen::Vector3d(gap, 0, 0), 0.0};
+        c.pregrasp = {at_face - Eigen::Vector3d(g.pregrasp_distance, 0, 0), 0.0};
+        // Pulled out until clear of what it rested on: the drop-off move
+        // after it swings the plate freely.
+        c.lift = {c.grasp.position + Eigen::Vector3d(0, 0, g.retract_lift), 0.0};
+        c.retract = {c.lift->position - Eigen::Vector3d(b[i].x1 - b[i].x0 + kMargin, 0, 0), 0.0};
       }
       if (!reachable(robot, c.grasp, at) || !reachable(robot, c.pregrasp, at)) return;
       ranked.push_back(
           {c, mismatches, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
     };
-    if (face_free && std::abs(yaw) <= g.max_face_yaw) add(false);
-    if (top_free) add(true);
+    if (face_dy && std::abs(yaw) <= g.max_face_yaw) add(false);
+    if (top_offset) add(true);
   }
   std::stable_sort(ranked.begin(), ranked.end(), [](const Ranked& a, const Ranked& b) {
     if (a.mismatches != b.mismatches) return a.mismatches < b.mismatches;

@@ -23,9 +23,9 @@ struct Geometry {
   double pick_reach = 1.5;          // preferred horizontal arm_1-axis-to-plate distance
   double pregrasp_distance = 0.25;  // plate stand-off before the approach
   double grasp_gap = 0.005;         // plate to box face at the grasp (suction reaches 2 cm)
-  double retract_lift = 0.03;       // lift while retracting, off the box below
+  double retract_lift = 0.05;       // lift off the box below before retracting
   double nose_clearance = 0.1;      // nose tip to the nearest box
-  double dropoff_bottom = 0.8;      // held box bottom over the conveyor (clears the nose at home)
+  double dropoff_bottom = 0.4;      // held box bottom over the floor, just above the lowered nose
   double dropoff_ahead = 0.5;       // held box centre ahead of base_x
   double sweep_overshoot = 0.1;     // scoop tip past the pile's far end
   // The plate's yaw follows its position (4-DOF arm), so a front face off the
@@ -38,6 +38,9 @@ struct PickCandidate {
   std::uint32_t box = 0;
   double base_x = 0;
   sim::PlateTarget pregrasp, grasp, retract;
+  // Front grasps first lift the box straight up, off the one it rests on,
+  // before pulling it out: dragged out, it would press into that one.
+  std::optional<sim::PlateTarget> lift;
   bool from_top = false;  // plate facing down on the top face, else on the front face
   bool matches = false;   // the box has the action's height class and side
 };

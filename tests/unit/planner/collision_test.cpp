@@ -132,6 +132,24 @@ TEST(Collision, HeldBoxCountsAsArm) {
   EXPECT_FALSE(cc.isValid(q));
 }
 
+TEST(Collision, HeldBoxMayTouchWhatItWasTakenFrom) {
+  const Config q = home();
+  Box held = box(5, 0, 0, 0, 0.5);
+  held.pose = robot().platePose(q) * Eigen::Translation3d(0.25, 0.0, 0.0);
+  World w;
+  w.boxes.push_back(held);
+  // Its neighbour below, face to face: the lift starts from touching it.
+  w.boxes.push_back(box(6, held.pose.translation().x(), held.pose.translation().y(),
+                        held.pose.translation().z() - 0.5, 0.5));
+  CollisionChecker cc(robot(), w);
+  cc.attachBox(held, q);
+  EXPECT_TRUE(cc.isValid(q)) << cc.describeCollision(q);
+  w.boxes[1].pose.translation().z() += 0.05;  // 5 cm into the held box: a real collision
+  CollisionChecker cc2(robot(), w);
+  cc2.attachBox(held, q);
+  EXPECT_FALSE(cc2.isValid(q));
+}
+
 TEST(Collision, MotionThroughThinObstacleIsCaughtBetweenEndpoints) {
   // A thin board between two free configurations: endpoints are free, the
   // straight motion is not.

@@ -18,9 +18,10 @@ World one_box(double mass) {
 }
 
 // Cup face on the box's top face, pointing down. 4 x 3 cups over 0.6 x 0.4 m:
-// six of them lie over a 0.4 m box (capacity 6 * 45 N = 270 N).
+// six of them seal on a 0.4 m box (capacity 6 * 45 N = 270 N).
 SuctionPlate plate_at(double z) {
   SuctionPlate p;
+  p.extent = {0.6, 0.4};
   p.pose = Eigen::Translation3d(10.0, 0.0, z) * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX());
   return p;
 }
@@ -75,6 +76,17 @@ TEST(Suction, DropsABoxWhenAccelerationOverloadsTheCups) {
   EXPECT_TRUE(sim.held_boxes().empty());
   EXPECT_GE(sim.settle(2.0), 0.0);
   EXPECT_NEAR(sim.world().boxes[0].pose.translation().z(), 0.2, 0.01);
+}
+
+TEST(Suction, ACupOverTheEdgeDoesNotSeal) {
+  // Shifted 6 cm along y, one row of cups has its centre 0.193 m from the
+  // box's centre: on the face, but its rim is not. Two rows of two seal.
+  Simulation sim(one_box(5.0));
+  SuctionPlate p = plate_at(0.4);
+  p.pose.translation().y() += 0.06;
+  sim.set_suction_plate(p);
+  EXPECT_EQ(sim.suction_on(), std::vector<std::uint32_t>{1});
+  EXPECT_NEAR(sim.suction_events().back().capacity, 4 * 45.0, 1e-9);
 }
 
 TEST(Suction, MissesABoxOutOfReach) {

@@ -69,7 +69,9 @@ class CollisionChecker {
   void ignoreBox(std::uint32_t id);
   void clearIgnoredBoxes();
   // Rigidly attaches `box` to the plate at its current world pose, taken with
-  // the robot at `q`; the same box is then ignored as a world obstacle.
+  // the robot at `q`; the same box is then ignored as a world obstacle. Its
+  // shape is 3 mm smaller on every side: a box just gripped still touches
+  // the floor or its neighbours, which the move away from them must not count.
   void attachBox(const Box& box, const Config& q);
   void detachAll();
 

@@ -29,8 +29,8 @@ struct LinkGeometry {
   Eigen::Vector3d size{0.1, 0.1, 0.1};
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   // Conveyor belt on this shape: its surface moves along the shape's local -x
-  // axis at this speed (m/s). Boxes carried past the local -x end of a belt
-  // are handed to the robot's body conveyor and count as unloaded.
+  // axis at this speed (m/s). A box whose trailing edge reaches the local -x
+  // end is handed to the robot's body conveyor and counts as unloaded.
   double belt_speed = 0.0;
 };
 
@@ -38,10 +38,12 @@ struct LinkGeometry {
 struct SuctionPlate {
   // Centre of the cup face; local +z points out of the plate towards what it grips.
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  Eigen::Vector2d extent{0.6, 0.4};  // cup field, local x and y (m)
+  // Cup field, local x and y (m): the robot's 0.4 m x 0.5 m plate.
+  Eigen::Vector2d extent{0.4, 0.5};
   int cups_x = 4;
   int cups_y = 3;
-  double cup_force = 45.0;  // N a cup holds
+  double cup_radius = 0.03;  // m; a cup seals only with its whole rim on the face
+  double cup_force = 45.0;   // N a cup holds
   double reach = 0.02;      // largest gap between cup face and box face that still grips
   double max_tilt = 0.26;   // rad between the plate normal and the box face normal
 };
