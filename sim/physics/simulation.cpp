@@ -5,7 +5,6 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
-#include <cstdio>
 
 #include "contact.hpp"
 #include "multibody.hpp"
@@ -266,9 +265,6 @@ struct Simulation::Impl {
         const Eigen::Vector3d need = b.box.mass * (plate_a - gravity) - wrenches[i].force;
         b.load += (need.norm() - b.load) * std::min(1.0, dt / kLoadFilter);
         if (b.load > b.capacity) {
-          fprintf(stderr, "DBG drop box %u need %.0f contact %.1f %.1f %.1f plate_a %.1f %.1f %.1f pos %.2f %.2f %.2f\n", b.box.id, need.norm(), wrenches[i].force.x(), wrenches[i].force.y(), wrenches[i].force.z(), plate_a.x(), plate_a.y(), plate_a.z(), b.box.pose.translation().x(), b.box.pose.translation().y(), b.box.pose.translation().z());
-          fprintf(stderr, "DBG t %.3f plate %.3f %.3f %.3f\n", state.time, state.plate->pose.translation().x(), state.plate->pose.translation().y(), state.plate->pose.translation().z());
-          for (auto& pr : state.pairs) if (pr.key.a == i || pr.key.b == i) fprintf(stderr, "DBG pair %u %u kind %d\n", pr.key.a, pr.key.b, pr.key.kind);
           b.mode = Mode::kAwake;
           b.still = 0.0;
           rebuild = true;
@@ -423,7 +419,6 @@ std::vector<std::uint32_t> Simulation::suction_on() {
     }
     if (b.mode == Mode::kAwake) m.rebuild = true;
     b.mode = Mode::kHeld;
-    fprintf(stderr, "DBG grip %u t %.3f plate %.3f %.3f %.3f box %.3f %.3f %.3f\n", b.box.id, s.time, plate.pose.translation().x(), plate.pose.translation().y(), plate.pose.translation().z(), b.box.pose.translation().x(), b.box.pose.translation().y(), b.box.pose.translation().z());
     b.grip = plate.pose.inverse() * b.box.pose;
     b.capacity = capacity;
     b.load = load;

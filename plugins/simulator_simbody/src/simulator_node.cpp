@@ -262,7 +262,7 @@ class SimulatorNode : public Node {
     }
     if (!points.empty()) robot_.q = points.back().second;
     apply_suction(r.suction_after(), gripped);
-    for (double t = 0; t < r.settle_s(); t += period_) { advance(period_, robot_.q); if (r.suction_after() == Suction::Off) for (auto& b : sim_->world().boxes) if (b.id == 21) fprintf(stderr, "DBG settle t %.2f box 21 %.3f %.3f %.3f loaded %d held %zu\n", t, b.pose.translation().x(), b.pose.translation().y(), b.pose.translation().z(), (int)belt_loaded(), sim_->held_boxes().size()); }
+    for (double t = 0; t < r.settle_s(); t += period_) advance(period_, robot_.q);
     // The belt keeps running until nothing lies on it (a real conveyor does
     // not stop between actions), bounded by carry_max_s.
     if (r.conveyor()) {
@@ -281,15 +281,15 @@ class SimulatorNode : public Node {
     }
     const auto& events = sim_->unloaded();
     for (auto i = events_before; i < events.size(); ++i) unloaded.push_back(events[i].box_id);
-    for (const auto& b : after.boxes) if (b.pose.translation().x() < robot_.q[0] + 1.2 && b.pose.translation().z() < 0.8) fprintf(stderr, "DBG near %u at %.2f %.2f %.2f\n", b.id, b.pose.translation().x(), b.pose.translation().y(), b.pose.translation().z());
-    for (const auto& b : after.boxes) { auto it = std::find_if(before.boxes.begin(), before.boxes.end(), [&](auto& x){return x.id==b.id;}); if (it != before.boxes.end() && (it->pose.translation()-b.pose.translation()).norm() > 0.01) fprintf(stderr, "DBG moved %u to %.2f %.2f %.2f q %.2f %.2f %.2f\n", b.id, b.pose.translation().x(), b.pose.translation().y(), b.pose.translation().z(), robot_.q[0], robot_.q[5], robot_.q[6]); }
     const auto& suction = sim_->suction_events();
     for (auto i = suction_before; i < suction.size(); ++i) {
       const auto& e = suction[i];
-      if (e.kind == sim::SuctionEvent::Kind::kDropped || e.kind == sim::SuctionEvent::Kind::kRefused)
+      if (e.kind == sim::SuctionEvent::Kind::kDropped ||
+          e.kind == sim::SuctionEvent::Kind::kRefused)
         log().info("box {} {} at t={:.2f} s: the cups had to hold {:.0f} N, can hold {:.0f} N",
-                   e.box_id, e.kind == sim::SuctionEvent::Kind::kDropped ? "dropped" : "not gripped",
-                   e.time, e.load, e.capacity);
+                   e.box_id,
+                   e.kind == sim::SuctionEvent::Kind::kDropped ? "dropped" : "not gripped", e.time,
+                   e.load, e.capacity);
     }
     log().debug(
         "execute: {} points, {:.2f} s simulated in {:.2f} s, {} unloaded", points.size(),

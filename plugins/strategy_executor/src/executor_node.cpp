@@ -21,9 +21,9 @@
 #include "plr/sim/observation.hpp"
 #include "plr/sim/plan_types.hpp"
 #include "plr/sim/render.hpp"
-#include "plr/sim/world_io.hpp"
 #include "plr/sim/robot_model.hpp"
 #include "plr/sim/strategy.hpp"
+#include "plr/sim/world_io.hpp"
 #include "report.hpp"
 
 namespace plr::executor {
@@ -467,8 +467,8 @@ class ExecutorNode : public plr::Node {
       if (!step("pre-grasp", PlanMode::kArmBase, pose(c.pregrasp), Suction::Keep, Suction::On, run))
         continue;
       // The plate ends touching the box (a settled box may lean a little).
-      if (!step("approach", PlanMode::kArmCartesian, pose(c.grasp), Suction::Keep, Suction::On,
-                run, {c.box}))
+      if (!step("approach", PlanMode::kArmCartesian, pose(c.grasp), Suction::Keep, Suction::On, run,
+                {c.box}))
         continue;
       chosen = &c;
       break;
@@ -494,11 +494,14 @@ class ExecutorNode : public plr::Node {
         step("drop-off", PlanMode::kArm, pose(*drop), Suction::Keep, Suction::Off, run);
       else
         log().warn("{}: no reachable drop-off pose", action_name_);
-      step("arm clear",  PlanMode::kArm,
-           joints({{sim::kArm1, arm_clear_[0]}, {sim::kArm2, arm_clear_[1]},
-                   {sim::kArm3, arm_clear_[2]}, {sim::kArm4, arm_clear_[3]}}),
-           Suction::Keep, Suction::Keep, run);
     }
+    // The folded arm leaves the belt free, and the nose room to rise.
+    step("arm clear", PlanMode::kArm,
+         joints({{sim::kArm1, arm_clear_[0]},
+                 {sim::kArm2, arm_clear_[1]},
+                 {sim::kArm3, arm_clear_[2]},
+                 {sim::kArm4, arm_clear_[3]}}),
+         Suction::Keep, Suction::Keep, run);
     step("nose home", PlanMode::kNose, nose(nose_home_), Suction::Keep, Suction::Keep, run);
     const Observed w = observe();
     step("base back", PlanMode::kBaseLine, joints({{sim::kBaseX, w.q[sim::kBaseX] - retreat_m_}}),
@@ -507,7 +510,8 @@ class ExecutorNode : public plr::Node {
 
   void sweep(sim::Action action, const Observed& w0, ActionRun& run) {
     const auto scene = sim::analyse(w0.world, obs_);
-    const auto plan = sweep_plan(scene, action, geometry_, nose_sweep_[2], w0.q);
+    const auto plan =
+        sweep_plan(scene, action, geometry_, nose_sweep_[2], w0.q, w0.world.trailer.depth);
     if (!plan) {
       log().info("{}: no pile in front to sweep", action_name_);
       return;
@@ -519,10 +523,12 @@ class ExecutorNode : public plr::Node {
       // The scoop goes under the pile: the planner must not treat it as an obstacle.
       step("sweep forward", PlanMode::kBaseLine, joints({{sim::kBaseX, plan->end_base_x}}),
            Suction::Keep, Suction::Keep, run, plan->swept);
+      // What was scooped may still lie on the scoop: it rides along.
       step("back up", PlanMode::kBaseLine, joints({{sim::kBaseX, plan->start_base_x}}),
-           Suction::Keep, Suction::Keep, run);
+           Suction::Keep, Suction::Keep, run, plan->swept);
     }
-    step("nose home", PlanMode::kNose, nose(nose_home_), Suction::Keep, Suction::Keep, run);
+    step("nose home", PlanMode::kNose, nose(nose_home_), Suction::Keep, Suction::Keep, run,
+         plan->swept);
   }
 
   // ---- The job -------------------------------------------------------------

@@ -17,6 +17,7 @@ constexpr double kCovered = 0.1;     // m, the plate's centre stays this far ins
 // The cups' rims stay this far inside the plate's outline (plus kClearance),
 // and grip faces up to this far below it.
 constexpr double kCupInset = 0.04;
+constexpr double kFlush = 0.004;  // m a neighbour may stand out of the face unnoticed
 constexpr double kCupReach = 0.03;
 
 sim::Height height_class(double top, double mid, double high) {
@@ -113,22 +114,34 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       }
       return out;
     };
-    std::optional<double> face_dy;
-    for (const double dy : slides(half_w)) {
-      const double py = std::clamp(face.y() + dy, -ylim, ylim);
-      if (clear(face.x() - g.pregrasp_distance, face.x() - kMargin, py - pw, py + pw,
-                face.z() - ph, face.z() + ph)) {
-        face_dy = py - face.y();
-        break;
+    // The face corridor ends at the plate's surface in the grasp: neighbours
+    // flush with the face do not block it, ones standing out do.
+    const double half_h = (b[i].z1 - b[i].z0) / 2;
+    const double corridor_end = face.x() - g.grasp_gap - kClearance + kFlush;
+    std::optional<Eigen::Vector2d> face_offset;
+    for (const double dz : slides(half_h)) {
+      for (const double dy : slides(half_w)) {
+        const double py = std::clamp(face.y() + dy, -ylim, ylim);
+        const double pz =
+            std::clamp(face.z() + dz, ph + kMargin, world.trailer.height - ph - kMargin);
+        if (clear(face.x() - g.pregrasp_distance, corridor_end, py - pw, py + pw, pz - ph,
+                  pz + ph)) {
+          face_offset = Eigen::Vector2d(py - face.y(), pz - face.z());
+          break;
+        }
       }
+      if (face_offset) break;
     }
     std::optional<Eigen::Vector2d> top_offset;
     for (const double dx : slides(half_d)) {
       for (const double dy : slides(half_w)) {
         const double px = top_x + dx, py = y + dy;
+        const bool inside = std::abs(py) + hy <= world.trailer.width / 2 - kMargin &&
+                            px + hx <= world.trailer.depth - kMargin;
         // Nothing above in the plate's way down, and no neighbour's top
         // under its cups (they would grip it too).
-        if (clear(px - hx, px + hx, py - hy, py + hy, b[i].z1 + kMargin,
+        if (inside &&
+            clear(px - hx, px + hx, py - hy, py + hy, b[i].z1 + kMargin,
                   b[i].z1 + g.pregrasp_distance) &&
             clear(px - hx + kCupInset, px + hx - kCupInset, py - hy + kCupInset,
                   py + hy - kCupInset, b[i].z1 - kCupReach, b[i].z1 + kMargin)) {
@@ -152,19 +165,21 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       } else {
         // Off the arm's axis the plate meets the face at an angle: keep its near edge off it.
         const double gap = g.grasp_gap + g.plate_half_width * std::sin(std::abs(yaw));
-        const Eigen::Vector3d at_face = face + Eigen::Vector3d(0, *face_dy, 0);
+        const Eigen::Vector3d at_face =
+            face + Eigen::Vector3d(0, face_offset->x(), face_offset->y());
         c.grasp = {at_face - Eigen::Vector3d(gap, 0, 0), 0.0};
         c.pregrasp = {at_face - Eigen::Vector3d(g.pregrasp_distance, 0, 0), 0.0};
-        // Pulled out until clear of what it rested on: the drop-off move
-        // after it swings the plate freely.
-        c.lift = {c.grasp.position + Eigen::Vector3d(0, 0, g.retract_lift), 0.0};
+        // Lifted off what it rests on (and over the lowered nose), then pulled
+        // out until clear of it: the drop-off move after that swings freely.
+        const double lift = std::max(g.retract_lift, g.nose_top + kMargin - b[i].z0);
+        c.lift = {c.grasp.position + Eigen::Vector3d(0, 0, lift), 0.0};
         c.retract = {c.lift->position - Eigen::Vector3d(b[i].x1 - b[i].x0 + kMargin, 0, 0), 0.0};
       }
       if (!reachable(robot, c.grasp, at) || !reachable(robot, c.pregrasp, at)) return;
       ranked.push_back(
           {c, mismatches, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
     };
-    if (face_dy && std::abs(yaw) <= g.max_face_yaw) add(false);
+    if (face_offset && std::abs(yaw) <= g.max_face_yaw) add(false);
     if (top_offset) add(true);
   }
   std::stable_sort(ranked.begin(), ranked.end(), [](const Ranked& a, const Ranked& b) {
@@ -210,7 +225,7 @@ std::optional<sim::PlateTarget> dropoff_target(const sim::World& world,
 
 std::optional<SweepPlan> sweep_plan(const sim::SceneAnalysis& scene, sim::Action action,
                                     const Geometry& g, double scoop_extension,
-                                    const sim::Config& current) {
+                                    const sim::Config& current, double trailer_depth) {
   if (scene.front_pile.empty()) return std::nullopt;
   const double tip = g.conveyor_length + scoop_extension;  // ahead of base_x
   SweepPlan p;
@@ -218,6 +233,7 @@ std::optional<SweepPlan> sweep_plan(const sim::SceneAnalysis& scene, sim::Action
   p.start_base_x = std::min(current[sim::kBaseX], scene.pile_near_x - tip - g.nose_clearance);
   double far = scene.pile_far_x + g.sweep_overshoot;
   if (!scene.first_wall.empty()) far = std::min(far, scene.wall_near_x - kMargin);
+  far = std::min(far, trailer_depth - kMargin);
   p.end_base_x = std::max(p.start_base_x, far - tip);
   // Higher sweeps skim higher: the scoop rides over what lies flat.
   switch (sim::height(action)) {

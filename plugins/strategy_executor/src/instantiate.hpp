@@ -69,9 +69,10 @@ struct SweepPlan {
   std::vector<std::uint32_t> swept;  // the pile boxes the sweep drives through
 };
 
-// nullopt when there is no pile in front to sweep.
+// nullopt when there is no pile in front to sweep. The scoop stops short of
+// the first wall behind the pile, and of the trailer's front wall.
 std::optional<SweepPlan> sweep_plan(const sim::SceneAnalysis& scene, sim::Action action,
                                     const Geometry& g, double scoop_extension,
-                                    const sim::Config& current);
+                                    const sim::Config& current, double trailer_depth);
 
 }  // namespace plr::executor
