@@ -107,6 +107,7 @@ class ExecutorNode : public plr::Node {
                          "nose_sweep",
                          "arm_clear",
                          "retreat_m",
+                         "dropoff_backoff_m",
                          "progress"});
     report_dir_ = params().get<std::string>("report_dir", "report");
     env_ = params().get<std::string>("env", "");
@@ -131,6 +132,7 @@ class ExecutorNode : public plr::Node {
     max_candidates_ = params().get<std::uint64_t>("pick_candidates", 4);
     settle_s_ = params().get<double>("settle_s", 0.3);
     retreat_m_ = params().get<double>("retreat_m", 0.3);
+    dropoff_backoff_m_ = params().get<double>("dropoff_backoff_m", 0.5);
     show_progress_ = params().get<bool>("progress", true);
     for (auto [key, target] :
          {std::pair{"nose_home", &nose_home_}, std::pair{"nose_down", &nose_down_},
@@ -314,8 +316,11 @@ class ExecutorNode : public plr::Node {
     auto& boxes = req.world->boxes;
     boxes.erase(std::remove_if(boxes.begin(), boxes.end(),
                                [&](const msg::BoxState& b) {
+                                 // A held box is part of the arm: the planner needs it.
                                  return std::find(leave_out.begin(), leave_out.end(), b.id()) !=
-                                        leave_out.end();
+                                            leave_out.end() &&
+                                        std::find(w.held.begin(), w.held.end(), b.id()) ==
+                                            w.held.end();
                                }),
                 boxes.end());
     req.held_box_ids = w.held;
@@ -489,11 +494,22 @@ class ExecutorNode : public plr::Node {
         run.failed_grasp = true;
         log().info("{}: box {} dropped while retracting", action_name_, chosen->box);
       }
-      if (const auto drop =
-              dropoff_target(w.world, w.held, robot_, geometry_, w.q, chosen->from_top))
-        step("drop-off", PlanMode::kArm, pose(*drop), Suction::Keep, Suction::Off, run);
-      else
-        log().warn("{}: no reachable drop-off pose", action_name_);
+      // Room for the arm to swing the box down to the nose: back away from
+      // the structure first.
+      if (!w.held.empty())
+        step("back off", PlanMode::kBaseLine,
+             joints({{sim::kBaseX, w.q[sim::kBaseX] - dropoff_backoff_m_}}), Suction::Keep,
+             Suction::Keep, run);
+      // A place the arm reaches may still fold it into itself: try the next.
+      bool dropped = false;
+      const Observed at = observe();
+      for (const auto& drop : dropoff_targets(at.world, at.held, robot_, geometry_, at.q,
+                                              chosen->from_top, max_candidates_)) {
+        if ((dropped =
+                 step("drop-off", PlanMode::kArm, pose(drop), Suction::Keep, Suction::Off, run)))
+          break;
+      }
+      if (!dropped) log().warn("{}: no drop-off pose could be planned", action_name_);
     }
     // The folded arm leaves the belt free, and the nose room to rise.
     step("arm clear", PlanMode::kArm,
@@ -785,7 +801,7 @@ class ExecutorNode : public plr::Node {
   sim::ObservationParams obs_;
   Geometry geometry_;
   double plan_timeout_s_ = 5, execute_timeout_s_ = 300, service_wait_s_ = 60, settle_s_ = 0.3;
-  double retreat_m_ = 0.3;
+  double retreat_m_ = 0.3, dropoff_backoff_m_ = 0.5;
   std::chrono::milliseconds retry_{50};
   std::uint64_t max_idle_ = 6, max_actions_ = 0, max_candidates_ = 4;
   std::vector<double> nose_home_{0.5, 0.0, 0.0}, nose_down_{0.0, 0.05, 0.0},

@@ -194,10 +194,11 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
   return out;
 }
 
-std::optional<sim::PlateTarget> dropoff_target(const sim::World& world,
-                                               const std::vector<std::uint32_t>& held,
-                                               const sim::RobotModel& robot, const Geometry& g,
-                                               const sim::Config& at, bool from_top) {
+std::vector<sim::PlateTarget> dropoff_targets(const sim::World& world,
+                                              const std::vector<std::uint32_t>& held,
+                                              const sim::RobotModel& robot, const Geometry& g,
+                                              const sim::Config& at, bool from_top,
+                                              std::size_t max_count) {
   // The held load sticks out of the plate by its depth (front grasp) or
   // hangs below it by its height (top grasp).
   double depth = 0.3, height = 0.3;
@@ -208,19 +209,23 @@ std::optional<sim::PlateTarget> dropoff_target(const sim::World& world,
     height = std::max(height, bb.z1 - bb.z0);
   }
   // The folded arm cannot bend enough to reach right over the nose hinge, so
-  // look further along the conveyor and higher up until the IK has a solution.
+  // look further along the conveyor and higher up for IK solutions.
+  std::vector<sim::PlateTarget> out;
   const double base_x = at[sim::kBaseX];
   for (double extra_z : {0.0, 0.2, 0.4}) {
-    for (double ahead = g.dropoff_ahead; ahead <= g.conveyor_length - 0.05; ahead += 0.1) {
+    // The box's centre `ahead` of base_x, the whole box over the conveyor.
+    for (double ahead = g.dropoff_ahead; ahead <= g.conveyor_length - depth / 2 + 1e-9;
+         ahead += 0.1) {
       sim::PlateTarget t;
       if (from_top)
         t = {{base_x + ahead, 0.0, g.dropoff_bottom + extra_z + height + g.grasp_gap}, M_PI / 2};
       else
         t = {{base_x + ahead - depth / 2, 0.0, g.dropoff_bottom + extra_z + height / 2}, 0.0};
-      if (reachable(robot, t, at)) return t;
+      if (reachable(robot, t, at)) out.push_back(t);
+      if (out.size() >= max_count) return out;
     }
   }
-  return std::nullopt;
+  return out;
 }
 
 std::optional<SweepPlan> sweep_plan(const sim::SceneAnalysis& scene, sim::Action action,

@@ -54,13 +54,14 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
                                            const sim::RobotModel& robot, const Geometry& g,
                                            const sim::Config& current, std::size_t max_count);
 
-// Where the plate releases held boxes over the nose, for a base at base_x,
-// with the plate facing forward (front grasp) or down (top grasp); the first
-// reachable of a few places. nullopt when none is.
-std::optional<sim::PlateTarget> dropoff_target(const sim::World& world,
-                                               const std::vector<std::uint32_t>& held,
-                                               const sim::RobotModel& robot, const Geometry& g,
-                                               const sim::Config& at, bool from_top);
+// Where the plate may release held boxes over the nose, for a base at
+// base_x, with the plate facing forward (front grasp) or down (top grasp):
+// reachable places, best first, at most max_count.
+std::vector<sim::PlateTarget> dropoff_targets(const sim::World& world,
+                                              const std::vector<std::uint32_t>& held,
+                                              const sim::RobotModel& robot, const Geometry& g,
+                                              const sim::Config& at, bool from_top,
+                                              std::size_t max_count);
 
 struct SweepPlan {
   double start_base_x = 0;           // behind the pile, nose lowered there

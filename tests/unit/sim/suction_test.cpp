@@ -22,6 +22,7 @@ World one_box(double mass) {
 SuctionPlate plate_at(double z) {
   SuctionPlate p;
   p.extent = {0.6, 0.4};
+  p.cup_force = 45.0;
   p.pose = Eigen::Translation3d(10.0, 0.0, z) * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX());
   return p;
 }

@@ -43,7 +43,7 @@ struct SuctionPlate {
   int cups_x = 4;
   int cups_y = 3;
   double cup_radius = 0.03;  // m; a cup seals only with its whole rim on the face
-  double cup_force = 45.0;   // N a cup holds
+  double cup_force = 90.0;   // N a cup holds (60 mm bellows cup, safety factor 2)
   double reach = 0.02;      // largest gap between cup face and box face that still grips
   double max_tilt = 0.26;   // rad between the plate normal and the box face normal
 };
