@@ -265,11 +265,18 @@ class ExecutorNode : public plr::Node {
     if (!r) {
       if (r.error().code == PLR_ERR_UNAVAILABLE)
         throw SimulatorLost{std::string(service) + ": " + r.error().message};
-      log().warn("{} 'checkpoint' failed: {}", service, r.error().message);
+      fail_checkpoint(service, r.error().message);
     } else if (!r.value()->ok()) {
-      log().warn("{} 'checkpoint' refused: {}", service,
-                 r.value()->message() ? r.value()->message()->str() : "");
+      fail_checkpoint(service, r.value()->message() ? r.value()->message()->str() : "refused");
     }
+  }
+
+  // A checkpoint not taken only costs a longer repeat; one not restored
+  // would continue on a world that is not the trailer's: stop instead.
+  void fail_checkpoint(const char* service, const std::string& why) {
+    if (std::string_view(service) == "sim/restore")
+      throw std::runtime_error(std::string(service) + " 'checkpoint': " + why);
+    log().warn("{} 'checkpoint' failed: {}", service, why);
   }
 
   // ---- Planning and execution ---------------------------------------------
@@ -414,13 +421,20 @@ class ExecutorNode : public plr::Node {
       if (there && before == Suction::Keep && after == Suction::Keep) return true;
     }
     last_status_ = msg::PlanStatus::Solved;
-    PlanResult p = plan_goal(mode, w, goal, leave_out, run);
+    // Boxes lying on the nose ride along with nose and base moves (or are
+    // carried off by the belt): they are not obstacles to them.
+    std::vector<std::uint32_t> ignored = leave_out;
+    if (mode == PlanMode::kNose || mode == PlanMode::kBaseLine) {
+      for (auto id : boxes_on_nose(w))
+        if (std::find(ignored.begin(), ignored.end(), id) == ignored.end()) ignored.push_back(id);
+    }
+    PlanResult p = plan_goal(mode, w, goal, ignored, run);
     if (!p.ok && last_status_ == msg::PlanStatus::StartInvalid) {
       // The planner did not escape by itself: ask for M6 explicitly, then retry.
       PlanResult escape = plan_once(PlanMode::kEscape, w, {}, {}, run);
       if (escape.ok && execute(*escape.trajectory, Suction::Keep, Suction::Keep, run, settle_s_)) {
         w = observe();
-        p = plan_goal(mode, w, goal, leave_out, run);
+        p = plan_goal(mode, w, goal, ignored, run);
       }
     }
     if (!p.ok) {
@@ -435,6 +449,37 @@ class ExecutorNode : public plr::Node {
                                                   (*out)->held_box_ids()->end())
                      : std::vector<std::uint32_t>{};
     return true;
+  }
+
+  // Boxes touching the conveyor or the scoop (within 2 cm of their shapes' bounds).
+  std::vector<std::uint32_t> boxes_on_nose(const Observed& w) const {
+    constexpr double kTouch = 0.02;
+    std::vector<Eigen::Isometry3d> poses;
+    robot_.forwardKinematics(w.q, poses);
+    std::vector<sim::Bounds> nose;
+    for (const char* name : {"nose_conveyor", "nose_scoop"}) {
+      const int l = robot_.linkIndex(name);
+      if (l < 0) continue;
+      for (const auto& shape : robot_.links()[static_cast<std::size_t>(l)].shapes) {
+        if (shape.type != sim::CollisionShape::Type::kBox) continue;
+        const Eigen::Isometry3d pose = poses[static_cast<std::size_t>(l)] * shape.origin;
+        const Eigen::Vector3d e = pose.linear().cwiseAbs() * (shape.size / 2);
+        const Eigen::Vector3d lo = pose.translation() - e, hi = pose.translation() + e;
+        nose.push_back({lo.x(), hi.x(), lo.y(), hi.y(), lo.z(), hi.z()});
+      }
+    }
+    std::vector<std::uint32_t> out;
+    for (const auto& box : w.world.boxes) {
+      const auto b = sim::bounds(box);
+      for (const auto& n : nose) {
+        if (b.x0 < n.x1 + kTouch && n.x0 < b.x1 + kTouch && b.y0 < n.y1 + kTouch &&
+            n.y0 < b.y1 + kTouch && b.z0 < n.z1 + kTouch && n.z0 < b.z1 + kTouch) {
+          out.push_back(box.id);
+          break;
+        }
+      }
+    }
+    return out;
   }
 
   Goal joints(std::initializer_list<std::pair<int, double>> j) { return Goal{j, std::nullopt}; }
