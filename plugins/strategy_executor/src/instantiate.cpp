@@ -14,10 +14,10 @@ constexpr double kMargin = 0.03;     // m, footprint shrink and clearances
 constexpr double kClearance = 0.02;  // m, the plate's distance to boxes it must not touch
 constexpr double kSlide = 0.05;      // m, steps of the plate off the face's centre
 constexpr double kCovered = 0.1;     // m, the plate's centre stays this far inside the face
+constexpr double kFlush = 0.004;     // m a neighbour may stand out of the face unnoticed
 // The cups' rims stay this far inside the plate's outline (plus kClearance),
 // and grip faces up to this far below it.
 constexpr double kCupInset = 0.04;
-constexpr double kFlush = 0.004;  // m a neighbour may stand out of the face unnoticed
 constexpr double kCupReach = 0.03;
 
 sim::Height height_class(double top, double mid, double high) {
@@ -151,6 +151,8 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       }
       if (top_offset) break;
     }
+    // Front grasps lift the box off what it rests on and over the lowered nose.
+    const double lift = std::max(g.retract_lift, g.nose_top + kMargin - b[i].z0);
     auto add = [&](bool from_top) {
       PickCandidate c;
       c.box = box.id;
@@ -171,7 +173,6 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
         c.pregrasp = {at_face - Eigen::Vector3d(g.pregrasp_distance, 0, 0), 0.0};
         // Lifted off what it rests on (and over the lowered nose), then pulled
         // out until clear of it: the drop-off move after that swings freely.
-        const double lift = std::max(g.retract_lift, g.nose_top + kMargin - b[i].z0);
         c.lift = {c.grasp.position + Eigen::Vector3d(0, 0, lift), 0.0};
         c.retract = {c.lift->position - Eigen::Vector3d(b[i].x1 - b[i].x0 + kMargin, 0, 0), 0.0};
       }
@@ -179,7 +180,10 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       ranked.push_back(
           {c, mismatches, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
     };
-    if (face_offset && std::abs(yaw) <= g.max_face_yaw) add(false);
+    // A box taken by its face is lifted before it comes out: nothing may rest on it.
+    const bool liftable = clear(b[i].x0 + kMargin, b[i].x1 - kMargin, b[i].y0 + kMargin,
+                                b[i].y1 - kMargin, b[i].z1, b[i].z1 + lift);
+    if (face_offset && liftable && std::abs(yaw) <= g.max_face_yaw) add(false);
     if (top_offset) add(true);
   }
   std::stable_sort(ranked.begin(), ranked.end(), [](const Ranked& a, const Ranked& b) {
