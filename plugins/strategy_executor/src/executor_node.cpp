@@ -258,25 +258,18 @@ class ExecutorNode : public plr::Node {
     }
   }
 
-  void snapshot_or_restore(const char* service) {
+  // Empty when the simulator took or restored the checkpoint, else why not.
+  std::string snapshot_or_restore(const char* service) {
     flatbuffers::FlatBufferBuilder fbb;
     fbb.Finish(msg::CreateSnapshotRequestDirect(fbb, "checkpoint"));
     auto r = call_retry<msg::SnapshotRequest, msg::SnapshotReply>(service, fbb, 60.0);
     if (!r) {
       if (r.error().code == PLR_ERR_UNAVAILABLE)
         throw SimulatorLost{std::string(service) + ": " + r.error().message};
-      fail_checkpoint(service, r.error().message);
-    } else if (!r.value()->ok()) {
-      fail_checkpoint(service, r.value()->message() ? r.value()->message()->str() : "refused");
+      return r.error().message;
     }
-  }
-
-  // A checkpoint not taken only costs a longer repeat; one not restored
-  // would continue on a world that is not the trailer's: stop instead.
-  void fail_checkpoint(const char* service, const std::string& why) {
-    if (std::string_view(service) == "sim/restore")
-      throw std::runtime_error(std::string(service) + " 'checkpoint': " + why);
-    log().warn("{} 'checkpoint' failed: {}", service, why);
+    if (!r.value()->ok()) return r.value()->message() ? r.value()->message()->str() : "refused";
+    return {};
   }
 
   // ---- Planning and execution ---------------------------------------------
@@ -613,7 +606,9 @@ class ExecutorNode : public plr::Node {
   }
 
   void checkpoint() {
-    snapshot_or_restore("sim/snapshot");
+    // A checkpoint not taken only costs a longer repeat after a crash.
+    if (const auto why = snapshot_or_restore("sim/snapshot"); !why.empty())
+      log().warn("sim/snapshot 'checkpoint' failed: {}", why);
     checkpoint_robot_time_ = stats_.robot_time_s;
     checkpoint_curve_ = stats_.curve.size();
   }
@@ -622,7 +617,9 @@ class ExecutorNode : public plr::Node {
     log().warn("simulator lost ({}); waiting for it to restart", why);
     report_progress("waiting for the simulator");
     wait_for_simulator();
-    snapshot_or_restore("sim/restore");
+    // Going on without it would unload a world that is not the trailer's.
+    if (const auto why = snapshot_or_restore("sim/restore"); !why.empty())
+      throw std::runtime_error("sim/restore 'checkpoint': " + why);
     stats_.robot_time_s = checkpoint_robot_time_;
     stats_.curve.resize(checkpoint_curve_);
     ++stats_.recoveries;
