@@ -400,5 +400,68 @@ INSTANTIATE_TEST_SUITE_P(Modes, TopicThreadsTest,
                            return info.param == WaitMode::kBlocking ? "Blocking" : "Polling";
                          });
 
+TEST_F(TopicTest, PublishSharedKeepsTheSlotForLocalReadersOfTheSameBytes) {
+  Publisher pub = make_pub(config(2, 64, Policy::kKeepLast));
+  Subscriber sub = make_sub();
+  auto l = pub.loan(8);
+  ASSERT_TRUE(l.has_value());
+  std::byte* slot = l->data();
+  std::memset(slot, 7, 8);
+  auto local = pub.publish_shared(std::move(*l), MessageType{42, 3}, 2, 4);
+  ASSERT_TRUE(local.has_value()) << to_string(local.error());
+  EXPECT_EQ(local->data().data(), slot + 2) << "the publisher's process reads the slot in place";
+  EXPECT_EQ(local->info().seq, 0u);
+  auto remote = sub.take();
+  ASSERT_TRUE(remote.has_value());
+  EXPECT_EQ(remote->info().seq, 0u);  // its own mapping of the same slot
+  EXPECT_EQ(remote->info().size, 4u);
+  EXPECT_EQ(std::to_integer<int>(remote->data()[3]), 7);
+  remote = sub.take(kNoWait);  // drops the subscriber's hold (kNoData)
+  // Keep-last may overwrite any slot nobody holds: only the other one is free.
+  for (int i = 0; i < 3; ++i) {
+    auto again = pub.loan(8);
+    ASSERT_TRUE(again.has_value());
+    EXPECT_NE(again->data(), slot) << "a slot held by the publisher's process is not reused";
+  }
+  local = unexpected(Error::kNoData);  // drops the hold
+  bool reused = false;
+  for (int i = 0; i < 2 && !reused; ++i) {
+    auto again = pub.loan(8);
+    ASSERT_TRUE(again.has_value());
+    reused = again->data() == slot;
+  }
+  EXPECT_TRUE(reused);
+}
+
+TEST_F(TopicTest, SpinThenSleepSpinsOnlyItsBudgetWhenIdle) {
+  TopicConfig c = config(4, 64, Policy::kKeepLast);
+  c.spin_us = 200;
+  Publisher pub = make_pub(c);
+  Subscriber sub = make_sub();
+  EXPECT_EQ(sub.config().spin_us, 200u);
+  timespec t0{}, t1{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t0);
+  EXPECT_EQ(sub.take(300ms).error(), Error::kTimeout);
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t1);
+  const double cpu_ms = (t1.tv_sec - t0.tv_sec) * 1e3 + (t1.tv_nsec - t0.tv_nsec) / 1e6;
+  // 200 µs of spinning, then futex sleeps with a liveness check every 5 ms.
+  EXPECT_LT(cpu_ms, 30.0) << "an idle spin-then-sleep reader must not burn its core";
+  std::thread writer([&] {
+    std::this_thread::sleep_for(20ms);
+    send(pub, 5);
+  });
+  auto s = sub.take(5s);
+  writer.join();
+  ASSERT_TRUE(s.has_value());
+  EXPECT_EQ(first_byte(*s), 5) << "a message after the spin budget still wakes the sleeper";
+}
+
+TEST_F(TopicTest, SpinBudgetIsBounded) {
+  TopicConfig c = config(4, 64, Policy::kKeepLast);
+  c.spin_us = 10'001;
+  auto p = PublisherBuilder().run_id(run_).topic("telemetry/joint_state").config(c).create();
+  EXPECT_EQ(p.error(), Error::kInvalidArgument);
+}
+
 }  // namespace
 }  // namespace plr::shm

@@ -11,12 +11,16 @@
 namespace plr::shm::detail {
 
 inline constexpr std::uint64_t kMagic = 0x316d68732d726c70ULL;  // "plr-shm1"
-inline constexpr std::uint32_t kLayoutVersion = 1;
+inline constexpr std::uint32_t kLayoutVersion = 2;
 inline constexpr std::size_t kLine = 64;
 inline constexpr std::uint32_t kMaxSlots = 4096;
 inline constexpr std::uint32_t kMaxSlotSize = 1u << 30;
-inline constexpr std::uint32_t kMaxSubscribers = 63;  // one reader bit each in a 64-bit word
+inline constexpr std::uint32_t kMaxSubscribers = 62;  // one reader bit each in a 64-bit word
 inline constexpr std::uint64_t kWriterBit = 1ULL << 63;
+// The publisher's own hold on a slot it published in place, for readers in
+// its process (Publisher::publish_shared).
+inline constexpr std::uint64_t kOwnerBit = 1ULL << 62;
+inline constexpr std::uint32_t kMaxSpinUs = 10'000;
 inline constexpr std::uint64_t kNeverWritten = ~0ULL;
 inline constexpr std::size_t kNameBytes = 128;
 inline constexpr std::int32_t kReclaiming = -1;  // SubscriberEntry::pid while being freed
@@ -55,6 +59,7 @@ struct RingGeometry {
   std::uint32_t max_subscribers;
   Policy policy;
   WaitMode wait_mode;
+  std::uint32_t spin_us;  // kBlocking: busy-wait this long before sleeping
 };
 
 struct alignas(kLine) RingHeader {
@@ -72,7 +77,8 @@ struct alignas(kLine) SubscriberEntry {
 };
 
 struct alignas(kLine) SlotHeader {
-  // kWriterBit while the publisher owns the slot; bit i while reader i holds it.
+  // kWriterBit while the publisher owns the slot; bit i while reader i holds
+  // it; kOwnerBit while readers in the publisher's process hold it.
   std::atomic<std::uint64_t> readers;
   std::atomic<std::uint64_t> seq;  // kNeverWritten until first publish
   std::uint64_t type_id;

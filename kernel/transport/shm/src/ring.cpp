@@ -39,7 +39,7 @@ Result<void> Ring::check(const RingGeometry& g) noexcept {
                   g.max_subscribers <= kMaxSubscribers &&
                   (g.policy == Policy::kKeepLast || g.policy == Policy::kReliable) &&
                   (g.wait_mode == WaitMode::kBlocking || g.wait_mode == WaitMode::kPolling) &&
-                  bytes(g) <= (std::size_t{16} << 30);
+                  g.spin_us <= kMaxSpinUs && bytes(g) <= (std::size_t{16} << 30);
   if (!ok) return unexpected(Error::kInvalidArgument);
   return {};
 }
@@ -165,7 +165,7 @@ void Producer::cancel(std::uint32_t slot) noexcept {
 
 Result<std::uint64_t> Producer::publish(std::uint32_t slot, MessageType type,
                                         std::uint64_t correlation, std::size_t offset,
-                                        std::size_t size) noexcept {
+                                        std::size_t size, std::uint64_t keep) noexcept {
   const std::size_t cap = ring_.geo.slot_size;
   if (offset > cap || size > cap - offset) {
     cancel(slot);
@@ -180,7 +180,7 @@ Result<std::uint64_t> Producer::publish(std::uint32_t slot, MessageType type,
   h.offset = static_cast<std::uint32_t>(offset);
   h.check = header_check(seq, type.type_id, correlation, type.schema_version, h.size, h.offset);
   h.seq.store(seq, std::memory_order_relaxed);
-  h.readers.store(0, std::memory_order_release);
+  h.readers.store(keep, std::memory_order_release);
   ring_.desc[seq % ring_.geo.slot_count].store(pack_desc(seq, slot), std::memory_order_release);
   ring_.header->head.store(seq + 1, std::memory_order_seq_cst);
   notify(*ring_.doorbell);

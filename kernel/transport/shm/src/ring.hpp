@@ -24,10 +24,12 @@ void notify(Notifier& n) noexcept;
 // Waits until ready() is true, the deadline passes (kTimeout) or check() — run
 // every kLivenessSlice — returns an error, which is passed on. Returns as soon
 // as ready() is true once (it may claim something).
-// spin_first: busy checks before the first sleep (0 = sleep at once).
+// spin_first: busy checks before the first sleep (0 = sleep at once);
+// spin_for: then busy-wait up to this long before the first sleep.
 template <class Ready, class Check>
 Result<void> wait_until(Notifier& n, WaitMode mode, Clock::time_point deadline, Ready ready,
-                        Check check, std::uint32_t spin_first = 0) noexcept;
+                        Check check, std::uint32_t spin_first = 0,
+                        Clock::duration spin_for = Clock::duration::zero()) noexcept;
 
 // A reliable publisher that finds the ring full usually gets a slot back
 // within a microsecond or two: spin that long before paying for a futex sleep.
@@ -74,8 +76,11 @@ class Producer {
   Result<std::uint32_t> loan(std::size_t max_size, Timeout timeout, CheckFn check = nullptr,
                              const void* ctx = nullptr) noexcept;
   void cancel(std::uint32_t slot) noexcept;
+  // keep: reader bits the slot starts with (kOwnerBit: the publisher's
+  // process still reads it in place).
   Result<std::uint64_t> publish(std::uint32_t slot, MessageType type, std::uint64_t correlation,
-                                std::size_t offset, std::size_t size) noexcept;
+                                std::size_t offset, std::size_t size,
+                                std::uint64_t keep = 0) noexcept;
   // Frees the table entries and held slots of readers whose process is gone.
   std::size_t reclaim_dead_readers() noexcept;
   std::uint64_t published() const noexcept { return published_.load(std::memory_order_relaxed); }

@@ -147,7 +147,7 @@ Result<ServiceServer> ServiceServerBuilder::create() const {
     return unexpected(Error::kInvalidArgument);
   }
   const Layout l{config_.max_clients, RingGeometry{config_.slot_count, config_.slot_size, 1,
-                                                   Policy::kReliable, config_.wait_mode}};
+                                                   Policy::kReliable, config_.wait_mode, 0}};
   if (auto ok = Ring::check(l.geo); !ok) return unexpected(ok.error());
   auto seg = Segment::create(service_segment_name(run_id_, service_),
                              segment_bytes(l.max_clients, l.geo), SegmentKind::kService, service_);

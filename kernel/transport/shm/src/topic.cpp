@@ -19,7 +19,8 @@ namespace {
 constexpr std::size_t kRingOffset = detail::align_up(sizeof(detail::SegmentHeader), detail::kLine);
 
 TopicConfig to_config(const RingGeometry& g) {
-  return TopicConfig{g.slot_count, g.slot_size, g.max_subscribers, g.policy, g.wait_mode};
+  return TopicConfig{g.slot_count, g.slot_size, g.max_subscribers,
+                     g.policy,     g.wait_mode, g.spin_us};
 }
 }  // namespace
 
@@ -101,7 +102,7 @@ Result<Publisher> PublisherBuilder::create() const {
     return unexpected(Error::kInvalidArgument);
   }
   const RingGeometry g{config_.slot_count, config_.slot_size, config_.max_subscribers,
-                       config_.policy, config_.wait_mode};
+                       config_.policy,     config_.wait_mode, config_.spin_us};
   if (auto ok = Ring::check(g); !ok) return unexpected(ok.error());
   auto seg = Segment::create(topic_segment_name(run_id_, topic_), kRingOffset + Ring::bytes(g),
                              SegmentKind::kTopic, topic_);
@@ -124,6 +125,20 @@ Result<std::uint64_t> Publisher::publish(Loan&& loan, MessageType type, std::siz
   if (loan.producer_ != &impl_->producer) return unexpected(Error::kInvalidArgument);
   loan.producer_ = nullptr;
   return impl_->producer.publish(loan.slot_, type, 0, offset, size);
+}
+
+Result<Sample> Publisher::publish_shared(Loan&& loan, MessageType type, std::size_t offset,
+                                         std::size_t size) noexcept {
+  if (loan.producer_ != &impl_->producer) return unexpected(Error::kInvalidArgument);
+  const std::uint32_t slot = std::exchange(loan.slot_, 0);
+  loan.producer_ = nullptr;
+  auto seq = impl_->producer.publish(slot, type, 0, offset, size, detail::kOwnerBit);
+  if (!seq) return unexpected(seq.error());
+  const Ring& r = impl_->producer.ring();
+  const MessageInfo info{type.type_id, type.schema_version, static_cast<std::uint32_t>(size), *seq,
+                         0};
+  return Sample(&r.slot(slot), &r.header->space, detail::kOwnerBit,
+                {r.payload(slot) + offset, size}, info);
 }
 
 Result<std::uint64_t> Publisher::publish_copy(MessageType type, std::span<const std::byte> bytes,
@@ -224,7 +239,8 @@ Result<Sample> Subscriber::take(Timeout timeout) noexcept {
     if (timeout == kNoWait) return unexpected(Error::kNoData);
     auto w = detail::wait_until(
         *im.consumer.ring().doorbell, im.config.wait_mode, deadline,
-        [&] { return im.consumer.has_data() || im.closed(); }, [&] { return im.watch.check(); });
+        [&] { return im.consumer.has_data() || im.closed(); }, [&] { return im.watch.check(); }, 0,
+        std::chrono::microseconds(im.config.spin_us));
     if (!w) return unexpected(w.error());
   }
 }

@@ -11,13 +11,22 @@ namespace plr::shm::detail {
 
 template <class Ready, class Check>
 Result<void> wait_until(Notifier& n, WaitMode mode, Clock::time_point deadline, Ready ready,
-                        Check check, std::uint32_t spin_first) noexcept {
+                        Check check, std::uint32_t spin_first, Clock::duration spin_for) noexcept {
   auto next_check = Clock::now() + kLivenessSlice;
   std::uint32_t spins = 0;
   // Check every few pauses only: each check reads lines the peer is writing.
   for (std::uint32_t i = 0; i < spin_first; i += 8) {
     if (ready()) return {};
     for (int k = 0; k < 8; ++k) cpu_relax();
+  }
+  if (spin_for > Clock::duration::zero()) {
+    // Bounded by the budget (and the deadline): an idle reader spins once, then sleeps.
+    const auto spin_end = std::min(deadline, Clock::now() + spin_for);
+    for (std::uint32_t i = 1;; ++i) {
+      if (ready()) return {};
+      cpu_relax();
+      if (i % 64 == 0 && Clock::now() >= spin_end) break;
+    }
   }
   for (;;) {
     if (ready()) return {};

@@ -1,4 +1,4 @@
-// Topics across processes: one publisher per topic segment, up to 63
+// Topics across processes: one publisher per topic segment, up to 62
 // subscribers, messages read in place (zero copy).
 //
 // Threading: a Publisher is used by one thread at a time (loan/publish); a
@@ -69,6 +69,7 @@ class Sample {
 
  private:
   friend class Subscriber;
+  friend class Publisher;
   friend class ServiceServer;
   friend class ServiceClient;
   Sample(detail::SlotHeader* slot, detail::Notifier* space, std::uint64_t bit,
@@ -97,6 +98,11 @@ class Publisher {
   // Publishes buffer()[offset, offset + size). Returns the sequence number.
   // On error the slot goes back unpublished.
   Result<std::uint64_t> publish(Loan&& loan, MessageType type, std::size_t offset,
+                                std::size_t size) noexcept;
+  // Publishes like publish() and keeps the slot for readers in this process:
+  // the returned Sample reads the same bytes in place, and the slot is reused
+  // only once it is dropped too (and every subscriber is done).
+  Result<Sample> publish_shared(Loan&& loan, MessageType type, std::size_t offset,
                                 std::size_t size) noexcept;
   // loan + one memcpy + publish, for messages already built elsewhere.
   Result<std::uint64_t> publish_copy(MessageType type, std::span<const std::byte> bytes,

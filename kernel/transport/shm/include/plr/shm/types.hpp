@@ -41,8 +41,12 @@ enum class Policy : std::uint32_t {
 
 // How a reader waits for data.
 enum class WaitMode : std::uint32_t {
-  kBlocking = 1,  // futex in the segment; the publisher wakes only if someone sleeps
-  kPolling = 2,   // busy-poll the ring head: lowest latency, burns the reader's core
+  // futex in the segment; the publisher wakes only if someone sleeps. With
+  // TopicConfig::spin_us > 0 a reader first busy-waits that long after each
+  // message it took (spin then sleep): a steady stream never pays a wake-up,
+  // an idle topic costs one spin budget and then sleeps.
+  kBlocking = 1,
+  kPolling = 2,  // busy-poll the ring head: lowest latency, burns the reader's core
 };
 
 using Timeout = std::chrono::nanoseconds;
@@ -52,9 +56,10 @@ inline constexpr Timeout kForever = Timeout::max();
 struct TopicConfig {
   std::uint32_t slot_count = 16;        // messages in flight per topic (1..4096)
   std::uint32_t slot_size = 64 * 1024;  // payload bytes per slot (1..1 GiB)
-  std::uint32_t max_subscribers = 8;    // 1..63
+  std::uint32_t max_subscribers = 8;    // 1..62
   Policy policy = Policy::kKeepLast;
   WaitMode wait_mode = WaitMode::kBlocking;
+  std::uint32_t spin_us = 0;  // kBlocking: busy-wait budget before a futex sleep (0..10000)
 };
 
 // Header of a received message, copied out of shared memory once and
