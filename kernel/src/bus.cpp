@@ -103,9 +103,31 @@ Expected<std::uint64_t> Bus::advertise(Endpoint* owner, const std::string& topic
   return id;
 }
 
+plr_msg* Bus::loan(std::uint64_t publisher, std::size_t capacity, std::uint8_t** data) {
+  std::string name;
+  const Topic* topic = nullptr;
+  std::vector<Link*> links;
+  {
+    std::lock_guard lock(m_);
+    auto it = publishers_.find(publisher);
+    if (it == publishers_.end()) return nullptr;
+    topic = it->second;
+    name = topic->name;
+    links = links_;
+  }
+  for (auto* l : links) {
+    if (plr_msg* m = l->loan(name, capacity, data)) {
+      m->loan->topic = topic;
+      return m;
+    }
+  }
+  return msg_alloc(capacity, data);
+}
+
 Status Bus::publish(std::uint64_t publisher, plr_msg* msg) {
   MsgRef ref(msg);
   std::vector<std::shared_ptr<Subscription>> targets;
+  Topic* topic = nullptr;
   {
     std::lock_guard lock(m_);
     auto it = publishers_.find(publisher);
@@ -116,10 +138,15 @@ Status Bus::publish(std::uint64_t publisher, plr_msg* msg) {
     msg->schema_version = t.schema_version;
     msg->stamp_ns = wall_now_ns();
     msg->topic = &t;
+    topic = &t;
     t.messages.fetch_add(1, std::memory_order_relaxed);
     for (const auto& s : t.subs)
       if (s->owner->live.load(std::memory_order_acquire)) targets.push_back(s);
   }
+  // On the publisher's thread, before any reader can see it: the transport
+  // sends the loaned bytes in place, and then need not copy them.
+  if (msg->loan && msg->origin == nullptr && msg->loan->topic == topic && msg->loan->commit(*msg))
+    msg->origin = msg->loan->transport;
   for (const auto& s : targets) deliver(s, ref);
   return {};
 }

@@ -55,6 +55,13 @@ class Link {
   // answers through Bus::respond.
   virtual bool forward_call(const std::string& service, const MsgRef& request,
                             std::uint64_t id) = 0;
+  // A buffer for the next message a local node publishes on `topic`, in the
+  // transport's own memory (a shared-memory slot), or nullptr when the
+  // transport does not carry the topic. Called without the bus lock.
+  virtual plr_msg* loan(const std::string& /*topic*/, std::size_t /*capacity*/,
+                        std::uint8_t** /*data*/) {
+    return nullptr;
+  }
 };
 
 struct TopicStatsSnapshot {
@@ -84,6 +91,10 @@ class Bus {
 
   Expected<std::uint64_t> advertise(Endpoint* owner, const std::string& topic,
                                     std::uint64_t type_id, std::uint32_t schema_version);
+  // A buffer of `capacity` bytes to build the next message of `publisher` in:
+  // a transport's slot when the topic leaves the process (published there
+  // without a copy), plain memory otherwise. Null only for an unknown publisher.
+  plr_msg* loan(std::uint64_t publisher, std::size_t capacity, std::uint8_t** data);
   // Adopts `msg` (one reference).
   Status publish(std::uint64_t publisher, plr_msg* msg);
   Expected<std::uint64_t> subscribe(Endpoint* owner, const std::string& topic,

@@ -51,7 +51,8 @@ const std::vector<std::string> kTopKeys = {"pipeline", "plugin_paths", "clock", 
                                            "nodes",    "topics",       "remote"};
 const std::vector<std::string> kHostKeys = {"restart", "max_restarts", "backoff_ms"};
 const std::vector<std::string> kNodeKeys = {"plugin", "host", "params", "remap"};
-const std::vector<std::string> kTopicKeys = {"policy", "depth", "slot_size", "busy_poll"};
+const std::vector<std::string> kTopicKeys = {"policy", "depth", "slot_size", "busy_poll",
+                                             "spin_us"};
 const std::vector<std::string> kRemoteKeys = {"dds"};
 const std::vector<std::string> kDdsKeys = {"domain", "interfaces",           "export",
                                            "import", "allow_remote_control", "security_dir"};
@@ -564,6 +565,9 @@ void parse_topics(Checker& c, const Entry& e, Config& config) {
       }
       if (const Entry* s = find(settings, "busy_poll")) {
         if (auto v = c.bool_value(*s)) topic.busy_poll = *v;
+      }
+      if (const Entry* s = find(settings, "spin_us")) {
+        if (auto v = c.int_value(*s, 0, 10'000)) topic.spin_us = static_cast<std::uint32_t>(*v);
       }
     }
     config.topics.push_back(std::move(topic));

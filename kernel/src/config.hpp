@@ -38,6 +38,7 @@ struct TopicConfig {
   std::size_t depth = 64;           // queued messages per subscriber
   std::size_t slot_size = 1 << 20;  // bytes, for shared memory
   bool busy_poll = false;           // shared-memory readers spin instead of sleeping
+  std::uint32_t spin_us = 0;        // shared-memory readers spin this long, then sleep
   SourceLocation where;
 };
 

@@ -46,6 +46,16 @@ plr_msg* msg_wrap(const std::uint8_t* data, std::size_t size, std::uint64_t type
   return m;
 }
 
+plr_msg* msg_loaned(std::uint8_t* data, std::size_t capacity, std::unique_ptr<MsgLoan> loan) {
+  auto* m = new plr_msg;
+  m->external = data;
+  m->capacity = capacity;
+  m->size = capacity;
+  m->loan = std::move(loan);
+  g_live.fetch_add(1, std::memory_order_relaxed);
+  return m;
+}
+
 void msg_retain(const plr_msg* msg) {
   const_cast<plr_msg*>(msg)->refs.fetch_add(1, std::memory_order_relaxed);
 }

@@ -9,6 +9,20 @@
 #include <cstdint>
 #include <memory>
 
+namespace plr::kernel {
+// Memory a transport loaned for one message (a shared-memory slot). When the
+// bus publishes the message on the topic it was loaned for, it commits the
+// loan: the transport sends those very bytes, without a copy, and keeps them
+// readable for in-process readers until the message dies.
+struct MsgLoan {
+  virtual ~MsgLoan() = default;
+  // True when sent; false leaves the bytes untouched (the transport may copy them).
+  virtual bool commit(const plr_msg& msg) = 0;
+  const void* topic = nullptr;      // the bus topic it was loaned for
+  const void* transport = nullptr;  // becomes the message's origin once committed
+};
+}  // namespace plr::kernel
+
 struct plr_msg {
   std::atomic<std::uint32_t> refs{1};
   std::unique_ptr<std::uint8_t[]> storage;
@@ -23,9 +37,11 @@ struct plr_msg {
   // alive by `keep_alive` for as long as this message lives.
   const std::uint8_t* external = nullptr;
   std::shared_ptr<void> keep_alive;
-  // The transport that brought it from another process; that transport does
-  // not send it back.
+  // The transport that brought it from another process, or sent it from a
+  // loaned slot; that transport does not send it (again).
   const void* origin = nullptr;
+  // Set while the bytes are a transport's loaned memory (`external`).
+  std::unique_ptr<plr::kernel::MsgLoan> loan;
 };
 
 namespace plr::kernel {
@@ -34,6 +50,8 @@ plr_msg* msg_alloc(std::size_t capacity, std::uint8_t** data);
 // A buffer holding a copy of bytes that arrived from elsewhere.
 plr_msg* msg_copy(const std::uint8_t* data, std::size_t size, std::uint64_t type_id,
                   std::uint32_t schema_version, std::int64_t stamp_ns);
+// A writable message over a transport's loaned bytes (zero copy on publish).
+plr_msg* msg_loaned(std::uint8_t* data, std::size_t capacity, std::unique_ptr<MsgLoan> loan);
 // A message over bytes owned by `keep_alive` (zero copy).
 plr_msg* msg_wrap(const std::uint8_t* data, std::size_t size, std::uint64_t type_id,
                   std::uint32_t schema_version, std::shared_ptr<void> keep_alive,

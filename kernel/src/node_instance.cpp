@@ -156,8 +156,9 @@ plr_status NodeInstance::advertise(void* ctx, const char* topic, std::uint64_t t
   return PLR_OK;
 }
 
-plr_msg* NodeInstance::loan(void*, std::uint64_t, std::size_t capacity, std::uint8_t** data) {
-  return kernel::msg_alloc(capacity, data);
+plr_msg* NodeInstance::loan(void* ctx, std::uint64_t publisher, std::size_t capacity,
+                            std::uint8_t** data) {
+  return self_of(ctx)->bus_.loan(publisher, capacity, data);
 }
 
 plr_status NodeInstance::publish(void* ctx, std::uint64_t publisher, plr_msg* msg,

@@ -23,6 +23,7 @@ shm::TopicConfig shm_topic_config(const TopicConfig& t) {
   c.slot_size = static_cast<std::uint32_t>(t.slot_size);
   c.policy = t.policy == TopicPolicy::Reliable ? shm::Policy::kReliable : shm::Policy::kKeepLast;
   c.wait_mode = t.busy_poll ? shm::WaitMode::kPolling : shm::WaitMode::kBlocking;
+  c.spin_us = t.spin_us;
   return c;
 }
 
@@ -46,22 +47,58 @@ plr_msg* wrap_sample(T&& holder, const shm::Sample& sample, const void* origin) 
 
 }  // namespace
 
+// The segment of an exported topic. Shared with the messages built in its
+// slots, which may outlive the bridge's table entry.
+struct Writer {
+  std::mutex m;  // a shm::Publisher is used by one thread at a time
+  shm::Publisher publisher;
+  std::atomic<std::uint64_t> in_place{0};  // sent from a loaned slot: no copy
+  std::atomic<std::uint64_t> copied{0};    // built elsewhere, copied into a slot once
+
+  explicit Writer(shm::Publisher p) : publisher(std::move(p)) {}
+};
+
+// A slot loaned to a local publisher. Committed, it stays held for the
+// in-process readers of the same message (they read the slot in place).
+struct SlotLoan final : MsgLoan {
+  std::shared_ptr<Writer> writer;  // first: outlives the loan and the hold
+  std::optional<shm::Loan> loan;
+  std::optional<shm::Sample> held;
+
+  bool commit(const plr_msg& m) override {
+    if (!loan || m.offset > m.capacity || m.size > m.capacity - m.offset) return false;
+    std::lock_guard lock(writer->m);
+    auto s = writer->publisher.publish_shared(std::move(*loan), {m.type_id, m.schema_version},
+                                              m.offset, m.size);
+    loan.reset();
+    if (!s) return false;
+    held.emplace(std::move(*s));
+    writer->in_place.fetch_add(1, std::memory_order_relaxed);
+    return true;
+  }
+};
+
 struct ShmBridge::Outgoing {
   ShmBridge* bridge = nullptr;
-  shm::Publisher publisher;
+  std::shared_ptr<Writer> writer;
   shm::MessageType type;
   shm::Timeout wait = shm::kNoWait;
 
+  // Messages not built in one of our slots: copied into one, once.
   static void on_local(void* user, const plr_msg* msg) {
     auto* self = static_cast<Outgoing*>(user);
-    if (msg->origin == self->bridge || self->publisher.subscriber_count() == 0) return;
+    if (msg->origin == self->bridge) return;
+    Writer& w = *self->writer;
+    std::lock_guard lock(w.m);
+    if (w.publisher.subscriber_count() == 0) return;
     const auto v = msg_view(msg);
-    auto r = self->publisher.publish_copy(
+    auto r = w.publisher.publish_copy(
         self->type, {reinterpret_cast<const std::byte*>(v.data), v.size}, self->wait);
-    if (r)
-      self->bridge->sent_.fetch_add(1, std::memory_order_relaxed);
-    else
+    if (r) {
+      w.copied.fetch_add(1, std::memory_order_relaxed);
+    } else {
       self->bridge->send_failures_.fetch_add(1, std::memory_order_relaxed);
+    }
   }
 };
 
@@ -156,7 +193,8 @@ void ShmBridge::export_topic(const std::string& topic, std::uint64_t type_id,
     spdlog::error("shm: cannot export topic '{}': {}", topic, shm::to_string(pub.error()));
     return;
   }
-  auto out = std::make_unique<Outgoing>(Outgoing{this, std::move(*pub), {type_id, version}});
+  auto out = std::make_unique<Outgoing>(
+      Outgoing{this, std::make_shared<Writer>(std::move(*pub)), {type_id, version}});
   if (settings.policy == TopicPolicy::Reliable) out->wait = Bus::reliable_wait;
   auto* raw = out.get();
   {
@@ -165,6 +203,35 @@ void ShmBridge::export_topic(const std::string& topic, std::uint64_t type_id,
   }
   if (auto s = bus_.subscribe(this, topic, type_id, &Outgoing::on_local, raw); !s)
     spdlog::error("shm: cannot export topic '{}': {}", topic, s.error().message);
+}
+
+plr_msg* ShmBridge::loan(const std::string& topic, std::size_t capacity, std::uint8_t** data) {
+  std::shared_ptr<Writer> w;
+  shm::Timeout wait;
+  {
+    std::lock_guard lock(m_);
+    auto it = outgoing_.find(topic);
+    if (it == outgoing_.end()) return nullptr;
+    w = it->second->writer;
+    wait = it->second->wait;
+  }
+  auto slot = std::make_unique<SlotLoan>();
+  {
+    std::lock_guard lock(w->m);
+    // Nobody in another process reads it: plain memory serves the local readers.
+    if (w->publisher.subscriber_count() == 0) return nullptr;
+    auto l = w->publisher.loan(capacity, wait);
+    if (!l) {
+      // Too big for a slot, or none free: plain memory, copied once if sent.
+      loan_fallbacks_.fetch_add(1, std::memory_order_relaxed);
+      return nullptr;
+    }
+    slot->loan.emplace(std::move(*l));
+  }
+  slot->writer = std::move(w);
+  slot->transport = this;
+  *data = reinterpret_cast<std::uint8_t*>(slot->loan->data());
+  return msg_loaned(*data, capacity, std::move(slot));
 }
 
 void ShmBridge::import_topic(const std::string& topic, std::uint64_t type_id) {
@@ -393,9 +460,20 @@ void ShmBridge::reply_loop(Client* client) {
 }
 
 nlohmann::json ShmBridge::stats() const {
+  std::uint64_t in_place = 0, copied = 0;
+  {
+    std::lock_guard lock(m_);
+    for (const auto& [topic, out] : outgoing_) {
+      in_place += out->writer->in_place.load(std::memory_order_relaxed);
+      copied += out->writer->copied.load(std::memory_order_relaxed);
+    }
+  }
   return {{"host", host_},
           {"run_id", run_id_},
-          {"sent", sent_.load()},
+          {"sent", sent_.load() + in_place + copied},
+          {"sent_in_place", in_place},
+          {"sent_copied", copied},
+          {"loan_fallbacks", loan_fallbacks_.load()},
           {"received", received_.load()},
           {"invalid", invalid_.load()},
           {"send_failures", send_failures_.load()}};

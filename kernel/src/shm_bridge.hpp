@@ -41,8 +41,11 @@ class ShmBridge final : public Endpoint, public Link {
   void topic_subscribed(const std::string& topic, std::uint64_t type_id) override;
   void service_provided(const std::string& service) override;
   bool forward_call(const std::string& service, const MsgRef& request, std::uint64_t id) override;
+  // A slot of the topic's segment while another host reads it.
+  plr_msg* loan(const std::string& topic, std::size_t capacity, std::uint8_t** data) override;
 
-  // Counters for telemetry: messages out and in, invalid ones dropped.
+  // Counters for telemetry: messages out (sent_in_place: from a loaned slot,
+  // sent_copied: copied into a slot once) and in, invalid ones dropped.
   nlohmann::json stats() const;
 
   struct Outgoing;
@@ -78,6 +81,7 @@ class ShmBridge final : public Endpoint, public Link {
   std::atomic<std::uint64_t> received_{0};
   std::atomic<std::uint64_t> invalid_{0};
   std::atomic<std::uint64_t> send_failures_{0};
+  std::atomic<std::uint64_t> loan_fallbacks_{0};
 
   Executor executor_;  // last: stops first, before the maps it works on
 };

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <plr/expected.hpp>
+#include <plr/loan.hpp>
 #include <plr/message.hpp>
 #include <plr/params.hpp>
 
@@ -77,7 +78,17 @@ class Publisher {
   Publisher() = default;
   Publisher(const plr_host_api* api, std::uint64_t id) : api_(api), id_(id) {}
 
-  // Publishes a finished builder (fbb.Finish(root) done by the caller).
+  // A buffer to build the next message in (see plr/loan.hpp): no copy on
+  // publish, also not into shared memory when another process reads the topic.
+  Expected<Loan> loan(std::size_t max_bytes) const {
+    std::uint8_t* data = nullptr;
+    plr_msg* msg = api_->loan(api_->ctx, id_, max_bytes, &data);
+    if (msg == nullptr) return make_error(PLR_ERR_UNAVAILABLE, "loan: no buffer available");
+    return Loan(api_, id_, msg, data, max_bytes);
+  }
+
+  // Publishes a finished builder (fbb.Finish(root) done by the caller): one
+  // copy, into the loaned buffer.
   Status publish(const flatbuffers::FlatBufferBuilder& fbb) const {
     std::uint8_t* data = nullptr;
     const std::size_t size = fbb.GetSize();

@@ -87,6 +87,10 @@ typedef struct plr_host_api {
   /* Topics. Names are resolved through the node's remaps. */
   plr_status (*advertise)(void* ctx, const char* topic, uint64_t type_id,
                           uint32_t schema_version, uint64_t* publisher);
+  /* A buffer of `capacity` bytes (8-byte aligned) for the next message of
+   * `publisher`; publish it on that publisher or msg_release it unpublished.
+   * When another process reads the topic it is a shared-memory slot, published
+   * there without a copy; otherwise plain kernel memory. */
   plr_msg* (*loan)(void* ctx, uint64_t publisher, size_t capacity, uint8_t** data);
   plr_status (*publish)(void* ctx, uint64_t publisher, plr_msg* msg, size_t offset,
                         size_t size);
