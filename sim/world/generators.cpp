@@ -13,7 +13,9 @@
 namespace plr::sim {
 namespace {
 
-constexpr double kGap = 0.01;  // between neighbouring columns, slabs and walls
+constexpr double kGap = 0.01;           // between neighbouring columns, slabs and walls
+constexpr double kSupportStep = 0.03;   // m; a pile box rests on what is this close below it
+constexpr double kSupportShare = 0.75;  // of its footprint, at least
 
 struct WallParams {
   std::vector<double> depths;                           // box extent along x, per slab
@@ -32,6 +34,7 @@ struct PileParams {
   double mass_median, mass_spread, mass_min, mass_max;
   double region;      // m of trailer (from the front wall) the pile covers
   double front_bias;  // > 1 packs boxes towards the front wall
+  double max_height;  // m; no box top above this (taller towers of loose boxes topple)
 };
 
 WallParams wall_params(EnvFamily family) {
@@ -63,9 +66,9 @@ WallParams wall_params(EnvFamily family) {
 
 PileParams pile_params(EnvFamily family) {
   if (family == EnvFamily::kB1) {
-    return {70, 90, 0.25, 0.50, 0.0, 6.0, 0.4, 1.5, 15.0, 3.0, 1.5};
+    return {70, 90, 0.25, 0.50, 0.0, 6.0, 0.4, 1.5, 15.0, 3.5, 1.5, 1.3};
   }
-  return {90, 120, 0.20, 0.60, 0.3, 8.0, 0.7, 1.0, 35.0, 4.0, 1.0};
+  return {90, 120, 0.20, 0.60, 0.3, 8.0, 0.7, 1.0, 35.0, 4.5, 1.0, 1.6};
 }
 
 double draw_mass(std::mt19937_64& rng, double median, double spread, double lo, double hi) {
@@ -181,11 +184,14 @@ World make_pile(EnvFamily family, std::uint64_t seed, const Trailer& trailer) {
   shapes.reserve(static_cast<std::size_t>(p.count_max));
   const int count = count_dist(rng);
   fcl::CollisionRequestd request;
-  for (int n = 0, tries = 0; n < count && tries < 20 * count; ++tries) {
+  for (int n = 0, tries = 0; n < count && tries < 60 * count; ++tries) {
     Box box;
     box.id = static_cast<std::uint32_t>(world.boxes.size() + 1);
     for (int k = 0; k < 3; ++k) box.size[k] = p.size_min + (p.size_max - p.size_min) * unit(rng);
     if (unit(rng) < p.flat_share) box.size.z() *= 0.5;
+    // A dropped box lands on a large face: never stand it on its smallest one.
+    auto& narrow = box.size.x() < box.size.y() ? box.size.x() : box.size.y();
+    if (box.size.z() > narrow) std::swap(box.size.z(), narrow);
     box.mass = draw_mass(rng, p.mass_median, p.mass_spread, p.mass_min, p.mass_max);
     const double yaw = M_PI * (unit(rng) - 0.5);
     box.pose = Eigen::Isometry3d::Identity();
@@ -207,6 +213,14 @@ World make_pile(EnvFamily family, std::uint64_t seed, const Trailer& trailer) {
     double centre = 0.0;
     map.for_cells(core, [&](double& h) { centre = std::max(centre, h); });
     if (centre < base - 0.03) continue;
+    // ... and whose footprint rests mostly at that height: a box on a ridge
+    // or a corner topples, and a toppling box brings its neighbours down.
+    int cells = 0, supported = 0;
+    map.for_cells(box, [&](double& h) {
+      ++cells;
+      supported += h > base - kSupportStep;
+    });
+    if (supported < kSupportShare * cells) continue;
     // Hover a little above the support so the drop starts free of contact.
     double z = base + 0.5 * box.size.z() + 0.003;
     const fcl::Boxd shape(box.size);
@@ -220,7 +234,7 @@ World make_pile(EnvFamily family, std::uint64_t seed, const Trailer& trailer) {
       }
       if (!clear) z += 0.01;
     }
-    if (z + 0.5 * box.size.z() > trailer.height - 0.1) continue;
+    if (z + 0.5 * box.size.z() > std::min(trailer.height - 0.1, p.max_height)) continue;
     const double top = z + 0.5 * box.size.z();
     map.for_cells(box, [&](double& h) { h = std::max(h, top); });
     world.boxes.push_back(box);

@@ -1,17 +1,22 @@
-// Generated worlds per family. The test runs one seed per family by default
-// (PLR_SIM_SEEDS raises it): dropping a pile costs seconds of wall time.
+// Generated worlds per family. The test runs two spread seeds per family by
+// default (PLR_SIM_SEEDS=N runs seeds 0..N-1 instead); `bench_sim
+// --generators 100` runs 100 per family and prints how many settle.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <vector>
 
 #include "plr/sim/physics.hpp"
 
 namespace plr::sim {
 namespace {
 
-int seed_count() {
+std::vector<std::uint64_t> seeds() {
   const char* env = std::getenv("PLR_SIM_SEEDS");
-  return env != nullptr ? std::max(1, std::atoi(env)) : 1;
+  if (env == nullptr) return {0, 57};
+  std::vector<std::uint64_t> all(static_cast<std::size_t>(std::max(1, std::atoi(env))));
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+  return all;
 }
 
 class Environments : public ::testing::TestWithParam<EnvFamily> {};
@@ -19,13 +24,13 @@ class Environments : public ::testing::TestWithParam<EnvFamily> {};
 // Every generated world is free of interpenetration. Walls come out at rest
 // and must stay so (at rest within 2 s, nothing sinks). Piles are dropped
 // and settled for a while by make_environment; they must not sink into each
-// other either. (Piles keep a residual jitter: they are not checked for rest
-// here; bench_sim --environments reports how many do rest within 2 s.)
+// other either. (Not every B2 pile rests within 2 s yet, see
+// docs/notes-sim.md, so piles are not checked for rest here; bench_sim
+// --generators reports how many do.)
 TEST_P(Environments, WorldsAreCleanAndWallsSettleWithin2Seconds) {
   const bool wall = GetParam() == EnvFamily::kA1 || GetParam() == EnvFamily::kA2;
-  for (int seed = 0; seed < seed_count(); ++seed) {
-    const auto s = static_cast<std::uint64_t>(seed);
-    const World generated = generate_world(GetParam(), s);
+  for (const std::uint64_t seed : seeds()) {
+    const World generated = generate_world(GetParam(), seed);
     ASSERT_FALSE(generated.boxes.empty());
     EXPECT_TRUE(find_interpenetrations(generated, 1e-6).empty()) << "seed " << seed;
     if (wall) {
@@ -34,7 +39,7 @@ TEST_P(Environments, WorldsAreCleanAndWallsSettleWithin2Seconds) {
       EXPECT_EQ(sim.world().boxes.size(), generated.boxes.size()) << "seed " << seed;
       EXPECT_TRUE(find_interpenetrations(sim.world(), 0.005).empty()) << "seed " << seed;
     } else {
-      const World pile = make_environment(GetParam(), s, Trailer{}, 1.0);
+      const World pile = make_environment(GetParam(), seed, Trailer{}, 1.0);
       EXPECT_EQ(pile.boxes.size(), generated.boxes.size()) << "seed " << seed;
       EXPECT_TRUE(find_interpenetrations(pile, 0.005).empty()) << "seed " << seed;
     }

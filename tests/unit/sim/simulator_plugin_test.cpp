@@ -1,0 +1,166 @@
+// The simulator plug-in in the fake kernel: its services on a small world
+// file, snapshot/restore through the service, and bad requests answered with
+// a clear error.
+#include <gtest/gtest.h>
+
+#include <plr/messages.hpp>
+#include <plr/testing/fake_kernel.hpp>
+
+#include <string>
+#include <vector>
+
+namespace plr {
+namespace {
+
+using testing::FakeKernel;
+using testing::NodeOptions;
+
+class SimulatorService : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    auto n = kernel_.load_node(SIMULATOR_SO, NodeOptions().with_params("{}"));
+    ASSERT_TRUE(n) << n.error().message;
+    node_ = *n;
+    ASSERT_TRUE(node_->configure());
+    ASSERT_TRUE(node_->activate());
+  }
+
+  Expected<Message<msg::WorldState>> reset(const std::string& env, const std::string& file) {
+    flatbuffers::FlatBufferBuilder fbb;
+    fbb.Finish(msg::CreateResetRequestDirect(fbb, env.c_str(), 0, file.c_str()));
+    return kernel_.call<msg::ResetRequest, msg::WorldState>("sim/reset", fbb,
+                                                            std::chrono::seconds(60));
+  }
+
+  Expected<Message<msg::WorldState>> observe(bool true_state) {
+    flatbuffers::FlatBufferBuilder fbb;
+    fbb.Finish(msg::CreateObserveRequest(fbb, true_state));
+    return kernel_.call<msg::ObserveRequest, msg::WorldState>("sim/observe", fbb);
+  }
+
+  // The robot waits at `q` from t = 0 to `duration` (the boxes keep moving).
+  Expected<Message<msg::ExecuteOutcome>> execute(const std::vector<std::vector<double>>& qs,
+                                                 const std::vector<double>& times) {
+    flatbuffers::FlatBufferBuilder fbb;
+    std::vector<flatbuffers::Offset<msg::TrajectoryPoint>> points;
+    for (std::size_t i = 0; i < qs.size(); ++i) {
+      points.push_back(msg::CreateTrajectoryPointDirect(fbb, times[i], &qs[i]));
+    }
+    const auto traj = msg::CreateTrajectoryDirect(fbb, &points);
+    fbb.Finish(
+        msg::CreateExecuteRequest(fbb, traj, msg::Suction::Keep, msg::Suction::Keep, false, 0.0));
+    return kernel_.call<msg::ExecuteRequest, msg::ExecuteOutcome>("sim/execute", fbb,
+                                                                  std::chrono::seconds(60));
+  }
+
+  Expected<Message<msg::SnapshotReply>> snapshot(const std::string& service,
+                                                 const std::string& name) {
+    flatbuffers::FlatBufferBuilder fbb;
+    fbb.Finish(msg::CreateSnapshotRequestDirect(fbb, name.c_str()));
+    return kernel_.call<msg::SnapshotRequest, msg::SnapshotReply>(service, fbb);
+  }
+
+  static std::vector<double> home() { return {0.0, 0.0, -1.0, 2.0, -1.0, 0.5, 0.0, 0.0}; }
+
+  FakeKernel kernel_;
+  std::optional<testing::NodeHandle> node_;
+};
+
+TEST_F(SimulatorService, ObserveBeforeResetAnswersAnEmptyTrailer) {
+  const auto w = observe(false);
+  ASSERT_TRUE(w) << w.error().message;
+  EXPECT_EQ(w.value()->boxes()->size(), 0u);
+}
+
+TEST_F(SimulatorService, ServicesBeforeResetSayWhatIsMissing) {
+  const auto e = execute({home(), home()}, {0.0, 0.1});
+  ASSERT_FALSE(e);
+  EXPECT_EQ(e.error().message, "no world yet: call sim/reset first");
+  const auto s = snapshot("sim/snapshot", "a");
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().message, "no world yet: call sim/reset first");
+  const auto r = snapshot("sim/restore", "a");
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().message, "sim/restore: no snapshot named 'a'");
+}
+
+TEST_F(SimulatorService, BadResetRequestsNameTheProblem) {
+  const auto family = reset("C7", "");
+  ASSERT_FALSE(family);
+  EXPECT_EQ(family.error().message, "sim/reset: env 'C7': expected A1, A2, B1 or B2");
+  const auto file = reset("", "/nonexistent/world.yaml");
+  ASSERT_FALSE(file);
+  EXPECT_EQ(file.error().message.rfind("sim/reset: ", 0), 0u) << file.error().message;
+  EXPECT_NE(file.error().message.find("/nonexistent/world.yaml"), std::string::npos)
+      << file.error().message;
+}
+
+TEST_F(SimulatorService, ResetFromAFileThenObservePerceivedAndTrueState) {
+  const auto w = reset("", SMALL_WORLD);
+  ASSERT_TRUE(w) << w.error().message;
+  ASSERT_EQ(w.value()->boxes()->size(), 30u);
+  EXPECT_DOUBLE_EQ(w.value()->trailer_size()->z(), 8.0);
+  EXPECT_FALSE(w.value()->is_true_state());
+  EXPECT_GT(w.value()->octree()->size(), 0u);
+  for (const auto* b : *w.value()->boxes()) EXPECT_EQ(b->mass(), 0.0) << "box " << b->id();
+
+  const auto t = observe(true);
+  ASSERT_TRUE(t) << t.error().message;
+  EXPECT_TRUE(t.value()->is_true_state());
+  for (const auto* b : *t.value()->boxes()) EXPECT_GT(b->mass(), 0.0) << "box " << b->id();
+  // The reset published the world and the progress.
+  EXPECT_FALSE(kernel_.published("world").empty());
+  EXPECT_FALSE(kernel_.published("progress").empty());
+}
+
+TEST_F(SimulatorService, BadTrajectoriesAreRefusedWithTheReason) {
+  ASSERT_TRUE(reset("", SMALL_WORLD));
+  const auto short_point = execute({home(), {0.0, 0.0, -1.0}}, {0.0, 0.1});
+  ASSERT_FALSE(short_point);
+  EXPECT_EQ(short_point.error().message, "sim/execute: every trajectory point needs 8 positions");
+  const auto backwards = execute({home(), home()}, {0.5, 0.1});
+  ASSERT_FALSE(backwards);
+  EXPECT_EQ(backwards.error().message, "sim/execute: trajectory times must not decrease");
+}
+
+TEST_F(SimulatorService, RestoreThroughTheServiceGoesBackInTime) {
+  ASSERT_TRUE(reset("", SMALL_WORLD));
+  const auto saved = snapshot("sim/snapshot", "before");
+  ASSERT_TRUE(saved) << saved.error().message;
+  EXPECT_TRUE(saved.value()->ok());
+  const auto w0 = observe(true);
+  ASSERT_TRUE(w0);
+  const double t0 = static_cast<double>(w0.value()->stamp_ns()) * 1e-9;
+
+  // The base drives 1 m into the trailer.
+  std::vector<double> forward = home();
+  forward[0] = 1.0;
+  const auto out = execute({home(), forward}, {0.0, 2.0});
+  ASSERT_TRUE(out) << out.error().message;
+  EXPECT_TRUE(out.value()->ok());
+  EXPECT_NEAR(out.value()->sim_time_s(), t0 + 2.0, 0.02);
+  const auto moved = observe(true);
+  ASSERT_TRUE(moved);
+  EXPECT_DOUBLE_EQ(moved.value()->robot()->positions()->Get(0), 1.0);
+
+  const auto back = snapshot("sim/restore", "before");
+  ASSERT_TRUE(back) << back.error().message;
+  const auto w1 = observe(true);
+  ASSERT_TRUE(w1);
+  EXPECT_EQ(w1.value()->stamp_ns(), w0.value()->stamp_ns());
+  EXPECT_DOUBLE_EQ(w1.value()->robot()->positions()->Get(0), 0.0);
+  ASSERT_EQ(w1.value()->boxes()->size(), w0.value()->boxes()->size());
+  for (flatbuffers::uoffset_t i = 0; i < w0.value()->boxes()->size(); ++i) {
+    const auto* a = w0.value()->boxes()->Get(i);
+    const auto* b = w1.value()->boxes()->Get(i);
+    EXPECT_EQ(a->id(), b->id());
+    EXPECT_EQ(a->pose().position().x(), b->pose().position().x());
+    EXPECT_EQ(a->pose().position().z(), b->pose().position().z());
+  }
+  const auto unknown = snapshot("sim/restore", "never-saved");
+  ASSERT_FALSE(unknown);
+  EXPECT_EQ(unknown.error().message, "sim/restore: no snapshot named 'never-saved'");
+}
+
+}  // namespace
+}  // namespace plr
