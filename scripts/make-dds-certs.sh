@@ -11,7 +11,8 @@
 # permissions_ca.pem governance.p7s permissions.p7s; point a kernel's
 # `remote.dds.security_dir` (or `plr monitor|swap --security`) at it.
 # Identities made:
-#   each KERNEL_NAME (default: kernel)  may publish and read every topic
+#   each KERNEL_NAME (default: kernel)  may publish every PLR topic but commands
+#                                       (plr/control) and read every topic
 #   operator                            may send commands (plr/control) and read everything
 #   monitor                             may only read
 # A test CA: keep the real one's key off the robots.
@@ -108,8 +109,11 @@ identity() {
   echo "$out/$name"
 }
 
-# Kernels publish everything: their data, announces, telemetry, and the
-# results of commands (which travel on plr/control too).
-for k in $kernels; do identity "$k" "* */* */*/* */*/*/* */*/*/*/*"; done
+# Kernels publish their data, announces, telemetry, calls and command
+# results, never commands: a stolen kernel key cannot control the others.
+# Listed one by one: Cyclone refuses even to create a topic a deny_rule names.
+kernel_topics="plr/announce plr/telemetry plr/result plr/request plr/reply"
+kernel_topics="$kernel_topics plr/topic/* plr/topic/*/* plr/topic/*/*/* plr/topic/*/*/*/*"
+for k in $kernels; do identity "$k" "$kernel_topics"; done
 identity operator "plr/control plr/announce"
 identity monitor ""

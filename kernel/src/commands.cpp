@@ -178,8 +178,11 @@ int run_pipeline(const RunOptions& options) {
             stop_requested = true;
             return {{"ok", true}};
           }
-          if (cmd == "swap") {
-            auto s = kernel.swap(req.value("node", ""), req.value("plugin", ""));
+          if (cmd == "swap" || cmd == "pause" || cmd == "resume") {
+            const auto node = req.value("node", "");
+            auto s = cmd == "swap"    ? kernel.swap(node, req.value("plugin", ""))
+                     : cmd == "pause" ? kernel.pause(node)
+                                      : kernel.resume(node);
             if (!s) return {{"ok", false}, {"error", s.error().message}};
             return {{"ok", true}};
           }
@@ -304,6 +307,16 @@ int swap_plugin(const SwapOptions& options) {
   if (!reply) return fail(reply.error().message);
   if (!reply->value("ok", false)) return fail(reply->value("error", "swap failed"));
   std::cout << fmt::format("node '{}' now runs '{}'\n", options.node, options.plugin);
+  return 0;
+}
+
+int pause_resume(const std::string& cmd, const std::string& node, const std::string& pipeline) {
+  auto path = find_socket(pipeline);
+  if (!path) return fail(path.error().message);
+  auto reply = control_request(*path, {{"cmd", cmd}, {"node", node}}, 60000);
+  if (!reply) return fail(reply.error().message);
+  if (!reply->value("ok", false)) return fail(reply->value("error", cmd + " failed"));
+  std::cout << fmt::format("node '{}' {}\n", node, cmd == "pause" ? "paused" : "resumed");
   return 0;
 }
 

@@ -31,6 +31,8 @@ int run_pipeline(const RunOptions& options);
 int validate(const std::string& config, const std::vector<std::string>& overrides);
 int list_plugins(const PluginsOptions& options);
 int swap_plugin(const SwapOptions& options);
+// `cmd` is "pause" or "resume".
+int pause_resume(const std::string& cmd, const std::string& node, const std::string& pipeline);
 int status(const std::string& pipeline);
 int print_version();
 

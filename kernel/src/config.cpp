@@ -54,8 +54,13 @@ const std::vector<std::string> kNodeKeys = {"plugin", "host", "params", "remap"}
 const std::vector<std::string> kTopicKeys = {"policy", "depth", "slot_size", "busy_poll",
                                              "spin_us"};
 const std::vector<std::string> kRemoteKeys = {"dds"};
-const std::vector<std::string> kDdsKeys = {"domain", "interfaces",           "export",
-                                           "import", "allow_remote_control", "security_dir"};
+const std::vector<std::string> kDdsKeys = {"domain",
+                                           "interfaces",
+                                           "export",
+                                           "import",
+                                           "resend_on_provider_loss",
+                                           "allow_remote_control",
+                                           "security_dir"};
 
 std::string join(const std::vector<std::string>& items) {
   std::string out;
@@ -594,6 +599,9 @@ void parse_remote(Checker& c, const Entry& e, const fs::path& folder, Config& co
   }
   if (const Entry* s = find(settings, "import")) {
     if (auto v = c.string_list(*s, "_/*", "topic or service patterns")) dds.import_patterns = *v;
+  }
+  if (const Entry* s = find(settings, "resend_on_provider_loss")) {
+    if (auto v = c.string_list(*s, "_/*", "service patterns")) dds.resend_patterns = *v;
   }
   if (const Entry* s = find(settings, "security_dir")) {
     if (s->value.IsScalar() && s->value.Scalar().empty()) {

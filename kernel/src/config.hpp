@@ -57,6 +57,9 @@ struct DdsConfig {
   std::vector<std::string> interfaces{"lo"};
   std::vector<std::string> export_patterns;  // topic or service names, '*' wildcards
   std::vector<std::string> import_patterns;
+  // Idempotent services whose calls are re-sent when their provider is lost
+  // (once to each other live provider); the others' calls fail.
+  std::vector<std::string> resend_patterns;
   bool allow_remote_control = false;
   std::string security_dir;  // DDS Security material; required for remote control
 };

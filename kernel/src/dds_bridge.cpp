@@ -252,13 +252,15 @@ Status DdsBridge::open() {
     const char* name;
     std::int32_t depth;
     bool transient;
-    dds_entity_t* writer;
-    int reader;  // ReaderKind, or -1
+    dds_entity_t* writer;  // or null
+    int reader;            // ReaderKind, or -1
   };
   const Plane planes[] = {
       {kDdsAnnounceTopic, 1, false, &announce_writer_, kAnnounceReader},
       {kDdsTelemetryTopic, 1, true, &telemetry_writer_, -1},
-      {kDdsControlTopic, 0, false, &control_writer_, kControlReader},
+      {kDdsControlTopic, 0, false, nullptr, kControlReader},
+      // Kept for late readers: a CLI whose reader matched after the answer still gets it.
+      {kDdsResultTopic, 16, true, &result_writer_, -1},
       {kDdsRequestTopic, 0, false, &request_writer_, kRequestReader},
       {kDdsReplyTopic, 0, false, &reply_writer_, kReplyReader},
   };
@@ -268,10 +270,11 @@ Status DdsBridge::open() {
       return make_error(PLR_ERR_INTERNAL,
                         fmt::format("dds: topic '{}': {}", plane.name, dds_strretcode(t)));
     dds_qos_t* q = control_qos(plane.depth, plane.transient);
-    *plane.writer = dds_create_writer(participant_, t, q, nullptr);
+    const dds_entity_t w = plane.writer ? dds_create_writer(participant_, t, q, nullptr) : 0;
+    if (plane.writer) *plane.writer = w;
     Reader* r = plane.reader < 0 ? nullptr : add_reader(t, q, plane.reader, "", 0);
     dds_delete_qos(q);
-    if (*plane.writer < 0 || (plane.reader >= 0 && r == nullptr))
+    if (w < 0 || (plane.reader >= 0 && r == nullptr))
       return make_error(PLR_ERR_INTERNAL,
                         fmt::format("dds: cannot create the endpoints of '{}'", plane.name));
   }
@@ -375,49 +378,62 @@ void DdsBridge::import_topic(const std::string& topic, std::uint64_t type_id) {
 }
 
 void DdsBridge::take(Reader* r) {
-  constexpr std::size_t kBatch = 32;
-  void* samples[kBatch];
-  dds_sample_info_t infos[kBatch];
+  // Samples are taken into memory of our own rather than Cyclone's loan, so
+  // that a payload goes on to the bus without another copy (64 KiB: a few
+  // microseconds per hop). A sample still referenced by a message is left to
+  // it and a fresh one taken next.
+  const auto fresh = [] {
+    return Sample(
+        static_cast<plr_dds_Envelope*>(dds_alloc(sizeof(plr_dds_Envelope))),
+        [](plr_dds_Envelope* e) { dds_sample_free(e, &plr_dds_Envelope_desc, DDS_FREE_ALL); });
+  };
   std::lock_guard lock(r->m);
-  for (;;) {
-    samples[0] = nullptr;  // loaned samples: no copy out of the reader cache
-    const dds_return_t n = dds_take(r->reader, samples, infos, kBatch, kBatch);
-    if (n <= 0) return;
-    for (dds_return_t i = 0; i < n; ++i) {
-      const auto& e = *static_cast<const plr_dds_Envelope*>(samples[i]);
-      if (!infos[i].valid_data) {
-        // A kernel's announce instance without writers: that kernel left.
-        if (r->kind == kAnnounceReader && infos[i].instance_state != DDS_IST_ALIVE &&
-            bounded_len(e.kernel, kMaxKernelId) <= kMaxKernelId)
-          on_announce(e, false);
-        continue;
-      }
-      if (const char* why = envelope_problem(e)) {
-        invalid(why, bounded_len(e.kernel, kMaxKernelId) <= kMaxKernelId ? e.kernel : "?");
-        continue;
-      }
-      if (kernel_id_ == e.kernel) continue;
-      received_.fetch_add(1, std::memory_order_relaxed);
-      switch (r->kind) {
-        case kDataReader:
-          on_data(r, e);
-          break;
-        case kRequestReader:
-          on_request(e);
-          break;
-        case kReplyReader:
-          on_reply(e);
-          break;
-        case kAnnounceReader:
-          on_announce(e, true);
-          break;
-        case kControlReader:
-          on_command(e);
-          break;
-      }
+  for (Sample sample = fresh();; sample = sample.use_count() == 1 ? std::move(sample) : fresh()) {
+    void* buffer = sample.get();
+    dds_sample_info_t info;
+    if (dds_take(r->reader, &buffer, &info, 1, 1) <= 0) return;
+    const auto& e = *sample;
+    if (!info.valid_data) {
+      // A kernel's announce instance without writers: that kernel left.
+      if (r->kind == kAnnounceReader && info.instance_state != DDS_IST_ALIVE &&
+          bounded_len(e.kernel, kMaxKernelId) <= kMaxKernelId)
+        on_announce(e, false);
+      continue;
     }
-    dds_return_loan(r->reader, samples, n);
+    if (const char* why = envelope_problem(e)) {
+      invalid(why, bounded_len(e.kernel, kMaxKernelId) <= kMaxKernelId ? e.kernel : "?");
+      continue;
+    }
+    if (kernel_id_ == e.kernel) continue;
+    received_.fetch_add(1, std::memory_order_relaxed);
+    switch (r->kind) {
+      case kDataReader:
+        on_data(r, sample);
+        break;
+      case kRequestReader:
+        on_request(sample);
+        break;
+      case kReplyReader:
+        on_reply(sample);
+        break;
+      case kAnnounceReader:
+        on_announce(e, true);
+        break;
+      case kControlReader:
+        on_command(e);
+        break;
+    }
   }
+}
+
+plr_msg* DdsBridge::payload_message(const Sample& sample) {
+  const auto& e = *sample;
+  if (e.payload._length > 0)
+    return msg_wrap(e.payload._buffer, e.payload._length, e.type_id, e.schema_version, sample,
+                    this);
+  plr_msg* m = msg_copy(nullptr, 0, e.type_id, e.schema_version, wall_now_ns());
+  m->origin = this;
+  return m;
 }
 
 void DdsBridge::invalid(const char* why, const std::string& from) {
@@ -427,7 +443,8 @@ void DdsBridge::invalid(const char* why, const std::string& from) {
     spdlog::warn("dds: dropped an invalid envelope from '{}': {} ({} so far)", from, why, n);
 }
 
-void DdsBridge::on_data(Reader* r, const plr_dds_Envelope& e) {
+void DdsBridge::on_data(Reader* r, const Sample& sample) {
+  const auto& e = *sample;
   if (e.kind != static_cast<std::uint8_t>(EnvelopeKind::kTopic))
     return invalid("not a topic message", e.kernel);
   if (r->topic != e.name) return invalid("topic name differs from its DDS topic", e.kernel);
@@ -442,9 +459,7 @@ void DdsBridge::on_data(Reader* r, const plr_dds_Envelope& e) {
     }
     r->publisher = *p;
   }
-  plr_msg* m =
-      msg_copy(e.payload._buffer, e.payload._length, e.type_id, e.schema_version, wall_now_ns());
-  m->origin = this;
+  plr_msg* m = payload_message(sample);
   (void)bus_.publish(r->publisher, m);
 }
 
@@ -457,7 +472,8 @@ void on_local_reply(void* user, plr_status status, const plr_msg* reply, const c
 
 }  // namespace
 
-void DdsBridge::on_request(const plr_dds_Envelope& e) {
+void DdsBridge::on_request(const Sample& sample) {
+  const auto& e = *sample;
   if (e.kind != static_cast<std::uint8_t>(EnvelopeKind::kRequest))
     return invalid("not a request", e.kernel);
   if (kernel_id_ != e.target) return;  // another provider's
@@ -479,9 +495,7 @@ void DdsBridge::on_request(const plr_dds_Envelope& e) {
     return send_error(PLR_ERR_INVALID, "request refused: bad type or size");
   }
   auto* call = new ServerCall{this, e.kernel, service, e.correlation_id};
-  plr_msg* m =
-      msg_copy(e.payload._buffer, e.payload._length, e.type_id, e.schema_version, wall_now_ns());
-  m->origin = this;
+  plr_msg* m = payload_message(sample);
   auto s = bus_.call(this, service, e.type_id, m, std::chrono::minutes(10), &on_local_reply, call,
                      nullptr);
   if (!s) {
@@ -503,7 +517,8 @@ void DdsBridge::send_reply(const ServerCall& c, plr_status status, const plr_msg
         reinterpret_cast<const std::uint8_t*>(why.data()), why.size());
 }
 
-void DdsBridge::on_reply(const plr_dds_Envelope& e) {
+void DdsBridge::on_reply(const Sample& sample) {
+  const auto& e = *sample;
   if (kernel_id_ != e.target) return;
   const bool error = e.kind == static_cast<std::uint8_t>(EnvelopeKind::kError);
   if (!error && e.kind != static_cast<std::uint8_t>(EnvelopeKind::kReply))
@@ -534,9 +549,7 @@ void DdsBridge::on_reply(const plr_dds_Envelope& e) {
                        fmt::format("invalid reply from kernel '{}'", e.kernel));
     return;
   }
-  plr_msg* m =
-      msg_copy(e.payload._buffer, e.payload._length, e.type_id, e.schema_version, wall_now_ns());
-  m->origin = this;
+  plr_msg* m = payload_message(sample);
   (void)bus_.respond(call.bus_id, PLR_OK, m, "");
 }
 
@@ -588,13 +601,58 @@ void DdsBridge::peer_gone(const std::string& kernel, const std::string& why) {
       }
     }
   }
-  spdlog::warn("dds: kernel '{}' {}; {} call(s) to it failed", kernel, why, lost.size());
-  provider_losses_.fetch_add(lost.size(), std::memory_order_relaxed);
-  for (const auto& c : lost)
-    (void)bus_.respond(c.bus_id, PLR_ERR_UNAVAILABLE, nullptr,
-                       fmt::format("kernel '{}' providing '{}' is gone ({}); the request was not "
-                                   "re-sent",
-                                   kernel, c.service, why));
+  spdlog::warn("dds: kernel '{}' {}; {} call(s) to it lost", kernel, why, lost.size());
+  for (auto& c : lost) {
+    const auto id = c.bus_id;
+    const auto service = c.service;
+    std::string outcome =
+        "the request was not re-sent (the service is not in "
+        "remote.dds.resend_on_provider_loss)";
+    if (c.resend) {
+      if (send_call(std::move(c))) {
+        resent_.fetch_add(1, std::memory_order_relaxed);
+        spdlog::warn("dds: call to '{}' re-sent after losing kernel '{}'", service, kernel);
+        continue;
+      }
+      outcome = "no other live provider to re-send the request to";
+    }
+    provider_losses_.fetch_add(1, std::memory_order_relaxed);
+    (void)bus_.respond(
+        id, PLR_ERR_UNAVAILABLE, nullptr,
+        fmt::format("kernel '{}' providing '{}' is gone ({}); {}", kernel, service, why, outcome));
+  }
+}
+
+bool DdsBridge::send_call(RemoteCall call) {
+  std::string target;
+  std::uint64_t corr = 0;
+  {
+    std::lock_guard lock(m_);
+    std::vector<const std::string*> live;
+    for (const auto& [k, p] : peers_)
+      if (p.services.count(call.service) && !call.tried.count(k)) live.push_back(&k);
+    if (live.empty()) return false;
+    target = *live[round_robin_++ % live.size()];
+    corr = next_corr_++;
+    call.kernel = target;
+    call.sent = Clock::now();
+    call.tried.insert(target);
+    auto& stored = calls_[corr] = call;
+    if (!stored.resend) stored.request = MsgRef();  // never re-sent: not kept
+  }
+  // A fresh correlation id: a late answer from a provider given up on is ignored.
+  const auto v = msg_view(call.request.msg);
+  if (!write(request_writer_, target, call.service, EnvelopeKind::kRequest, v.type_id,
+             v.schema_version, corr, 0, v.data, v.size)) {
+    {
+      std::lock_guard lock(m_);
+      calls_.erase(corr);
+    }
+    (void)bus_.respond(
+        call.bus_id, PLR_ERR_UNAVAILABLE, nullptr,
+        fmt::format("service '{}' on kernel '{}': DDS write failed", call.service, target));
+  }
+  return true;
 }
 
 bool DdsBridge::forward_call(const std::string& service, const MsgRef& request, std::uint64_t id) {
@@ -604,41 +662,22 @@ bool DdsBridge::forward_call(const std::string& service, const MsgRef& request, 
   if (dds_get_publication_matched_status(request_writer_, &matched) < 0 ||
       matched.current_count == 0)
     return false;
-  std::string target;
-  std::uint64_t corr = 0;
-  {
-    std::lock_guard lock(m_);
-    std::vector<const std::string*> live;
-    for (const auto& [k, p] : peers_)
-      if (p.services.count(service)) live.push_back(&k);
-    if (live.empty()) return false;
-    target = *live[round_robin_++ % live.size()];
-    corr = next_corr_++;
-    calls_[corr] = {id, target, service, Clock::now()};
-  }
-  const auto v = msg_view(request.msg);
-  if (!write(request_writer_, target, service, EnvelopeKind::kRequest, v.type_id, v.schema_version,
-             corr, 0, v.data, v.size)) {
-    {
-      std::lock_guard lock(m_);
-      calls_.erase(corr);
-    }
-    (void)bus_.respond(
-        id, PLR_ERR_UNAVAILABLE, nullptr,
-        fmt::format("service '{}' on kernel '{}': DDS write failed", service, target));
-  }
-  return true;
+  RemoteCall call;
+  call.bus_id = id;
+  call.service = service;
+  call.resend = matches_any(config_.dds.resend_patterns, service);
+  call.request = request;
+  return send_call(std::move(call));
 }
 
 void DdsBridge::on_command(const plr_dds_Envelope& e) {
-  if (e.kind == static_cast<std::uint8_t>(EnvelopeKind::kResult)) return;  // a CLI's business
   if (e.kind != static_cast<std::uint8_t>(EnvelopeKind::kCommand))
     return invalid("not a command", e.kernel);
   if (kernel_id_ != e.target) return;
   const std::string from = e.kernel;
   const auto corr = e.correlation_id;
   const auto result = [this, from, corr](plr_status status, const std::string& text) {
-    write(control_writer_, from, "result", EnvelopeKind::kResult, 0, 0, corr, status,
+    write(result_writer_, from, "result", EnvelopeKind::kResult, 0, 0, corr, status,
           reinterpret_cast<const std::uint8_t*>(text.data()), text.size());
   };
   if (e.payload._length > kMaxJsonPayload) return invalid("command too large", from);
@@ -737,6 +776,7 @@ nlohmann::json DdsBridge::stats() const {
           {"invalid", invalid_.load()},
           {"send_failures", send_failures_.load()},
           {"calls_failed_provider_gone", provider_losses_.load()},
+          {"calls_resent_provider_gone", resent_.load()},
           {"commands_refused", commands_refused_.load()}};
 }
 

@@ -6,13 +6,16 @@
 // are exported are announced; calls nobody here provides go to a live remote
 // provider, spread round-robin. Every kernel announces itself (4 Hz) and
 // publishes its telemetry (1 Hz) for `plr monitor`. Remote commands arrive on
-// "plr/control" and are refused unless remote control is on.
+// "plr/control" and are refused unless remote control is on; results go out
+// on "plr/result".
 //
-// Provider loss policy: when a providing kernel disappears (its announce
-// instance is disposed or loses its writer, or no announce for
-// kPeerTimeout), every call still waiting on it fails at once with
-// PLR_ERR_UNAVAILABLE naming the kernel; nothing is re-sent, because the
-// bridge cannot know whether the provider acted on the request.
+// Provider loss policy, per service: when a providing kernel disappears (its
+// announce instance is disposed or loses its writer, or no announce for
+// kPeerTimeout), a call still waiting on it is re-sent to another live
+// provider if the service is declared idempotent (`resend_on_provider_loss`
+// patterns; at most once per provider), and otherwise fails at once with
+// PLR_ERR_UNAVAILABLE naming the kernel: the bridge cannot know whether the
+// lost provider acted on the request.
 #pragma once
 
 #include "bus.hpp"
@@ -53,7 +56,10 @@ enum class EnvelopeKind : std::uint8_t {
 
 inline constexpr const char* kDdsAnnounceTopic = "plr/announce";
 inline constexpr const char* kDdsTelemetryTopic = "plr/telemetry";
+// Commands only operators may write (DDS Security permissions); kernels answer
+// on the result topic, so a kernel identity needs no write access to commands.
 inline constexpr const char* kDdsControlTopic = "plr/control";
+inline constexpr const char* kDdsResultTopic = "plr/result";
 inline constexpr const char* kDdsRequestTopic = "plr/request";
 inline constexpr const char* kDdsReplyTopic = "plr/reply";
 inline constexpr std::chrono::milliseconds kPeerTimeout{1500};
@@ -77,7 +83,7 @@ bool matches_any(const std::vector<std::string>& patterns, const std::string& na
 class DdsBridge final : public Endpoint, public Link {
  public:
   using TelemetryFn = std::function<std::string()>;
-  // Runs a remote command (JSON {"cmd": "swap", "node", "plugin"}) once it is allowed.
+  // Runs a remote command (JSON {"cmd": "swap"|"pause"|"resume", "node", "plugin"}) once allowed.
   using ControlFn = std::function<Status(const nlohmann::json&)>;
 
   static Expected<std::unique_ptr<DdsBridge>> create(Bus& bus, const Config& config,
@@ -121,13 +127,19 @@ class DdsBridge final : public Endpoint, public Link {
   void import_topic(const std::string& topic, std::uint64_t type_id);
   void heartbeat_loop();
   void take(Reader* r);
-  void on_data(Reader* r, const ::plr_dds_Envelope& e);
-  void on_request(const ::plr_dds_Envelope& e);
-  void on_reply(const ::plr_dds_Envelope& e);
+  // A taken sample; bus messages made from it wrap its payload and keep it alive.
+  using Sample = std::shared_ptr<::plr_dds_Envelope>;
+  plr_msg* payload_message(const Sample& sample);
+  void on_data(Reader* r, const Sample& sample);
+  void on_request(const Sample& sample);
+  void on_reply(const Sample& sample);
   void on_announce(const ::plr_dds_Envelope& e, bool alive);
   void on_command(const ::plr_dds_Envelope& e);
   void expire_peers();
   void peer_gone(const std::string& kernel, const std::string& why);
+  struct RemoteCall;
+  // Sends `call` to a live provider it has not tried yet; false when there is none.
+  bool send_call(RemoteCall call);
   bool write(dds_entity_t writer, const std::string& target, const std::string& name,
              EnvelopeKind kind, std::uint64_t type_id, std::uint32_t version, std::uint64_t corr,
              std::int32_t status, const std::uint8_t* data, std::size_t size);
@@ -145,7 +157,7 @@ class DdsBridge final : public Endpoint, public Link {
   dds_entity_t participant_ = 0;
   dds_entity_t announce_writer_ = 0;
   dds_entity_t telemetry_writer_ = 0;
-  dds_entity_t control_writer_ = 0;
+  dds_entity_t result_writer_ = 0;
   dds_entity_t request_writer_ = 0;
   dds_entity_t reply_writer_ = 0;
 
@@ -158,6 +170,9 @@ class DdsBridge final : public Endpoint, public Link {
     std::string kernel;
     std::string service;
     std::chrono::steady_clock::time_point sent;
+    bool resend = false;
+    MsgRef request;               // kept only when it may be re-sent
+    std::set<std::string> tried;  // providers it went to
   };
 
   mutable std::mutex m_;
@@ -180,6 +195,7 @@ class DdsBridge final : public Endpoint, public Link {
   std::atomic<std::uint64_t> invalid_{0};
   std::atomic<std::uint64_t> send_failures_{0};
   std::atomic<std::uint64_t> provider_losses_{0};
+  std::atomic<std::uint64_t> resent_{0};
   std::atomic<std::uint64_t> commands_refused_{0};
 
   Executor executor_;  // last: stops first, before what it works on

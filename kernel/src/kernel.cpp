@@ -87,9 +87,10 @@ Status Kernel::start() {
           const auto text = [&](const char* key) {
             return c.contains(key) && c[key].is_string() ? c[key].get<std::string>() : "";
           };
-          if (text("cmd") != "swap")
-            return make_error(PLR_ERR_INVALID, "unknown remote command '" + text("cmd") + "'");
-          return swap(text("node"), text("plugin"));
+          if (text("cmd") == "swap") return swap(text("node"), text("plugin"));
+          if (text("cmd") == "pause") return pause(text("node"));
+          if (text("cmd") == "resume") return resume(text("node"));
+          return make_error(PLR_ERR_INVALID, "unknown remote command '" + text("cmd") + "'");
         });
     if (!dds) return dds.error();
     dds_ = std::move(*dds);
@@ -170,6 +171,32 @@ Status Kernel::swap(const std::string& node, const std::string& plugin) {
   old.reset();
   spdlog::info("node '{}' swapped to {} {}", node, plugin,
                s->instance->library().descriptor().version);
+  return {};
+}
+
+Status Kernel::pause(const std::string& node) {
+  Slot* s = slot(node);
+  if (s == nullptr)
+    return make_error(PLR_ERR_INVALID, fmt::format("pause: no node '{}' in this pipeline", node));
+  std::lock_guard lock(s->swap_mutex);
+  if (!s->instance || s->instance->state() != InstanceState::Active)
+    return make_error(PLR_ERR_STATE, fmt::format("pause: node '{}' is not running", node));
+  bus_.set_live(s->instance.get(), false);
+  if (auto r = s->instance->deactivate(); !r) return r;
+  spdlog::info("node '{}' paused", node);
+  return {};
+}
+
+Status Kernel::resume(const std::string& node) {
+  Slot* s = slot(node);
+  if (s == nullptr)
+    return make_error(PLR_ERR_INVALID, fmt::format("resume: no node '{}' in this pipeline", node));
+  std::lock_guard lock(s->swap_mutex);
+  if (!s->instance || s->instance->state() != InstanceState::Configured)
+    return make_error(PLR_ERR_STATE, fmt::format("resume: node '{}' is not paused", node));
+  if (auto r = s->instance->activate(); !r) return r;
+  bus_.set_live(s->instance.get(), true);
+  spdlog::info("node '{}' resumed", node);
   return {};
 }
 

@@ -49,6 +49,10 @@ class Kernel {
   // accepted, and is then deactivated and unloaded. On failure the old one
   // keeps running and the error says why.
   Status swap(const std::string& node, const std::string& plugin);
+  // Pauses a running node: it stops receiving topics and new calls and is
+  // deactivated (the plug-in's deactivate hook). Resume activates it again.
+  Status pause(const std::string& node);
+  Status resume(const std::string& node);
 
   // Binds the pipeline clock to the simulator's `clock` topic (clock: sim).
   Status follow_sim_clock();

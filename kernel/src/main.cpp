@@ -43,15 +43,30 @@ int main(int argc, char** argv) {
   swap_cmd->add_option("plugin", swap.plugin, "Plug-in to load in its place")->required();
   swap_cmd->add_option("--pipeline", swap.pipeline,
                        "Pipeline name (default: the only one running)");
-  RemoteSwapOptions remote_swap_options;
-  swap_cmd->add_option("--remote", remote_swap_options.kernel,
-                       "Swap on this kernel over DDS (id, pipeline@hostname or pipeline name)");
+  RemoteCommandOptions remote;
   const auto dds_options = [](CLI::App* cmd, DdsToolOptions& o) {
     cmd->add_option("--domain", o.domain, "DDS domain")->capture_default_str();
     cmd->add_option("--interface", o.interfaces, "Network interfaces for DDS (default: lo)");
     cmd->add_option("--security", o.security_dir, "DDS Security material of this tool");
   };
-  dds_options(swap_cmd, remote_swap_options.dds);
+  const auto remote_options = [&](CLI::App* cmd) {
+    cmd->add_option("--remote", remote.kernel,
+                    "On this kernel over DDS (id, pipeline@hostname or pipeline name)");
+    dds_options(cmd, remote.dds);
+  };
+  remote_options(swap_cmd);
+
+  std::string node_name, node_pipeline;
+  std::vector<CLI::App*> pause_resume_cmds;
+  for (const char* what : {"pause", "resume"}) {
+    auto* cmd = app.add_subcommand(
+        what, std::string(what == std::string("pause") ? "Deactivate a node of a running pipeline"
+                                                       : "Activate a paused node again"));
+    cmd->add_option("node", node_name, "Node name")->required();
+    cmd->add_option("--pipeline", node_pipeline, "Pipeline name (default: the only one running)");
+    remote_options(cmd);
+    pause_resume_cmds.push_back(cmd);
+  }
 
   MonitorOptions monitor_options;
   auto* monitor_cmd =
@@ -75,12 +90,20 @@ int main(int argc, char** argv) {
   if (*run_cmd) return run_pipeline(run);
   if (*validate_cmd) return validate(validate_config, validate_overrides);
   if (*plugins_cmd) return list_plugins(plugins);
-  if (*swap_cmd && !remote_swap_options.kernel.empty()) {
-    remote_swap_options.node = swap.node;
-    remote_swap_options.plugin = swap.plugin;
-    return remote_swap(remote_swap_options);
+  if (*swap_cmd && !remote.kernel.empty()) {
+    remote.cmd = "swap";
+    remote.node = swap.node;
+    remote.plugin = swap.plugin;
+    return remote_command(remote);
   }
   if (*swap_cmd) return swap_plugin(swap);
+  for (auto* cmd : pause_resume_cmds) {
+    if (!*cmd) continue;
+    if (remote.kernel.empty()) return pause_resume(cmd->get_name(), node_name, node_pipeline);
+    remote.cmd = cmd->get_name();
+    remote.node = node_name;
+    return remote_command(remote);
+  }
   if (*monitor_cmd) return monitor(monitor_options);
   if (*status_cmd) return status(status_pipeline);
   return print_version();

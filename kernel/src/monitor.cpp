@@ -54,9 +54,9 @@ dds_qos_t* qos(std::int32_t depth, bool transient) {
 // A participant with readers (and writers) on the kernel's control plane.
 class Tool {
  public:
-  ~Tool() {
-    if (participant_ > 0) dds_delete(participant_);
-  }
+  // The whole Cyclone instance goes, threads included: a receive thread still
+  // decrypting at exit would use OpenSSL after its exit handler freed it.
+  ~Tool() { dds_delete(DDS_CYCLONEDDS_HANDLE); }
   Status open(const DdsToolOptions& o) {
     auto p = open_participant(to_config(o));
     if (!p) return p.error();
@@ -256,11 +256,11 @@ bool names_kernel(const std::string& id, const std::string& wanted) {
 
 }  // namespace
 
-int remote_swap(const RemoteSwapOptions& options) {
+int remote_command(const RemoteCommandOptions& options) {
   Tool tool;
   if (auto s = tool.open(options.dds); !s) return fail(s.error().message);
   const auto announce = tool.reader(kDdsAnnounceTopic, 1, false);
-  const auto results = tool.reader(kDdsControlTopic, 0, false);
+  const auto results = tool.reader(kDdsResultTopic, 16, true);
   const auto commands = tool.writer(kDdsControlTopic, 0, false);
   if (announce < 0 || results < 0 || commands < 0)
     return fail("dds: cannot create the control endpoints");
@@ -281,23 +281,27 @@ int remote_swap(const RemoteSwapOptions& options) {
     return fail(fmt::format("'{}' names several kernels ({}); give the full id", options.kernel,
                             fmt::join(found, ", ")));
   const std::string target = *found.begin();
-  // The kernel must have seen our writer, or the command is lost.
+  // The kernel must have seen our writer, or the command is lost; and we its
+  // result writer (kept answers reach a late reader, but only a matched one).
   for (int i = 0; i < 200; ++i) {
-    dds_publication_matched_status_t m{};
-    dds_get_publication_matched_status(commands, &m);
-    if (m.current_count > 0) break;
+    dds_publication_matched_status_t w{};
+    dds_subscription_matched_status_t r{};
+    dds_get_publication_matched_status(commands, &w);
+    dds_get_subscription_matched_status(results, &r);
+    if (w.current_count > 0 && r.current_count > 0) break;
     std::this_thread::sleep_for(10ms);
   }
 
   char host[256] = {};
   ::gethostname(host, sizeof host - 1);
   const std::string me = fmt::format("plr-cli@{}:{}", host, ::getpid());
-  const auto payload =
-      nlohmann::json{{"cmd", "swap"}, {"node", options.node}, {"plugin", options.plugin}}.dump();
+  nlohmann::json command = {{"cmd", options.cmd}, {"node", options.node}};
+  if (options.cmd == "swap") command["plugin"] = options.plugin;
+  const auto payload = command.dump();
   plr_dds_Envelope e{};
   e.kernel = const_cast<char*>(me.c_str());
   e.target = const_cast<char*>(target.c_str());
-  e.name = const_cast<char*>("swap");
+  e.name = const_cast<char*>(options.cmd.c_str());
   e.kind = static_cast<std::uint8_t>(EnvelopeKind::kCommand);
   e.correlation_id = 1;
   e.payload._buffer = reinterpret_cast<std::uint8_t*>(const_cast<char*>(payload.data()));
@@ -316,8 +320,12 @@ int remote_swap(const RemoteSwapOptions& options) {
     });
     if (answer) {
       if (answer->first != PLR_OK) return fail(fmt::format("{}: {}", target, answer->second));
-      std::cout << fmt::format("node '{}' of kernel '{}' now runs '{}'\n", options.node, target,
-                               options.plugin);
+      if (options.cmd == "swap")
+        std::cout << fmt::format("node '{}' of kernel '{}' now runs '{}'\n", options.node, target,
+                                 options.plugin);
+      else
+        std::cout << fmt::format("node '{}' of kernel '{}' {}\n", options.node, target,
+                                 options.cmd == "pause" ? "paused" : "resumed");
       return 0;
     }
     std::this_thread::sleep_for(10ms);

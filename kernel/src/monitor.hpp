@@ -1,6 +1,6 @@
 // Remote tools over Cyclone DDS: `plr monitor` (read-only: kernels, nodes,
-// topics, rates from every kernel's telemetry) and `plr swap --remote`
-// (a command the target kernel refuses unless remote control is on).
+// topics, rates from every kernel's telemetry) and `plr swap|pause|resume
+// --remote` (commands the target kernel refuses unless remote control is on).
 #pragma once
 
 #include <string>
@@ -21,14 +21,16 @@ struct MonitorOptions {
   double wait_s = 3.0;  // --once: longest wait for kernels to show up
 };
 
-struct RemoteSwapOptions {
+// A command for one node of a remote kernel: "swap" (to `plugin`), "pause" or "resume".
+struct RemoteCommandOptions {
   DdsToolOptions dds;
   std::string kernel;  // full id, "pipeline@hostname" or the pipeline name
+  std::string cmd;
   std::string node;
   std::string plugin;
 };
 
 int monitor(const MonitorOptions& options);
-int remote_swap(const RemoteSwapOptions& options);
+int remote_command(const RemoteCommandOptions& options);
 
 }  // namespace plr::kernel

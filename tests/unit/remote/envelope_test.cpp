@@ -126,7 +126,7 @@ TEST(RemoteEnvelope, GarbageIsCountedGoodRequestsAnsweredCommandsRefused) {
   const auto announce_w = raw.endpoint(kDdsAnnounceTopic, true);
   const auto control_w = raw.endpoint(kDdsControlTopic, true);
   const auto reply_r = raw.endpoint(kDdsReplyTopic, false);
-  const auto control_r = raw.endpoint(kDdsControlTopic, false);
+  const auto result_r = raw.endpoint(kDdsResultTopic, false);
   for (auto w : {count_w, request_w, announce_w, control_w}) Raw::wait_matched(w);
 
   const auto count_type = MessageTraits<msg::Count>::type_id();
@@ -185,7 +185,7 @@ TEST(RemoteEnvelope, GarbageIsCountedGoodRequestsAnsweredCommandsRefused) {
                 .find("does not export service 'nope'"),
             std::string::npos);
 
-  const auto results = take_replies(control_r, 1);
+  const auto results = take_replies(result_r, 1);
   ASSERT_EQ(results.count(4), 1u);
   EXPECT_EQ(results.at(4).status, PLR_ERR_STATE);
   EXPECT_NE(std::string(results.at(4).payload.begin(), results.at(4).payload.end())

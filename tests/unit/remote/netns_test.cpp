@@ -1,102 +1,24 @@
 // Kernels on "different machines": network namespaces A and B, each joined
 // by a veth pair to a bridge in the root namespace (so a monitor there sees
-// both). Shows a topic and a service crossing over Cyclone DDS, a service
-// with providers on both sides losing one mid-run (its pending call fails at
-// once, the rest go to the other), `plr monitor --once --json` seeing both
-// kernels, and a remote swap refused without permission. Where namespaces
-// are not permitted the same scenario runs on loopback, and says so.
-#include <plr/expected.hpp>
+// both). Shows a topic and a service crossing over Cyclone DDS; a service
+// with providers on both sides losing one mid-run, seen by two callers: one
+// whose policy is to fail (its pending call fails at once, naming the lost
+// kernel) and one that declares the service idempotent (its pending call is
+// re-sent to the other provider and completes); `plr monitor --once --json`
+// seeing both kernels; a remote swap and pause refused without permission.
+// Where namespaces are not permitted the same scenario runs on loopback, and
+// says so.
+#include "remote_fixture.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <fcntl.h>
-#include <sched.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
-#include <chrono>
-#include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <regex>
-#include <sstream>
-#include <string>
-#include <thread>
-#include <vector>
 
 namespace {
 
-using namespace std::chrono_literals;
-
-const std::string kPlr = PLR_BINARY;
-
-int sh(const std::string& command, std::string* out = nullptr) {
-  FILE* p = ::popen((command + " 2>&1").c_str(), "r");
-  if (!p) return -1;
-  char buf[4096];
-  std::size_t n = 0;
-  std::string sink;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) (out ? out : &sink)->append(buf, n);
-  const int status = ::pclose(p);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-// A process started as `argv` (in network namespace `ns` unless empty) with
-// stdout and stderr to `log`. Joined here rather than by `ip netns exec`,
-// which forks: the pid must be plr's own, to stop and kill it.
-struct Proc {
-  pid_t pid = -1;
-  std::string log;
-  Proc(const std::string& ns, const std::vector<std::string>& argv, std::string log_path)
-      : log(std::move(log_path)) {
-    pid = ::fork();
-    if (pid == 0) {
-      if (!ns.empty()) {
-        const int nsfd = ::open(("/run/netns/" + ns).c_str(), O_RDONLY | O_CLOEXEC);
-        if (nsfd < 0 || ::setns(nsfd, CLONE_NEWNET) != 0) ::_exit(126);
-      }
-      const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      ::dup2(fd, 1);
-      ::dup2(fd, 2);
-      std::vector<char*> args;
-      for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-      args.push_back(nullptr);
-      ::execvp(args[0], args.data());
-      ::_exit(127);
-    }
-  }
-  // Exit code, or -1 when it did not end within `timeout`.
-  int wait(std::chrono::milliseconds timeout) {
-    const auto end = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < end) {
-      int status = 0;
-      if (::waitpid(pid, &status, WNOHANG) == pid) {
-        pid = -1;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      }
-      std::this_thread::sleep_for(20ms);
-    }
-    return -1;
-  }
-  // A clean stop first, so the kernel removes its control socket.
-  ~Proc() {
-    if (pid <= 0) return;
-    ::kill(pid, SIGTERM);
-    ::kill(pid, SIGCONT);
-    if (wait(5s) == -1) {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, nullptr, 0);
-    }
-  }
-};
+using namespace plr::remote_test;
 
 // Namespaces A and B on a bridge; removed again at the end.
 struct Net {
@@ -150,15 +72,34 @@ struct Net {
 };
 
 std::string write_config(const std::string& name, const std::string& text) {
-  const std::string path = ::testing::TempDir() + name;
-  std::ofstream(path) << text;
-  return path;
+  return write_file(::testing::TempDir() + name, text);
 }
 
 std::string dds_block(int domain, const std::string& iface, const std::string& exp,
-                      const std::string& imp) {
+                      const std::string& imp, const std::string& extra = "") {
   return "remote:\n  dds: {domain: " + std::to_string(domain) + ", interfaces: [" + iface +
-         "], export: [" + exp + "], import: [" + imp + "]}\n";
+         "], export: [" + exp + "], import: [" + imp + "]" + extra + "}\n";
+}
+
+struct CallerLog {
+  int good = 0, wrong = 0;
+  std::size_t last_good = 0;  // where the last answer is
+  std::size_t failures_after_start = 0;
+};
+
+// What a demo_counter's log says about its `double` calls. Before discovery
+// calls are refused (no provider yet); failures count from the first answer.
+CallerLog read_caller(const std::string& log) {
+  static const std::regex ok(R"((\d+) doubled is (\d+))");
+  CallerLog c;
+  for (std::sregex_iterator it(log.begin(), log.end(), ok), end; it != end; ++it) {
+    (std::stoll((*it)[2]) == 2 * std::stoll((*it)[1]) ? c.good : c.wrong)++;
+    c.last_good = static_cast<std::size_t>(it->position());
+  }
+  for (auto at = log.find("failed:", log.find("doubled is")); at != std::string::npos;
+       at = log.find("failed:", at + 1))
+    ++c.failures_after_start;
+  return c;
 }
 
 nlohmann::json monitor_once(const Net& net, int domain, std::string* raw) {
@@ -182,7 +123,7 @@ std::uint64_t topic_messages(const nlohmann::json& kernel, const std::string& to
   return 0;
 }
 
-TEST(RemoteNetns, TopicAndServiceCrossProviderLossMonitorAndRefusedSwap) {
+TEST(RemoteNetns, TopicAndServiceCrossProviderLossMonitorAndRefusedControl) {
   Net net;
   if (net.isolated) {
     std::cout << "remote_netns: kernels in network namespaces " << net.ns_a << " and " << net.ns_b
@@ -198,11 +139,15 @@ TEST(RemoteNetns, TopicAndServiceCrossProviderLossMonitorAndRefusedSwap) {
   const auto b1 = write_config(
       "remote_b1.yaml", "pipeline: remote_b_provider\nnodes:\n  doubler: {plugin: demo_doubler}\n" +
                             dds_block(domain, net.iface, "double", ""));
+  const auto counter =
+      "nodes:\n  counter: {plugin: demo_counter, params: {period_ms: 20, limit: 250}}\n";
   const auto b2 =
-      write_config("remote_b2.yaml",
-                   "pipeline: remote_b_caller\nnodes:\n  counter: {plugin: demo_counter, params: "
-                   "{period_ms: 20, limit: 200}}\n" +
-                       dds_block(domain, net.iface, "count", "double"));
+      write_config("remote_b2.yaml", std::string("pipeline: remote_b_caller\n") + counter +
+                                         dds_block(domain, net.iface, "count", "double"));
+  const auto b3 = write_config(
+      "remote_b3.yaml",
+      std::string("pipeline: remote_b_resend\n") + counter +
+          dds_block(domain, net.iface, "", "double", ", resend_on_provider_loss: [double]"));
   const auto dir = ::testing::TempDir();
 
   Proc kernel_a(net.in(net.ns_a), {kPlr, "run", a, "--report", dir + "ra"}, dir + "remote_a.log");
@@ -221,17 +166,22 @@ TEST(RemoteNetns, TopicAndServiceCrossProviderLossMonitorAndRefusedSwap) {
   EXPECT_EQ((*kernel_of(doc, "remote_a"))["telemetry"]["nodes"][0].value("plugin", ""),
             "demo_doubler");
 
-  // Remote control is off: the swap is refused, and the kernel logs it.
-  std::string swap_out;
-  EXPECT_EQ(sh(kPlr + " swap --remote remote_a doubler demo_doubler --domain " +
-                   std::to_string(domain) + " --interface " + net.root_iface,
-               &swap_out),
-            1)
-      << swap_out;
-  EXPECT_NE(swap_out.find("refuses remote control"), std::string::npos) << swap_out;
+  // Remote control is off: a swap and a pause are refused, and the kernel logs them.
+  for (const std::string command :
+       {"swap --remote remote_a doubler demo_doubler", "pause --remote remote_a doubler"}) {
+    std::string out;
+    EXPECT_EQ(sh(kPlr + " " + command + " --domain " + std::to_string(domain) + " --interface " +
+                     net.root_iface,
+                 &out),
+              1)
+        << command << ": " << out;
+    EXPECT_NE(out.find("refuses remote control"), std::string::npos) << command << ": " << out;
+  }
 
-  // The caller in B: its calls are spread over A and B's provider.
+  // Two callers in B: their calls are spread over A and B's provider.
   Proc caller(net.in(net.ns_b), {kPlr, "run", b2, "--report", dir + "rb2"}, dir + "remote_b2.log");
+  Proc resender(net.in(net.ns_b), {kPlr, "run", b3, "--report", dir + "rb3"},
+                dir + "remote_b3.log");
   // The count topic reaches A (its bus counts what the bridge injected).
   std::uint64_t counts_at_a = 0;
   for (int i = 0; i < 5 && counts_at_a <= 10; ++i) {
@@ -242,33 +192,40 @@ TEST(RemoteNetns, TopicAndServiceCrossProviderLossMonitorAndRefusedSwap) {
 
   // A freezes mid-run: the call waiting on it fails at once (heartbeat), not
   // by the caller's 2 s timeout; later calls go to B's provider.
+  // A freezes mid-run: the call waiting on it is lost at once (heartbeat),
+  // not by the callers' 2 s timeout. The fail caller sees it fail; the
+  // resend caller's goes to B's provider. Later calls go to B's provider.
   ::kill(kernel_a.pid, SIGSTOP);
   const int rc = caller.wait(60s);
+  const int resend_rc = resender.wait(30s);
   const auto log = slurp(caller.log);
+  const auto resend_log = slurp(resender.log);
   EXPECT_EQ(rc, 0) << log;
-  EXPECT_NE(slurp(kernel_a.log).find("refused remote command"), std::string::npos);
+  EXPECT_EQ(resend_rc, 0) << resend_log;
+  const auto a_log = slurp(kernel_a.log);
+  EXPECT_NE(a_log.find(R"(refused remote command {"cmd":"swap")"), std::string::npos) << a_log;
+  EXPECT_NE(a_log.find(R"(refused remote command {"cmd":"pause")"), std::string::npos) << a_log;
 
-  static const std::regex ok(R"((\d+) doubled is (\d+))");
-  int good = 0, wrong = 0;
-  std::size_t last_good = 0;
-  for (std::sregex_iterator it(log.begin(), log.end(), ok), end; it != end; ++it) {
-    (std::stoll((*it)[2]) == 2 * std::stoll((*it)[1]) ? good : wrong)++;
-    last_good = static_cast<std::size_t>(it->position());
-  }
+  const auto fails = read_caller(log);
   const auto gone = log.find("failed: kernel 'remote_a@");
-  EXPECT_EQ(wrong, 0);
-  EXPECT_GE(good, 150) << log;
-  // Before discovery calls are refused (no provider yet); after the first
-  // answer, only the call caught on the frozen kernel fails.
-  std::size_t failures_after_start = 0;
-  for (auto at = log.find("failed:", log.find("doubled is")); at != std::string::npos;
-       at = log.find("failed:", at + 1))
-    ++failures_after_start;
-  EXPECT_EQ(failures_after_start, 1u) << log;
+  EXPECT_EQ(fails.wrong, 0);
+  EXPECT_GE(fails.good, 150) << log;
+  // Only the call caught on the frozen kernel fails.
+  EXPECT_EQ(fails.failures_after_start, 1u) << log;
   ASSERT_NE(gone, std::string::npos) << "no call failed when A froze:\n" << log;
   EXPECT_NE(log.find("is gone (silent for"), std::string::npos) << log;
+  EXPECT_NE(log.find("the request was not re-sent"), std::string::npos) << log;
   EXPECT_EQ(log.find("timed out"), std::string::npos) << log;
-  EXPECT_GT(last_good, gone) << "no answers after A was lost";
+  EXPECT_GT(fails.last_good, gone) << "no answers after A was lost";
+
+  // The idempotent service: nothing fails, the lost call was re-sent and answered.
+  const auto resent = read_caller(resend_log);
+  const auto resend_at = resend_log.find("re-sent after losing kernel 'remote_a@");
+  EXPECT_EQ(resent.wrong, 0);
+  EXPECT_GE(resent.good, 150) << resend_log;
+  EXPECT_EQ(resent.failures_after_start, 0u) << resend_log;
+  ASSERT_NE(resend_at, std::string::npos) << "no call was re-sent when A froze:\n" << resend_log;
+  EXPECT_GT(resent.last_good, resend_at) << "no answers after A was lost";
 }
 
 }  // namespace
