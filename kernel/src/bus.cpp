@@ -145,9 +145,13 @@ Status Bus::publish(std::uint64_t publisher, plr_msg* msg) {
   }
   // On the publisher's thread, before any reader can see it: the transport
   // sends the loaned bytes in place, and then need not copy them.
-  if (msg->loan && msg->origin == nullptr && msg->loan->topic == topic && msg->loan->commit(*msg))
+  const void* sent_by = nullptr;
+  if (msg->loan && msg->origin == nullptr && msg->loan->topic == topic && msg->loan->commit(*msg)) {
     msg->origin = msg->loan->transport;
-  for (const auto& s : targets) deliver(s, ref);
+    sent_by = msg->loan->endpoint;
+  }
+  for (const auto& s : targets)
+    if (s->owner != sent_by) deliver(s, ref);
   return {};
 }
 

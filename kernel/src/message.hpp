@@ -20,6 +20,7 @@ struct MsgLoan {
   virtual bool commit(const plr_msg& msg) = 0;
   const void* topic = nullptr;      // the bus topic it was loaned for
   const void* transport = nullptr;  // becomes the message's origin once committed
+  const void* endpoint = nullptr;   // the transport's bus endpoint: not handed the message
 };
 }  // namespace plr::kernel
 

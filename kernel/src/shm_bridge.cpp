@@ -230,6 +230,7 @@ plr_msg* ShmBridge::loan(const std::string& topic, std::size_t capacity, std::ui
   }
   slot->writer = std::move(w);
   slot->transport = this;
+  slot->endpoint = static_cast<const Endpoint*>(this);
   *data = reinterpret_cast<std::uint8_t*>(slot->loan->data());
   return msg_loaned(*data, capacity, std::move(slot));
 }

@@ -1,7 +1,8 @@
 // bench_transport: cross-process one-way latency and throughput of our
-// shared-memory transport (busy-polling and futex) against a Unix domain
-// socket and Cyclone DDS on loopback. Sender on CPU 0, receiver (a forked
-// process) on CPU 1.
+// shared-memory transport (busy-polling, futex, spin-then-futex) against a
+// Unix domain socket and Cyclone DDS on loopback. Sender on CPU 0, receiver
+// (a forked process) on CPU 1; one futex row with both on CPU 0. Then the
+// kernel's publish path (kernel_path.cpp): loaned slot vs copies.
 //
 // Latency: ping-pong; the sender stamps CLOCK_MONOTONIC before sending (for
 // shm: before loan()), the receiver reads the clock as soon as the message is
@@ -26,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "kernel_path.hpp"
 #include "links.hpp"
 #include "plr/shm/shm.hpp"
 
@@ -38,13 +40,23 @@ constexpr int kSenderCpu = 0;
 constexpr int kReceiverCpu = 1;
 constexpr std::size_t kMaxLatencySamples = 200'000;
 
-enum class Kind { kShmPoll, kShmBlock, kUds, kDds };
+// kShmSpin: blocking topic with spin_us = kSpinUs (spin, then futex).
+// kShmBlockSameCore: blocking, receiver pinned to the sender's CPU.
+enum class Kind { kShmPoll, kShmBlock, kShmSpin, kShmBlockSameCore, kUds, kDds };
+constexpr std::uint32_t kSpinUs = 50;
+bool is_shm(Kind k) {
+  return k != Kind::kUds && k != Kind::kDds;
+}
 const char* name(Kind k) {
   switch (k) {
     case Kind::kShmPoll:
       return "shm-poll";
     case Kind::kShmBlock:
       return "shm-futex";
+    case Kind::kShmSpin:
+      return "shm-spin50";
+    case Kind::kShmBlockSameCore:
+      return "shm-futex-1cpu";
     case Kind::kUds:
       return "uds";
     case Kind::kDds:
@@ -100,11 +112,13 @@ class ShmLink final : public Link {
   // The sender publishes "data", the receiver publishes "ack"; each side
   // subscribes to the other's once the peer says it exists.
   static Link* make(bool sender, const std::string& run, std::size_t size, shm::WaitMode mode,
-                    const Pipe& to_peer, const Pipe& from_peer, std::string& error) {
+                    std::uint32_t spin_us, const Pipe& to_peer, const Pipe& from_peer,
+                    std::string& error) {
     auto l = std::make_unique<ShmLink>();
     shm::TopicConfig c;
     c.policy = shm::Policy::kReliable;
     c.wait_mode = mode;
+    c.spin_us = spin_us;
     c.slot_count = 8;
     c.slot_size = static_cast<std::uint32_t>(sender ? size : 64);
     auto pub =
@@ -267,9 +281,10 @@ Row run_case(const Case& c, Shared* shared, const std::string& run) {
   }
   const shm::WaitMode mode =
       c.kind == Kind::kShmPoll ? shm::WaitMode::kPolling : shm::WaitMode::kBlocking;
+  const std::uint32_t spin_us = c.kind == Kind::kShmSpin ? kSpinUs : 0;
   const pid_t pid = ::fork();
   if (pid == 0) {
-    pin(kReceiverCpu);
+    pin(c.kind == Kind::kShmBlockSameCore ? kSenderCpu : kReceiverCpu);
     std::string err;
     Link* l = nullptr;
     if (c.kind == Kind::kUds) {
@@ -279,7 +294,7 @@ Row run_case(const Case& c, Shared* shared, const std::string& run) {
     } else if (c.kind == Kind::kDds) {
       l = make_dds_link(false, c.size, err);
     } else {
-      l = ShmLink::make(false, run, c.size, mode, to_parent, to_child, err);
+      l = ShmLink::make(false, run, c.size, mode, spin_us, to_parent, to_child, err);
     }
     if (l == nullptr) {
       std::fprintf(stderr, "receiver: %s\n", err.c_str());
@@ -297,7 +312,7 @@ Row run_case(const Case& c, Shared* shared, const std::string& run) {
   } else if (c.kind == Kind::kDds) {
     l.reset(make_dds_link(true, c.size, err));
   } else {
-    l.reset(ShmLink::make(true, run, c.size, mode, to_child, to_parent, err));
+    l.reset(ShmLink::make(true, run, c.size, mode, spin_us, to_child, to_parent, err));
   }
   std::uint64_t first_send = 0;
   const bool sent = l != nullptr && run_sender(*l, c, warm, first_send);
@@ -397,8 +412,9 @@ int main(int argc, char** argv) {
   constexpr std::size_t kShmThroughput = 200000;
   std::vector<Row> rows;
   for (const SizePlan& p : plans) {
-    for (Kind k : {Kind::kShmPoll, Kind::kShmBlock, Kind::kUds, Kind::kDds}) {
-      const bool shm = k == Kind::kShmPoll || k == Kind::kShmBlock;
+    for (Kind k : {Kind::kShmPoll, Kind::kShmBlock, Kind::kShmSpin, Kind::kShmBlockSameCore,
+                   Kind::kUds, Kind::kDds}) {
+      const bool shm = is_shm(k);
       const std::size_t lat = p.lat / div, thr = (shm ? kShmThroughput : p.thr) / div;
       rows.push_back(
           run_case(Case{k, p.size, std::max<std::size_t>(lat, 50), std::max<std::size_t>(thr, 20)},
@@ -406,18 +422,26 @@ int main(int argc, char** argv) {
       if (!json) {
         const Row& r = rows.back();
         if (r.ok) {
-          std::printf("%-8s %-11s p50 %9.2f us  p99 %9.2f us  %12.0f msg/s  %10.1f MiB/s\n",
+          std::printf("%-8s %-14s p50 %9.2f us  p99 %9.2f us  %12.0f msg/s  %10.1f MiB/s\n",
                       size_label(r.size).c_str(), name(r.kind), r.p50_us, r.p99_us, r.msgs_per_s,
                       r.mib_per_s);
         } else {
-          std::printf("%-8s %-11s FAILED: %s\n", size_label(r.size).c_str(), name(r.kind),
+          std::printf("%-8s %-14s FAILED: %s\n", size_label(r.size).c_str(), name(r.kind),
                       r.error.c_str());
         }
         std::fflush(stdout);
       }
     }
   }
+  std::vector<KernelRow> kernel_rows = run_kernel_path(quick, run + "k");
+  nlohmann::json kernel_json = nlohmann::json::array();
+  if (!json) std::printf("\nkernel publish path, %s\n", kernel_path_description());
+  for (const KernelRow& r : kernel_rows) {
+    if (!json) print(r);
+    kernel_json.push_back(to_json(r));
+  }
   (void)plr::shm::remove_run_segments(run);
+  (void)plr::shm::remove_run_segments(run + "k");
   ::unlink(dds_config.c_str());
 
   auto find = [&](Kind k, std::size_t s) -> const Row* {
@@ -429,6 +453,8 @@ int main(int argc, char** argv) {
   const Row* dds64 = find(Kind::kDds, 64);
   const Row* poll64 = find(Kind::kShmPoll, 64);
   const Row* block64 = find(Kind::kShmBlock, 64);
+  const Row* spin64 = find(Kind::kShmSpin, 64);
+  const Row* same64 = find(Kind::kShmBlockSameCore, 64);
   const char* timed =
       "one-way latency = receiver clock when the message is in hand - sender clock before "
       "send (shm: before loan(); shm payload is not copied or rewritten, a 16-byte stamp is "
@@ -438,6 +464,8 @@ int main(int argc, char** argv) {
     nlohmann::json j;
     j["pinning"] = {{"sender_cpu", kSenderCpu},
                     {"receiver_cpu", kReceiverCpu},
+                    {"receiver_cpu_shm_futex_1cpu", kSenderCpu},
+                    {"shm_spin50_spin_us", kSpinUs},
                     {"sched", g_realtime ? "SCHED_FIFO 10" : "SCHED_OTHER"}};
     j["quick"] = quick;
     j["timed"] = timed;
@@ -460,17 +488,28 @@ int main(int argc, char** argv) {
     }
     if (dds64 && poll64) j["dds_over_shm_poll_64B_p50"] = dds64->p50_us / poll64->p50_us;
     if (dds64 && block64) j["dds_over_shm_futex_64B_p50"] = dds64->p50_us / block64->p50_us;
+    if (dds64 && spin64) j["dds_over_shm_spin50_64B_p50"] = dds64->p50_us / spin64->p50_us;
+    if (dds64 && same64) j["dds_over_shm_futex_1cpu_64B_p50"] = dds64->p50_us / same64->p50_us;
+    j["kernel_path"] = kernel_json;
     std::printf("%s\n", j.dump(2).c_str());
   } else {
     std::printf("\npinning: sender CPU %d, receiver CPU %d (forked process), %s\ntimed: %s\n",
                 kSenderCpu, kReceiverCpu, g_realtime ? "SCHED_FIFO 10" : "SCHED_OTHER", timed);
-    if (dds64 && poll64 && block64) {
-      std::printf("64 B p50: DDS / shm-poll = %.0fx, DDS / shm-futex = %.1fx\n",
-                  dds64->p50_us / poll64->p50_us, dds64->p50_us / block64->p50_us);
+    std::printf("shm-spin50: blocking topic, spin_us %u; shm-futex-1cpu: receiver on CPU %d too\n",
+                kSpinUs, kSenderCpu);
+    if (dds64 && poll64 && block64 && spin64 && same64) {
+      std::printf(
+          "64 B p50: DDS / shm-poll = %.0fx, / shm-futex = %.1fx, / shm-spin50 = %.0fx, / "
+          "shm-futex-1cpu = %.1fx\n",
+          dds64->p50_us / poll64->p50_us, dds64->p50_us / block64->p50_us,
+          dds64->p50_us / spin64->p50_us, dds64->p50_us / same64->p50_us);
     }
   }
   ::munmap(mem, sizeof(Shared));
   for (const Row& r : rows) {
+    if (!r.ok) return 1;
+  }
+  for (const KernelRow& r : kernel_rows) {
     if (!r.ok) return 1;
   }
   return 0;
