@@ -310,7 +310,11 @@ int main(int argc, char** argv) {
   bool quick = false, json = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--serve" && i + 1 < argc) return plr::kernel::serve(std::atoi(argv[i + 1]));
+    if (a == "--serve" && i + 1 < argc) {
+      // The server shares the parent's stdout: its warnings would break the JSON.
+      spdlog::set_level(spdlog::level::err);
+      return plr::kernel::serve(std::atoi(argv[i + 1]));
+    }
     if (a == "--quick")
       quick = true;
     else if (a == "--json")
