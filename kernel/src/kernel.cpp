@@ -108,6 +108,8 @@ Status Kernel::start() {
     bus_.set_live(inst->get(), true);
     spdlog::info("node '{}' active ({} {})", s->config.name, (*inst)->library().name(),
                  (*inst)->library().descriptor().version);
+    // The control server is already up: a swap or status may come in now.
+    std::scoped_lock lock(s->swap_mutex, s->view_mutex);
     s->instance = std::move(*inst);
   }
   started_ = true;
@@ -126,7 +128,11 @@ void Kernel::stop() {
     std::lock_guard lock(s.swap_mutex);
     if (!s.instance) continue;
     if (auto r = s.instance->cleanup(); !r) spdlog::warn("{}", r.error().message);
-    s.instance.reset();
+    std::unique_ptr<NodeInstance> gone;
+    {
+      std::lock_guard view(s.view_mutex);
+      gone = std::move(s.instance);
+    }
   }
   started_ = false;
 }
@@ -158,16 +164,20 @@ Status Kernel::swap(const std::string& node, const std::string& plugin) {
                       fmt::format("swap of '{}' to '{}' failed, '{}' keeps running: {}", node,
                                   plugin, s->config.plugin, fresh.error().message));
 
-  std::unique_ptr<NodeInstance> old = std::move(s->instance);
-  bus_.swap_live(old.get(), fresh->get());
+  std::unique_ptr<NodeInstance> old;
+  {
+    std::lock_guard view(s->view_mutex);
+    old = std::move(s->instance);
+    s->instance = std::move(*fresh);
+    s->config.plugin = plugin;  // only the plug-in changes; slot() reads the name unlocked
+  }
+  bus_.swap_live(old.get(), s->instance.get());
   // The old instance answers what it already accepted before it goes.
   old->executor().drain();
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
   while (bus_.pending_for(old.get()) > 0 && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   if (auto r = old->deactivate(); !r) spdlog::warn("swap: {}", r.error().message);
-  s->instance = std::move(*fresh);
-  s->config = next;
   old.reset();
   spdlog::info("node '{}' swapped to {} {}", node, plugin,
                s->instance->library().descriptor().version);
@@ -237,6 +247,7 @@ Status Kernel::on_pipeline_done(std::function<void(bool, std::string)> fn) {
 std::vector<NodeStatus> Kernel::nodes() const {
   std::vector<NodeStatus> out;
   for (const auto& s : slots_) {
+    std::lock_guard view(s->view_mutex);
     NodeStatus n;
     n.name = s->config.name;
     n.plugin = s->config.plugin;

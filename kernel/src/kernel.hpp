@@ -74,7 +74,11 @@ class Kernel {
   struct Slot {
     NodeConfig config;
     std::unique_ptr<NodeInstance> instance;
+    // Held through a whole swap, pause or resume: one change to a node at a time.
     std::mutex swap_mutex;
+    // Held only while `config` or `instance` change, so status readers on the
+    // control or DDS thread never wait for a swap draining in-flight calls.
+    mutable std::mutex view_mutex;
   };
   class Internal;
 
