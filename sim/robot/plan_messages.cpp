@@ -75,6 +75,7 @@ DecodedPlanRequest decodePlanRequest(const plr::msg::PlanRequest& r) {
     q.goal = g;
   }
   q.time_limit_s = r.timeout_s();
+  q.max_expansions = r.max_expansions();
   if (const auto* eps = r.epsilons(); eps != nullptr && eps->size() > 0) {
     q.eps_initial = eps->Get(0);
     q.eps_final = eps->Get(eps->size() - 1);
@@ -128,10 +129,10 @@ void encodePlanResponse(const PlanResult& result, const std::string& planner, do
     }
   }
   const auto traj = plr::msg::CreateTrajectoryDirect(out, &points);
-  const auto stats =
-      plr::msg::CreatePlanStats(out, result.stats.expansions, 1e3 * result.stats.first_solution_s,
-                                1e3 * result.stats.planning_time_s, result.stats.final_eps,
-                                result.stats.cost, result.stats.escaped);
+  const PlanStats& st = result.stats;
+  const auto stats = plr::msg::CreatePlanStats(
+      out, st.expansions, 1e3 * st.first_solution_s, 1e3 * st.planning_time_s, st.final_eps,
+      st.cost, st.escaped, 1e3 * st.escape_time_s, st.budget_exhausted, st.time_limit_hit);
   out.Finish(plr::msg::CreatePlanResponseDirect(out, toMsg(result.status), result.message.c_str(),
                                                 traj, stats, planner.c_str()));
 }

@@ -24,26 +24,38 @@ PlanResult fail(PlanStatus status, std::string message) {
   return r;
 }
 
+std::string budgetMessage(std::uint64_t budget) {
+  return "no solution within the expansion budget of " + std::to_string(budget);
+}
+
 }  // namespace
 
 Planner::Planner(LatticeConfig config) : config_(std::move(config)) {}
 
 Planner::Escape Planner::escape(const Config& start, sim::CollisionChecker& checker,
-                                double time_limit_s, sim::PlanStats& stats) {
+                                const sim::PlanQuery& query, sim::PlanStats& stats) {
   JointLattice graph(config_.modes.at(PlanMode::kEscape), checker, start, std::monostate{}, true);
   search::ZeroHeuristic zero;
   search::SearchOptions o;
-  o.time_limit_s = time_limit_s;
+  o.time_limit_s = query.time_limit_s;
+  o.max_expansions = query.max_expansions;
   o.first_solution_only = true;
   const auto r = search_.search(graph, zero, graph.start(), o);
   stats.expansions += r.expansions;
+  stats.budget_exhausted = r.budget_exhausted;
+  stats.time_limit_hit = r.time_limit_hit;
   Escape e;
   if (r.status == search::SearchStatus::kSolved) {
     e.status = PlanStatus::kSolved;
     for (auto id : r.path) e.path.push_back(graph.config(id));
+  } else if (r.budget_exhausted) {
+    e.status = PlanStatus::kTimeout;
+    e.why = "expansion budget of " + std::to_string(query.max_expansions) + " exhausted";
+  } else if (r.status == search::SearchStatus::kTimeout) {
+    e.status = PlanStatus::kTimeout;
+    e.why = "timeout";
   } else {
-    e.status =
-        r.status == search::SearchStatus::kTimeout ? PlanStatus::kTimeout : PlanStatus::kNoPath;
+    e.why = "none";
   }
   return e;
 }
@@ -76,14 +88,13 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
                          "start in collision: " + checker.describeCollision(start)));
     }
     const std::string why = checker.describeCollision(start);
-    Escape e = escape(start, checker, query.time_limit_s, result.stats);
+    Escape e = escape(start, checker, query, result.stats);
     result.stats.escaped = query.mode != PlanMode::kEscape || !why.empty();
     result.stats.escape_time_s = secondsSince(t0);
     result.stats.escape_cpu_s = sim::threadCpuSeconds() - cpu0;
     if (e.status != PlanStatus::kSolved) {
       PlanResult r = fail(PlanStatus::kStartInvalid,
-                          "start in collision (" + why + ") and no escape found: " +
-                              (e.status == PlanStatus::kTimeout ? "timeout" : "none"));
+                          "start in collision (" + why + ") and no escape found: " + e.why);
       r.stats = result.stats;
       return finish(r);
     }
@@ -124,6 +135,17 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
   const double remaining = query.time_limit_s - secondsSince(t0);
   search::SearchOptions o;
   o.time_limit_s = std::max(0.0, remaining);
+  if (query.max_expansions != 0) {
+    // What the escape left of the budget; an escape that used all of it
+    // leaves none (0 would mean no budget).
+    if (result.stats.expansions >= query.max_expansions) {
+      result.status = PlanStatus::kTimeout;
+      result.stats.budget_exhausted = true;
+      result.message = budgetMessage(query.max_expansions);
+      return finish(result);
+    }
+    o.max_expansions = query.max_expansions - result.stats.expansions;
+  }
   o.improve_time_s = query.improve_time_s;
   o.eps_initial = query.eps_initial;
   o.eps_final = query.eps_final;
@@ -150,12 +172,16 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
     for (auto id : sr.path) path.push_back(graph.config(id));
   }
   result.stats.expansions += sr.expansions;
+  result.stats.budget_exhausted = sr.budget_exhausted;
+  result.stats.time_limit_hit = sr.time_limit_hit;
   result.stats.final_eps = sr.final_eps;
   result.stats.suboptimality_bound = sr.suboptimality_bound;
   if (sr.status != search::SearchStatus::kSolved) {
     result.status =
         sr.status == search::SearchStatus::kTimeout ? PlanStatus::kTimeout : PlanStatus::kNoPath;
-    if (result.message.empty()) {
+    if (sr.budget_exhausted) {
+      result.message = budgetMessage(query.max_expansions);
+    } else if (result.message.empty()) {
       result.message = sr.status == search::SearchStatus::kTimeout
                            ? "no solution within the time limit"
                            : "no path: the lattice was exhausted";

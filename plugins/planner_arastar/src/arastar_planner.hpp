@@ -29,10 +29,11 @@ class Planner {
  private:
   struct Escape {
     sim::PlanStatus status = sim::PlanStatus::kNoPath;
+    std::string why;  // when not solved
     std::vector<sim::Config> path;
   };
-  Escape escape(const sim::Config& start, sim::CollisionChecker& checker, double time_limit_s,
-                sim::PlanStats& stats);
+  Escape escape(const sim::Config& start, sim::CollisionChecker& checker,
+                const sim::PlanQuery& query, sim::PlanStats& stats);
 
   LatticeConfig config_;
   search::AraStar search_;

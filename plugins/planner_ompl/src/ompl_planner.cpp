@@ -6,14 +6,15 @@
 #include <ompl/base/goals/GoalStates.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/geometric/PathGeometric.h>
-#include <ompl/geometric/PathSimplifier.h>
 #include <ompl/geometric/planners/rrt/RRTConnect.h>
 #include <ompl/util/Console.h>
-#include <ompl/util/RandomNumbers.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <mutex>
+#include <random>
 
 namespace plr::ompl_planner {
 
@@ -129,14 +130,105 @@ class Motion final : public ob::MotionValidator {
   const sim::CollisionChecker& cc_;
 };
 
+// Uniform sampling with a seed of our choosing instead of one drawn from
+// OMPL's process-wide sequence.
+class SeededSampler final : public ob::RealVectorStateSampler {
+ public:
+  SeededSampler(const ob::StateSpace* space, std::uint32_t seed) : RealVectorStateSampler(space) {
+    rng_.setLocalSeed(seed);
+  }
+};
+
+// FNV-1a over what defines a query (the world is the checker's).
+class QueryHash {
+ public:
+  template <class T>
+  void add(const T& v) {
+    unsigned char bytes[sizeof(T)];
+    std::memcpy(bytes, &v, sizeof(T));
+    for (unsigned char b : bytes) h_ = (h_ ^ b) * 1099511628211ull;
+  }
+  void add(const Config& q) {
+    for (int i = 0; i < sim::kNumJoints; ++i) add(q[i]);
+  }
+  std::uint64_t value() const { return h_; }
+
+ private:
+  std::uint64_t h_ = 1469598103934665603ull;
+};
+
+std::uint32_t querySeed(const sim::PlanQuery& q, std::uint32_t seed) {
+  QueryHash h;
+  h.add(seed);
+  h.add(static_cast<int>(q.mode));
+  h.add(q.start);
+  h.add(q.goal.index());
+  if (const auto* jg = std::get_if<sim::JointGoal>(&q.goal)) {
+    h.add(jg->q);
+    h.add(jg->tolerance);
+  } else if (const auto* pg = std::get_if<sim::PoseGoal>(&q.goal)) {
+    for (int i = 0; i < 3; ++i) h.add(pg->target.position[i]);
+    h.add(pg->target.pitch);
+  }
+  for (const sim::Box& b : q.held_boxes) h.add(b.id);
+  for (std::uint32_t id : q.ignored_boxes) h.add(id);
+  const std::uint64_t v = h.value();
+  // OMPL treats seed 0 as "none".
+  return std::max<std::uint32_t>(1u, static_cast<std::uint32_t>(v ^ (v >> 32)));
+}
+
+// Randomised shortcutting between points inside segments (what OMPL's
+// PathSimplifier::shortcutPath does), on the query's own generator. Lengths
+// are joint-space distances scaled by velocity limits.
+std::vector<Config> randomShortcut(std::vector<Config> path, const sim::CollisionChecker& cc,
+                                   std::mt19937& rng) {
+  const sim::RobotModel& robot = cc.robot();
+  auto dist = [&](const Config& a, const Config& b) {
+    double s = 0.0;
+    for (int j = 0; j < sim::kNumJoints; ++j) {
+      const double d = (b[j] - a[j]) / robot.limits(j).velocity;
+      s += d * d;
+    }
+    return std::sqrt(s);
+  };
+  const std::size_t max_steps = 2 * path.size() + 10;
+  std::size_t failures = 0;
+  for (std::size_t step = 0; step < max_steps && failures < path.size() && path.size() > 2;
+       ++step) {
+    std::vector<double> acc{0.0};
+    for (std::size_t i = 1; i < path.size(); ++i)
+      acc.push_back(acc.back() + dist(path[i - 1], path[i]));
+    std::uniform_real_distribution<double> u(0.0, acc.back());
+    double a = u(rng), b = u(rng);
+    if (a > b) std::swap(a, b);
+    auto at = [&](double s, std::size_t& seg) {
+      seg = static_cast<std::size_t>(std::upper_bound(acc.begin(), acc.end(), s) - acc.begin());
+      seg = std::clamp<std::size_t>(seg, 1, path.size() - 1) - 1;
+      const double len = acc[seg + 1] - acc[seg];
+      const double f = len > 0.0 ? (s - acc[seg]) / len : 0.0;
+      return Config(path[seg] + f * (path[seg + 1] - path[seg]));
+    };
+    std::size_t ia = 0, ib = 0;
+    const Config pa = at(a, ia), pb = at(b, ib);
+    if (ia == ib || !cc.isMotionValid(pa, pb)) {
+      ++failures;
+      continue;
+    }
+    failures = 0;
+    std::vector<Config> next(path.begin(), path.begin() + static_cast<std::ptrdiff_t>(ia) + 1);
+    next.push_back(pa);
+    next.push_back(pb);
+    next.insert(next.end(), path.begin() + static_cast<std::ptrdiff_t>(ib) + 1, path.end());
+    path = std::move(next);
+  }
+  return path;
+}
+
 }  // namespace
 
 Planner::Planner(const Options& options) : options_(options) {
   static std::once_flag once;
-  std::call_once(once, [&] {
-    ompl::msg::setLogLevel(ompl::msg::LOG_WARN);
-    ompl::RNG::setSeed(options.seed);
-  });
+  std::call_once(once, [] { ompl::msg::setLogLevel(ompl::msg::LOG_WARN); });
 }
 
 PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& checker) {
@@ -181,6 +273,10 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
     mapping = std::make_unique<JointMapping>(joints, query.start);
   }
   space->setBounds(bounds);
+  const std::uint32_t seed = querySeed(query, options_.seed);
+  space->setStateSamplerAllocator([seed, n = 0u](const ob::StateSpace* sp) mutable {
+    return std::make_shared<SeededSampler>(sp, seed + n++);
+  });
   auto si = std::make_shared<ob::SpaceInformation>(space);
   si->setStateValidityChecker(std::make_shared<Validity>(si, *mapping, checker));
   if (line) {
@@ -251,12 +347,29 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
   if (options_.range > 0.0) rrt.setRange(options_.range);
   rrt.setProblemDefinition(pdef);
   rrt.setup();
-  const double remaining = std::max(0.0, query.time_limit_s - secondsSince(t0));
-  const ob::PlannerStatus st = rrt.solve(ob::timedPlannerTerminationCondition(remaining));
+  const auto deadline = t0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                 std::chrono::duration<double>(query.time_limit_s));
+  // RRTConnect evaluates the condition once per iteration (and while it
+  // samples goals), always in the same order: counting evaluations is a
+  // load-independent budget.
+  std::uint64_t evaluations = 0;
+  bool budget_hit = false, time_hit = false;
+  const ob::PlannerTerminationCondition ptc([&] {
+    ++evaluations;
+    budget_hit = query.max_expansions != 0 && evaluations > query.max_expansions;
+    time_hit = std::chrono::steady_clock::now() >= deadline;
+    return budget_hit || time_hit;
+  });
+  const ob::PlannerStatus st = rrt.solve(ptc);
   PlanResult result;
+  result.stats.expansions = evaluations;
   if (st != ob::PlannerStatus::EXACT_SOLUTION) {
     result.status = PlanStatus::kTimeout;
-    result.message = "no solution within the time limit";
+    result.stats.budget_exhausted = budget_hit;
+    result.stats.time_limit_hit = time_hit && !budget_hit;
+    result.message = budget_hit ? "no solution within the expansion budget of " +
+                                      std::to_string(query.max_expansions)
+                                : "no solution within the time limit";
     return finish(result);
   }
   result.stats.first_solution_s = secondsSince(t0);
@@ -267,9 +380,6 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
     // Densify to 1 cm of plate travel so the IK path follows the line.
     const double len = static_cast<const LineMapping&>(*mapping).length();
     path.interpolate(std::max(2u, static_cast<unsigned>(std::ceil(len / 0.01)) + 1));
-  } else {
-    og::PathSimplifier simplifier(si);
-    simplifier.shortcutPath(path);
   }
   for (std::size_t i = 0; i < path.getStateCount(); ++i) {
     Config q;
@@ -277,7 +387,10 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
       return finish(fail(PlanStatus::kNoPath, "lost IK on the line"));
     configs.push_back(q);
   }
-  if (!line) configs = sim::shortcutPath(configs, checker);
+  if (!line) {
+    std::mt19937 rng(seed);
+    configs = sim::shortcutPath(randomShortcut(configs, checker, rng), checker);
+  }
   result.status = PlanStatus::kSolved;
   result.path = configs;
   result.trajectory = sim::Trajectory::fromWaypoints(configs, robot.allLimits());

@@ -7,6 +7,13 @@
 // plans the plate's progress along its line (states map to configurations
 // through the IK). M6 is not a sampling problem: starts in collision are
 // reported as kStartInvalid and M6 queries as kInvalidRequest.
+//
+// Reproducible per query: OMPL's RNG::setSeed only seeds the process-wide
+// sequence from which every RNG instance draws its seed, so results would
+// depend on how many RNGs were made before. Instead the query's state
+// sampler gets a local seed from the query, and the random shortcutting is
+// our own on a generator seeded the same way (OMPL's PathSimplifier keeps its
+// RNG private). A query's max_expansions bounds RRTConnect's iterations.
 #pragma once
 
 #include <cstdint>
@@ -18,8 +25,8 @@ namespace plr::ompl_planner {
 struct Options {
   // RRTConnect's step (in the planning space's units); 0 lets OMPL choose.
   double range = 0.0;
-  // Seeds OMPL's global RNG the first time a Planner is made in a process
-  // (OMPL allows this once), so runs are repeatable.
+  // Mixed with a hash of each query into the seed of that query's sampler
+  // and shortcutting, so the same query always gives the same path.
   std::uint32_t seed = 1;
 };
 

@@ -5,7 +5,9 @@
 
 #include <fcl/fcl.h>
 
+#include <atomic>
 #include <cmath>
+#include <thread>
 
 #include "arastar_planner.hpp"
 #include "ompl_planner.hpp"
@@ -370,4 +372,84 @@ TEST(Trajectory, TrapezoidRespectsLimitsAndReachesWaypoints) {
   EXPECT_NEAR(t.duration() - t.waypointTime(1), 2.0 * std::sqrt(0.4 / 0.8), 1e-9);
   expectWithinLimits(t);
   EXPECT_NEAR(segmentDuration(wps[0], wps[1], lim), t.waypointTime(1), 1e-12);
+}
+
+// Deterministic planning: with an expansion budget the same request gives the
+// same trajectory, bit for bit, whether or not other threads load the
+// machine. ARA* needs ~0.5 s for this budget, past the default improve_time_s
+// (0.1 s): were ε still lowered on a timer, how far it got would differ
+// between the two runs.
+TEST_P(Planners, ExpansionBudgetMakesPlansIndependentOfLoad) {
+  const World w = wall(5.0);
+  PlanQuery q = poseQuery(PlanMode::kArmBase, home(2.0), Eigen::Vector3d(4.85, 0.4, 1.8), 0.0);
+  // Past the first solution (ARA*: ~100 expansions), short of ε = 1.
+  q.max_expansions = 400;
+  auto once = [&] {
+    CollisionChecker cc(robot(), w);
+    return plan(q, cc);
+  };
+  const PlanResult quiet = once();
+  ASSERT_EQ(quiet.status, PlanStatus::kSolved) << quiet.message;
+  EXPECT_LE(quiet.stats.expansions, q.max_expansions);
+  EXPECT_FALSE(quiet.stats.time_limit_hit);
+  if (GetParam() == 0) {
+    EXPECT_TRUE(quiet.stats.budget_exhausted);  // not improve_time_s
+  }
+
+  std::atomic<bool> stop{false};
+  std::vector<std::thread> burners;
+  for (int i = 0; i < 2; ++i) {
+    burners.emplace_back([&stop] {
+      volatile double x = 1.0;
+      while (!stop.load(std::memory_order_relaxed)) x = std::sqrt(x + 1.0);
+    });
+  }
+  const PlanResult loaded = once();
+  stop = true;
+  for (auto& t : burners) t.join();
+
+  ASSERT_EQ(loaded.status, PlanStatus::kSolved) << loaded.message;
+  EXPECT_EQ(loaded.stats.expansions, quiet.stats.expansions);
+  EXPECT_EQ(loaded.stats.final_eps, quiet.stats.final_eps);
+  EXPECT_EQ(loaded.stats.cost, quiet.stats.cost);
+  ASSERT_EQ(loaded.path.size(), quiet.path.size());
+  for (std::size_t i = 0; i < quiet.path.size(); ++i) EXPECT_EQ(loaded.path[i], quiet.path[i]);
+  const auto a = quiet.trajectory.sampled(0.02), b = loaded.trajectory.sampled(0.02);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].first, b[i].first);
+    EXPECT_EQ(a[i].second.position, b[i].second.position);
+    EXPECT_EQ(a[i].second.velocity, b[i].second.velocity);
+  }
+}
+
+TEST_P(Planners, ExhaustedBudgetWithoutSolutionSaysSo) {
+  const World w = wall(5.0);
+  CollisionChecker cc(robot(), w);
+  PlanQuery q = poseQuery(PlanMode::kArmBase, home(2.0), Eigen::Vector3d(4.85, 0.4, 1.8), 0.0);
+  q.max_expansions = 3;
+  const PlanResult r = plan(q, cc);
+  EXPECT_EQ(r.status, PlanStatus::kTimeout);
+  EXPECT_EQ(r.message, "no solution within the expansion budget of 3");
+  EXPECT_TRUE(r.stats.budget_exhausted);
+  EXPECT_FALSE(r.stats.time_limit_hit);
+}
+
+// ARA* with a budget that ends it while it improves: the last completed
+// iteration's solution, the same every time.
+TEST(Arastar, BudgetEndingTheImprovementReturnsTheLastSolution) {
+  const World w = wall(5.0);
+  PlanQuery q = poseQuery(PlanMode::kArmBase, home(2.0), Eigen::Vector3d(4.85, 0.4, 1.8), 0.0);
+  q.improve_time_s = 10.0;
+  q.max_expansions = 400;
+  CollisionChecker cc(robot(), w);
+  const PlanResult cut = arastar().plan(q, cc);
+  ASSERT_EQ(cut.status, PlanStatus::kSolved) << cut.message;
+  EXPECT_TRUE(cut.stats.budget_exhausted);
+  EXPECT_FALSE(cut.stats.time_limit_hit);
+  EXPECT_EQ(cut.stats.expansions, q.max_expansions);
+  EXPECT_GT(cut.stats.final_eps, q.eps_final);
+  const PlanResult again = arastar().plan(q, cc);
+  EXPECT_EQ(again.path, cut.path);
+  EXPECT_EQ(again.stats.final_eps, cut.stats.final_eps);
 }

@@ -33,15 +33,17 @@ AraStar::Record& AraStar::record(StateId s) {
   return r;
 }
 
-bool AraStar::improvePath(Graph& graph, Clock::time_point deadline, SearchResult& result) {
+AraStar::Stop AraStar::improvePath(Graph& graph, Clock::time_point deadline,
+                                   std::size_t max_expansions, SearchResult& result) {
   std::size_t since_clock = 0;
   while (!open_.empty()) {
     const double goal_g = best_goal_ == kNoState ? std::numeric_limits<double>::infinity()
                                                  : records_[static_cast<std::size_t>(best_goal_)].g;
     if (open_.topKey() >= goal_g) break;
+    if (max_expansions != 0 && result.expansions >= max_expansions) return Stop::kBudget;
     if (++since_clock == 8) {
       since_clock = 0;
-      if (Clock::now() >= deadline) return false;
+      if (Clock::now() >= deadline) return Stop::kTime;
     }
     Record* r = open_.pop();
     r->closed_iteration = iteration_;
@@ -72,7 +74,7 @@ bool AraStar::improvePath(Graph& graph, Clock::time_point deadline, SearchResult
       }
     }
   }
-  return true;
+  return Stop::kDone;
 }
 
 double AraStar::minUnexpandedF() const {
@@ -125,8 +127,12 @@ SearchResult AraStar::search(Graph& graph, Heuristic& heuristic, StateId start,
   }
 
   for (;;) {
-    const bool finished = improvePath(graph, deadline, result);
-    if (!finished) break;
+    const Stop stop = improvePath(graph, deadline, options.max_expansions, result);
+    if (stop != Stop::kDone) {
+      result.budget_exhausted = stop == Stop::kBudget;
+      result.time_limit_hit = stop == Stop::kTime;
+      break;
+    }
     ++result.iterations;
     if (best_goal_ == kNoState) break;  // OPEN exhausted: no path at any ε
     const bool first = result.path.empty();
@@ -140,7 +146,7 @@ SearchResult AraStar::search(Graph& graph, Heuristic& heuristic, StateId start,
       result.first_solution_time_s = elapsed();
       result.first_solution_cpu_s = threadCpuSeconds() - cpu0;
       result.first_solution_expansions = result.expansions;
-      if (std::isfinite(options.improve_time_s)) {
+      if (std::isfinite(options.improve_time_s) && options.max_expansions == 0) {
         deadline = std::min(
             deadline, Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                          std::chrono::duration<double>(options.improve_time_s)));

@@ -23,8 +23,12 @@ struct SearchOptions {
   double eps_final = 1.0;      // stop improving once this ε is done
   double eps_decrement = 0.5;  // ε step between iterations
   double time_limit_s = std::numeric_limits<double>::infinity();
-  // Once a solution exists, improve it for at most this long.
+  // Once a solution exists, improve it for at most this long. Ignored with an
+  // expansion budget: how far ε gets must not depend on the machine's load.
   double improve_time_s = std::numeric_limits<double>::infinity();
+  // Stop after this many expansions (0 = no budget) with the solution of the
+  // last completed iteration: the same search then always ends the same way.
+  std::size_t max_expansions = 0;
   // Stop at the first solution instead of improving it while time remains.
   bool first_solution_only = false;
 };
@@ -41,6 +45,8 @@ struct SearchResult {
   int iterations = 0;      // completed ImprovePath calls
   std::size_t expansions = 0;
   std::size_t first_solution_expansions = 0;
+  bool budget_exhausted = false;  // max_expansions ended the search
+  bool time_limit_hit = false;    // time_limit_s (or improve_time_s) ended it
   double first_solution_time_s = 0.0;
   double first_solution_cpu_s = 0.0;  // this thread's CPU time
   double time_s = 0.0;
@@ -65,8 +71,10 @@ class AraStar {
 
   Record& record(StateId s);
   double keyOf(const Record& r) const { return r.g + eps_ * r.h; }
-  // Returns false if the time limit hit first.
-  bool improvePath(Graph& graph, Clock::time_point deadline, SearchResult& result);
+  enum class Stop { kDone, kTime, kBudget };
+  // kDone when the iteration completed (solution proven at ε or OPEN empty).
+  Stop improvePath(Graph& graph, Clock::time_point deadline, std::size_t max_expansions,
+                   SearchResult& result);
   void extractPath(SearchResult& result) const;
   double minUnexpandedF() const;
 

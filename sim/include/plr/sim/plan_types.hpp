@@ -67,6 +67,11 @@ struct PlanQuery {
   double eps_initial = 5.0;
   double eps_final = 1.0;
   double eps_decrement = 2.0;
+  // Deterministic planning: stop after this many search expansions in total
+  // (escape included; RRTConnect: iterations) with the best solution found
+  // by then. improve_time_s is then ignored, so the answer does not depend on
+  // the machine's load; time_limit_s stays a safety net. 0 = no budget.
+  std::uint64_t max_expansions = 0;
 
   // Start in collision: run M6 first and plan from where it ends.
   bool escape_if_start_invalid = true;
@@ -99,6 +104,8 @@ struct PlanStats {
   double cost = 0.0;                   // the search's cost: estimated execution time (s)
   std::uint64_t collision_checks = 0;  // states + sweeps
   bool escaped = false;                // M6 ran first
+  bool budget_exhausted = false;       // max_expansions ended the search
+  bool time_limit_hit = false;         // time_limit_s ended it: the result depends on load
   double escape_time_s = 0.0;
   double escape_cpu_s = 0.0;
 };
