@@ -103,6 +103,11 @@ void reload(Kernel& kernel, const RunOptions& options) {
 int run_pipeline(const RunOptions& options) {
   spdlog::set_level(options.verbose ? spdlog::level::debug : spdlog::level::info);
   const bool main_host = options.host == "main";
+  // A host's parent is its supervisor. When it is killed, the host may hear
+  // of it (PR_SET_PDEATHSIG) while the dying supervisor's other threads still
+  // hold it as parent, and an orphan goes to init or to a subreaper: so ask
+  // whether that process is still alive (a zombie is not), not who the parent is.
+  const auto parent = shm::ProcessStamp::of(::getppid());
   // A vanished peer shows up as EPIPE where we write, not as a process kill.
   std::signal(SIGPIPE, SIG_IGN);
   if (!main_host) spdlog::set_pattern(fmt::format("[%H:%M:%S.%e] [%l] [host {}] %v", options.host));
@@ -246,7 +251,7 @@ int run_pipeline(const RunOptions& options) {
   supervisor.reset();
   // The main host clears the run's shared memory; a host whose supervisor
   // died (kill -9) does it instead.
-  if (main_host || ::getppid() == 1) (void)shm::remove_run_segments(run_id);
+  if (main_host || !parent.alive()) (void)shm::remove_run_segments(run_id);
   return exit_code;
 }
 
