@@ -21,11 +21,11 @@ Executor::~Executor() {
 }
 
 bool Executor::post(std::function<void()> task) {
-  {
-    std::lock_guard lock(m_);
-    if (stop_ || queue_.size() >= max_queued_) return false;
-    queue_.push_back(std::move(task));
-  }
+  // Notified under the lock: once the task has run, a swap may destroy this
+  // executor, and the poster must not touch cv_ after that.
+  std::lock_guard lock(m_);
+  if (stop_ || queue_.size() >= max_queued_) return false;
+  queue_.push_back(std::move(task));
   cv_.notify_one();
   return true;
 }
@@ -44,8 +44,8 @@ void Executor::run_sync(const std::function<void()>& task) {
       task();
       done.set_value();
     });
+    cv_.notify_one();
   }
-  cv_.notify_one();
   fut.wait();
 }
 
