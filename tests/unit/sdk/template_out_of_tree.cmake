@@ -2,7 +2,8 @@
 # sdk/template against it as an outside project would, and runs its tests
 # (fake-kernel unit test and the conformance suite).
 # cmake -DBUILD_DIR=... -DTEMPLATE_DIR=... -DWORK_DIR=... -DGENERATOR=... -DCXX=...
-#       -DSANITIZE=<flags or empty> -P template_out_of_tree.cmake
+#       -DSANITIZE=<flags or empty> -DSANITIZE_OPTION=<PLR_ASAN, PLR_TSAN or empty>
+#       -P template_out_of_tree.cmake
 function(run)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
   if(NOT rc EQUAL 0)
@@ -28,7 +29,7 @@ endforeach()
 
 set(flags)
 if(SANITIZE)
-  set(flags -DPLR_ASAN=ON "-DCMAKE_CXX_FLAGS=${SANITIZE}" "-DCMAKE_EXE_LINKER_FLAGS=${SANITIZE}"
+  set(flags -D${SANITIZE_OPTION}=ON "-DCMAKE_CXX_FLAGS=${SANITIZE}" "-DCMAKE_EXE_LINKER_FLAGS=${SANITIZE}"
             "-DCMAKE_MODULE_LINKER_FLAGS=${SANITIZE}")
 endif()
 run(${CMAKE_COMMAND} -S ${TEMPLATE_DIR} -B ${WORK_DIR}/build -G ${GENERATOR}
