@@ -1,8 +1,22 @@
 #!/usr/bin/env bash
 # Installs the Debian packages PLR needs (only those missing), then configures
 # and builds into build/. Extra arguments go to CMake's configure step.
+#   --asan  builds into build-asan/ with AddressSanitizer + UBSan (every test)
+#   --tsan  builds into build-tsan/ with ThreadSanitizer; only the in-process
+#           suites (kernel, SDK, transport, remote, planner) are built as tests
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+build_dir=build
+sanitizer=()
+case "${1:-}" in
+  --asan) build_dir=build-asan sanitizer=(-DPLR_ASAN=ON) && shift ;;
+  --tsan)
+    build_dir=build-tsan
+    sanitizer=(-DPLR_TSAN=ON "-DPLR_TEST_AREAS=unit/sdk;unit/kernel;unit/transport;unit/remote;unit/planner")
+    shift
+    ;;
+esac
 
 packages=(
   build-essential cmake ninja-build pkg-config git clang-format
@@ -28,5 +42,5 @@ if ((${#missing[@]})); then
 fi
 
 build_type=${PLR_BUILD_TYPE:-RelWithDebInfo}
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE="$build_type" "$@" >/dev/null
-cmake --build build -j "$(nproc)"
+cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE="$build_type" "${sanitizer[@]}" "$@" >/dev/null
+cmake --build "$build_dir" -j "$(nproc)"
