@@ -337,6 +337,24 @@ struct CollisionChecker::Impl {
     return worst + std::abs(half_step[kBaseX]);
   }
 
+  bool hitsWorld(const fcl::CollisionObjectd* o) const { return hitsOctree(o) || hitBox(o) >= 0; }
+
+  // Stretching a shape's box along its own axes covers a base translation
+  // exactly only when world x is one of them. For a tilted shape (the scoop,
+  // pitched a little, just above the floor) the box in world axes covering
+  // the inflated shape, stretched along x, is the tighter bound below and
+  // beside it: try that before splitting the segment.
+  bool alignedSweepFree(RobotShape& s, const Eigen::Isometry3d& pose, double d,
+                        const Config& half_step) const {
+    const Eigen::Vector3d half =
+        pose.linear().cwiseAbs() * s.half + Eigen::Vector3d(std::abs(half_step[kBaseX]) + d, d, d);
+    s.swept_box->side = 2.0 * half;
+    s.swept_box->computeLocalAABB();
+    s.swept->setTransform(toFcl(Eigen::Isometry3d(Eigen::Translation3d(pose.translation()))));
+    s.swept->computeAABB();
+    return !hitsWorld(s.swept.get());
+  }
+
   bool sweepFree(const Config& half_step) const {
     ++stats.sweep_checks;
     for (std::size_t i = 0; i < shapes.size(); ++i) {
@@ -344,7 +362,7 @@ struct CollisionChecker::Impl {
       const double d = d_self[i];
       const Eigen::Isometry3d pose = poses[s.link] * s.origin;
       // The base translates along world x: stretch the box along that
-      // direction only (exact for a translation), in the shape's frame.
+      // direction, in the shape's frame (exact when x is one of its axes).
       const Eigen::Vector3d base_shift =
           (pose.linear().transpose() * Eigen::Vector3d::UnitX()).cwiseAbs() *
           std::abs(half_step[kBaseX]);
@@ -356,9 +374,10 @@ struct CollisionChecker::Impl {
         s.swept_box->computeLocalAABB();
         s.swept->setTransform(toFcl(pose));
         s.swept->computeAABB();
-        if (hitsOctree(s.swept.get()) || hitBox(s.swept.get()) >= 0) {
-          s.swept_at =
-              RobotShape::Placement::Constant(std::nan(""));  // object now differs from swept_at
+        s.swept_at =
+            RobotShape::Placement::Constant(std::nan(""));  // object now differs from swept_at
+        if (hitsWorld(s.swept.get()) &&
+            !(half_step[kBaseX] != 0.0 && alignedSweepFree(s, pose, d, half_step))) {
           return false;
         }
         s.swept_world_free = true;

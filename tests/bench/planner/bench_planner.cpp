@@ -1,7 +1,8 @@
 // Planner benchmark: seeded queries per mode, drawn from what the strategy
 // executor asks for during Pick and Sweep actions on generated walls (A1) and
 // piles (B1); ARA* lattice planner and RRTConnect side by side.
-//   bench_planner [--quick] [--json] [--seed N]
+//   bench_planner [--quick] [--json] [--seed N] [--mode 1-6] [--budget N] [--verbose]
+// --budget sets every query's max_expansions (deterministic planning).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -237,7 +238,7 @@ double percentile(std::vector<double> v, double p) {
 int main(int argc, char** argv) {
   bool quick = false, json = false, verbose = false;
   int only_mode = 0;
-  std::uint64_t seed = 1;
+  std::uint64_t seed = 1, budget = 0;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--quick") == 0) {
       quick = true;
@@ -249,9 +250,12 @@ int main(int argc, char** argv) {
       only_mode = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--seed") == 0 && i + 1 < argc) {
       seed = std::stoull(argv[++i]);
+    } else if (std::strcmp(argv[i], "--budget") == 0 && i + 1 < argc) {
+      budget = std::stoull(argv[++i]);
     } else {
       std::fprintf(stderr,
-                   "usage: bench_planner [--quick] [--json] [--seed N] [--mode 1-6] [--verbose]\n");
+                   "usage: bench_planner [--quick] [--json] [--seed N] [--mode 1-6] [--budget N] "
+                   "[--verbose]\n");
       return 2;
     }
   }
@@ -276,8 +280,9 @@ int main(int argc, char** argv) {
   std::map<PlanMode, std::map<std::string, Row>> rows;
   std::map<PlanMode, std::vector<double>> exec_ratio;  // ARA* / RRTConnect, both solved
   for (Scene& s : scenes) {
-    for (const PlanQuery& q : s.queries) {
+    for (PlanQuery& q : s.queries) {
       if (only_mode != 0 && static_cast<int>(q.mode) != only_mode) continue;
+      q.max_expansions = budget;
       double exec[2] = {NAN, NAN};
       for (int p = 0; p < 2; ++p) {
         if (p == 1 && (q.mode == PlanMode::kEscape || !startValid(*s.checker, q))) continue;
@@ -322,8 +327,9 @@ int main(int argc, char** argv) {
 
   nlohmann::json out = nlohmann::json::array();
   if (!json) {
-    std::printf("%zu scenes (A1 walls, B1 piles), seed %llu%s\n", scenes.size(),
-                static_cast<unsigned long long>(seed), quick ? ", quick" : "");
+    std::printf("%zu scenes (A1 walls, B1 piles), seed %llu%s, expansion budget %llu\n",
+                scenes.size(), static_cast<unsigned long long>(seed), quick ? ", quick" : "",
+                static_cast<unsigned long long>(budget));
     for (const auto& [why, n] : g_skipped)
       std::printf("picks not generated (%s): %d\n", why.c_str(), n);
     std::printf("first-solution times in ms; wall clock and this thread's CPU time\n");

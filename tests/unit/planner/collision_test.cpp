@@ -180,3 +180,28 @@ TEST(Collision, FreeMotionFarFromObstaclesIsCheap) {
   // One sweep for the whole 2 m when nothing is near; a few more at most.
   EXPECT_LE(cc.stats().sweep_checks, 8u);
 }
+
+TEST(Collision, NoseDownDriveOverTheFloorIsOneSweepAndABoxAheadStillStopsIt) {
+  // Nose lowered and pitched (scoop tip just above the floor): a tilted box
+  // stretched along its own axes would dip into the floor on a 2 m drive.
+  World w;
+  Config a = home(1.0), b = home(3.0);
+  for (Config* q : {&a, &b}) {
+    (*q)[plr::sim::kNose1] = 0.0;
+    (*q)[plr::sim::kNose2] = 0.05;
+    (*q)[plr::sim::kNose3] = 0.3;
+  }
+  CollisionChecker cc(robot(), w);
+  ASSERT_TRUE(cc.isValid(a)) << cc.describeCollision(a);
+  ASSERT_TRUE(cc.isValid(b)) << cc.describeCollision(b);
+  cc.resetStats();
+  EXPECT_TRUE(cc.isMotionValid(a, b, false));
+  EXPECT_EQ(cc.stats().sweep_checks, 1u);
+  EXPECT_EQ(cc.stats().state_checks, 0u);
+
+  // A low box in the scoop's way, half way along the drive.
+  w.boxes.push_back(box(1, 3.0, 0.0, 0.05, 0.1));
+  CollisionChecker blocked(robot(), w);
+  ASSERT_TRUE(blocked.isValid(a));
+  EXPECT_FALSE(blocked.isMotionValid(a, b, false));
+}
