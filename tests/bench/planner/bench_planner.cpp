@@ -1,8 +1,10 @@
 // Planner benchmark: seeded queries per mode, drawn from what the strategy
 // executor asks for during Pick and Sweep actions on generated walls (A1) and
 // piles (B1); ARA* lattice planner and RRTConnect side by side.
-//   bench_planner [--quick] [--json] [--seed N] [--mode 1-6] [--budget N] [--verbose]
-// --budget sets every query's max_expansions (deterministic planning).
+//   bench_planner [--quick] [--json] [--seed N] [--mode 1-6] [--budget N]
+//                 [--primitives FILE] [--verbose]
+// --budget sets every query's max_expansions (deterministic planning);
+// --primitives another lattice file than the shipped one.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -239,6 +241,7 @@ int main(int argc, char** argv) {
   bool quick = false, json = false, verbose = false;
   int only_mode = 0;
   std::uint64_t seed = 1, budget = 0;
+  std::string primitives = PLR_ARASTAR_PRIMITIVES;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--quick") == 0) {
       quick = true;
@@ -250,17 +253,19 @@ int main(int argc, char** argv) {
       only_mode = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--seed") == 0 && i + 1 < argc) {
       seed = std::stoull(argv[++i]);
+    } else if (std::strcmp(argv[i], "--primitives") == 0 && i + 1 < argc) {
+      primitives = argv[++i];
     } else if (std::strcmp(argv[i], "--budget") == 0 && i + 1 < argc) {
       budget = std::stoull(argv[++i]);
     } else {
       std::fprintf(stderr,
                    "usage: bench_planner [--quick] [--json] [--seed N] [--mode 1-6] [--budget N] "
-                   "[--verbose]\n");
+                   "[--primitives FILE] [--verbose]\n");
       return 2;
     }
   }
   const RobotModel robot = RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
-  plr::arastar::Planner arastar(plr::arastar::LatticeConfig::fromFile(PLR_ARASTAR_PRIMITIVES));
+  plr::arastar::Planner arastar(plr::arastar::LatticeConfig::fromFile(primitives));
   plr::ompl_planner::Planner rrt({0.0, static_cast<std::uint32_t>(seed)});
 
   std::mt19937_64 rng(seed);
