@@ -2,7 +2,7 @@
 // with the real simulator (its own process), planner, strategy H and
 // executor, then the report. The second run kills the simulator's process
 // mid-run: it is restarted, restores the last checkpoint, and the executor
-// repeats the interrupted action.
+// repeats the interrupted action. The third swaps the planner mid-run.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <string>
 #include <thread>
 
@@ -38,9 +39,9 @@ std::string read(const fs::path& file) {
   return std::string((std::istreambuf_iterator<char>(in)), {});
 }
 
-// Runs the pipeline; with kill_after > 0, kills the simulator host that many
-// seconds in.
-Outcome unload(double kill_after) {
+// Runs the pipeline; `meanwhile`, if given, runs `at` seconds in with the pid
+// of the `plr run` process.
+Outcome unload(double at = 0, const std::function<void(pid_t)>& meanwhile = {}) {
   Outcome run;
   run.dir = make_dir();
   const std::string err = (run.dir / "stderr.txt").string();
@@ -52,11 +53,9 @@ Outcome unload(double kill_after) {
     execl(PLR_BIN, PLR_BIN, "run", UNLOAD_SMALL_CONFIG, "--report", report.c_str(), nullptr);
     _exit(127);
   }
-  if (kill_after > 0) {
-    std::this_thread::sleep_for(std::chrono::duration<double>(kill_after));
-    // The supervisor's child that runs host 'sim'.
-    const std::string cmd = "pkill -KILL -P " + std::to_string(pid) + " -f -- '--host sim'";
-    EXPECT_EQ(std::system(cmd.c_str()), 0) << "no simulator host to kill";
+  if (meanwhile) {
+    std::this_thread::sleep_for(std::chrono::duration<double>(at));
+    meanwhile(pid);
   }
   int status = 0;
   waitpid(pid, &status, 0);
@@ -98,7 +97,7 @@ void expect_unloaded(const Outcome& run, int at_least) {
 }
 
 TEST(UnloadSmall, UnloadsTheTrailerWithoutHittingIt) {
-  const Outcome run = unload(0);
+  const Outcome run = unload();
   expect_unloaded(run, 27);
   EXPECT_EQ(run.report.value("recoveries", -1), 0);
   if (!HasFailure()) fs::remove_all(run.dir);
@@ -108,9 +107,35 @@ TEST(UnloadSmall, SurvivesTheSimulatorBeingKilled) {
   // Restored from the checkpoint on disk (box poses, not the integrator's
   // exact state), the run takes another course than the undisturbed one;
   // what it must do is finish, with every box accounted for.
-  const Outcome run = unload(6.0);
+  const Outcome run = unload(6.0, [](pid_t pid) {
+    // The supervisor's child that runs host 'sim'.
+    const std::string cmd = "pkill -KILL -P " + std::to_string(pid) + " -f -- '--host sim'";
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << "no simulator host to kill";
+  });
   expect_unloaded(run, 20);
   EXPECT_GE(run.report.value("recoveries", 0), 1) << run.log;
+  if (!HasFailure()) fs::remove_all(run.dir);
+}
+
+// RRTConnect has no M6: a start in collision (a box resting on the nose)
+// stalls it, so the planner goes back to ARA* after a while.
+TEST(UnloadSmall, FinishesWhenThePlannerIsSwappedMidRun) {
+  const Outcome run = unload(5.0, [](pid_t) {
+    const auto swap = [](const char* plugin) {
+      const std::string cmd =
+          std::string(PLR_BIN) + " swap planner " + plugin + " --pipeline unload_sim_small";
+      EXPECT_EQ(std::system(cmd.c_str()), 0) << "plr swap planner " << plugin << " failed";
+    };
+    swap("planner_ompl");
+    std::this_thread::sleep_for(std::chrono::seconds(4));
+    swap("planner_arastar");
+  });
+  expect_unloaded(run, 20);
+  // Both planners answered, and no query went unanswered across the swap.
+  ASSERT_TRUE(run.report.contains("planners")) << run.report.dump(1);
+  EXPECT_GT(run.report["planners"].value("arastar", 0), 0) << run.report["planners"].dump();
+  EXPECT_GT(run.report["planners"].value("rrtconnect", 0), 0) << run.report["planners"].dump();
+  EXPECT_EQ(run.report.value("plan_calls_unanswered", -1), 0);
   if (!HasFailure()) fs::remove_all(run.dir);
 }
 

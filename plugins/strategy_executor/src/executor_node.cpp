@@ -333,11 +333,13 @@ class ExecutorNode : public plr::Node {
     PlanResult out;
     if (!r) {
       count_query(mode, nullptr, wall);
+      ++stats_.plan_calls_unanswered;
       out.message = "plan: " + r.error().message;
       return out;
     }
     const auto* rep = r.value().get();
     count_query(mode, rep, wall);
+    ++stats_.planners[rep->planner() ? rep->planner()->str() : "?"];
     if (rep->status() != msg::PlanStatus::Solved || rep->trajectory() == nullptr ||
         rep->trajectory()->points() == nullptr || rep->trajectory()->points()->size() == 0) {
       out.message = std::string(msg::EnumNamePlanStatus(rep->status())) +

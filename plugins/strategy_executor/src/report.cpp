@@ -74,6 +74,8 @@ nlohmann::json to_json(const RunStats& s) {
           {"strategy_steps", s.strategy_steps},
           {"stop_reason", s.stop_reason},
           {"planner_modes", modes},
+          {"planners", s.planners},
+          {"plan_calls_unanswered", s.plan_calls_unanswered},
           {"actions", {{"pick", action_json(s.pick)}, {"sweep", action_json(s.sweep)}}},
           {"curve", curve}};
 }

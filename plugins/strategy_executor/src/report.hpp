@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,10 @@ struct CurvePoint {
 struct RunStats {
   std::array<ModeStats, 7> modes{};  // index = plan mode 1..6
   std::uint64_t m6_implicit = 0;     // escapes the planner ran inside another query
+  // Who answered the plan queries (a hot swap shows as two names), and the
+  // queries no planner answered (lost in transit, timed out on the bus).
+  std::map<std::string, std::uint64_t> planners;
+  std::uint64_t plan_calls_unanswered = 0;
   ActionStats pick, sweep;
   std::vector<CurvePoint> curve;
   std::uint32_t boxes_total = 0;
