@@ -181,6 +181,44 @@ TEST(Search, TimeLimitStopsASearchWithoutSolution) {
   EXPECT_LT(r.time_s, 0.5);
 }
 
+TEST(Search, ExpansionBudgetEndsTheSearchTheSameWayEveryTime) {
+  // The misleading graph above: ε = 3 finds the cost-11 route after 2
+  // expansions, ε = 2 completes without one, ε = 1 needs 2 more for cost 9.
+  TableGraph g;
+  g.edge(0, 1, 1);
+  g.edge(1, 9, 10);
+  g.edge(0, 2, 3);
+  g.edge(2, 3, 3);
+  g.edge(3, 9, 3);
+  g.goal = 9;
+  g.h = {{0, 9}, {1, 1}, {2, 6}, {3, 3}};
+  AraStar ara;
+  SearchOptions o;
+  o.eps_initial = 3.0;
+  o.eps_final = 1.0;
+  o.eps_decrement = 1.0;
+  o.improve_time_s = 0.0;  // would stop at the first solution without a budget
+  o.max_expansions = 3;
+  const auto r = ara.search(g, g, 0, o);
+  ASSERT_EQ(r.status, SearchStatus::kSolved);
+  EXPECT_TRUE(r.budget_exhausted);
+  EXPECT_FALSE(r.time_limit_hit);
+  EXPECT_EQ(r.expansions, 3u);
+  EXPECT_DOUBLE_EQ(r.cost, 11.0);  // the last completed iteration's
+  EXPECT_EQ(r.final_eps, 2.0);
+
+  o.max_expansions = 100;  // enough for ε = 1, improve_time_s ignored
+  const auto full = ara.search(g, g, 0, o);
+  EXPECT_FALSE(full.budget_exhausted);
+  EXPECT_DOUBLE_EQ(full.cost, 9.0);
+  EXPECT_EQ(full.final_eps, 1.0);
+
+  o.max_expansions = 1;  // before any solution
+  const auto none = ara.search(g, g, 0, o);
+  EXPECT_EQ(none.status, SearchStatus::kTimeout);
+  EXPECT_TRUE(none.budget_exhausted);
+}
+
 // Every query of the three shipped Moving AI maps at the published optimum.
 class MovingAi : public ::testing::TestWithParam<const char*> {};
 
