@@ -8,6 +8,7 @@
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -15,6 +16,7 @@
 #include <filesystem>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <thread>
 
 #include "instantiate.hpp"
@@ -95,6 +97,7 @@ class ExecutorNode : public plr::Node {
                          "wall_mid",
                          "wall_high",
                          "plan_timeout_s",
+                         "plan_expansions",
                          "execute_timeout_s",
                          "service_wait_s",
                          "retry_ms",
@@ -124,6 +127,7 @@ class ExecutorNode : public plr::Node {
       return make_error(PLR_ERR_INVALID,
                         "param '" + err.substr(0, err.find(':')) + "'" + err.substr(err.find(':')));
     plan_timeout_s_ = params().get<double>("plan_timeout_s", 5.0);
+    plan_expansions_ = params().get<std::uint64_t>("plan_expansions", plan_expansions_);
     execute_timeout_s_ = params().get<double>("execute_timeout_s", 300.0);
     service_wait_s_ = params().get<double>("service_wait_s", 60.0);
     retry_ = std::chrono::milliseconds(params().get<std::uint64_t>("retry_ms", 50));
@@ -280,6 +284,10 @@ class ExecutorNode : public plr::Node {
     if (rep == nullptr || rep->status() != msg::PlanStatus::Solved) ++ms.failures;
     const auto* st = rep ? rep->stats() : nullptr;
     ms.ms.add(st && st->planning_ms() > 0 ? st->planning_ms() : 1e3 * wall_s);
+    if (st) {
+      ms.expansions.add(static_cast<double>(st->expansions()));
+      ms.max_expansions = std::max(ms.max_expansions, st->expansions());
+    }
     if (st && st->m6_used() && mode != PlanMode::kEscape) {
       // The escape the planner ran first counts as an M6 query of its own.
       ++stats_.m6_implicit;
@@ -312,6 +320,7 @@ class ExecutorNode : public plr::Node {
       req.goal_joints.assign(g.data(), g.data() + sim::kNumJoints);
     }
     req.timeout_s = plan_timeout_s_;
+    req.max_expansions = plan_expansions_;
     req.world = std::make_unique<msg::WorldStateT>(w.state);
     auto& boxes = req.world->boxes;
     boxes.erase(std::remove_if(boxes.begin(), boxes.end(),
@@ -488,8 +497,11 @@ class ExecutorNode : public plr::Node {
 
   void pick(sim::Action action, const Observed& w0, ActionRun& run) {
     const auto scene = sim::analyse(w0.world, obs_);
-    const auto candidates =
+    auto candidates =
         pick_candidates(w0.world, scene, action, obs_, robot_, geometry_, w0.q, max_candidates_);
+    // A box the cups did not hold is tried again only after the others.
+    std::stable_partition(candidates.begin(), candidates.end(),
+                          [&](const PickCandidate& c) { return !ungripped_.count(c.box); });
     if (candidates.empty()) {
       log().info("{}: no reachable pick point", action_name_);
       return;
@@ -521,6 +533,7 @@ class ExecutorNode : public plr::Node {
     if (chosen != nullptr) {
       if (last_held_.empty()) {
         run.failed_grasp = true;
+        ungripped_.insert(chosen->box);
         log().info("{}: grasp of box {} failed (nothing held)", action_name_, chosen->box);
       }
       if (chosen->lift)
@@ -728,6 +741,7 @@ class ExecutorNode : public plr::Node {
       report_progress(fmt::format("{}: +{} boxes", action_name_, gained), true);
       publish_status();
       idle = gained == 0 ? idle + 1 : 0;
+      if (gained > 0) ungripped_.clear();  // the world changed: worth another try
       if (idle >= max_idle_) {
         stats_.stop_reason = fmt::format("no progress in {} actions", idle);
         break;
@@ -848,6 +862,10 @@ class ExecutorNode : public plr::Node {
   double retreat_m_ = 0.3, dropoff_backoff_m_ = 0.5;
   std::chrono::milliseconds retry_{50};
   std::uint64_t max_idle_ = 6, max_actions_ = 0, max_candidates_ = 4;
+  // A budget of search expansions, not of time, makes each plan (and so the
+  // run) the same for a seed whatever the machine's load; 0 plans until the
+  // time limit. bench_planner --budget 500 fails no query in any mode.
+  std::uint64_t plan_expansions_ = 500;
   std::vector<double> nose_home_{0.5, 0.0, 0.0}, nose_down_{0.0, 0.05, 0.0},
       nose_sweep_{0.0, 0.05, 0.3};
   // Arm folded over the base: out of the way of boxes leaving on the belt.
@@ -867,6 +885,7 @@ class ExecutorNode : public plr::Node {
   RunStats stats_;
   std::string action_name_;
   std::vector<std::uint32_t> last_held_;
+  std::set<std::uint32_t> ungripped_;  // boxes whose grasp failed since the last unloaded box
   msg::PlanStatus last_status_ = msg::PlanStatus::Solved;
   double checkpoint_robot_time_ = 0;
   std::size_t checkpoint_curve_ = 0;

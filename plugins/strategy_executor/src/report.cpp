@@ -54,7 +54,9 @@ nlohmann::json to_json(const RunStats& s) {
         {"failures", ms.failures},
         {"failure_rate", ms.queries ? static_cast<double>(ms.failures) / ms.queries : 0.0},
         {"mean_ms", ms.ms.mean},
-        {"sd_ms", ms.ms.sd()}};
+        {"sd_ms", ms.ms.sd()},
+        {"mean_expansions", ms.expansions.mean},
+        {"max_expansions", ms.max_expansions}};
   }
   modes["M6"]["implicit"] = s.m6_implicit;
   nlohmann::json curve = nlohmann::json::array();

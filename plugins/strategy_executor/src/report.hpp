@@ -25,6 +25,8 @@ struct ModeStats {
   std::uint64_t queries = 0;
   std::uint64_t failures = 0;
   Accumulator ms;  // planning time of the queries that reported one
+  Accumulator expansions;
+  std::uint64_t max_expansions = 0;
 };
 
 struct ActionStats {
