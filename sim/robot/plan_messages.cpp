@@ -2,9 +2,12 @@
 #include <octomap/octomap.h>
 
 #include <cmath>
+#include <mutex>
 #include <plr/messages.hpp>
 #include <sstream>
 #include <stdexcept>
+#include <string>
+#include <string_view>
 
 #include "plr/sim/plan_types.hpp"
 
@@ -50,6 +53,22 @@ plr::msg::PlanStatus toMsg(PlanStatus s) {
       return plr::msg::PlanStatus::InvalidRequest;
   }
   return plr::msg::PlanStatus::InvalidRequest;
+}
+
+// The requests of a run share their trailer: its octree is parsed once, not
+// per request (tens of ms, and OctoMap's reader prints a line each time).
+std::shared_ptr<const octomap::OcTree> parse_octree(std::string_view bytes, double resolution) {
+  static std::mutex m;
+  static std::string last_bytes;
+  static std::shared_ptr<const octomap::OcTree> last;
+  std::lock_guard lock(m);
+  if (last && bytes == last_bytes) return last;
+  auto tree = std::make_shared<octomap::OcTree>(resolution);
+  std::istringstream in{std::string(bytes)};
+  if (!tree->readBinary(in)) return nullptr;
+  last_bytes = bytes;
+  last = std::move(tree);
+  return last;
 }
 
 }  // namespace
@@ -100,11 +119,10 @@ DecodedPlanRequest decodePlanRequest(const plr::msg::PlanRequest& r) {
     }
   }
   if (const auto* bytes = w->octree(); bytes != nullptr && bytes->size() > 0) {
-    auto tree = std::make_shared<octomap::OcTree>(
-        w->octree_resolution() > 0 ? w->octree_resolution() : 0.05);
-    std::istringstream in(std::string(reinterpret_cast<const char*>(bytes->data()), bytes->size()));
-    if (!tree->readBinary(in)) bad("world.octree", "not an OctoMap binary tree");
-    d.octree = std::move(tree);
+    d.octree =
+        parse_octree(std::string_view(reinterpret_cast<const char*>(bytes->data()), bytes->size()),
+                     w->octree_resolution() > 0 ? w->octree_resolution() : 0.05);
+    if (!d.octree) bad("world.octree", "not an OctoMap binary tree");
   }
   if (const auto* held = r.held_box_ids()) {
     for (std::uint32_t id : *held) {
