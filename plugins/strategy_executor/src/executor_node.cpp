@@ -98,6 +98,7 @@ class ExecutorNode : public plr::Node {
                          "wall_high",
                          "plan_timeout_s",
                          "plan_expansions",
+                         "plan_epsilons",
                          "execute_timeout_s",
                          "service_wait_s",
                          "retry_ms",
@@ -128,6 +129,10 @@ class ExecutorNode : public plr::Node {
                         "param '" + err.substr(0, err.find(':')) + "'" + err.substr(err.find(':')));
     plan_timeout_s_ = params().get<double>("plan_timeout_s", 5.0);
     plan_expansions_ = params().get<std::uint64_t>("plan_expansions", plan_expansions_);
+    plan_epsilons_ = params().get<std::vector<double>>("plan_epsilons", plan_epsilons_);
+    for (double e : plan_epsilons_)
+      if (!(e >= 1.0))
+        return make_error(PLR_ERR_INVALID, "param 'plan_epsilons': each must be >= 1");
     execute_timeout_s_ = params().get<double>("execute_timeout_s", 300.0);
     service_wait_s_ = params().get<double>("service_wait_s", 60.0);
     retry_ = std::chrono::milliseconds(params().get<std::uint64_t>("retry_ms", 50));
@@ -321,6 +326,7 @@ class ExecutorNode : public plr::Node {
     }
     req.timeout_s = plan_timeout_s_;
     req.max_expansions = plan_expansions_;
+    req.epsilons = plan_epsilons_;
     req.world = std::make_unique<msg::WorldStateT>(w.state);
     auto& boxes = req.world->boxes;
     boxes.erase(std::remove_if(boxes.begin(), boxes.end(),
@@ -864,8 +870,10 @@ class ExecutorNode : public plr::Node {
   std::uint64_t max_idle_ = 6, max_actions_ = 0, max_candidates_ = 4;
   // A budget of search expansions, not of time, makes each plan (and so the
   // run) the same for a seed whatever the machine's load; 0 plans until the
-  // time limit. bench_planner --budget 500 fails no query in any mode.
-  std::uint64_t plan_expansions_ = 500;
+  // time limit. ARA* spends the whole budget lowering ε, so by default it
+  // stops at its first solution (ε = 5) and the budget only caps the search.
+  std::uint64_t plan_expansions_ = 5000;
+  std::vector<double> plan_epsilons_{5.0};
   std::vector<double> nose_home_{0.5, 0.0, 0.0}, nose_down_{0.0, 0.05, 0.0},
       nose_sweep_{0.0, 0.05, 0.3};
   // Arm folded over the base: out of the way of boxes leaving on the belt.
