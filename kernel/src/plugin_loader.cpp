@@ -87,10 +87,11 @@ Expected<std::shared_ptr<PluginLibrary>> PluginLoader::load(const std::string& n
   std::lock_guard lock(mutex_);
   std::erase_if(loaded_, [](const Loaded& l) { return l.library.expired(); });
   for (const auto& l : loaded_) {
-    if (l.file != real.string()) continue;
-    if (auto library = l.library.lock()) return library;
-  }
-  for (const auto& l : loaded_) {
+    // Its last user may drop a library at any time, outside this lock: only
+    // a library still alive now is shared, or makes another file a duplicate.
+    auto library = l.library.lock();
+    if (!library) continue;
+    if (l.file == real.string()) return library;
     if (l.name == name)
       return refuse(file, "duplicate: plug-in '" + name + "' is already loaded from " + l.file);
   }

@@ -320,7 +320,7 @@ struct CollisionChecker::Impl {
       for (int k = s.link; k >= 0; k = links[k].parent_link) {
         const Link& lk = links[k];
         if (lk.joint <= kBaseX) continue;
-        const double dq = std::abs(half_step[lk.joint]);
+        const double dq = std::abs(lk.mimic_multiplier * half_step[lk.joint]);
         if (dq == 0.0) continue;
         if (lk.joint_type == JointType::kPrismatic) {
           d += dq;

@@ -85,8 +85,8 @@ DecodedPlanRequest decodePlanRequest(const plr::msg::PlanRequest& r) {
     const Eigen::Isometry3d pose = toPose(*r.goal_pose());
     const Eigen::Vector3d n = pose.linear().col(0);
     PoseGoal g;
-    // The plate's yaw follows its position; only the pitch of its normal is a goal.
-    g.target = {pose.translation(), std::atan2(-n.z(), std::hypot(n.x(), n.y()))};
+    // The plate is always vertical: only the yaw of its normal is a goal.
+    g.target = {pose.translation(), std::atan2(n.y(), n.x())};
     q.goal = g;
   } else if (r.goal_joints() != nullptr && r.goal_joints()->size() > 0) {
     JointGoal g;

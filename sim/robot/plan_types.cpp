@@ -103,9 +103,9 @@ std::string validateQuery(const PlanQuery& q, const RobotModel& robot) {
   }
   if (pose) {
     const PoseGoal& g = std::get<PoseGoal>(q.goal);
-    if (!g.target.position.allFinite() || !std::isfinite(g.target.pitch))
+    if (!g.target.position.allFinite() || !std::isfinite(g.target.yaw))
       return "pose goal has a non-finite value";
-    if (!(g.position_tolerance > 0.0) || !(g.pitch_tolerance > 0.0))
+    if (!(g.position_tolerance > 0.0) || !(g.yaw_tolerance > 0.0))
       return "pose goal tolerances must be positive";
   }
   for (const Box& b : q.held_boxes) {

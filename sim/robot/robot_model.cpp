@@ -146,7 +146,17 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const std::string&
         link.joint = qi;
         seen[qi] = true;
       } else if (cj.joint_type != JointType::kFixed) {
-        fail(source, "joint '" + j->name + "' is movable but not one of the 8 planned joints");
+        const auto followed =
+            j->mimic ? std::find(kJointNames.begin(), kJointNames.end(), j->mimic->joint_name)
+                     : kJointNames.end();
+        if (followed == kJointNames.end()) {
+          fail(source, "joint '" + j->name +
+                           "' is movable but neither one of the 8 planned joints nor a "
+                           "<mimic> of one");
+        }
+        link.joint = static_cast<int>(followed - kJointNames.begin());
+        link.mimic_multiplier = j->mimic->multiplier;
+        link.mimic_offset = j->mimic->offset;
       }
     }
     for (const auto& c : l->collision_array) {
@@ -197,11 +207,14 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const std::string&
     m.allowed_.emplace_back(i1->second, i2->second);
   }
 
-  // The closed-form IK assumes yaw about z, then three pitch joints about y
-  // offset along the link's x, then the plate offset along x.
+  // The closed-form IK assumes yaw about z, then two pitch joints about y
+  // offset along the link's x, then a level flange turning about z (arm_4),
+  // then the plate offset along x.
   auto jointLink = [&](int qi) {
     for (std::size_t i = 0; i < m.links_.size(); ++i) {
-      if (m.links_[i].joint == qi) return static_cast<int>(i);
+      if (m.links_[i].joint == qi && m.links_[i].mimic_multiplier == 1.0 &&
+          m.links_[i].mimic_offset == 0.0)
+        return static_cast<int>(i);
     }
     return -1;
   };
@@ -224,19 +237,34 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const std::string&
       !isPureOffset(m.links_[l3].origin, ex)) {
     fail(source, "arm_3 must pitch about y, offset along x from arm_2 (closed-form IK)");
   }
-  if (m.links_[l4].parent_link != l3 || !m.links_[l4].axis.isApprox(ey) ||
-      !isPureOffset(m.links_[l4].origin, ex)) {
-    fail(source, "arm_4 must pitch about y, offset along x from arm_3 (closed-form IK)");
-  }
+  if (!m.links_[l4].axis.isApprox(ez)) fail(source, "arm_4 must turn about z (closed-form IK)");
   if (m.links_[m.plate_link_].parent_link != l4 ||
       m.links_[m.plate_link_].joint_type != JointType::kFixed ||
       !isPureOffset(m.links_[m.plate_link_].origin, ex)) {
     fail(source, "link 'plate' must be fixed to the arm_4 link, offset along x (closed-form IK)");
   }
+  // Whatever the shoulder and elbow do, arm_4's frame must stay level and
+  // keep its offset along the forearm: the parallelogram.
+  std::vector<Eigen::Isometry3d> poses;
+  for (const auto& [a2, a3] : {std::pair{0.0, 0.0}, std::pair{0.7, -1.3}, std::pair{-1.1, 2.0}}) {
+    Config q = Config::Zero();
+    q[kArm1] = 0.3;
+    q[kArm2] = a2;
+    q[kArm3] = a3;
+    m.forwardKinematics(q, poses);
+    const Eigen::Isometry3d fore_to_wrist = poses[l3].inverse() * poses[l4];
+    const Eigen::Matrix3d level = Eigen::AngleAxisd(0.3, ez).toRotationMatrix();
+    const Eigen::Vector3d offset = fore_to_wrist.translation();
+    if (!poses[l4].linear().isApprox(level, 1e-9) || (offset - offset.x() * ex).norm() > 1e-9) {
+      fail(source,
+           "arm_4 must sit on a level flange at the end of arm_3's link (mimic joints "
+           "following arm_2 and arm_3 backwards; closed-form IK)");
+    }
+    m.arm_.fore = offset.x();
+  }
   m.arm_.yaw_origin = m.links_[l1].origin.translation();
   m.arm_.shoulder_height = m.links_[l2].origin.translation().z();
   m.arm_.upper = m.links_[l3].origin.translation().x();
-  m.arm_.fore = m.links_[l4].origin.translation().x();
   m.arm_.plate = m.links_[m.plate_link_].origin.translation().x();
   return m;
 }
@@ -261,7 +289,7 @@ void RobotModel::forwardKinematics(const Config& q, std::vector<Eigen::Isometry3
     const Link& cj = links_[i];
     Eigen::Isometry3d local = cj.origin;
     if (links_[i].joint >= 0) {
-      const double v = q[links_[i].joint];
+      const double v = cj.mimic_multiplier * q[links_[i].joint] + cj.mimic_offset;
       if (cj.joint_type == JointType::kRevolute) {
         local.linear() = local.linear() * Eigen::AngleAxisd(v, cj.axis).toRotationMatrix();
       } else {
@@ -281,33 +309,26 @@ Eigen::Isometry3d RobotModel::platePose(const Config& q) const {
 PlateTarget RobotModel::plateTarget(const Config& q) const {
   const Eigen::Isometry3d p = platePose(q);
   const Eigen::Vector3d n = p.linear().col(0);
-  // Pitch is measured in the vertical plane through the yaw axis and the
-  // plate, from the horizontal direction pointing away from the axis.
-  const Eigen::Vector3d d =
-      p.translation() - (arm_.yaw_origin + Eigen::Vector3d(q[kBaseX], 0.0, 0.0));
-  const double r = std::hypot(d.x(), d.y());
-  const double psi = r > 1e-9 ? std::atan2(d.y(), d.x()) : q[kArm1];
-  const double forward = n.x() * std::cos(psi) + n.y() * std::sin(psi);
-  return {p.translation(), std::atan2(-n.z(), forward)};
+  return {p.translation(), std::atan2(n.y(), n.x())};
 }
 
 std::vector<Config> RobotModel::armIk(const PlateTarget& target, const Config& seed) const {
   std::vector<Config> out;
   const Eigen::Vector3d yaw_origin = arm_.yaw_origin + Eigen::Vector3d(seed[kBaseX], 0.0, 0.0);
-  const Eigen::Vector3d d = target.position - yaw_origin;
+  // The wrist axis stands behind the plate, along its normal.
+  const Eigen::Vector3d wrist =
+      target.position - arm_.plate * Eigen::Vector3d(std::cos(target.yaw), std::sin(target.yaw), 0);
+  const Eigen::Vector3d d = wrist - yaw_origin;
   const double r = std::hypot(d.x(), d.y());
   const double psi = r > 1e-9 ? std::atan2(d.y(), d.x()) : seed[kArm1];
-  const double height = d.z() - arm_.shoulder_height;
   const double l1 = arm_.upper, l2 = arm_.fore;
-  // Two yaw branches: facing the target (reach r, pitch phi) and turned away
-  // (reach -r, link angle pi - phi); each has elbow up and elbow down.
+  // Planar coordinates (u forward, v down) of the wrist in the arm's plane.
+  // Two yaw branches: facing the wrist (u = r) and turned away (u = -r, the
+  // arm reaching back over itself); each has elbow up and elbow down.
+  const double v = -(d.z() - arm_.shoulder_height);
   for (int branch = 0; branch < 2; ++branch) {
     const double yaw = branch == 0 ? psi : psi + M_PI;
-    const double a = branch == 0 ? target.pitch : M_PI - target.pitch;
-    const double u_plate = branch == 0 ? r : -r;
-    // Planar coordinates (u forward, v down) of the wrist joint.
-    const double u = u_plate - arm_.plate * std::cos(a);
-    const double v = -height - arm_.plate * std::sin(a);
+    const double u = branch == 0 ? r : -r;
     const double c3 = (u * u + v * v - l1 * l1 - l2 * l2) / (2.0 * l1 * l2);
     if (c3 < -1.0 - 1e-12 || c3 > 1.0 + 1e-12) continue;
     const double base3 = std::acos(std::clamp(c3, -1.0, 1.0));
@@ -317,7 +338,7 @@ std::vector<Config> RobotModel::armIk(const PlateTarget& target, const Config& s
       q[kArm1] = wrapNear(yaw, limits_[kArm1].lower, limits_[kArm1].upper);
       q[kArm2] = wrapNear(q2, limits_[kArm2].lower, limits_[kArm2].upper);
       q[kArm3] = wrapNear(q3, limits_[kArm3].lower, limits_[kArm3].upper);
-      q[kArm4] = wrapNear(a - q2 - q3, limits_[kArm4].lower, limits_[kArm4].upper);
+      q[kArm4] = wrapNear(target.yaw - q[kArm1], limits_[kArm4].lower, limits_[kArm4].upper);
       if (!withinLimits(q)) continue;
       const bool duplicate = std::any_of(out.begin(), out.end(),
                                          [&](const Config& o) { return (o - q).norm() < 1e-9; });

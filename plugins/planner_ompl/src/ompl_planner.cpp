@@ -68,12 +68,12 @@ class LineMapping final : public Mapping {
  public:
   LineMapping(const sim::RobotModel& robot, const Config& start, const sim::PlateTarget& goal)
       : robot_(robot), start_(start), from_(robot.plateTarget(start)), to_(goal) {
-    to_.pitch = from_.pitch + std::remainder(to_.pitch - from_.pitch, 2.0 * M_PI);
+    to_.yaw = from_.yaw + std::remainder(to_.yaw - from_.yaw, 2.0 * M_PI);
   }
   bool toConfig(const ob::State* s, Config& q) const override {
     const double t = s->as<ob::RealVectorStateSpace::StateType>()->values[0];
     const sim::PlateTarget p{from_.position + t * (to_.position - from_.position),
-                             from_.pitch + t * (to_.pitch - from_.pitch)};
+                             from_.yaw + t * (to_.yaw - from_.yaw)};
     const auto sols = robot_.armIk(p, start_);
     if (sols.empty()) return false;
     q = sols.front();
@@ -168,7 +168,7 @@ std::uint32_t querySeed(const sim::PlanQuery& q, std::uint32_t seed) {
     h.add(jg->tolerance);
   } else if (const auto* pg = std::get_if<sim::PoseGoal>(&q.goal)) {
     for (int i = 0; i < 3; ++i) h.add(pg->target.position[i]);
-    h.add(pg->target.pitch);
+    h.add(pg->target.yaw);
   }
   for (const sim::Box& b : q.held_boxes) h.add(b.id);
   for (std::uint32_t id : q.ignored_boxes) h.add(id);

@@ -30,7 +30,7 @@ using msg::Suction;
 // folded, nose raised (see docs/notes-planner.md).
 sim::Config home_configuration() {
   sim::Config q;
-  q << 0.0, 0.0, -1.0, 2.0, -1.0, 0.5, 0.0, 0.0;
+  q << 0.0, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
   return q;
 }
 

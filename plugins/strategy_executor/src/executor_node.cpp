@@ -56,10 +56,13 @@ struct Observed {
   std::uint32_t unloaded = 0;
 };
 
-// A goal for a sub-action: joint values for the mode's joints, or a plate pose.
+// A goal for a sub-action: joint values for the mode's joints, or a plate
+// pose. `then`: the straight plate moves that follow a pose goal; its IK
+// solutions must carry the arm through them on one branch.
 struct Goal {
   std::vector<std::pair<int, double>> joints;
   std::optional<sim::PlateTarget> pose;
+  std::vector<sim::PlateTarget> then;
 };
 
 struct PlanResult {
@@ -309,12 +312,8 @@ class ExecutorNode : public plr::Node {
     req.start.assign(w.q.data(), w.q.data() + sim::kNumJoints);
     if (goal.pose) {
       const auto& t = *goal.pose;
-      // Orientation: pitch about y, yaw from the arm's axis to the target
-      // (the planner reads position + pitch; see docs/notes-executor.md).
-      const double yaw = std::atan2(t.position.y(),
-                                    t.position.x() - (w.q[sim::kBaseX] - geometry_.arm_yaw_offset));
-      const Eigen::Quaterniond q(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
-                                 Eigen::AngleAxisd(t.pitch, Eigen::Vector3d::UnitY()));
+      // The plate is vertical: its orientation is the yaw of its normal.
+      const Eigen::Quaterniond q(Eigen::AngleAxisd(t.yaw, Eigen::Vector3d::UnitZ()));
       req.goal_pose =
           std::make_unique<msg::Pose>(msg::Vec3(t.position.x(), t.position.y(), t.position.z()),
                                       msg::Quat(q.x(), q.y(), q.z(), q.w()));
@@ -375,9 +374,13 @@ class ExecutorNode : public plr::Node {
                        const std::vector<std::uint32_t>& leave_out, ActionRun& run) {
     if (!goal.pose || (mode != PlanMode::kArm && mode != PlanMode::kArmBase))
       return plan_once(mode, w, goal, leave_out, run);
-    const auto solutions = robot_.armIk(*goal.pose, w.q);
+    auto solutions = robot_.armIk(*goal.pose, w.q);
+    std::erase_if(solutions,
+                  [&](const sim::Config& q) { return !follows_lines(robot_, q, goal.then); });
     PlanResult p;
-    p.message = "no arm IK solution for the goal pose";
+    p.message = goal.then.empty() ? "no arm IK solution for the goal pose"
+                                  : "no arm IK solution for the goal pose from which the "
+                                    "straight moves after it stay on one IK branch";
     for (std::size_t i = 0; i < solutions.size() && i < 3; ++i) {
       Goal g;
       for (int j : {sim::kArm1, sim::kArm2, sim::kArm3, sim::kArm4})
@@ -492,12 +495,14 @@ class ExecutorNode : public plr::Node {
     return out;
   }
 
-  Goal joints(std::initializer_list<std::pair<int, double>> j) { return Goal{j, std::nullopt}; }
+  Goal joints(std::initializer_list<std::pair<int, double>> j) { return Goal{j, std::nullopt, {}}; }
   Goal nose(const std::vector<double>& n, double lift = 0.0) {
-    return Goal{{{sim::kNose1, n[0] + lift}, {sim::kNose2, n[1]}, {sim::kNose3, n[2]}},
-                std::nullopt};
+    return Goal{
+        {{sim::kNose1, n[0] + lift}, {sim::kNose2, n[1]}, {sim::kNose3, n[2]}}, std::nullopt, {}};
   }
-  Goal pose(const sim::PlateTarget& t) { return Goal{{}, t}; }
+  Goal pose(const sim::PlateTarget& t, std::vector<sim::PlateTarget> then = {}) {
+    return Goal{{}, t, std::move(then)};
+  }
 
   // ---- Actions -------------------------------------------------------------
 
@@ -524,10 +529,10 @@ class ExecutorNode : public plr::Node {
           !step("nose down (lifted)", PlanMode::kNose, nose(nose_down_, 0.15), Suction::Keep,
                 Suction::Keep, run))
         continue;
-      log().debug("{}: box {} from the {}, plate at ({:.2f}, {:.2f}, {:.2f})", action_name_, c.box,
-                  c.from_top ? "top" : "front", c.grasp.position.x(), c.grasp.position.y(),
-                  c.grasp.position.z());
-      if (!step("pre-grasp", PlanMode::kArmBase, pose(c.pregrasp), Suction::Keep, Suction::On, run))
+      log().debug("{}: box {}, plate at ({:.2f}, {:.2f}, {:.2f}) yaw {:.2f}", action_name_, c.box,
+                  c.grasp.position.x(), c.grasp.position.y(), c.grasp.position.z(), c.grasp.yaw);
+      if (!step("pre-grasp", PlanMode::kArmBase, pose(c.pregrasp, {c.grasp, c.lift, c.retract}),
+                Suction::Keep, Suction::On, run))
         continue;
       // The plate ends touching the box (a settled box may lean a little).
       if (!step("approach", PlanMode::kArmCartesian, pose(c.grasp), Suction::Keep, Suction::On, run,
@@ -542,33 +547,25 @@ class ExecutorNode : public plr::Node {
         ungripped_.insert(chosen->box);
         log().info("{}: grasp of box {} failed (nothing held)", action_name_, chosen->box);
       }
-      if (chosen->lift)
-        step("lift", PlanMode::kArmCartesian, pose(*chosen->lift), Suction::Keep, Suction::Keep,
-             run);
-      step("retract", PlanMode::kArmCartesian, pose(chosen->retract), Suction::Keep, Suction::Keep,
-           run);
+      step("lift", PlanMode::kArmCartesian, pose(chosen->lift), Suction::Keep, Suction::Keep, run);
+      const bool out = step("retract", PlanMode::kArmCartesian, pose(chosen->retract),
+                            Suction::Keep, Suction::Keep, run);
+      if (!out) {
+        // Still in the wall: no drop-off can be planned from here. Set the
+        // box down where it was and withdraw; it is tried after the others.
+        step("put back", PlanMode::kArmCartesian, pose(chosen->grasp), Suction::Keep, Suction::Off,
+             run, {chosen->box});
+        step("withdraw", PlanMode::kArmCartesian, pose(chosen->pregrasp), Suction::Keep,
+             Suction::Keep, run, {chosen->box});
+        ungripped_.insert(chosen->box);
+      }
       const Observed w = observe();
       if (!w.held.empty() && last_held_.empty()) run.failed_grasp = false;
-      if (w.held.empty() && !run.failed_grasp) {
+      if (out && w.held.empty() && !run.failed_grasp) {
         run.failed_grasp = true;
         log().info("{}: box {} dropped while retracting", action_name_, chosen->box);
       }
-      // Room for the arm to swing the box down to the nose: back away from
-      // the structure first.
-      if (!w.held.empty())
-        step("back off", PlanMode::kBaseLine,
-             joints({{sim::kBaseX, w.q[sim::kBaseX] - dropoff_backoff_m_}}), Suction::Keep,
-             Suction::Keep, run);
-      // A place the arm reaches may still fold it into itself: try the next.
-      bool dropped = false;
-      const Observed at = observe();
-      for (const auto& drop : dropoff_targets(at.world, at.held, robot_, geometry_, at.q,
-                                              chosen->from_top, max_candidates_)) {
-        if ((dropped =
-                 step("drop-off", PlanMode::kArm, pose(drop), Suction::Keep, Suction::Off, run)))
-          break;
-      }
-      if (!dropped) log().warn("{}: no drop-off pose could be planned", action_name_);
+      if (!w.held.empty()) drop_off(w, run);
     }
     // The folded arm leaves the belt free, and the nose room to rise.
     step("arm clear", PlanMode::kArm,
@@ -581,6 +578,22 @@ class ExecutorNode : public plr::Node {
     const Observed w = observe();
     step("base back", PlanMode::kBaseLine, joints({{sim::kBaseX, w.q[sim::kBaseX] - retreat_m_}}),
          Suction::Keep, Suction::Keep, run);
+  }
+
+  // Releases what the plate holds over the nose's conveyor.
+  void drop_off(const Observed& w, ActionRun& run) {
+    // Room for the arm to swing the box down to the nose: back away from
+    // the structure first.
+    step("back off", PlanMode::kBaseLine,
+         joints({{sim::kBaseX, w.q[sim::kBaseX] - dropoff_backoff_m_}}), Suction::Keep,
+         Suction::Keep, run);
+    // A place the arm reaches may still fold it into itself: try the next.
+    const Observed at = observe();
+    for (const auto& drop :
+         dropoff_targets(at.world, at.held, robot_, geometry_, at.q, max_candidates_)) {
+      if (step("drop-off", PlanMode::kArm, pose(drop), Suction::Keep, Suction::Off, run)) return;
+    }
+    log().warn("{}: no drop-off pose could be planned", action_name_);
   }
 
   void sweep(sim::Action action, const Observed& w0, ActionRun& run) {
@@ -877,7 +890,7 @@ class ExecutorNode : public plr::Node {
   std::vector<double> nose_home_{0.5, 0.0, 0.0}, nose_down_{0.0, 0.05, 0.0},
       nose_sweep_{0.0, 0.05, 0.3};
   // Arm folded over the base: out of the way of boxes leaving on the belt.
-  std::vector<double> arm_clear_{0.0, -1.0, 2.0, -1.0};
+  std::vector<double> arm_clear_{0.0, -1.0, 2.0, 0.0};
   bool show_progress_ = true, tty_ = false;
   sim::RobotModel robot_;
   Publisher<msg::Statistics> status_;

@@ -14,11 +14,11 @@ constexpr double kMargin = 0.03;     // m, footprint shrink and clearances
 constexpr double kClearance = 0.02;  // m, the plate's distance to boxes it must not touch
 constexpr double kSlide = 0.05;      // m, steps of the plate off the face's centre
 constexpr double kCovered = 0.1;     // m, the plate's centre stays this far inside the face
-constexpr double kFlush = 0.004;     // m a neighbour may stand out of the face unnoticed
-// The cups' rims stay this far inside the plate's outline (plus kClearance),
-// and grip faces up to this far below it.
-constexpr double kCupInset = 0.04;
-constexpr double kCupReach = 0.03;
+constexpr double kProud = 0.015;  // m a neighbour may stand out of the face (the cups reach 2 cm)
+// rad: a face tilted further than this from the vertical is not taken (the
+// cups seal up to about 0.26 rad).
+constexpr double kMaxFaceTilt = 0.2;
+constexpr double kSquare = 0.03;  // rad: faces turned less than this are taken square to the axis
 
 sim::Height height_class(double top, double mid, double high) {
   if (top >= high) return sim::Height::kHigh;
@@ -67,11 +67,36 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     const int mismatches =
         (cls != sim::height(action)) + (side_of(y, world, obs) != sim::side(action));
 
+    // The front face: of the box's horizontal axes, the one nearest the
+    // trailer's axis gives the face's normal and the plate's yaw (the wrist
+    // turns the plate square to it). A box tilted on an edge has no face
+    // the vertical plate can seal on.
+    const Eigen::Matrix3d R = box.pose.linear();
+    int normal_axis = -1, up_axis = 0;
+    for (int k = 0; k < 3; ++k) {
+      if (std::abs(R(2, k)) > std::abs(R(2, up_axis))) up_axis = k;
+      if (std::abs(R(2, k)) < kMaxFaceTilt &&
+          (normal_axis < 0 || std::abs(R(0, k)) > std::abs(R(0, normal_axis))))
+        normal_axis = k;
+    }
+    if (normal_axis < 0 || std::abs(R(2, up_axis)) < std::cos(kMaxFaceTilt)) continue;
+    Eigen::Vector3d n = R.col(normal_axis);
+    n.z() = 0;
+    n = n.normalized() * (n.x() < 0 ? -1.0 : 1.0);
+    // A settled wall's few milliradians are not worth turning the plate for:
+    // turned, it would lead with a corner.
+    if (std::abs(n.y()) < kSquare) n = Eigen::Vector3d::UnitX();
+    const Eigen::Vector3d lateral(-n.y(), n.x(), 0.0);
+    const double plate_yaw = std::atan2(n.y(), n.x());
+    const double half_d = box.size[normal_axis] / 2;
+    const double half_w = box.size[3 - normal_axis - up_axis] / 2;
+    const Eigen::Vector3d face_centre = box.pose.translation() - half_d * n;
+
     // Plate centred on the face, kept inside the trailer and off the floor.
     const double ylim = world.trailer.width / 2 - g.plate_half_width - kMargin;
-    const double zc = std::clamp((b[i].z0 + b[i].z1) / 2, g.plate_half_height + kMargin,
+    const double zc = std::clamp(face_centre.z(), g.plate_half_height + kMargin,
                                  world.trailer.height - g.plate_half_height - kMargin);
-    const Eigen::Vector3d face(b[i].x0, std::clamp(y, -ylim, ylim), zc);
+    const Eigen::Vector3d face(face_centre.x(), face_centre.y(), zc);
     // Base: the arm at its preferred reach, the lowered nose short of every box.
     const double by_reach = face.x() - g.pick_reach + g.arm_yaw_offset;
     const double by_nose = nearest - g.conveyor_length - g.nose_clearance;
@@ -81,19 +106,13 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
             ? face.x() - g.pregrasp_distance - g.conveyor_length - g.nose_clearance
             : by_reach;
     const double base_x = std::min({by_reach, by_nose, by_plate});
-    const double yaw = std::atan2(face.y(), face.x() - (base_x - g.arm_yaw_offset));
     sim::Config at = current;
     at[sim::kBaseX] = base_x;
     // The plate is wider than many boxes: the corridor it moves through to
-    // the face (or down onto the top) must be clear of every other box. Where
-    // a neighbour is in the way, the plate slides off centre as long as it
-    // still covers most of the face.
+    // the face must be clear of every other box. Where a neighbour is in the
+    // way, the plate slides off centre as long as it still covers most of
+    // the face.
     const double pw = g.plate_half_width, ph = g.plate_half_height;
-    const double top_x = (b[i].x0 + b[i].x1) / 2;
-    // Facing down, the plate turns with the arm's yaw: its footprint's bounds.
-    const double top_yaw = std::abs(std::atan2(y, top_x - (base_x - g.arm_yaw_offset)));
-    const double hx = ph * std::cos(top_yaw) + pw * std::sin(top_yaw);
-    const double hy = pw * std::cos(top_yaw) + ph * std::sin(top_yaw);
     auto near = [](double a0, double a1, double b0, double b1) {
       return a0 - kClearance < b1 && b0 < a1 + kClearance;
     };
@@ -105,7 +124,6 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       }
       return true;
     };
-    const double half_w = (b[i].y1 - b[i].y0) / 2, half_d = (b[i].x1 - b[i].x0) / 2;
     auto slides = [&](double half_extent) {
       std::vector<double> out{0.0};
       for (double d = kSlide; d <= half_extent - kCovered + 1e-9; d += kSlide) {
@@ -114,81 +132,67 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       }
       return out;
     };
-    // The face corridor ends at the plate's surface in the grasp: neighbours
-    // flush with the face do not block it, ones standing out do.
+    // The plate moves in to the face through a corridor that must be free.
+    // It stops grasp_gap short of the face; a settled wall is not flush, so
+    // also grasp_gap short of any neighbour under its outline that stands
+    // out (by its leading corner, if the plate is turned off the trailer's
+    // axis). The cups reach the face across kProud of extra gap.
     const double half_h = (b[i].z1 - b[i].z0) / 2;
-    const double corridor_end = face.x() - g.grasp_gap - kClearance + kFlush;
-    std::optional<Eigen::Vector2d> face_offset;
+    const double reach_y = pw * std::abs(n.x());
+    const double lead = pw * std::abs(n.y());
+    std::optional<Eigen::Vector3d> at_face;
+    double stop_x = 0.0;
     for (const double dz : slides(half_h)) {
       for (const double dy : slides(half_w)) {
-        const double py = std::clamp(face.y() + dy, -ylim, ylim);
-        const double pz =
-            std::clamp(face.z() + dz, ph + kMargin, world.trailer.height - ph - kMargin);
-        if (clear(face.x() - g.pregrasp_distance, corridor_end, py - pw, py + pw, pz - ph,
-                  pz + ph)) {
-          face_offset = Eigen::Vector2d(py - face.y(), pz - face.z());
+        Eigen::Vector3d p = face + dy * lateral;
+        p.y() = std::clamp(p.y(), -ylim, ylim);
+        p.z() = std::clamp(face.z() + dz, ph + kMargin, world.trailer.height - ph - kMargin);
+        const double at_target = p.x() - g.grasp_gap * n.x();
+        double stop = at_target;
+        for (std::size_t j = 0; j < world.boxes.size(); ++j) {
+          if (j != i && near(b[i].x0 - g.pregrasp_distance, b[i].x0, b[j].x0, b[j].x1) &&
+              near(p.y() - reach_y - lead, p.y() + reach_y + lead, b[j].y0, b[j].y1) &&
+              near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1))
+            stop = std::min(stop, b[j].x0 - g.grasp_gap - lead);
+        }
+        if (at_target - stop <= kProud) {
+          at_face = p;
+          stop_x = stop;
           break;
         }
       }
-      if (face_offset) break;
+      if (at_face) break;
     }
-    std::optional<Eigen::Vector2d> top_offset;
-    for (const double dx : slides(half_d)) {
-      for (const double dy : slides(half_w)) {
-        const double px = top_x + dx, py = y + dy;
-        const bool inside = std::abs(py) + hy <= world.trailer.width / 2 - kMargin &&
-                            px + hx <= world.trailer.depth - kMargin;
-        // Nothing above in the plate's way down, and no neighbour's top
-        // under its cups (they would grip it too).
-        if (inside &&
-            clear(px - hx, px + hx, py - hy, py + hy, b[i].z1 + kMargin,
-                  b[i].z1 + g.pregrasp_distance) &&
-            clear(px - hx + kCupInset, px + hx - kCupInset, py - hy + kCupInset,
-                  py + hy - kCupInset, b[i].z1 - kCupReach, b[i].z1 + kMargin)) {
-          top_offset = Eigen::Vector2d(dx, dy);
-          break;
-        }
-      }
-      if (top_offset) break;
-    }
-    // Front grasps lift the box off what it rests on and over the lowered nose.
+    // The box is lifted off what it rests on (and over the lowered nose)
+    // before it comes out: nothing may rest on it.
     const double lift = std::max(g.retract_lift, g.nose_top + kMargin - b[i].z0);
-    auto add = [&](bool from_top) {
-      PickCandidate c;
-      c.box = box.id;
-      c.matches = mismatches == 0;
-      c.base_x = base_x;
-      c.from_top = from_top;
-      if (from_top) {
-        const Eigen::Vector3d top(top_x + top_offset->x(), y + top_offset->y(), b[i].z1);
-        c.grasp = {top + Eigen::Vector3d(0, 0, g.grasp_gap), M_PI / 2};
-        c.pregrasp = {top + Eigen::Vector3d(0, 0, g.pregrasp_distance), M_PI / 2};
-        c.retract = {c.pregrasp.position + Eigen::Vector3d(0, 0, g.retract_lift), M_PI / 2};
-      } else {
-        // Off the arm's axis the plate meets the face at an angle: keep its near edge off it.
-        const double gap = g.grasp_gap + g.plate_half_width * std::sin(std::abs(yaw));
-        const Eigen::Vector3d at_face =
-            face + Eigen::Vector3d(0, face_offset->x(), face_offset->y());
-        c.grasp = {at_face - Eigen::Vector3d(gap, 0, 0), 0.0};
-        c.pregrasp = {at_face - Eigen::Vector3d(g.pregrasp_distance, 0, 0), 0.0};
-        // Lifted off what it rests on (and over the lowered nose), then pulled
-        // out until clear of it: the drop-off move after that swings freely.
-        c.lift = {c.grasp.position + Eigen::Vector3d(0, 0, lift), 0.0};
-        c.retract = {c.lift->position - Eigen::Vector3d(b[i].x1 - b[i].x0 + kMargin, 0, 0), 0.0};
-      }
-      if (!reachable(robot, c.grasp, at) || !reachable(robot, c.pregrasp, at)) return;
-      ranked.push_back(
-          {c, mismatches, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
-    };
-    // A box taken by its face is lifted before it comes out: nothing may rest on it.
     const bool liftable = clear(b[i].x0 + kMargin, b[i].x1 - kMargin, b[i].y0 + kMargin,
                                 b[i].y1 - kMargin, b[i].z1, b[i].z1 + lift);
-    if (face_offset && liftable && std::abs(yaw) <= g.max_face_yaw) add(false);
-    if (top_offset) add(true);
+    // Pulled out, the whole box (it may be wider than the plate) passes over
+    // what stands in front of it.
+    const double out_depth = 2 * half_d + kMargin;
+    const bool extractable = clear(b[i].x0 - out_depth, b[i].x0 - kClearance, b[i].y0, b[i].y1,
+                                   b[i].z0 + lift, b[i].z1 + lift);
+    if (!at_face || !liftable || !extractable) continue;
+    PickCandidate c;
+    c.box = box.id;
+    c.matches = mismatches == 0;
+    c.base_x = base_x;
+    c.grasp = {*at_face - (at_face->x() - stop_x) / n.x() * n, plate_yaw};
+    c.pregrasp = {*at_face - g.pregrasp_distance * n, plate_yaw};
+    // Lifted, then pulled out until clear of what it rested on: the
+    // drop-off move after that swings freely.
+    c.lift = {c.grasp.position + Eigen::Vector3d(0, 0, lift), plate_yaw};
+    c.retract = {c.lift.position - out_depth * n, plate_yaw};
+    if (!reachable(robot, c.grasp, at) || !reachable(robot, c.pregrasp, at)) continue;
+    ranked.push_back({c, mismatches, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
   }
+  // Nearest first: a box behind others is reached over them, which the arm
+  // plans slowly and the held box may not clear; within reach of the front,
+  // the action's height and side, then high up.
   std::stable_sort(ranked.begin(), ranked.end(), [](const Ranked& a, const Ranked& b) {
-    if (a.mismatches != b.mismatches) return a.mismatches < b.mismatches;
     if (a.x_bin != b.x_bin) return a.x_bin < b.x_bin;
+    if (a.mismatches != b.mismatches) return a.mismatches < b.mismatches;
     if (std::abs(a.top - b.top) > 1e-3) return a.top > b.top;
     return a.centre_distance < b.centre_distance;
   });
@@ -201,35 +205,62 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
 std::vector<sim::PlateTarget> dropoff_targets(const sim::World& world,
                                               const std::vector<std::uint32_t>& held,
                                               const sim::RobotModel& robot, const Geometry& g,
-                                              const sim::Config& at, bool from_top,
-                                              std::size_t max_count) {
-  // The held load sticks out of the plate by its depth (front grasp) or
-  // hangs below it by its height (top grasp).
-  double depth = 0.3, height = 0.3;
+                                              const sim::Config& at, std::size_t max_count) {
+  // The held load's extents: along the plate's normal (depth: it sticks out
+  // of the plate by that much), across it, and its height.
+  double depth = 0.3, across = 0.3, height = 0.3;
   for (const auto& box : world.boxes) {
     if (std::find(held.begin(), held.end(), box.id) == held.end()) continue;
     const auto bb = sim::bounds(box);
     depth = std::max(depth, bb.x1 - bb.x0);
+    across = std::max(across, bb.y1 - bb.y0);
     height = std::max(height, bb.z1 - bb.z0);
   }
-  // The folded arm cannot bend enough to reach right over the nose hinge, so
-  // look further along the conveyor and higher up for IK solutions.
+  // Facing forward, the wrist stands behind the box and close to the arm's
+  // yaw axis, which folds the forearm over the plate; turned sideways the
+  // wrist stands beside the box and the arm reaches further out. Sideways
+  // first, the wrist on the side the plate comes from.
+  const double side = robot.plateTarget(at).position.y() < 0 ? 1.0 : -1.0;
   std::vector<sim::PlateTarget> out;
   const double base_x = at[sim::kBaseX];
+  // The folded arm cannot bend enough to reach right over the nose hinge,
+  // so look further along the conveyor and higher up for IK solutions.
   for (double extra_z : {0.0, 0.2, 0.4}) {
-    // The box's centre `ahead` of base_x, the whole box over the conveyor.
-    for (double ahead = g.dropoff_ahead; ahead <= g.conveyor_length - depth / 2 + 1e-9;
-         ahead += 0.1) {
-      sim::PlateTarget t;
-      if (from_top)
-        t = {{base_x + ahead, 0.0, g.dropoff_bottom + extra_z + height + g.grasp_gap}, M_PI / 2};
-      else
-        t = {{base_x + ahead - depth / 2, 0.0, g.dropoff_bottom + extra_z + height / 2}, 0.0};
-      if (reachable(robot, t, at)) out.push_back(t);
-      if (out.size() >= max_count) return out;
+    // The box's centre `ahead` of base_x on the conveyor's middle line.
+    for (double ahead = g.dropoff_ahead; ahead <= g.conveyor_length + 1e-9; ahead += 0.1) {
+      for (const double yaw : {side * M_PI / 2, -side * M_PI / 2, 0.0}) {
+        // The whole box over the conveyor: its length along it.
+        const double along = yaw == 0.0 ? depth : across;
+        if (ahead > g.conveyor_length - along / 2 + 1e-9) continue;
+        const Eigen::Vector3d n(std::cos(yaw), std::sin(yaw), 0.0);
+        const Eigen::Vector3d centre(base_x + ahead, 0.0, g.dropoff_bottom + extra_z + height / 2);
+        const sim::PlateTarget t{centre - depth / 2 * n, yaw};
+        if (reachable(robot, t, at)) out.push_back(t);
+        if (out.size() >= max_count) return out;
+      }
     }
   }
   return out;
+}
+
+bool follows_lines(const sim::RobotModel& robot, const sim::Config& from,
+                   const std::vector<sim::PlateTarget>& through) {
+  constexpr double kStep = 0.01, kMaxJump = 0.25;  // as the planner's M4 lattice
+  sim::Config q = from;
+  for (const auto& to : through) {
+    const sim::PlateTarget start = robot.plateTarget(q);
+    const double yaw_change = std::remainder(to.yaw - start.yaw, 2.0 * M_PI);
+    const int n =
+        std::max(1, static_cast<int>(std::ceil((to.position - start.position).norm() / kStep)));
+    for (int k = 1; k <= n; ++k) {
+      const double s = static_cast<double>(k) / n;
+      const auto sols = robot.armIk(
+          {start.position + s * (to.position - start.position), start.yaw + s * yaw_change}, q);
+      if (sols.empty() || (sols.front() - q).cwiseAbs().maxCoeff() > kMaxJump) return false;
+      q = sols.front();
+    }
+  }
+  return true;
 }
 
 std::optional<SweepPlan> sweep_plan(const sim::SceneAnalysis& scene, sim::Action action,

@@ -28,40 +28,45 @@ struct Geometry {
   double dropoff_bottom = 0.4;      // held box bottom over the floor, just above the lowered nose
   double dropoff_ahead = 0.5;       // held box centre ahead of base_x
   double sweep_overshoot = 0.1;     // scoop tip past the pile's far end
-  // The plate's yaw follows its position (4-DOF arm), so a front face off the
-  // arm's axis is seen at an angle; beyond this the box is taken from the top.
-  double max_face_yaw = 0.15;  // rad
-  double nose_top = 0.25;      // m, top of the lowered nose and conveyor
+  double nose_top = 0.25;           // m, top of the lowered nose and conveyor
 };
 
 struct PickCandidate {
   std::uint32_t box = 0;
   double base_x = 0;
   sim::PlateTarget pregrasp, grasp, retract;
-  // Front grasps first lift the box straight up, off the one it rests on,
-  // before pulling it out: dragged out, it would press into that one.
-  std::optional<sim::PlateTarget> lift;
-  bool from_top = false;  // plate facing down on the top face, else on the front face
-  bool matches = false;   // the box has the action's height class and side
+  // The box is first lifted straight up, off the one it rests on, before it
+  // is pulled out: dragged out, it would press into that one.
+  sim::PlateTarget lift;
+  bool matches = false;  // the box has the action's height class and side
 };
 
 // Pick points for Pick(height, side), best first: boxes of the structure in
-// front whose front face nothing hides, those matching the action's height
-// class and side first, then near the robot, then high up. Candidates whose
-// plate poses the arm cannot reach from their base position are left out.
+// front whose front face nothing hides, on which nothing rests and that come
+// out over what stands in front of them; near the robot first (0.2 m bins),
+// then those matching the action's height class and side, then high up.
+// Candidates whose plate poses the arm cannot reach from their base position
+// are left out.
 std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::SceneAnalysis& scene,
                                            sim::Action action, const sim::ObservationParams& obs,
                                            const sim::RobotModel& robot, const Geometry& g,
                                            const sim::Config& current, std::size_t max_count);
 
 // Where the plate may release held boxes over the nose, for a base at
-// base_x, with the plate facing forward (front grasp) or down (top grasp):
-// reachable places, best first, at most max_count.
+// base_x, the plate facing forward: reachable places, best first, at most
+// max_count.
 std::vector<sim::PlateTarget> dropoff_targets(const sim::World& world,
                                               const std::vector<std::uint32_t>& held,
                                               const sim::RobotModel& robot, const Geometry& g,
-                                              const sim::Config& at, bool from_top,
-                                              std::size_t max_count);
+                                              const sim::Config& at, std::size_t max_count);
+
+// Whether the plate, starting at `from`, can follow straight lines through
+// each of `through` in turn with the arm's IK on one branch all the way (no
+// joint jumping between 1 cm steps): what the planner's straight-line mode
+// (M4) needs. An IK solution for a pre-grasp that fails this leads into an
+// approach or retract that cannot be planned.
+bool follows_lines(const sim::RobotModel& robot, const sim::Config& from,
+                   const std::vector<sim::PlateTarget>& through);
 
 struct SweepPlan {
   double start_base_x = 0;           // behind the pile, nose lowered there

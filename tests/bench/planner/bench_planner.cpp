@@ -38,7 +38,7 @@ std::map<std::string, int> g_skipped;  // pick queries not generated, by reason
 
 Config home(double base) {
   Config q;
-  q << base, 0.0, -1.0, 2.0, -1.0, 0.5, 0.0, 0.0;
+  q << base, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
   return q;
 }
 
@@ -66,12 +66,12 @@ Eigen::AlignedBox3d aabb(const Box& b) {
   return out;
 }
 
-PlanQuery poseQuery(PlanMode mode, const Config& start, const Eigen::Vector3d& p, double pitch) {
+PlanQuery poseQuery(PlanMode mode, const Config& start, const Eigen::Vector3d& p, double yaw) {
   PlanQuery q;
   q.mode = mode;
   q.start = start;
   PoseGoal g;
-  g.target = {p, pitch};
+  g.target = {p, yaw};
   q.goal = g;
   return q;
 }
@@ -107,7 +107,6 @@ bool startValid(CollisionChecker& cc, const PlanQuery& q) {
 // Executor-like queries for one scene: picks of front boxes and a sweep.
 void makeQueries(Scene& s, std::mt19937_64& rng, int picks) {
   CollisionChecker& cc = *s.checker;
-  const RobotModel& robot = cc.robot();
   double front = s.world.trailer.depth;
   for (const Box& b : s.world.boxes) front = std::min(front, aabb(b).min().x());
   const double b0 = front - 1.35;
@@ -150,12 +149,8 @@ void makeQueries(Scene& s, std::mt19937_64& rng, int picks) {
     PlanQuery scope;  // target box ignored while approaching
     scope.ignored_boxes = {box.id};
     Config pre, contact, back;
-    // The plate's yaw follows its position (4-joint arm), so off the axis its
-    // corner leads by 0.25 |sin(yaw)|: keep that corner 1.2 cm off the face.
-    const Eigen::Vector3d yaw_axis = Eigen::Vector3d(b0, 0, 0) + robot.arm().yaw_origin;
-    const double lead =
-        0.25 * std::abs(std::sin(std::atan2(face.y() - yaw_axis.y(), face.x() - yaw_axis.x())));
-    const Eigen::Vector3d touch = face - Eigen::Vector3d(0.012 + lead, 0, 0);
+    // The wrist turns the plate square to the face: stop it 1.2 cm short.
+    const Eigen::Vector3d touch = face - Eigen::Vector3d(0.012, 0, 0);
     const PlateTarget pre_t{touch - Eigen::Vector3d(0.15, 0, 0), 0.0};
     if (!solveIk(cc, PlanQuery{}, pre_t, nose_down, pre)) {
       ++g_skipped["pre-grasp IK"];
@@ -185,21 +180,17 @@ void makeQueries(Scene& s, std::mt19937_64& rng, int picks) {
     PlanQuery retract = poseQuery(PlanMode::kArmCartesian, contact, back_p, 0.0);
     retract.held_boxes = {box};
     if (startValid(cc, retract)) s.queries.push_back(retract);
-    // M1: drop-off over the nose, holding the box (plate facing down).
-    const double drop_z = 0.25 + box.size.x() + 0.15;
-    PlanQuery drop =
-        poseQuery(PlanMode::kArm, back, Eigen::Vector3d(b0 + 0.6, 0.0, drop_z), M_PI / 2);
+    // M1: drop-off over the nose, holding the box in front of the plate.
+    const Eigen::Vector3d drop_p(b0 + 0.6 - bb.sizes().x() / 2, 0.0, 0.55 + bb.sizes().z() / 2);
+    PlanQuery drop = poseQuery(PlanMode::kArm, back, drop_p, 0.0);
     drop.held_boxes = {box};
     drop.start = back;
     Config drop_q;
-    if (solveIk(cc, drop, {Eigen::Vector3d(b0 + 0.6, 0.0, drop_z), M_PI / 2}, back, drop_q)) {
-      s.queries.push_back(drop);
-    }
+    if (solveIk(cc, drop, {drop_p, 0.0}, back, drop_q)) s.queries.push_back(drop);
     // M1: back home from the drop-off.
     Config dropped;
     held_scope.start = back;
-    if (solveIk(cc, PlanQuery{}, {Eigen::Vector3d(b0 + 0.6, 0.0, drop_z), M_PI / 2}, back,
-                dropped)) {
+    if (solveIk(cc, PlanQuery{}, {drop_p, 0.0}, back, dropped)) {
       s.queries.push_back(jointQuery(PlanMode::kArm, dropped, nose_down));
     }
     // M6: drive forward from the pre-grasp pose until the first contact,

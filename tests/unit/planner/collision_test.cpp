@@ -21,7 +21,7 @@ const RobotModel& robot() {
 // Arm folded above the raised nose, robot 1 m inside the trailer.
 Config home(double base_x = 1.0) {
   Config q;
-  q << base_x, 0.0, -1.0, 2.0, -1.0, 0.5, 0.0, 0.0;
+  q << base_x, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
   return q;
 }
 

@@ -12,8 +12,8 @@ namespace {
 flatbuffers::FlatBufferBuilder request(std::uint64_t budget) {
   msg::PlanRequestT req;
   req.mode = msg::PlanMode::M5;
-  req.start = {1.0, 0, -1.0, 2.0, -1.0, 0.5, 0, 0};
-  req.goal_joints = {2.5, 0, -1.0, 2.0, -1.0, 0.5, 0, 0};
+  req.start = {1.0, 0, -1.0, 2.0, 0.0, 0.5, 0, 0};
+  req.goal_joints = {2.5, 0, -1.0, 2.0, 0.0, 0.5, 0, 0};
   req.world = std::make_unique<msg::WorldStateT>();
   req.max_expansions = budget;
   flatbuffers::FlatBufferBuilder fbb;

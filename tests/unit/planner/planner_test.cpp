@@ -25,7 +25,7 @@ const RobotModel& robot() {
 
 Config home(double base) {
   Config q;
-  q << base, 0.0, -1.0, 2.0, -1.0, 0.5, 0.0, 0.0;
+  q << base, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
   return q;
 }
 
@@ -56,12 +56,12 @@ plr::arastar::Planner& arastar() {
   return p;
 }
 
-PlanQuery poseQuery(PlanMode mode, const Config& start, const Eigen::Vector3d& p, double pitch) {
+PlanQuery poseQuery(PlanMode mode, const Config& start, const Eigen::Vector3d& p, double yaw) {
   PlanQuery q;
   q.mode = mode;
   q.start = start;
   PoseGoal g;
-  g.target = {p, pitch};
+  g.target = {p, yaw};
   q.goal = g;
   return q;
 }
@@ -175,9 +175,7 @@ TEST_P(Planners, ArmToPreGraspIsCollisionFreeAndWithinLimits) {
   const World w = wall(4.0);
   CollisionChecker cc(robot(), w);
   const Config start = home(4.0 - 1.35);
-  // Plate 15 cm in front of a box's face (row 2, column 1), facing forward
-  // (its yaw follows the position, so off-centre it is not square to the
-  // wall: 15 cm leaves its corner clear).
+  // Plate 15 cm in front of a box's face (row 2, column 1), square to it.
   const Eigen::Vector3d target(3.85, at(w, 2, 1).pose.translation().y(),
                                at(w, 2, 1).pose.translation().z());
   const PlanResult r = plan(poseQuery(PlanMode::kArm, start, target, 0.0), cc);

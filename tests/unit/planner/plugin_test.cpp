@@ -36,8 +36,7 @@ class PlanService : public ::testing::TestWithParam<const char*> {
 };
 
 TEST_P(PlanService, PlansABaseMove) {
-  const auto reply =
-      call({1.0, 0, -1.0, 2.0, -1.0, 0.5, 0, 0}, {2.5, 0, -1.0, 2.0, -1.0, 0.5, 0, 0});
+  const auto reply = call({1.0, 0, -1.0, 2.0, 0.0, 0.5, 0, 0}, {2.5, 0, -1.0, 2.0, 0.0, 0.5, 0, 0});
   ASSERT_TRUE(reply) << reply.error().message;
   const msg::PlanResponse& r = *reply.value();
   ASSERT_EQ(r.status(), msg::PlanStatus::Solved) << r.message()->str();
@@ -50,7 +49,7 @@ TEST_P(PlanService, PlansABaseMove) {
 }
 
 TEST_P(PlanService, BadRequestNamesTheField) {
-  const auto reply = call({1.0, 0, -1.0}, {2.5, 0, -1.0, 2.0, -1.0, 0.5, 0, 0});
+  const auto reply = call({1.0, 0, -1.0}, {2.5, 0, -1.0, 2.0, 0.0, 0.5, 0, 0});
   ASSERT_TRUE(reply) << reply.error().message;
   EXPECT_EQ(reply.value()->status(), msg::PlanStatus::InvalidRequest);
   EXPECT_EQ(reply.value()->message()->str(), "PlanRequest.start: needs 8 joint values, got 3");

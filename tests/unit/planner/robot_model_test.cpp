@@ -79,7 +79,7 @@ TEST(RobotModel, IkInvertsFkOnRandomConfigurations) {
       q[j] = u(rng);
     }
     const auto target = m.plateTarget(q);
-    // Pitch beyond +-90 degrees is the turned-away branch; both are covered.
+    // The arm reaching back over itself is the turned-away branch; both are covered.
     const auto sols = m.armIk(target, q);
     ASSERT_FALSE(sols.empty()) << "no IK for a reachable FK pose, i=" << i;
     bool found_original = false;
@@ -87,15 +87,52 @@ TEST(RobotModel, IkInvertsFkOnRandomConfigurations) {
       EXPECT_TRUE(m.withinLimits(s));
       const auto back = m.plateTarget(s);
       EXPECT_LT((back.position - target.position).norm(), 1e-7);
-      EXPECT_NEAR(std::remainder(back.pitch - target.pitch, 2 * M_PI), 0.0, 1e-7);
-      // Same plate normal (the turned-away branch rolls the plate by pi).
-      EXPECT_LT((m.platePose(s).linear().col(0) - m.platePose(q).linear().col(0)).norm(), 1e-6);
+      EXPECT_NEAR(std::remainder(back.yaw - target.yaw, 2 * M_PI), 0.0, 1e-7);
+      EXPECT_TRUE(m.platePose(s).linear().isApprox(m.platePose(q).linear(), 1e-6));
       if ((s - q).norm() < 1e-6) found_original = true;
     }
     EXPECT_TRUE(found_original) << "i=" << i;
     ++checked;
   }
   EXPECT_EQ(checked, 500);
+}
+
+TEST(RobotModel, PlateStaysVerticalWhateverTheArmDoes) {
+  // The parallelogram keeps the wrist level: the plate's normal is
+  // horizontal and its yaw is arm_1 + arm_4.
+  const RobotModel& m = robot();
+  std::mt19937 rng(11);
+  for (int i = 0; i < 200; ++i) {
+    Config q;
+    for (int j = 0; j < plr::sim::kNumJoints; ++j) {
+      std::uniform_real_distribution<double> u(m.limits(j).lower, m.limits(j).upper);
+      q[j] = u(rng);
+    }
+    const Eigen::Matrix3d r = m.platePose(q).linear();
+    EXPECT_NEAR(r.col(0).z(), 0.0, 1e-9) << "i=" << i;
+    EXPECT_NEAR(r.col(2).z(), 1.0, 1e-9) << "i=" << i;
+    EXPECT_NEAR(
+        std::remainder(m.plateTarget(q).yaw - q[plr::sim::kArm1] - q[plr::sim::kArm4], 2 * M_PI),
+        0.0, 1e-9);
+  }
+}
+
+TEST(RobotModel, FacesEveryColumnSquarelyFromBehindTheLoweredNose) {
+  // Base 1.1 m short of a wall face (the lowered nose's length plus a
+  // margin): the plate reaches every face of the wall square on, at the
+  // grasp and at the pre-grasp 0.25 m back, from the floor to under the
+  // ceiling and out to the side walls.
+  const RobotModel& m = robot();
+  Config seed = Config::Zero();
+  const double face_x = 1.1;
+  for (double y : {-0.97, -0.5, 0.0, 0.5, 0.97}) {
+    for (double z : {0.3, 0.8, 1.3, 1.9, 2.47}) {
+      for (double back : {0.005, 0.25}) {
+        const auto sols = m.armIk({Eigen::Vector3d(face_x - back, y, z), 0.0}, seed);
+        EXPECT_FALSE(sols.empty()) << "y=" << y << " z=" << z << " back=" << back;
+      }
+    }
+  }
 }
 
 TEST(RobotModel, UnreachableTargetHasNoSolution) {
@@ -129,14 +166,38 @@ TEST(RobotModel, UrdfdomRejectionCarriesItsReason) {
   EXPECT_GT(msg.size(), std::string("bad.urdf: invalid URDF: ").size());
 }
 
+namespace {
+std::string shippedUrdf() {
+  std::ifstream in(PLR_UNLOADER_URDF);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+}  // namespace
+
+TEST(RobotModel, MovableJointThatIsNeitherPlannedNorMimicIsNamed) {
+  std::string xml = shippedUrdf();
+  const std::string mimic = "<mimic joint=\"arm_2\" multiplier=\"-1\" offset=\"0\"/>";
+  const auto pos = xml.find(mimic);
+  ASSERT_NE(pos, std::string::npos);
+  xml.erase(pos, mimic.size());
+  EXPECT_EQ(errorOf(xml),
+            "bad.urdf: joint 'arm_level_2' is movable but neither one of the 8 planned joints "
+            "nor a <mimic> of one");
+}
+
+TEST(RobotModel, WristThatDoesNotStayLevelIsRefused) {
+  std::string xml = shippedUrdf();
+  const std::string mimic = "<mimic joint=\"arm_3\" multiplier=\"-1\"";
+  const auto pos = xml.find(mimic);
+  ASSERT_NE(pos, std::string::npos);
+  xml.replace(pos, mimic.size(), "<mimic joint=\"arm_3\" multiplier=\"-0.5\"");
+  EXPECT_EQ(errorOf(xml).rfind("bad.urdf: arm_4 must sit on a level flange", 0), 0u)
+      << errorOf(xml);
+}
+
 TEST(RobotModel, MissingAccelerationLimitIsNamed) {
-  std::string xml;
-  {
-    std::ifstream in(PLR_UNLOADER_URDF);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    xml = ss.str();
-  }
+  std::string xml = shippedUrdf();
   const auto pos = xml.find("<acceleration_limit value=\"2.5\"/>");
   ASSERT_NE(pos, std::string::npos);
   xml.erase(pos, std::string("<acceleration_limit value=\"2.5\"/>").size());

@@ -60,7 +60,7 @@ class SimulatorService : public ::testing::Test {
     return kernel_.call<msg::SnapshotRequest, msg::SnapshotReply>(service, fbb);
   }
 
-  static std::vector<double> home() { return {0.0, 0.0, -1.0, 2.0, -1.0, 0.5, 0.0, 0.0}; }
+  static std::vector<double> home() { return {0.0, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0}; }
 
   FakeKernel kernel_;
   std::optional<testing::NodeHandle> node_;

@@ -38,7 +38,7 @@ class FakeSim {
  public:
   explicit FakeSim(sim::World w) {
     s_.world = std::move(w);
-    s_.q << 1.0, 0, -1.0, 2.0, -1.0, 0.5, 0, 0;
+    s_.q << 1.0, 0, -1.0, 2.0, 0.0, 0.5, 0, 0;
   }
 
   void serve(FakeKernel& k) {
@@ -188,7 +188,7 @@ class FakePlanner {
                                  p.orientation().z());
       const Eigen::Vector3d n = q.toRotationMatrix().col(0);  // plate normal
       sim::PlateTarget t{{p.position().x(), p.position().y(), p.position().z()},
-                         std::atan2(-n.z(), std::hypot(n.x(), n.y()))};
+                         std::atan2(n.y(), n.x())};
       const auto sols = robot_.armIk(t, start);
       if (sols.empty()) return reply(fbb, msg::PlanStatus::GoalInvalid, {});
       goal = sols.front();

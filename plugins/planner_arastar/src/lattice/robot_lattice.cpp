@@ -37,7 +37,7 @@ void JointLattice::fillPlate(State& st) const {
   if (!std::holds_alternative<sim::PoseGoal>(goal_)) return;
   const sim::PlateTarget t = robot_.plateTarget(st.q);
   st.plate = t.position;
-  st.pitch = t.pitch;
+  st.yaw = t.yaw;
 }
 
 bool JointLattice::withinGoal(const State& st) const {
@@ -49,7 +49,7 @@ bool JointLattice::withinGoal(const State& st) const {
   }
   if (const auto* pg = std::get_if<sim::PoseGoal>(&goal_)) {
     return (st.plate - pg->target.position).norm() <= pg->position_tolerance &&
-           std::abs(std::remainder(st.pitch - pg->target.pitch, 2.0 * M_PI)) <= pg->pitch_tolerance;
+           std::abs(std::remainder(st.yaw - pg->target.yaw, 2.0 * M_PI)) <= pg->yaw_tolerance;
   }
   return false;
 }
@@ -183,8 +183,8 @@ LineLattice::LineLattice(const ModeLattice& lattice, const sim::CollisionChecker
     : lattice_(lattice), checker_(checker), robot_(checker.robot()) {
   from_ = robot_.plateTarget(start);
   to_ = goal.target;
-  // Pitch moves the shorter way round.
-  to_.pitch = from_.pitch + std::remainder(to_.pitch - from_.pitch, 2.0 * M_PI);
+  // Yaw turns the shorter way round.
+  to_.yaw = from_.yaw + std::remainder(to_.yaw - from_.yaw, 2.0 * M_PI);
   const double length = (to_.position - from_.position).norm();
   count_ = std::max(2, static_cast<int>(std::ceil(length / lattice_.resolution[0])) + 1);
   configs_.reserve(static_cast<std::size_t>(count_));
@@ -195,7 +195,7 @@ LineLattice::LineLattice(const ModeLattice& lattice, const sim::CollisionChecker
 sim::PlateTarget LineLattice::targetAt(int i) const {
   const double s = static_cast<double>(i) / (count_ - 1);
   return {from_.position + s * (to_.position - from_.position),
-          from_.pitch + s * (to_.pitch - from_.pitch)};
+          from_.yaw + s * (to_.yaw - from_.yaw)};
 }
 
 bool LineLattice::ensure(int i) {

@@ -11,7 +11,7 @@
 // contact) and every collision-free state is a goal; run it with Dijkstra.
 //
 // LineLattice (M4): the plate moves along the straight line from its start
-// position to the goal (pitch interpolated). States are progress steps along
+// position to the goal (yaw interpolated). States are progress steps along
 // the line with IK configurations chosen continuously; edges skip ahead by
 // the mode's steps when the joint-space motion stays within line_tolerance
 // of the line.
@@ -58,7 +58,7 @@ class JointLattice final : public search::Graph {
     sim::Config q;
     Key key{};
     Eigen::Vector3d plate = Eigen::Vector3d::Zero();
-    double pitch = 0.0;
+    double yaw = 0.0;
     std::int8_t valid = -1;  // -1 unknown
     bool goal = false;
     bool snapped = false;      // reached by a snap primitive (not on the lattice)

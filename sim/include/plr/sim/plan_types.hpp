@@ -47,11 +47,11 @@ struct JointGoal {
   double tolerance = 1e-3;  // per joint, rad or m
 };
 
-// Put the plate at a position with a pitch (see PlateTarget).
+// Put the plate at a position with a yaw (see PlateTarget).
 struct PoseGoal {
   PlateTarget target;
   double position_tolerance = 0.005;  // m
-  double pitch_tolerance = 0.01;      // rad
+  double yaw_tolerance = 0.01;        // rad
 };
 
 struct PlanQuery {

@@ -2,11 +2,12 @@
 //
 // Configuration q (8 doubles, this order everywhere):
 //   [base_x, arm_1, arm_2, arm_3, arm_4, nose_1, nose_2, nose_3]
-// The arm is yaw (arm_1) + three pitch joints; its end effector is the
-// suction plate, whose frame has its origin on the suction surface and its
-// normal along +x. A plate target is a position plus a pitch (angle of the
-// normal below the horizontal); the plate's yaw follows from the position,
-// which is what makes the closed-form IK possible.
+// The arm is a 4-axis palletizer: yaw (arm_1), shoulder and elbow pitch
+// (arm_2, arm_3), and a wrist yaw (arm_4) on a flange that a parallelogram
+// keeps level (URDF mimic joints). Its end effector is the suction plate,
+// whose frame has its origin on the suction surface and its normal along +x;
+// the plate is always vertical. A plate target is a position plus the yaw of
+// the normal, which is what makes the closed-form IK possible.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -57,8 +58,11 @@ struct Link {
   std::string name;
   int parent_link = -1;  // -1 for the root
   // Index into the configuration of the joint that moves this link relative
-  // to its parent, or -1 for a fixed joint / the root.
+  // to its parent, or -1 for a fixed joint / the root. A mimic joint moves by
+  // mimic_multiplier * q[joint] + mimic_offset.
   int joint = -1;
+  double mimic_multiplier = 1.0;
+  double mimic_offset = 0.0;
   JointType joint_type = JointType::kFixed;
   Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();  // joint frame in the parent link
   Eigen::Vector3d axis = Eigen::Vector3d::UnitX();           // in the joint frame
@@ -66,11 +70,11 @@ struct Link {
 };
 
 // Plate target: position of the suction surface centre (world frame) and the
-// pitch of the plate normal below the horizontal (0: facing +x/forward along
-// the arm, pi/2: facing down).
+// yaw of the plate normal about z (0: facing +x, towards the trailer's front
+// wall). The normal is always horizontal.
 struct PlateTarget {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
-  double pitch = 0.0;
+  double yaw = 0.0;
 };
 
 class RobotModel {
@@ -105,7 +109,7 @@ class RobotModel {
   struct ArmGeometry {
     Eigen::Vector3d yaw_origin;             // arm_1 axis origin, in base_link
     double shoulder_height;                 // arm_2 above arm_1 origin
-    double upper = 0, fore = 0, plate = 0;  // arm_2->arm_3, arm_3->arm_4, arm_4->plate
+    double upper = 0, fore = 0, plate = 0;  // arm_2->arm_3, arm_3->arm_4 axis, arm_4 axis->plate
   };
   const ArmGeometry& arm() const { return arm_; }
 
