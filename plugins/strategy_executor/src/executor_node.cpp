@@ -115,6 +115,7 @@ class ExecutorNode : public plr::Node {
                          "arm_clear",
                          "retreat_m",
                          "dropoff_backoff_m",
+                         "carry_height_m",
                          "progress"});
     report_dir_ = params().get<std::string>("report_dir", "report");
     env_ = params().get<std::string>("env", "");
@@ -145,6 +146,7 @@ class ExecutorNode : public plr::Node {
     settle_s_ = params().get<double>("settle_s", 0.3);
     retreat_m_ = params().get<double>("retreat_m", 0.3);
     dropoff_backoff_m_ = params().get<double>("dropoff_backoff_m", 0.5);
+    carry_height_m_ = params().get<double>("carry_height_m", carry_height_m_);
     show_progress_ = params().get<bool>("progress", true);
     for (auto [key, target] :
          {std::pair{"nose_home", &nose_home_}, std::pair{"nose_down", &nose_down_},
@@ -587,6 +589,17 @@ class ExecutorNode : public plr::Node {
     step("back off", PlanMode::kBaseLine,
          joints({{sim::kBaseX, w.q[sim::kBaseX] - dropoff_backoff_m_}}), Suction::Keep,
          Suction::Keep, run);
+    // From a high pick the elbow is up near the ceiling, and folding the arm
+    // straight towards the nose would raise it further: lower the load
+    // first, on a straight line.
+    {
+      const Observed now = observe();
+      const sim::PlateTarget p = robot_.plateTarget(now.q);
+      if (p.position.z() > carry_height_m_)
+        step("lower", PlanMode::kArmCartesian,
+             pose({{p.position.x(), p.position.y(), carry_height_m_}, p.yaw}), Suction::Keep,
+             Suction::Keep, run);
+    }
     // A place the arm reaches may still fold it into itself: try the next.
     const Observed at = observe();
     for (const auto& drop :
@@ -906,6 +919,7 @@ class ExecutorNode : public plr::Node {
   RunStats stats_;
   std::string action_name_;
   std::vector<std::uint32_t> last_held_;
+  double carry_height_m_ = 1.4;        // plate height a load is lowered to before the drop-off
   std::set<std::uint32_t> ungripped_;  // boxes whose grasp failed since the last unloaded box
   msg::PlanStatus last_status_ = msg::PlanStatus::Solved;
   double checkpoint_robot_time_ = 0;

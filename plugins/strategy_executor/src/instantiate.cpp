@@ -169,9 +169,10 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     const bool liftable = clear(b[i].x0 + kMargin, b[i].x1 - kMargin, b[i].y0 + kMargin,
                                 b[i].y1 - kMargin, b[i].z1, b[i].z1 + lift);
     // Pulled out, the whole box (it may be wider than the plate) passes over
-    // what stands in front of it.
+    // what stands in front of it; neighbours beside it, flush with its face
+    // (clear() adds kClearance), are not in the way.
     const double out_depth = 2 * half_d + kMargin;
-    const bool extractable = clear(b[i].x0 - out_depth, b[i].x0 - kClearance, b[i].y0, b[i].y1,
+    const bool extractable = clear(b[i].x0 - out_depth, b[i].x0 - 2 * kClearance, b[i].y0, b[i].y1,
                                    b[i].z0 + lift, b[i].z1 + lift);
     if (!at_face || !liftable || !extractable) continue;
     PickCandidate c;

@@ -4,8 +4,8 @@
 // pile in front of the first wall is deeper than d_min, sweep it; else if the
 // first wall is higher than h_min, pick from it — from its top box's height
 // and side, which is how the executor's pick-point choice ends up preferring
-// boxes near the robot and high up. Otherwise what is left is low: sweep a
-// pile, pick a low wall.
+// boxes near the robot and high up. Otherwise what is left is low: pick the
+// shallow pile's top box, or from the low wall.
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
@@ -70,8 +70,10 @@ class HardcodedStrategy : public plr::Node {
     if (!scene.front_pile.empty() && scene.pile_depth > d_min_) return make_sweep(scene.pile_class);
     if (!scene.first_wall.empty() && scene.wall_height > h_min_)
       return make_pick(scene.wall_class, scene.wall_side);
-    // Only low things are left: a shallow pile, or a wall no higher than h_min.
-    if (!scene.front_pile.empty()) return make_sweep(scene.pile_class);
+    // Only low things are left: a pile too shallow to be worth a sweep, or a
+    // wall no higher than h_min. The paper leaves this case open; taking the
+    // top box of what is in front always makes progress.
+    if (!scene.front_pile.empty()) return make_pick(scene.pile_class, scene.pile_side);
     return make_pick(scene.wall_class, scene.wall_side);
   }
 

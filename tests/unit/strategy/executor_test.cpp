@@ -290,10 +290,10 @@ TEST_F(Executor, UnloadsASmallWallWithStrategyH) {
   EXPECT_EQ(report["boxes_unloaded"], 6);
   EXPECT_EQ(sim.state().unloaded, 6u);
   EXPECT_EQ(report["robot_trailer_collisions"], 0);
-  // The top row by picks (M5 base, M3 nose, M2 pre-grasp, M4 approach and
-  // retract, M1 drop-off), the low row left is a pile and swept.
+  // By picks (M5 base, M3 nose, M2 pre-grasp, M4 approach and retract, M1
+  // drop-off): the low row left is a pile too shallow to sweep, also picked.
   EXPECT_GE(report["actions"]["pick"]["executions"], 3);
-  EXPECT_GE(report["actions"]["sweep"]["executions"], 1);
+  EXPECT_EQ(report["actions"]["sweep"]["executions"], 0);
   EXPECT_EQ(report["actions"]["pick"]["boxes"].get<int>() +
                 report["actions"]["sweep"]["boxes"].get<int>(),
             6);
@@ -314,6 +314,26 @@ TEST_F(Executor, UnloadsASmallWallWithStrategyH) {
   ASSERT_FALSE(snaps.empty());
   for (const auto& s : snaps) EXPECT_EQ(s.as<msg::SnapshotRequest>()->name()->str(), "checkpoint");
   EXPECT_FALSE(kernel_.published("executor/status").empty());
+}
+
+TEST_F(Executor, SweepsADeepPileWithStrategyH) {
+  // Three rows of low boxes, 1.2 m deep (> d_min) and nothing behind: H
+  // sweeps; the scoop takes what its tip passes.
+  sim::World w;
+  std::uint32_t id = 1;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      w.boxes.push_back(test::make_box(id++, 5.2 + r * 0.41, (c - 1) * 0.41, 0.0, {0.4, 0.4, 0.3}));
+  FakeSim sim(w);
+  FakePlanner planner;
+  sim.serve(kernel_);
+  planner.serve(kernel_);
+  const auto report = run();
+  EXPECT_TRUE(done_ok_) << done_reason_;
+  EXPECT_EQ(report["boxes_unloaded"], 9);
+  EXPECT_GE(report["actions"]["sweep"]["executions"], 1);
+  EXPECT_GT(report["actions"]["sweep"]["boxes"], 0);
+  EXPECT_GT(report["actions"]["sweep"]["boxes_per_s"], 0.0);
 }
 
 TEST_F(Executor, PlannerGapLosesNoQuery) {

@@ -79,13 +79,14 @@ TEST_F(Hardcoded, DMinMovesTheDecision) {
   EXPECT_EQ(decide(w), Action::SweepMid);
 }
 
-TEST_F(Hardcoded, LowLeftoversAreSweptOrPicked) {
+TEST_F(Hardcoded, LowLeftoversArePicked) {
   start(R"({"h_pile": 0.3, "h_min": 0.5})");
   sim::World w;
   test::add_wall(w, 10.0, 3, 1);  // one row, 0.4 m: a wall (>= h_pile) below h_min
   EXPECT_EQ(decide(w), Action::PickLowCenter);
-  w.boxes.push_back(test::make_box(50, 9.5, 0.0, 0.0, {0.2, 0.4, 0.2}));  // a thin pile
-  EXPECT_EQ(decide(w), Action::SweepLow);
+  // A pile too shallow to sweep in front of it: its top box is picked.
+  w.boxes.push_back(test::make_box(50, 9.5, 0.6, 0.0, {0.2, 0.4, 0.2}));
+  EXPECT_EQ(decide(w), Action::PickLowLeft);
 }
 
 TEST_F(Hardcoded, RefusesEmptyAndBadWorlds) {
