@@ -26,6 +26,10 @@ namespace {
 
 using msg::Suction;
 
+// How far (rad or m, any joint) a trajectory may start from the robot's
+// configuration: planners start from the observed one, exactly.
+constexpr double kStartTolerance = 1e-4;
+
 // Where the robot starts: base front edge at the trailer's open rear, arm
 // folded, nose raised (see docs/notes-planner.md).
 sim::Config home_configuration() {
@@ -233,6 +237,16 @@ class SimulatorNode : public Node {
           return make_error(PLR_ERR_INVALID, "sim/execute: trajectory times must not decrease");
         points.emplace_back(p->time_s(), q);
       }
+    }
+    // A trajectory planned from another state would make the robot jump: a
+    // robot controller refuses it, and so does the simulator.
+    if (!points.empty()) {
+      const double off = (points.front().second - robot_.q).cwiseAbs().maxCoeff();
+      if (off > kStartTolerance)
+        return make_error(PLR_ERR_STATE,
+                          fmt::format("sim/execute: the trajectory starts {:.4f} (rad or m) away "
+                                      "from the robot's configuration",
+                                      off));
     }
     const auto before = sim_->world();
     const auto events_before = sim_->unloaded().size();

@@ -247,6 +247,7 @@ class ExecutorNode : public plr::Node {
     }
     Observed o;
     o.message = std::move(r.value());
+    check_clock(static_cast<double>(o.message->stamp_ns()) * 1e-9, "sim/observe");
     o.message->UnPackTo(&o.state);
     o.world = sim::world_from_message(*o.message);
     if (o.state.robot && o.state.robot->positions.size() == sim::kNumJoints)
@@ -255,6 +256,19 @@ class ExecutorNode : public plr::Node {
     o.held = o.state.held_box_ids;
     o.unloaded = o.state.boxes_unloaded;
     return o;
+  }
+
+  // A simulator host restarted between two calls resumes from its checkpoint,
+  // with its clock set back: the same as a call it failed.
+  void check_clock(double sim_time_s, const char* service) {
+    if (sim_time_s + 1e-9 < sim_clock_s_) {
+      const double seen = sim_clock_s_;
+      sim_clock_s_ = -1.0;
+      throw SimulatorLost{
+          fmt::format("{}: the simulator's clock went back from {:.2f} s to {:.2f} s", service,
+                      seen, sim_time_s)};
+    }
+    sim_clock_s_ = sim_time_s;
   }
 
   // Waits for the simulator to answer (at start, and after its host restarted).
@@ -414,6 +428,7 @@ class ExecutorNode : public plr::Node {
       return std::nullopt;
     }
     const auto& out = r.value();
+    check_clock(out->sim_time_s(), "sim/execute");
     run.exec_s += (trajectory.points.empty() ? 0.0 : trajectory.points.back()->time_s) + settle_s;
     run.contacts += out->robot_trailer_contacts();
     run.sim_time_s = out->sim_time_s();
@@ -502,6 +517,12 @@ class ExecutorNode : public plr::Node {
     return Goal{
         {{sim::kNose1, n[0] + lift}, {sim::kNose2, n[1]}, {sim::kNose3, n[2]}}, std::nullopt, {}};
   }
+  Goal arm_clear() {
+    return joints({{sim::kArm1, arm_clear_[0]},
+                   {sim::kArm2, arm_clear_[1]},
+                   {sim::kArm3, arm_clear_[2]},
+                   {sim::kArm4, arm_clear_[3]}});
+  }
   Goal pose(const sim::PlateTarget& t, std::vector<sim::PlateTarget> then = {}) {
     return Goal{{}, t, std::move(then)};
   }
@@ -520,6 +541,7 @@ class ExecutorNode : public plr::Node {
       return;
     }
     const PickCandidate* chosen = nullptr;
+    bool delivered = false;
     for (const auto& c : candidates) {
       // Nose down before anything else in reach of the boxes moves; a pile in
       // front may leave only a lifted nose possible.
@@ -567,23 +589,28 @@ class ExecutorNode : public plr::Node {
         run.failed_grasp = true;
         log().info("{}: box {} dropped while retracting", action_name_, chosen->box);
       }
-      if (!w.held.empty()) drop_off(w, run);
+      if (!w.held.empty()) delivered = drop_off(w, run);
     }
-    // The folded arm leaves the belt free, and the nose room to rise.
-    step("arm clear", PlanMode::kArm,
-         joints({{sim::kArm1, arm_clear_[0]},
-                 {sim::kArm2, arm_clear_[1]},
-                 {sim::kArm3, arm_clear_[2]},
-                 {sim::kArm4, arm_clear_[3]}}),
-         Suction::Keep, Suction::Keep, run);
-    step("nose home", PlanMode::kNose, nose(nose_home_), Suction::Keep, Suction::Keep, run);
+    // After a delivered box the robot stays as it is, nose down and the arm
+    // over the belt: the next pick starts from there (its nose-down step is
+    // then already done). Otherwise it stows and backs away, so that the next
+    // action starts from a known, clear pose.
+    if (delivered) return;
+    stow(run);
     const Observed w = observe();
     step("base back", PlanMode::kBaseLine, joints({{sim::kBaseX, w.q[sim::kBaseX] - retreat_m_}}),
          Suction::Keep, Suction::Keep, run);
   }
 
-  // Releases what the plate holds over the nose's conveyor.
-  void drop_off(const Observed& w, ActionRun& run) {
+  // The folded arm leaves the belt free, and the nose room to rise.
+  void stow(ActionRun& run) {
+    step("arm clear", PlanMode::kArm, arm_clear(), Suction::Keep, Suction::Keep, run);
+    step("nose home", PlanMode::kNose, nose(nose_home_), Suction::Keep, Suction::Keep, run);
+  }
+
+  // Releases what the plate holds over the nose's conveyor; false when no
+  // drop-off place could be reached.
+  bool drop_off(const Observed& w, ActionRun& run) {
     // Room for the arm to swing the box down to the nose: back away from
     // the structure first.
     step("back off", PlanMode::kBaseLine,
@@ -604,9 +631,11 @@ class ExecutorNode : public plr::Node {
     const Observed at = observe();
     for (const auto& drop :
          dropoff_targets(at.world, at.held, robot_, geometry_, at.q, max_candidates_)) {
-      if (step("drop-off", PlanMode::kArm, pose(drop), Suction::Keep, Suction::Off, run)) return;
+      if (step("drop-off", PlanMode::kArm, pose(drop), Suction::Keep, Suction::Off, run))
+        return true;
     }
     log().warn("{}: no drop-off pose could be planned", action_name_);
+    return false;
   }
 
   void sweep(sim::Action action, const Observed& w0, ActionRun& run) {
@@ -617,6 +646,9 @@ class ExecutorNode : public plr::Node {
       log().info("{}: no pile in front to sweep", action_name_);
       return;
     }
+    // A pick may have left the arm over the belt: fold it before the scoop
+    // brings boxes up.
+    step("arm clear", PlanMode::kArm, arm_clear(), Suction::Keep, Suction::Keep, run);
     if (step("back up", PlanMode::kBaseLine, joints({{sim::kBaseX, plan->start_base_x}}),
              Suction::Keep, Suction::Keep, run) &&
         step("nose down", PlanMode::kNose, nose(nose_sweep_, plan->lift), Suction::Keep,
@@ -663,10 +695,12 @@ class ExecutorNode : public plr::Node {
   void recover(const std::string& why) {
     log().warn("simulator lost ({}); waiting for it to restart", why);
     report_progress("waiting for the simulator");
+    sim_clock_s_ = -1.0;  // the restart set it back
     wait_for_simulator();
     // Going on without it would unload a world that is not the trailer's.
     if (const auto why = snapshot_or_restore("sim/restore"); !why.empty())
       throw std::runtime_error("sim/restore 'checkpoint': " + why);
+    sim_clock_s_ = -1.0;  // and so did the restore
     stats_.robot_time_s = checkpoint_robot_time_;
     stats_.curve.resize(checkpoint_curve_);
     ++stats_.recoveries;
@@ -919,6 +953,7 @@ class ExecutorNode : public plr::Node {
   RunStats stats_;
   std::string action_name_;
   std::vector<std::uint32_t> last_held_;
+  double sim_clock_s_ = -1.0;          // the simulator's clock when last heard, s
   double carry_height_m_ = 1.4;        // plate height a load is lowered to before the drop-off
   std::set<std::uint32_t> ungripped_;  // boxes whose grasp failed since the last unloaded box
   msg::PlanStatus last_status_ = msg::PlanStatus::Solved;

@@ -121,6 +121,15 @@ TEST_F(SimulatorService, BadTrajectoriesAreRefusedWithTheReason) {
   const auto backwards = execute({home(), home()}, {0.5, 0.1});
   ASSERT_FALSE(backwards);
   EXPECT_EQ(backwards.error().message, "sim/execute: trajectory times must not decrease");
+  // Planned from another state: the robot would jump to its first point.
+  auto elsewhere = home();
+  elsewhere[0] += 0.5;
+  const auto jump = execute({elsewhere, elsewhere}, {0.0, 0.1});
+  ASSERT_FALSE(jump);
+  EXPECT_EQ(jump.error().code, PLR_ERR_STATE);
+  EXPECT_EQ(jump.error().message,
+            "sim/execute: the trajectory starts 0.5000 (rad or m) away from the robot's "
+            "configuration");
 }
 
 TEST_F(SimulatorService, RestoreThroughTheServiceGoesBackInTime) {

@@ -47,7 +47,8 @@ class FakeSim {
         [this](const msg::ObserveRequest&, flatbuffers::FlatBufferBuilder& fbb) -> Status {
           if (down_ && --observes_while_down < 0) down_ = false;
           if (down_) return make_error(PLR_ERR_UNAVAILABLE, "no provider");
-          fbb.Finish(test::pack_world(fbb, s_.world, joints(), s_.held, s_.unloaded));
+          // Stamped with the simulated clock, as the simulator does.
+          fbb.Finish(test::pack_world(fbb, s_.world, joints(), s_.held, s_.unloaded, s_.t));
           return {};
         });
     k.fake_service<msg::ExecuteRequest, msg::ExecuteOutcome>(
@@ -76,6 +77,9 @@ class FakeSim {
 
   bool suction_works = true;
   int crash_at_execute = -1;  // the n-th execute dies with the host
+  // After the n-th execute the host dies and restarts unseen, between two
+  // calls: it resumes from its checkpoint on disk, clock and all.
+  int restart_after_execute = -1;
   int observes_while_down = 3;
 
   const SimState& state() const { return s_; }
@@ -109,6 +113,7 @@ class FakeSim {
     std::vector<std::uint32_t> none;
     fbb.Finish(msg::CreateExecuteOutcomeDirect(fbb, true, "", s_.t, &none, &none, &s_.held, 0,
                                                static_cast<std::uint32_t>(s_.world.boxes.size())));
+    if (executes_ == restart_after_execute) s_ = snapshots_.at("checkpoint");
     return {};
   }
 
@@ -368,6 +373,21 @@ TEST_F(Executor, RepeatsTheActionASimulatorCrashInterrupted) {
   EXPECT_EQ(restores[0].as<msg::SnapshotRequest>()->name()->str(), "checkpoint");
   EXPECT_EQ(report["recoveries"], 1);
   // No box appeared or vanished.
+  EXPECT_EQ(report["boxes_unloaded"], 6);
+  EXPECT_EQ(sim.state().unloaded + sim.state().world.boxes.size(), 6u);
+}
+
+TEST_F(Executor, NoticesASimulatorThatRestartedBetweenCalls) {
+  // No call fails: the executor sees the simulator's clock go back.
+  FakeSim sim(small_wall());
+  sim.restart_after_execute = 14;  // inside the second pick, after its checkpoint
+  FakePlanner planner;
+  sim.serve(kernel_);
+  planner.serve(kernel_);
+  const auto report = run();
+  EXPECT_TRUE(done_ok_) << done_reason_;
+  EXPECT_EQ(report["recoveries"], 1);
+  EXPECT_EQ(sim.restores(), 1);
   EXPECT_EQ(report["boxes_unloaded"], 6);
   EXPECT_EQ(sim.state().unloaded + sim.state().world.boxes.size(), 6u);
 }

@@ -34,7 +34,8 @@ inline flatbuffers::Offset<msg::WorldState> pack_world(flatbuffers::FlatBufferBu
                                                        const sim::World& w,
                                                        const std::vector<double>& joints = {},
                                                        const std::vector<std::uint32_t>& held = {},
-                                                       std::uint32_t unloaded = 0) {
+                                                       std::uint32_t unloaded = 0,
+                                                       double sim_time_s = 0.0) {
   const msg::Vec3 size(w.trailer.width, w.trailer.height, w.trailer.depth);
   std::vector<msg::BoxState> boxes;
   for (const auto& b : w.boxes) {
@@ -45,7 +46,8 @@ inline flatbuffers::Offset<msg::WorldState> pack_world(flatbuffers::FlatBufferBu
         msg::Pose(msg::Vec3(p.x(), p.y(), p.z()), msg::Quat(q.x(), q.y(), q.z(), q.w())), b.mass);
   }
   const auto robot = msg::CreateJointStateDirect(fbb, &joints);
-  return msg::CreateWorldStateDirect(fbb, 0, &size, nullptr, 0.05, &boxes, robot, &held, unloaded);
+  return msg::CreateWorldStateDirect(fbb, static_cast<std::int64_t>(sim_time_s * 1e9), &size,
+                                     nullptr, 0.05, &boxes, robot, &held, unloaded);
 }
 
 inline std::vector<std::uint8_t> world_bytes(const sim::World& w) {
