@@ -53,10 +53,19 @@ Kernel::Kernel(Config config, std::string host, std::string run_id)
 
 Kernel::~Kernel() {
   stop();
-  if (dds_) bus_.detach(dds_.get());
-  dds_.reset();
-  if (bridge_) bus_.detach(bridge_.get());
-  bridge_.reset();
+  // Taken out under the lock, destroyed outside it: the DDS bridge joins its
+  // heartbeat thread, which may be waiting for the lock in telemetry_json().
+  std::unique_ptr<DdsBridge> dds;
+  std::unique_ptr<ShmBridge> bridge;
+  {
+    std::lock_guard lock(transports_mutex_);
+    dds = std::move(dds_);
+    bridge = std::move(bridge_);
+  }
+  if (dds) bus_.detach(dds.get());
+  dds.reset();
+  if (bridge) bus_.detach(bridge.get());
+  bridge.reset();
   bus_.remove_endpoint(internal_.get());
   internal_->executor().drain();
 }
@@ -76,8 +85,10 @@ Expected<std::unique_ptr<NodeInstance>> Kernel::bring_up(const NodeConfig& confi
 Status Kernel::start() {
   const auto hosts = hosts_with_nodes(config_);
   if (!run_id_.empty() && hosts.size() > 1 && !bridge_) {
-    bridge_ = std::make_unique<ShmBridge>(bus_, config_, host_, hosts, run_id_);
-    bus_.attach(bridge_.get());
+    auto bridge = std::make_unique<ShmBridge>(bus_, config_, host_, hosts, run_id_);
+    bus_.attach(bridge.get());
+    std::lock_guard lock(transports_mutex_);
+    bridge_ = std::move(bridge);
   }
   // Other machines: after shared memory, so calls try this machine's hosts first.
   if (config_.dds.enabled && host_ == "main" && !dds_) {
@@ -93,8 +104,10 @@ Status Kernel::start() {
           return make_error(PLR_ERR_INVALID, "unknown remote command '" + text("cmd") + "'");
         });
     if (!dds) return dds.error();
+    bus_.attach(dds->get());
+    // Its heartbeat thread runs already, and reads dds_ in telemetry_json().
+    std::lock_guard lock(transports_mutex_);
     dds_ = std::move(*dds);
-    bus_.attach(dds_.get());
   }
   if (config_.clock == "sim")
     if (auto s = follow_sim_clock(); !s) return s;
@@ -290,6 +303,7 @@ std::string Kernel::telemetry_json() {
   for (const auto& s : bus_.services())
     j["services"].push_back({{"name", s.name}, {"providers", s.providers}});
   j["invalid_messages"] = bus_.invalid_total();
+  std::lock_guard lock(transports_mutex_);
   if (bridge_) j["shm"] = bridge_->stats();
   if (dds_) j["dds"] = dds_->stats();
   return j.dump();

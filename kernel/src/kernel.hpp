@@ -95,6 +95,11 @@ class Kernel {
   Bus bus_;
   std::vector<std::unique_ptr<Slot>> slots_;
   std::unique_ptr<Internal> internal_;
+  // Set and cleared on the thread that starts and destroys the kernel, under
+  // `transports_mutex_`: telemetry_json() reads them from the control-socket
+  // and DDS heartbeat threads, which run before start() sets them and until
+  // the DDS bridge is destroyed.
+  std::mutex transports_mutex_;
   std::unique_ptr<class ShmBridge> bridge_;
   std::unique_ptr<class DdsBridge> dds_;  // main host only, when remote.dds is configured
   // Kernel-side subscriptions (clock, pipeline/done), alive as long as the kernel.
