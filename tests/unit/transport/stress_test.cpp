@@ -18,6 +18,15 @@ using namespace std::chrono_literals;
 constexpr std::uint64_t kMessages = 1'000'000;
 constexpr int kSubscribers = 3;
 constexpr std::size_t kPayload = 64;
+// A subscriber that is still running after this is taken for deadlocked and
+// killed by an alarm. Under ThreadSanitizer the run is 5-10 times slower: on
+// two loaded cores it took 24-48 s, and past 50 s it was killed while still
+// making progress. Both stay below the test's ctest timeout (120 s).
+#if defined(__SANITIZE_THREAD__)
+constexpr unsigned kChildAlarmSeconds = 100;
+#else
+constexpr unsigned kChildAlarmSeconds = 50;
+#endif
 
 // Resident set of a process in KiB, from /proc/<pid>/status.
 long rss_kib(pid_t pid) {
@@ -77,10 +86,15 @@ TEST(StressTest, FourProcessesMillionMessagesReliable) {
           exit_now.wait();
           return 0;
         },
-        /*alarm_seconds=*/50);
+        kChildAlarmSeconds);
     ASSERT_GT(kid, 0);
   }
-  for (int i = 0; i < kSubscribers; ++i) ASSERT_EQ(ready.wait(), 'x');
+  // Only the children write to these: a subscriber that fails or is killed
+  // then ends our wait (0, end-of-file) instead of leaving us blocked.
+  ready.close_write();
+  done.close_write();
+  for (int i = 0; i < kSubscribers; ++i)
+    ASSERT_EQ(ready.wait(), 'x') << "a subscriber exited before it was ready";
   ASSERT_EQ(pub->subscriber_count(), static_cast<std::size_t>(kSubscribers));
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -95,7 +109,9 @@ TEST(StressTest, FourProcessesMillionMessagesReliable) {
       ASSERT_EQ(segment_bytes(run), ring_bytes) << "memory must not grow";
     }
   }
-  for (int i = 0; i < kSubscribers; ++i) ASSERT_EQ(done.wait(), 'x');
+  for (int i = 0; i < kSubscribers; ++i)
+    ASSERT_EQ(done.wait(), 'x') << "a subscriber exited (or was killed by its alarm, "
+                                << kChildAlarmSeconds << " s) before it had all messages";
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("%llu messages to %d processes in %.2f s (%.0f msg/s)\n",
               static_cast<unsigned long long>(kMessages), kSubscribers, secs, kMessages / secs);

@@ -54,6 +54,13 @@ struct Pipe {
     }
   }
   void signal(char c = 'x') const { (void)!::write(fd[1], &c, 1); }
+  // For a pipe only children write to: once the parent has closed its own
+  // write end, wait() sees end-of-file when every child has exited, instead
+  // of blocking for ever on a child that died without signalling.
+  void close_write() {
+    if (fd[1] >= 0) ::close(fd[1]);
+    fd[1] = -1;
+  }
   // Returns the byte, or 0 if the writer closed the pipe.
   char wait() const {
     char c = 0;
