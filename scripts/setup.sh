@@ -2,8 +2,7 @@
 # Installs the Debian packages PLR needs (only those missing), then configures
 # and builds into build/. Extra arguments go to CMake's configure step.
 #   --asan  builds into build-asan/ with AddressSanitizer + UBSan (every test)
-#   --tsan  builds into build-tsan/ with ThreadSanitizer; only the in-process
-#           suites (kernel, SDK, transport, remote, planner) are built as tests
+#   --tsan  builds into build-tsan/ with ThreadSanitizer (every test)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -11,11 +10,7 @@ build_dir=build
 sanitizer=()
 case "${1:-}" in
   --asan) build_dir=build-asan sanitizer=(-DPLR_ASAN=ON) && shift ;;
-  --tsan)
-    build_dir=build-tsan
-    sanitizer=(-DPLR_TSAN=ON "-DPLR_TEST_AREAS=unit/sdk;unit/kernel;unit/transport;unit/remote;unit/planner")
-    shift
-    ;;
+  --tsan) build_dir=build-tsan sanitizer=(-DPLR_TSAN=ON) && shift ;;
 esac
 
 packages=(

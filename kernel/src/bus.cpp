@@ -7,6 +7,11 @@
 
 namespace plr::kernel {
 
+namespace {
+// Callers whose reply callbacks this thread is running, innermost last.
+thread_local std::vector<const Endpoint*> t_replying;
+}  // namespace
+
 using Clock = std::chrono::steady_clock;
 
 struct Bus::Topic {
@@ -370,14 +375,20 @@ void Bus::complete(std::uint64_t id, plr_status status, plr_msg* reply, const st
   {
     std::lock_guard lock(m_);
     if (!erase_pending_locked(id, &p)) return;  // someone else completed it first
+    ++replying_[p.caller];
   }
-  if (status == PLR_OK && r.msg == nullptr) {
-    status = PLR_ERR_INTERNAL;
-    p.fn(p.user, status, nullptr, "provider answered without a reply");
-    return;
+  t_replying.push_back(p.caller);
+  if (status == PLR_OK && r.msg == nullptr)
+    p.fn(p.user, PLR_ERR_INTERNAL, nullptr, "provider answered without a reply");
+  else
+    p.fn(p.user, status, status == PLR_OK ? r.msg : nullptr,
+         status == PLR_OK ? nullptr : (error.empty() ? "call failed" : error.c_str()));
+  t_replying.pop_back();
+  {
+    std::lock_guard lock(m_);
+    if (--replying_[p.caller] == 0) replying_.erase(p.caller);
   }
-  p.fn(p.user, status, status == PLR_OK ? r.msg : nullptr,
-       status == PLR_OK ? nullptr : (error.empty() ? "call failed" : error.c_str()));
+  replied_.notify_all();
 }
 
 void Bus::timer_loop() {
@@ -457,6 +468,15 @@ void Bus::remove_endpoint(Endpoint* e) {
   }
   for (const auto& [id, why] : failed) complete(id, PLR_ERR_UNAVAILABLE, nullptr, why);
   for (auto id : cancelled) complete(id, PLR_ERR_CANCELLED, nullptr, "caller went away");
+  // A reply taken off pending_ just before may still be running e's
+  // callback on a transport's thread: e's code must outlive it. Callbacks
+  // this thread is inside of itself are not waited for.
+  const auto own = std::count(t_replying.begin(), t_replying.end(), e);
+  std::unique_lock lock(m_);
+  replied_.wait(lock, [&] {
+    const auto it = replying_.find(e);
+    return it == replying_.end() || it->second <= own;
+  });
 }
 
 void Bus::attach(Link* link) {

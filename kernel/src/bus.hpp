@@ -158,6 +158,10 @@ class Bus {
   std::atomic<std::uint64_t> invalid_total_{0};
   std::vector<Link*> links_;  // tried in order for calls: local transports first
 
+  // Reply callbacks running now, per caller (complete() runs them unlocked).
+  std::unordered_map<const Endpoint*, std::ptrdiff_t> replying_;
+  std::condition_variable replied_;
+
   std::condition_variable timer_cv_;
   bool stop_ = false;
   std::thread timer_;

@@ -40,7 +40,8 @@ TEST(Physics, BoxRestsOnFloor) {
   w.boxes[0].pose.translation().z() = 0.5;
   Simulation sim(w);
   EXPECT_GE(sim.settle(3.0), 0.0);
-  const Box& b = sim.world().boxes[0];
+  const World settled = sim.world();  // a copy: keep it alive for the reference
+  const Box& b = settled.boxes[0];
   EXPECT_NEAR(b.pose.translation().z(), 0.2, 0.002);
   EXPECT_NEAR(b.pose.translation().x(), 10.0, 0.002);
 }

@@ -111,7 +111,8 @@ TEST(PickCandidates, ATurnedBoxIsFacedSquarely) {
   sim::Box b = test::make_box(1, 10.2, 0.3, 0.0);
   b.pose.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   w.boxes.push_back(b);
-  const PickCandidate* k = find(candidates(w), 1);
+  const std::vector<PickCandidate> c = candidates(w);
+  const PickCandidate* k = find(c, 1);
   ASSERT_NE(k, nullptr);
   EXPECT_NEAR(k->grasp.yaw, 0.3, 1e-9);
   // Pre-grasp, grasp and retract lie on the face's normal.
