@@ -257,6 +257,36 @@ TEST_F(BusTest, ProviderGoingAwayFailsItsPendingCalls) {
   }
 }
 
+// A reply already taken off the pending table runs the caller's callback
+// unlocked (here on the provider's thread, as the shared-memory bridge's
+// reply thread does). Removing the caller meanwhile must wait for it: the
+// caller's code and memory go right after.
+struct SlowReply {
+  std::atomic<bool> entered{false}, done{false};
+  static void on(void* user, plr_status, const plr_msg*, const char*) {
+    auto* self = static_cast<SlowReply*>(user);
+    self->entered = true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    self->done = true;
+  }
+};
+
+TEST_F(BusTest, RemovingACallerWaitsForItsReplyCallbackToReturn) {
+  Silent s;
+  ASSERT_TRUE(bus_->provide(&b_, "slow", kDoubleReq, kDoubleRep, &Silent::on, &s));
+  SlowReply r;
+  ASSERT_TRUE(bus_->call(&a_, "slow", kDoubleReq, make_double_request(1), std::chrono::seconds(5),
+                         &SlowReply::on, &r, nullptr));
+  settle();
+  ASSERT_EQ(s.tokens.size(), 1u);
+  std::thread replier(
+      [&] { EXPECT_TRUE(bus_->respond(s.tokens[0], PLR_OK, make_double_request(2), "")); });
+  while (!r.entered) std::this_thread::yield();
+  bus_->remove_endpoint(&a_);
+  EXPECT_TRUE(r.done);
+  replier.join();
+}
+
 TEST_F(BusTest, NonLiveEndpointsGetNothing) {
   Received rb;
   auto pub = bus_->advertise(&a_, "count", kCount, 1);
