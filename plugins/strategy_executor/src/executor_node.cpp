@@ -668,9 +668,9 @@ class ExecutorNode : public plr::Node {
 
   sim::Strategy ask_strategy(const Observed& w, sim::Observation observation) {
     const auto view = w.message.view();
-    const std::vector<std::uint8_t> bytes(view.data, view.data + view.size);
     flatbuffers::FlatBufferBuilder fbb;
-    fbb.Finish(msg::CreateNextStrategyRequestDirect(fbb, &bytes, observation));
+    const auto world = plr::create_nested(fbb, view.data, view.size);
+    fbb.Finish(msg::CreateNextStrategyRequest(fbb, world, observation));
     auto r =
         call_retry<msg::NextStrategyRequest, msg::NextStrategyReply>("strategy/next", fbb, 30.0);
     if (!r) throw std::runtime_error("strategy/next: " + r.error().message);

@@ -48,10 +48,11 @@ class HardcodedStrategy : public plr::Node {
     const auto* bytes = request.world();
     if (bytes == nullptr || bytes->size() == 0)
       return plr::make_error(PLR_ERR_INVALID, "strategy/next: request carries no world");
-    if (!plr::verify<plr::msg::WorldState>(bytes->data(), bytes->size()))
+    std::vector<std::uint64_t> aligned;
+    const auto* state = plr::read_nested<plr::msg::WorldState>(bytes, aligned);
+    if (state == nullptr)
       return plr::make_error(PLR_ERR_INVALID, "strategy/next: world is not a valid WorldState");
-    const auto world =
-        plr::sim::world_from_message(*flatbuffers::GetRoot<plr::msg::WorldState>(bytes->data()));
+    const auto world = plr::sim::world_from_message(*state);
     const auto scene = plr::sim::analyse(world, obs_);
     if (!scene.observation)
       return plr::make_error(PLR_ERR_INVALID, "strategy/next: the trailer is empty");

@@ -6,8 +6,10 @@
 #include <flatbuffers/flatbuffers.h>
 
 #include <cstdint>
+#include <cstring>
 #include <string_view>
 #include <utility>
+#include <vector>
 
 namespace plr {
 
@@ -38,6 +40,34 @@ bool verify(const std::uint8_t* data, std::size_t size) {
     return false;
   flatbuffers::Verifier verifier(data, size);
   return verifier.VerifyBuffer<T>(nullptr);
+}
+
+// A message nested in a [ubyte] field of another. Its structs of doubles are
+// read in place, so its bytes must start on an 8-byte boundary: FlatBuffers
+// aligns a byte vector to 4 only, so writers force 8 and readers copy a
+// misaligned buffer (from a foreign writer) before reading it.
+inline constexpr std::size_t kNestedAlignment = 8;
+
+inline flatbuffers::Offset<flatbuffers::Vector<std::uint8_t>> create_nested(
+    flatbuffers::FlatBufferBuilder& fbb, const std::uint8_t* data, std::size_t size) {
+  fbb.ForceVectorAlignment(size, sizeof(std::uint8_t), kNestedAlignment);
+  return fbb.CreateVector(data, size);
+}
+
+// The verified T nested in `bytes`, or nullptr when absent or invalid.
+// `storage` keeps an aligned copy when one is needed: it must outlive the result.
+template <class T>
+const T* read_nested(const flatbuffers::Vector<std::uint8_t>* bytes,
+                     std::vector<std::uint64_t>& storage) {
+  if (bytes == nullptr) return nullptr;
+  const std::uint8_t* data = bytes->data();
+  const std::size_t size = bytes->size();
+  if (reinterpret_cast<std::uintptr_t>(data) % kNestedAlignment != 0) {
+    storage.assign((size + sizeof(std::uint64_t) - 1) / sizeof(std::uint64_t), 0);
+    std::memcpy(storage.data(), data, size);
+    data = reinterpret_cast<const std::uint8_t*>(storage.data());
+  }
+  return verify<T>(data, size) ? flatbuffers::GetRoot<T>(data) : nullptr;
 }
 
 // A reference to a received message; copies share the kernel's buffer.
