@@ -642,15 +642,16 @@ bool DdsBridge::send_call(RemoteCall call) {
   }
   // A fresh correlation id: a late answer from a provider given up on is ignored.
   const auto v = msg_view(call.request.msg);
-  if (!write(request_writer_, target, call.service, EnvelopeKind::kRequest, v.type_id,
-             v.schema_version, corr, 0, v.data, v.size)) {
+  if (const auto rc = write(request_writer_, target, call.service, EnvelopeKind::kRequest,
+                            v.type_id, v.schema_version, corr, 0, v.data, v.size);
+      rc < 0) {
     {
       std::lock_guard lock(m_);
       calls_.erase(corr);
     }
-    (void)bus_.respond(
-        call.bus_id, PLR_ERR_UNAVAILABLE, nullptr,
-        fmt::format("service '{}' on kernel '{}': DDS write failed", call.service, target));
+    (void)bus_.respond(call.bus_id, PLR_ERR_UNAVAILABLE, nullptr,
+                       fmt::format("service '{}' on kernel '{}': DDS write failed ({})",
+                                   call.service, target, dds_strretcode(rc)));
   }
   return true;
 }
@@ -706,10 +707,10 @@ void DdsBridge::on_command(const plr_dds_Envelope& e) {
   });
 }
 
-bool DdsBridge::write(dds_entity_t writer, const std::string& target, const std::string& name,
-                      EnvelopeKind kind, std::uint64_t type_id, std::uint32_t version,
-                      std::uint64_t corr, std::int32_t status, const std::uint8_t* data,
-                      std::size_t size) {
+dds_return_t DdsBridge::write(dds_entity_t writer, const std::string& target,
+                              const std::string& name, EnvelopeKind kind, std::uint64_t type_id,
+                              std::uint32_t version, std::uint64_t corr, std::int32_t status,
+                              const std::uint8_t* data, std::size_t size) {
   plr_dds_Envelope e{};
   e.kernel = const_cast<char*>(kernel_id_.c_str());
   e.target = const_cast<char*>(target.c_str());
@@ -723,12 +724,9 @@ bool DdsBridge::write(dds_entity_t writer, const std::string& target, const std:
   e.payload._length = static_cast<std::uint32_t>(size);
   e.payload._maximum = static_cast<std::uint32_t>(size);
   e.payload._release = false;
-  if (dds_write(writer, &e) < 0) {
-    send_failures_.fetch_add(1, std::memory_order_relaxed);
-    return false;
-  }
-  sent_.fetch_add(1, std::memory_order_relaxed);
-  return true;
+  const dds_return_t rc = dds_write(writer, &e);
+  (rc < 0 ? send_failures_ : sent_).fetch_add(1, std::memory_order_relaxed);
+  return rc;
 }
 
 void DdsBridge::heartbeat_loop() {

@@ -140,9 +140,11 @@ class DdsBridge final : public Endpoint, public Link {
   struct RemoteCall;
   // Sends `call` to a live provider it has not tried yet; false when there is none.
   bool send_call(RemoteCall call);
-  bool write(dds_entity_t writer, const std::string& target, const std::string& name,
-             EnvelopeKind kind, std::uint64_t type_id, std::uint32_t version, std::uint64_t corr,
-             std::int32_t status, const std::uint8_t* data, std::size_t size);
+  // DDS_RETCODE_OK, or why the sample was not written.
+  dds_return_t write(dds_entity_t writer, const std::string& target, const std::string& name,
+                     EnvelopeKind kind, std::uint64_t type_id, std::uint32_t version,
+                     std::uint64_t corr, std::int32_t status, const std::uint8_t* data,
+                     std::size_t size);
   void invalid(const char* why, const std::string& from);
   Reader* add_reader(dds_entity_t topic, const dds_qos_t* qos, int kind, std::string bus_topic,
                      std::uint64_t type_id);
