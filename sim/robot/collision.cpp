@@ -82,9 +82,10 @@ struct WorldBox {
 };
 
 // Occupied octree leaves counted in a 3-D prefix-sum table at the octree's
-// resolution: whether an AABB overlaps any occupied voxel is eight lookups.
-// Shapes whose AABB touches none cannot hit the octree, which spares FCL's
-// descent from the root for links in free space (most checks).
+// resolution: how many occupied voxels a block of cells holds is eight
+// lookups. A shape whose box meets no occupied cell cannot hit the octree,
+// which spares FCL's descent from the root for links in free space and for
+// links beside a wall or the floor but not touching it (most checks).
 class OccupancyGrid {
  public:
   explicit OccupancyGrid(const octomap::OcTree& tree) {
@@ -96,6 +97,7 @@ class OccupancyGrid {
     // Voxel-sized cells, coarser if the table would get large.
     cell_ = tree.getResolution();
     while ((span / cell_).prod() > 2e7) cell_ *= 2.0;
+    voxel_sized_ = cell_ == tree.getResolution();
     for (int i = 0; i < 3; ++i)
       dims_[i] = std::max(1, static_cast<int>(std::ceil(span[i] / cell_ - 1e-9)));
     sum_.assign(static_cast<std::size_t>(dims_[0] + 1) * (dims_[1] + 1) * (dims_[2] + 1), 0);
@@ -122,16 +124,65 @@ class OccupancyGrid {
     }
   }
 
-  bool mayHit(const fcl::AABBd& box) const {
+  // One cell per voxel (the table was not coarsened to fit in memory).
+  bool voxelSized() const { return voxel_sized_; }
+
+  // Whether `shape`, an oriented box within `bounds`, meets an occupied
+  // cell: the block of cells under `bounds` is halved, longest side first,
+  // while a part holds occupied cells and its box meets the shape.
+  bool mayHit(const fcl::OBBd& shape, const fcl::AABBd& bounds) const {
     Eigen::Vector3i lo, hi;
-    if (!range(box.min_, box.max_, lo, hi)) return false;
-    const int x0 = lo[0], y0 = lo[1], z0 = lo[2], x1 = hi[0] + 1, y1 = hi[1] + 1, z1 = hi[2] + 1;
-    const std::int64_t n = get(x1, y1, z1) - get(x0, y1, z1) - get(x1, y0, z1) - get(x1, y1, z0) +
-                           get(x0, y0, z1) + get(x0, y1, z0) + get(x1, y0, z0) - get(x0, y0, z0);
-    return n > 0;
+    return range(bounds.min_, bounds.max_, lo, hi) && occupiedTouching(shape, lo, hi);
   }
 
  private:
+  bool occupiedTouching(const fcl::OBBd& shape, Eigen::Vector3i lo, Eigen::Vector3i hi) const {
+    if (occupied(lo, hi) == 0) return false;
+    // Shrunk to its occupied cells first: a block of floor under a link
+    // just above it is then one thin slab, apart from the link.
+    for (int a = 0; a < 3; ++a) {
+      int l = lo[a], r = hi[a];  // the first occupied slice along a
+      while (l < r) {
+        Eigen::Vector3i upto = hi;
+        upto[a] = l + (r - l) / 2;
+        if (occupied(lo, upto) > 0)
+          r = upto[a];
+        else
+          l = upto[a] + 1;
+      }
+      lo[a] = l;
+      for (r = hi[a]; l < r;) {  // the last one
+        Eigen::Vector3i from = lo;
+        from[a] = l + (r - l + 1) / 2;
+        if (occupied(from, hi) > 0)
+          l = from[a];
+        else
+          r = from[a] - 1;
+      }
+      hi[a] = l;
+    }
+    const Eigen::Vector3d cells = (hi - lo + Eigen::Vector3i::Ones()).cast<double>() * cell_;
+    fcl::OBBd block;
+    block.axis.setIdentity();
+    block.extent = cells / 2.0;
+    block.To = origin_ + lo.cast<double>() * cell_ + block.extent;
+    if (!block.overlap(shape)) return false;
+    // A solid block (a stretch of wall or floor) met by the shape is a hit.
+    if (occupied(lo, hi) == (hi - lo + Eigen::Vector3i::Ones()).prod()) return true;
+    int axis = 0;
+    const int span = (hi - lo).maxCoeff(&axis);
+    Eigen::Vector3i first_hi = hi, second_lo = lo;
+    first_hi[axis] = lo[axis] + span / 2;
+    second_lo[axis] = first_hi[axis] + 1;
+    return occupiedTouching(shape, lo, first_hi) || occupiedTouching(shape, second_lo, hi);
+  }
+  // Occupied cells in the block [lo, hi].
+  std::int64_t occupied(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi) const {
+    const int x0 = lo[0], y0 = lo[1], z0 = lo[2], x1 = hi[0] + 1, y1 = hi[1] + 1, z1 = hi[2] + 1;
+    return get(x1, y1, z1) - get(x0, y1, z1) - get(x1, y0, z1) - get(x1, y1, z0) + get(x0, y0, z1) +
+           get(x0, y1, z0) + get(x1, y0, z0) - get(x0, y0, z0);
+  }
+
   std::int32_t& at(int x, int y, int z) {
     return sum_[(static_cast<std::size_t>(x) * (dims_[1] + 1) + y) * (dims_[2] + 1) + z];
   }
@@ -153,12 +204,45 @@ class OccupancyGrid {
 
   Eigen::Vector3d origin_;
   double cell_ = 0.05;
+  bool voxel_sized_ = true;
   std::array<int, 3> dims_{};
   std::vector<std::int32_t> sum_;  // (dims + 1)^3, zero border
 };
 
+// The box enclosing an object's shape as an FCL OBB: exact for a box,
+// conservative for a cylinder or a sphere, its AABB for anything else.
+fcl::OBBd enclosingBox(const fcl::CollisionObjectd& o) {
+  fcl::OBBd box;
+  const fcl::CollisionGeometryd& g = *o.collisionGeometry();
+  switch (o.getNodeType()) {
+    case fcl::GEOM_BOX:
+      box.extent = static_cast<const fcl::Boxd&>(g).side / 2.0;
+      break;
+    case fcl::GEOM_CYLINDER: {
+      const auto& c = static_cast<const fcl::Cylinderd&>(g);
+      box.extent = Eigen::Vector3d(c.radius, c.radius, c.lz / 2.0);
+      break;
+    }
+    case fcl::GEOM_SPHERE:
+      box.extent.setConstant(static_cast<const fcl::Sphered&>(g).radius);
+      break;
+    default:
+      box.axis.setIdentity();
+      box.To = o.getAABB().center();
+      box.extent = (o.getAABB().max_ - o.getAABB().min_) / 2.0;
+      return box;
+  }
+  box.axis = o.getRotation();
+  box.To = o.getTranslation();
+  return box;
+}
+
 bool collide(const fcl::CollisionObjectd* a, const fcl::CollisionObjectd* b) {
   if (!a->getAABB().overlap(b->getAABB())) return false;
+  // FCL's 15-axis box test settles most near pairs before the narrow phase,
+  // and every pair of boxes (it is exact for them, up to 1e-6 m of slack).
+  if (!enclosingBox(*a).overlap(enclosingBox(*b))) return false;
+  if (a->getNodeType() == fcl::GEOM_BOX && b->getNodeType() == fcl::GEOM_BOX) return true;
   fcl::CollisionRequestd req;
   fcl::CollisionResultd res;
   fcl::collide(a, b, req, res);
@@ -239,7 +323,11 @@ struct CollisionChecker::Impl {
   }
 
   bool hitsOctree(const fcl::CollisionObjectd* o) const {
-    return octree_obj && grid->mayHit(o->getAABB()) && collide(o, octree_obj.get());
+    if (!octree_obj || !grid->mayHit(enclosingBox(*o), o->getAABB())) return false;
+    // With voxel-sized cells that was the exact test for a box; other
+    // shapes, only enclosed by their box, go on to FCL's octree test.
+    return (o->getNodeType() == fcl::GEOM_BOX && grid->voxelSized()) ||
+           collide(o, octree_obj.get());
   }
 
   // World box hit by `o` (not ignored), or -1.

@@ -5,6 +5,10 @@
 #include <fcl/fcl.h>
 #include <octomap/octomap.h>
 
+#include <algorithm>
+#include <memory>
+#include <random>
+
 using plr::sim::Box;
 using plr::sim::CollisionChecker;
 using plr::sim::Config;
@@ -204,4 +208,95 @@ TEST(Collision, NoseDownDriveOverTheFloorIsOneSweepAndABoxAheadStillStopsIt) {
   CollisionChecker blocked(robot(), w);
   ASSERT_TRUE(blocked.isValid(a));
   EXPECT_FALSE(blocked.isMotionValid(a, b, false));
+}
+
+namespace {
+
+std::unique_ptr<fcl::CollisionObjectd> fclObject(std::shared_ptr<fcl::CollisionGeometryd> g,
+                                                 const Eigen::Isometry3d& pose) {
+  fcl::Transform3d tf = fcl::Transform3d::Identity();
+  tf.linear() = pose.linear();
+  tf.translation() = pose.translation();
+  return std::make_unique<fcl::CollisionObjectd>(std::move(g), tf);
+}
+
+bool fclCollide(const fcl::CollisionObjectd& a, const fcl::CollisionObjectd& b) {
+  fcl::CollisionRequestd req;
+  fcl::CollisionResultd res;
+  return fcl::collide(&a, &b, req, res) > 0;
+}
+
+// Validity by FCL's own narrow phase and octree traversal alone: every link
+// shape against the octree, every box and every other link not allowed to
+// touch it, without the checker's occupancy grid, box tests or caches.
+bool validByFclAlone(const Config& q, const World& w,
+                     const std::shared_ptr<const octomap::OcTree>& tree) {
+  const RobotModel& m = robot();
+  std::vector<Eigen::Isometry3d> poses;
+  m.forwardKinematics(q, poses);
+  std::vector<std::pair<int, std::unique_ptr<fcl::CollisionObjectd>>> shapes;
+  for (std::size_t l = 0; l < m.links().size(); ++l) {
+    for (const auto& s : m.links()[l].shapes) {
+      std::shared_ptr<fcl::CollisionGeometryd> g;
+      if (s.type == plr::sim::CollisionShape::Type::kBox)
+        g = std::make_shared<fcl::Boxd>(s.size);
+      else if (s.type == plr::sim::CollisionShape::Type::kCylinder)
+        g = std::make_shared<fcl::Cylinderd>(s.size.x(), s.size.y());
+      else
+        g = std::make_shared<fcl::Sphered>(s.size.x());
+      shapes.emplace_back(static_cast<int>(l), fclObject(g, poses[l] * s.origin));
+    }
+  }
+  const fcl::CollisionObjectd octree(std::make_shared<fcl::OcTreed>(tree));
+  for (const auto& [link, shape] : shapes) {
+    if (fclCollide(*shape, octree)) return false;
+    for (const Box& b : w.boxes)
+      if (fclCollide(*shape, *fclObject(std::make_shared<fcl::Boxd>(b.size), b.pose))) return false;
+  }
+  auto allowed = [&](int a, int b) {
+    if (a == b || m.links()[a].parent_link == b || m.links()[b].parent_link == a) return true;
+    for (const auto& [x, y] : m.allowedCollisions())
+      if ((x == a && y == b) || (x == b && y == a)) return true;
+    return false;
+  };
+  for (std::size_t i = 0; i < shapes.size(); ++i)
+    for (std::size_t j = i + 1; j < shapes.size(); ++j)
+      if (!allowed(shapes[i].first, shapes[j].first) &&
+          fclCollide(*shapes[i].second, *shapes[j].second))
+        return false;
+  return true;
+}
+
+}  // namespace
+
+// The checker's shortcuts (occupied-cell grid, FCL's box-box SAT in place of
+// its narrow phase, cached free placements) must not change any answer.
+TEST(Collision, AgreesWithFclAloneOnRandomStates) {
+  World w;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (std::uint32_t id = 1; id <= 25; ++id) {
+    Box b =
+        box(id, 4.0 + 2.5 * u(rng), -1.0 + 2.0 * u(rng), 0.2 + 2.2 * u(rng), 0.3 + 0.2 * u(rng));
+    b.pose.linear() = Eigen::AngleAxisd(u(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    w.boxes.push_back(b);
+  }
+  const auto tree = plr::sim::makeTrailerOctree(w.trailer, 0.05);
+  CollisionChecker cc(robot(), w, tree);
+  int valid = 0, invalid = 0;
+  for (int n = 0; n < 1500; ++n) {
+    // Around the folded arm, an eighth of each joint's range either way.
+    Config q = home(0.5 + 2.5 * u(rng));
+    for (int j = plr::sim::kArm1; j < plr::sim::kNumJoints; ++j) {
+      const auto& l = robot().limits(j);
+      q[j] = std::clamp(q[j] + (l.upper - l.lower) * (u(rng) - 0.5) / 4.0, l.lower, l.upper);
+    }
+    const bool expected = validByFclAlone(q, w, tree);
+    ASSERT_EQ(cc.isValid(q), expected)
+        << "q = " << q.transpose() << ": " << cc.describeCollision(q);
+    (expected ? valid : invalid)++;
+  }
+  // Both answers are common, so the comparison means something.
+  EXPECT_GT(valid, 150) << invalid;
+  EXPECT_GT(invalid, 150);
 }

@@ -6,6 +6,11 @@
 // Boxes held by the suction plate are attached to the plate link, so they
 // collide with the world and with the rest of the robot like part of the arm.
 //
+// Pairs of boxes are settled by FCL's 15-axis OBB test (exact for boxes), and
+// a box against the octree by the same test on a prefix-sum table of
+// occupied voxels; cylinders and spheres go on to FCL's narrow phase and
+// octree traversal when their enclosing box meets something.
+//
 // Motion checks are conservative sweeps: each link's shapes, inflated by a
 // bound on how far any of their points moves over half a segment, are checked
 // at the segment's midpoint; a segment whose sweep touches something is split
