@@ -1,6 +1,8 @@
 #include "arastar_planner.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "lattice/robot_lattice.hpp"
 
@@ -26,6 +28,54 @@ PlanResult fail(PlanStatus status, std::string message) {
 
 std::string budgetMessage(std::uint64_t budget) {
   return "no solution within the expansion budget of " + std::to_string(budget);
+}
+
+// A pose goal is met by many configurations: each IK branch, and with the
+// base planned, every base position from which the arm reaches the target.
+// The search ends at the first one it meets; the path's last move is
+// re-aimed at the one it reaches soonest.
+void aimAtQuickestGoal(std::vector<Config>& path, const sim::PoseGoal& goal,
+                       const ModeLattice& lattice, const sim::CollisionChecker& checker) {
+  if (path.size() < 2) return;
+  const sim::RobotModel& robot = checker.robot();
+  const Config from = path[path.size() - 2];
+  // The move's duration under velocity and acceleration limits (a
+  // trapezoidal profile per joint, the slowest joint sets the pace).
+  auto time = [&](const Config& q) {
+    double t = 0.0;
+    for (int j : lattice.joints) {
+      const double d = std::abs(q[j] - from[j]), v = robot.limits(j).velocity,
+                   a = robot.limits(j).acceleration;
+      t = std::max(t, d * a >= v * v ? d / v + v / a : 2.0 * std::sqrt(d / a));
+    }
+    return t;
+  };
+  std::vector<double> bases{path.back()[sim::kBaseX]};
+  if (std::find(lattice.joints.begin(), lattice.joints.end(), sim::kBaseX) !=
+      lattice.joints.end()) {
+    const sim::JointLimits& lb = robot.limits(sim::kBaseX);
+    const double b0 = from[sim::kBaseX], b1 = path.back()[sim::kBaseX];
+    for (double f : {0.0, 0.25, 0.5, 0.75}) bases.push_back(b0 + f * (b1 - b0));
+    for (double off = 0.25; off <= 1.0; off += 0.25) {
+      bases.push_back(b0 + off);
+      bases.push_back(b0 - off);
+    }
+    std::erase_if(bases, [&](double b) { return b < lb.lower || b > lb.upper; });
+  }
+  Config best = path.back();
+  double best_time = time(best);
+  for (double b : bases) {
+    Config seed = path.back();
+    seed[sim::kBaseX] = b;
+    for (const Config& q : robot.armIk(goal.target, seed)) {
+      const double t = time(q);
+      if (t < best_time - 1e-9 && checker.isValid(q) && checker.isMotionValid(from, q, false)) {
+        best = q;
+        best_time = t;
+      }
+    }
+  }
+  path.back() = best;
 }
 
 }  // namespace
@@ -193,7 +243,11 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
   result.stats.first_solution_cpu_s = before_cpu + sr.first_solution_cpu_s;
   result.stats.cost = sr.cost;
   // The line must stay a line; elsewhere drop lattice detours.
-  if (query.mode != PlanMode::kArmCartesian) path = sim::shortcutPath(path, checker);
+  if (query.mode != PlanMode::kArmCartesian) {
+    path = sim::shortcutPath(path, checker);
+    if (const auto* pg = std::get_if<sim::PoseGoal>(&query.goal))
+      aimAtQuickestGoal(path, *pg, lattice, checker);
+  }
   result.path = prefix;
   result.path.insert(result.path.end(), path.begin(), path.end());
   result.trajectory = sim::Trajectory::fromWaypoints(result.path, robot.allLimits());
