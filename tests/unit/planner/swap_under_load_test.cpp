@@ -1,0 +1,129 @@
+// Hot swap of the planner while plan requests flow: the pipeline's "plan"
+// service moves between ARA* and RRTConnect and every request is answered
+// once, solved, by one of them.
+#include "kernel.hpp"
+#include "kernel_fixture.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <map>
+#include <thread>
+
+namespace plr::kernel {
+namespace {
+
+using testing::config_from_yaml;
+using testing::make_msg;
+using testing::TestEndpoint;
+
+// Base from x = 1 to x = 2.5 in an empty 16 m trailer (M5).
+plr_msg* plan_request() {
+  flatbuffers::FlatBufferBuilder fbb;
+  const msg::Vec3 trailer(2.5, 2.7, 16.0);
+  const std::vector<double> start{1.0, 0, -1.0, 2.0, 0.0, 0.5, 0, 0};
+  const std::vector<double> goal{2.5, 0, -1.0, 2.0, 0.0, 0.5, 0, 0};
+  const auto world = msg::CreateWorldStateDirect(fbb, 0, &trailer);
+  fbb.Finish(msg::CreatePlanRequestDirect(fbb, msg::PlanMode::M5, &start, &goal, nullptr, false,
+                                          5.0, nullptr, world));
+  return make_msg<msg::PlanRequest>(fbb);
+}
+
+struct Ledger {
+  std::mutex m;
+  std::condition_variable cv;
+  std::vector<int> answers;  // per request
+  std::map<std::string, int> solved_by;
+  std::vector<std::string> problems;
+  std::size_t completed = 0;
+};
+
+struct CallCtx {
+  Ledger* ledger;
+  std::size_t index;
+};
+
+void on_reply(void* user, plr_status status, const plr_msg* reply, const char* error) {
+  auto* c = static_cast<CallCtx*>(user);
+  Ledger& l = *c->ledger;
+  std::lock_guard lock(l.m);
+  ++l.answers[c->index];
+  if (status != PLR_OK) {
+    l.problems.push_back(error ? error : "error without text");
+  } else {
+    const auto* r = flatbuffers::GetRoot<msg::PlanResponse>(msg_view(reply).data);
+    if (r->status() == msg::PlanStatus::Solved)
+      ++l.solved_by[r->planner() ? r->planner()->str() : "?"];
+    else
+      l.problems.push_back(r->message() ? r->message()->str() : "not solved");
+  }
+  ++l.completed;
+  l.cv.notify_all();
+}
+
+TEST(PlannerSwap, RequestsFromFourThreadsAcrossSwapsAreEachSolvedOnce) {
+  Kernel kernel(config_from_yaml("nodes:\n  planner: {plugin: planner_arastar}\n"));
+  ASSERT_TRUE(kernel.start());
+  TestEndpoint client;
+  kernel.bus().set_live(&client, true);
+
+  constexpr std::size_t kRequests = 200;
+  Ledger ledger;
+  ledger.answers.assign(kRequests, 0);
+  std::vector<CallCtx> ctx(kRequests);
+  const std::uint64_t type = MessageTraits<msg::PlanRequest>::type_id();
+
+  // Swaps every 50 ms for as long as requests are outstanding.
+  std::atomic<bool> loaded{true};
+  int swaps = 0;
+  std::thread swapper([&] {
+    while (loaded) {
+      const auto s = kernel.swap("planner", swaps % 2 == 0 ? "planner_ompl" : "planner_arastar");
+      EXPECT_TRUE(s) << s.error().message;
+      ++swaps;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  });
+  std::vector<std::thread> callers;
+  for (std::size_t t = 0; t < 4; ++t)
+    callers.emplace_back([&, t] {
+      // Closed loop: each caller waits for its answer, as the executor does,
+      // so the planner's queue stays short and swaps land between requests.
+      for (std::size_t i = t; i < kRequests; i += 4) {
+        ctx[i] = {&ledger, i};
+        const auto s = kernel.bus().call(&client, "plan", type, plan_request(),
+                                         std::chrono::seconds(30), &on_reply, &ctx[i], nullptr);
+        std::unique_lock lock(ledger.m);
+        if (!s) {
+          ++ledger.answers[i];
+          ++ledger.completed;
+          ledger.problems.push_back("refused: " + s.error().message);
+        }
+        ledger.cv.wait_for(lock, std::chrono::seconds(30), [&] { return ledger.answers[i] > 0; });
+      }
+    });
+  for (auto& c : callers) c.join();
+  {
+    std::unique_lock lock(ledger.m);
+    const bool all = ledger.cv.wait_for(lock, std::chrono::seconds(60),
+                                        [&] { return ledger.completed >= kRequests; });
+    loaded = false;
+    lock.unlock();
+    swapper.join();
+    ASSERT_TRUE(all) << ledger.completed << " of " << kRequests << " answered";
+  }
+  EXPECT_GE(swaps, 10);
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));  // a second answer would land here
+  std::lock_guard lock(ledger.m);
+  for (std::size_t i = 0; i < kRequests; ++i) EXPECT_EQ(ledger.answers[i], 1) << "request " << i;
+  EXPECT_TRUE(ledger.problems.empty())
+      << ledger.problems.size() << " problems, first: " << ledger.problems.front();
+  // The load really spanned the swaps: both planners answered.
+  EXPECT_EQ(ledger.solved_by.size(), 2u);
+  for (const auto& [planner, n] : ledger.solved_by) EXPECT_GT(n, 20) << planner;
+  kernel.bus().remove_endpoint(&client);
+  client.executor().drain();
+}
+
+}  // namespace
+}  // namespace plr::kernel
