@@ -37,6 +37,32 @@ plr_msg* make_msg(const flatbuffers::FlatBufferBuilder& fbb) {
 
 plr_msg* make_double_request(std::int64_t value);
 
+// Answers to numbered bus calls: how many each got, and the error texts.
+// Tests derive to keep what the replies carry.
+struct CallLedger {
+  explicit CallLedger(std::size_t calls) : answers(calls, 0) {}
+  std::mutex m;
+  std::condition_variable cv;
+  std::vector<int> answers;
+  std::vector<std::string> errors;
+  std::size_t completed = 0;
+
+  // One answer to call `i`, `error` null when it succeeded; `m` is held.
+  void count(std::size_t i, const char* error) {
+    ++answers[i];
+    if (error != nullptr) errors.emplace_back(error);
+    ++completed;
+    cv.notify_all();
+  }
+};
+
+// The user pointer of call `index`.
+template <class Ledger>
+struct CallCtx {
+  Ledger* ledger;
+  std::size_t index;
+};
+
 // Collects the source strings of `lifecycle` reports, in arrival order.
 class EventLog {
  public:

@@ -17,31 +17,21 @@ using testing::TestEndpoint;
 
 constexpr auto kDoubleReq = MessageTraits<msg::DoubleRequest>::type_id();
 
-struct Ledger {
-  std::mutex m;
-  std::condition_variable cv;
-  std::vector<int> answers;  // per request: how many completions
-  std::vector<std::int64_t> values;
-  std::vector<std::string> errors;
-  std::size_t completed = 0;
-};
+using testing::CallLedger;
 
-struct CallCtx {
-  Ledger* ledger;
-  std::size_t index;
+struct Ledger : CallLedger {
+  explicit Ledger(std::size_t calls) : CallLedger(calls), values(calls, -1) {}
+  std::vector<std::int64_t> values;
 };
+using CallCtx = testing::CallCtx<Ledger>;
 
 void on_reply(void* user, plr_status status, const plr_msg* reply, const char* error) {
   auto* c = static_cast<CallCtx*>(user);
   auto& l = *c->ledger;
   std::lock_guard lock(l.m);
-  ++l.answers[c->index];
   if (status == PLR_OK)
     l.values[c->index] = flatbuffers::GetRoot<msg::DoubleReply>(msg_view(reply).data)->value();
-  else
-    l.errors.push_back(error ? error : "");
-  ++l.completed;
-  l.cv.notify_all();
+  l.count(c->index, status == PLR_OK ? nullptr : (error ? error : ""));
 }
 
 TEST(Swap, ThousandRequestsAcrossHundredSwapsAreEachAnsweredOnce) {
@@ -57,9 +47,7 @@ nodes:
 
     constexpr std::size_t kRequests = 1000;
     constexpr int kSwaps = 100;
-    Ledger ledger;
-    ledger.answers.assign(kRequests, 0);
-    ledger.values.assign(kRequests, -1);
+    Ledger ledger(kRequests);
     std::vector<CallCtx> ctx(kRequests);
     std::atomic<std::size_t> refused{0};
 
@@ -85,9 +73,7 @@ nodes:
           if (!s) {
             // Refused calls never complete; count them as answered with an error.
             std::lock_guard lock(ledger.m);
-            ++ledger.answers[i];
-            ++ledger.completed;
-            ledger.errors.push_back(s.error().message);
+            ledger.count(i, s.error().message.c_str());
             ++refused;
           }
           std::this_thread::sleep_for(std::chrono::microseconds(50));
@@ -146,9 +132,7 @@ nodes:
 
   TestEndpoint client;
   kernel.bus().set_live(&client, true);
-  Ledger ledger;
-  ledger.answers.assign(1, 0);
-  ledger.values.assign(1, -1);
+  Ledger ledger(1);
   CallCtx c{&ledger, 0};
   ASSERT_TRUE(kernel.bus().call(&client, "double", kDoubleReq, make_double_request(5),
                                 std::chrono::seconds(5), &on_reply, &c, nullptr));

@@ -29,36 +29,22 @@ plr_msg* plan_request() {
   return make_msg<msg::PlanRequest>(fbb);
 }
 
-struct Ledger {
-  std::mutex m;
-  std::condition_variable cv;
-  std::vector<int> answers;  // per request
-  std::map<std::string, int> solved_by;
-  std::vector<std::string> problems;
-  std::size_t completed = 0;
+struct Ledger : testing::CallLedger {
+  using CallLedger::CallLedger;
+  std::map<std::string, int> solved_by;  // planner name -> requests
 };
-
-struct CallCtx {
-  Ledger* ledger;
-  std::size_t index;
-};
+using CallCtx = testing::CallCtx<Ledger>;
 
 void on_reply(void* user, plr_status status, const plr_msg* reply, const char* error) {
   auto* c = static_cast<CallCtx*>(user);
   Ledger& l = *c->ledger;
   std::lock_guard lock(l.m);
-  ++l.answers[c->index];
-  if (status != PLR_OK) {
-    l.problems.push_back(error ? error : "error without text");
-  } else {
-    const auto* r = flatbuffers::GetRoot<msg::PlanResponse>(msg_view(reply).data);
-    if (r->status() == msg::PlanStatus::Solved)
-      ++l.solved_by[r->planner() ? r->planner()->str() : "?"];
-    else
-      l.problems.push_back(r->message() ? r->message()->str() : "not solved");
-  }
-  ++l.completed;
-  l.cv.notify_all();
+  if (status != PLR_OK) return l.count(c->index, error ? error : "error without text");
+  const auto* r = flatbuffers::GetRoot<msg::PlanResponse>(msg_view(reply).data);
+  if (r->status() != msg::PlanStatus::Solved)
+    return l.count(c->index, r->message() ? r->message()->c_str() : "not solved");
+  ++l.solved_by[r->planner() ? r->planner()->str() : "?"];
+  l.count(c->index, nullptr);
 }
 
 TEST(PlannerSwap, RequestsFromFourThreadsAcrossSwapsAreEachSolvedOnce) {
@@ -68,8 +54,7 @@ TEST(PlannerSwap, RequestsFromFourThreadsAcrossSwapsAreEachSolvedOnce) {
   kernel.bus().set_live(&client, true);
 
   constexpr std::size_t kRequests = 200;
-  Ledger ledger;
-  ledger.answers.assign(kRequests, 0);
+  Ledger ledger(kRequests);
   std::vector<CallCtx> ctx(kRequests);
   const std::uint64_t type = MessageTraits<msg::PlanRequest>::type_id();
 
@@ -94,11 +79,7 @@ TEST(PlannerSwap, RequestsFromFourThreadsAcrossSwapsAreEachSolvedOnce) {
         const auto s = kernel.bus().call(&client, "plan", type, plan_request(),
                                          std::chrono::seconds(30), &on_reply, &ctx[i], nullptr);
         std::unique_lock lock(ledger.m);
-        if (!s) {
-          ++ledger.answers[i];
-          ++ledger.completed;
-          ledger.problems.push_back("refused: " + s.error().message);
-        }
+        if (!s) ledger.count(i, ("refused: " + s.error().message).c_str());
         ledger.cv.wait_for(lock, std::chrono::seconds(30), [&] { return ledger.answers[i] > 0; });
       }
     });
@@ -116,8 +97,8 @@ TEST(PlannerSwap, RequestsFromFourThreadsAcrossSwapsAreEachSolvedOnce) {
   std::this_thread::sleep_for(std::chrono::milliseconds(50));  // a second answer would land here
   std::lock_guard lock(ledger.m);
   for (std::size_t i = 0; i < kRequests; ++i) EXPECT_EQ(ledger.answers[i], 1) << "request " << i;
-  EXPECT_TRUE(ledger.problems.empty())
-      << ledger.problems.size() << " problems, first: " << ledger.problems.front();
+  EXPECT_TRUE(ledger.errors.empty())
+      << ledger.errors.size() << " failed, first: " << ledger.errors.front();
   // The load really spanned the swaps: both planners answered.
   EXPECT_EQ(ledger.solved_by.size(), 2u);
   for (const auto& [planner, n] : ledger.solved_by) EXPECT_GT(n, 20) << planner;
