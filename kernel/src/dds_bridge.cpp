@@ -131,9 +131,15 @@ Expected<std::string> cyclone_config_xml(const DdsConfig& dds) {
   if (loopback_only) xml += "<AllowMulticast>false</AllowMulticast>";
   // Large samples in one datagram: half the round trip at 64 KiB (DEPENDENCIES.md).
   xml += "<MaxMessageSize>65500B</MaxMessageSize></General>";
-  xml +=
+  // A frozen kernel stays matched until its DDS lease ends, and reliable
+  // writers keep its unacknowledged samples: by Cyclone's default of 10 s the
+  // request and reply histories fill and every call on the domain stalls.
+  // The lease ends shortly after the heartbeat has declared the kernel gone.
+  xml += fmt::format(
       "<Discovery><ParticipantIndex>auto</ParticipantIndex>"
-      "<MaxAutoParticipantIndex>60</MaxAutoParticipantIndex><Peers>";
+      "<MaxAutoParticipantIndex>60</MaxAutoParticipantIndex>"
+      "<LeaseDuration>{} ms</LeaseDuration><SPDPInterval>{} ms</SPDPInterval><Peers>",
+      kDdsLease.count(), kDdsLease.count() / 4);
   if (loopback_only) xml += R"(<Peer Address="127.0.0.1"/>)";
   if (const char* extra = std::getenv("PLR_DDS_PEERS")) {
     std::string list = extra;

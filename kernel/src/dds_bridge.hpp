@@ -63,6 +63,8 @@ inline constexpr const char* kDdsResultTopic = "plr/result";
 inline constexpr const char* kDdsRequestTopic = "plr/request";
 inline constexpr const char* kDdsReplyTopic = "plr/reply";
 inline constexpr std::chrono::milliseconds kPeerTimeout{1500};
+// Cyclone's participant lease: a silent peer's endpoints go soon after.
+inline constexpr std::chrono::milliseconds kDdsLease{2000};
 // Sizes an envelope may carry; larger ones are dropped and counted.
 inline constexpr std::size_t kMaxNameSize = 256;
 inline constexpr std::size_t kMaxJsonPayload = 4 << 20;

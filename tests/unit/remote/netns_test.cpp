@@ -190,8 +190,6 @@ TEST(RemoteNetns, TopicAndServiceCrossProviderLossMonitorAndRefusedControl) {
   }
   EXPECT_GT(counts_at_a, 10u) << "the count topic did not reach A: " << raw;
 
-  // A freezes mid-run: the call waiting on it fails at once (heartbeat), not
-  // by the caller's 2 s timeout; later calls go to B's provider.
   // A freezes mid-run: the call waiting on it is lost at once (heartbeat),
   // not by the callers' 2 s timeout. The fail caller sees it fail; the
   // resend caller's goes to B's provider. Later calls go to B's provider.
@@ -226,6 +224,53 @@ TEST(RemoteNetns, TopicAndServiceCrossProviderLossMonitorAndRefusedControl) {
   EXPECT_EQ(resent.failures_after_start, 0u) << resend_log;
   ASSERT_NE(resend_at, std::string::npos) << "no call was re-sent when A froze:\n" << resend_log;
   EXPECT_GT(resent.last_good, resend_at) << "no answers after A was lost";
+}
+
+}  // namespace
+
+namespace {
+
+// A kernel frozen mid-run (SIGSTOP) must not stall the calls between the
+// others. Its DDS readers stop acknowledging, and reliable writers keep every
+// sample it has not acknowledged until its DDS lease ends: with Cyclone's
+// default lease (10 s) the request and reply histories filled after a few
+// thousand calls and every call on the domain timed out until then.
+TEST(RemoteNetns, AFrozenKernelDoesNotStallTheOthersCalls) {
+  Net net;
+  const int domain = 100 + (::getpid() + 50) % 100;
+  const auto provider = [&](const std::string& name) {
+    return write_config(name + ".yaml", "pipeline: " + name +
+                                            "\nnodes:\n  doubler: {plugin: demo_doubler}\n" +
+                                            dds_block(domain, net.iface, "double", ""));
+  };
+  const auto a = provider("frozen_a"), b = provider("frozen_b");
+  const auto c = write_config(
+      "frozen_c.yaml",
+      "pipeline: frozen_c\nnodes:\n  counter: {plugin: demo_counter, params: {period_ms: 1, "
+      "limit: 12000}}\n" +
+          dds_block(domain, net.iface, "", "double"));
+  const auto dir = ::testing::TempDir();
+  Proc kernel_a(net.in(net.ns_a), {kPlr, "run", a, "--report", dir + "fa"}, dir + "frozen_a.log");
+  Proc kernel_b(net.in(net.ns_b), {kPlr, "run", b, "--report", dir + "fb"}, dir + "frozen_b.log");
+  Proc caller(net.in(net.ns_b), {kPlr, "run", c, "--report", dir + "fc"}, dir + "frozen_c.log");
+
+  // Freeze A once calls flow to both providers.
+  const auto deadline = std::chrono::steady_clock::now() + 30s;
+  while (read_caller(slurp(caller.log)).good < 1000 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(100ms);
+  ASSERT_GE(read_caller(slurp(caller.log)).good, 1000) << slurp(caller.log);
+  ::kill(kernel_a.pid, SIGSTOP);
+  const int rc = caller.wait(120s);
+  ::kill(kernel_a.pid, SIGCONT);
+  const auto log = slurp(caller.log);
+  const auto tail = log.substr(log.size() > 3000 ? log.size() - 3000 : 0);
+  EXPECT_EQ(rc, 0) << tail;
+  const auto calls = read_caller(log);
+  EXPECT_EQ(calls.wrong, 0);
+  EXPECT_GE(calls.good, 11000) << tail;
+  // The call caught on A when it froze, and nothing after.
+  EXPECT_LE(calls.failures_after_start, 1u) << tail;
+  EXPECT_EQ(log.find("timed out"), std::string::npos) << tail;
 }
 
 }  // namespace

@@ -55,6 +55,9 @@ struct Proc {
   std::string log;
   Proc(const std::string& ns, const std::vector<std::string>& argv, std::string log_path)
       : log(std::move(log_path)) {
+    // Emptied before the fork: a reader must never see an earlier run's log.
+    if (const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644); fd >= 0)
+      ::close(fd);
     pid = ::fork();
     if (pid == 0) {
       if (!ns.empty()) {
