@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 
 #include "lattice/robot_lattice.hpp"
+#include "plr/sim/trajectory.hpp"
 
 namespace plr::arastar {
 
@@ -39,17 +39,8 @@ void aimAtQuickestGoal(std::vector<Config>& path, const sim::PoseGoal& goal,
   if (path.size() < 2) return;
   const sim::RobotModel& robot = checker.robot();
   const Config from = path[path.size() - 2];
-  // The move's duration under velocity and acceleration limits (a
-  // trapezoidal profile per joint, the slowest joint sets the pace).
-  auto time = [&](const Config& q) {
-    double t = 0.0;
-    for (int j : lattice.joints) {
-      const double d = std::abs(q[j] - from[j]), v = robot.limits(j).velocity,
-                   a = robot.limits(j).acceleration;
-      t = std::max(t, d * a >= v * v ? d / v + v / a : 2.0 * std::sqrt(d / a));
-    }
-    return t;
-  };
+  // How long the last move takes, timed as the trajectory will time it.
+  auto time = [&](const Config& q) { return sim::segmentDuration(from, q, robot.allLimits()); };
   std::vector<double> bases{path.back()[sim::kBaseX]};
   if (std::find(lattice.joints.begin(), lattice.joints.end(), sim::kBaseX) !=
       lattice.joints.end()) {
