@@ -8,6 +8,7 @@
 #include "variables.hpp"
 
 #include <plr/shm/segments.hpp>
+#include <plr/shm/wake_latency.hpp>
 
 #include <plr/plugin_abi.h>
 
@@ -24,6 +25,7 @@
 #include <ctime>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 namespace plr::kernel {
 
@@ -135,9 +137,23 @@ int run_pipeline(const RunOptions& options) {
   std::vector<HostConfig> children;
   for (const auto& h : hosts_with_nodes(*config))
     if (h != "main") children.push_back(*config->host(h));
+  // The request is machine-wide: the main host holds it for every host.
+  std::optional<shm::WakeLatencyRequest> wake_latency;
   if (main_host) {
     if (const auto n = shm::reclaim_stale_segments(); n > 0)
       spdlog::info("removed {} shared-memory segments of dead runs", n);
+    if (const auto us = config->cpu_wake_latency_us) {
+      auto r = shm::WakeLatencyRequest::hold(*us);
+      if (r) {
+        wake_latency.emplace(std::move(*r));
+        spdlog::info("idle CPUs wake within {} us while the run lasts", *us);
+      } else {
+        spdlog::warn(
+            "{}: cpu_wake_latency_us: /dev/cpu_dma_latency: {}; idle wake-ups keep the "
+            "machine's setting",
+            config->file, shm::to_string(r.error()));
+      }
+    }
     if (!children.empty()) {
       std::vector<std::string> command{fs::read_symlink("/proc/self/exe").string(), "run",
                                        config->file, "--report", report_dir.string()};

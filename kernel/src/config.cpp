@@ -47,8 +47,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::vector<std::string> kTopKeys = {"pipeline", "plugin_paths", "clock", "hosts",
-                                           "nodes",    "topics",       "remote"};
+const std::vector<std::string> kTopKeys = {
+    "pipeline", "plugin_paths", "clock",  "cpu_wake_latency_us",
+    "hosts",    "nodes",        "topics", "remote"};
 const std::vector<std::string> kHostKeys = {"restart", "max_restarts", "backoff_ms"};
 const std::vector<std::string> kNodeKeys = {"plugin", "host", "params", "remap"};
 const std::vector<std::string> kTopicKeys = {"policy", "depth", "slot_size", "busy_poll",
@@ -635,6 +636,10 @@ Config build(Checker& c, const YAML::Node& root, const std::string& file_name) {
   }
   if (const Entry* e = find(top, "clock")) {
     if (auto v = c.enum_value(*e, {"wall", "sim"})) config.clock = *v;
+  }
+  if (const Entry* e = find(top, "cpu_wake_latency_us")) {
+    if (auto v = c.int_value(*e, 0, std::numeric_limits<std::int32_t>::max()))
+      config.cpu_wake_latency_us = static_cast<std::int32_t>(*v);
   }
   const bool hosts_ok = parse_hosts(c, find(top, "hosts"), config);
   parse_nodes(c, root, find(top, "nodes"), config, hosts_ok);

@@ -6,7 +6,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -70,6 +72,10 @@ struct Config {
   std::vector<std::string>
       plugin_paths;            // absolute; relative entries resolve against the file's folder
   std::string clock = "wall";  // "wall" or "sim" (time from the `clock` topic)
+  // While the run lasts, idle CPUs must wake within this many µs (Linux PM
+  // QoS): 0 makes cross-core futex wake-ups several times cheaper on machines
+  // with a slow idle exit, at the cost of power. Unset: the machine's setting.
+  std::optional<std::int32_t> cpu_wake_latency_us;
   std::vector<NodeConfig> nodes;
   std::vector<HostConfig> hosts;  // always contains "main"
   std::vector<TopicConfig> topics;

@@ -1,8 +1,11 @@
 // bench_transport: cross-process one-way latency and throughput of our
 // shared-memory transport (busy-polling, futex, spin-then-futex) against a
 // Unix domain socket and Cyclone DDS on loopback. Sender on CPU 0, receiver
-// (a forked process) on CPU 1; one futex row with both on CPU 0. Then the
-// kernel's publish path (kernel_path.cpp): loaned slot vs copies.
+// (a forked process) on CPU 1; one futex row with both on CPU 0. The
+// transports that sleep run again with a PM QoS request that idle CPUs wake
+// within 0 µs (rows marked "wake0"; needs root), as a deployment can ask with
+// `cpu_wake_latency_us: 0`. Then the kernel's publish path (kernel_path.cpp):
+// loaned slot vs copies.
 //
 // Latency: ping-pong; the sender stamps CLOCK_MONOTONIC before sending (for
 // shm: before loan()), the receiver reads the clock as soon as the message is
@@ -24,6 +27,7 @@
 #include <cstring>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -221,6 +225,7 @@ class UdsLink final : public Link {
 
 struct Case {
   Kind kind;
+  bool wake0;  // a PM QoS request of 0 µs held during the case
   std::size_t size;
   std::size_t latency_iters;
   std::size_t throughput_iters;
@@ -228,6 +233,7 @@ struct Case {
 
 struct Row {
   Kind kind = Kind::kShmPoll;
+  bool wake0 = false;
   std::size_t size = 0;
   bool ok = false;
   std::string error;
@@ -267,6 +273,7 @@ int run_receiver(Link& l, const Case& c, std::size_t warm, Shared& out) {
 Row run_case(const Case& c, Shared* shared, const std::string& run) {
   Row row;
   row.kind = c.kind;
+  row.wake0 = c.wake0;
   row.size = c.size;
   row.latency_iters = c.latency_iters;
   row.throughput_iters = c.throughput_iters;
@@ -282,6 +289,15 @@ Row run_case(const Case& c, Shared* shared, const std::string& run) {
   const shm::WaitMode mode =
       c.kind == Kind::kShmPoll ? shm::WaitMode::kPolling : shm::WaitMode::kBlocking;
   const std::uint32_t spin_us = c.kind == Kind::kShmSpin ? kSpinUs : 0;
+  std::optional<shm::WakeLatencyRequest> wake;
+  if (c.wake0) {
+    auto w = shm::WakeLatencyRequest::hold(0);
+    if (!w) {
+      row.error = std::string("/dev/cpu_dma_latency: ") + shm::to_string(w.error());
+      return row;
+    }
+    wake.emplace(std::move(*w));
+  }
   const pid_t pid = ::fork();
   if (pid == 0) {
     pin(c.kind == Kind::kShmBlockSameCore ? kSenderCpu : kReceiverCpu);
@@ -338,6 +354,10 @@ Row run_case(const Case& c, Shared* shared, const std::string& run) {
   row.mib_per_s = row.msgs_per_s * static_cast<double>(c.size) / (1024.0 * 1024.0);
   row.ok = true;
   return row;
+}
+
+std::string row_label(const Row& r) {
+  return std::string(name(r.kind)) + (r.wake0 ? " wake0" : "");
 }
 
 std::string size_label(std::size_t s) {
@@ -410,23 +430,36 @@ int main(int argc, char** argv) {
   const SizePlan plans[] = {
       {64, 20000, 200000}, {4096, 20000, 100000}, {64 * 1024, 5000, 20000}, {4 << 20, 500, 200}};
   constexpr std::size_t kShmThroughput = 200000;
+  // Only transports whose reader sleeps feel the idle state's exit.
+  const bool can_wake0 = plr::shm::WakeLatencyRequest::hold(0).has_value();
+  struct Variant {
+    Kind kind;
+    bool wake0;
+  };
+  std::vector<Variant> variants{{Kind::kShmPoll, false}, {Kind::kShmBlock, false},
+                                {Kind::kShmSpin, false}, {Kind::kShmBlockSameCore, false},
+                                {Kind::kUds, false},     {Kind::kDds, false}};
+  if (can_wake0) {
+    for (Kind k : {Kind::kShmBlock, Kind::kUds, Kind::kDds}) variants.push_back({k, true});
+  } else if (!json) {
+    std::printf("(no wake0 rows: /dev/cpu_dma_latency is not writable; run as root)\n");
+  }
   std::vector<Row> rows;
   for (const SizePlan& p : plans) {
-    for (Kind k : {Kind::kShmPoll, Kind::kShmBlock, Kind::kShmSpin, Kind::kShmBlockSameCore,
-                   Kind::kUds, Kind::kDds}) {
-      const bool shm = is_shm(k);
+    for (const Variant& v : variants) {
+      const bool shm = is_shm(v.kind);
       const std::size_t lat = p.lat / div, thr = (shm ? kShmThroughput : p.thr) / div;
-      rows.push_back(
-          run_case(Case{k, p.size, std::max<std::size_t>(lat, 50), std::max<std::size_t>(thr, 20)},
-                   shared, run));
+      rows.push_back(run_case(Case{v.kind, v.wake0, p.size, std::max<std::size_t>(lat, 50),
+                                   std::max<std::size_t>(thr, 20)},
+                              shared, run));
       if (!json) {
         const Row& r = rows.back();
         if (r.ok) {
-          std::printf("%-8s %-14s p50 %9.2f us  p99 %9.2f us  %12.0f msg/s  %10.1f MiB/s\n",
-                      size_label(r.size).c_str(), name(r.kind), r.p50_us, r.p99_us, r.msgs_per_s,
-                      r.mib_per_s);
+          std::printf("%-8s %-16s p50 %9.2f us  p99 %9.2f us  %12.0f msg/s  %10.1f MiB/s\n",
+                      size_label(r.size).c_str(), row_label(r).c_str(), r.p50_us, r.p99_us,
+                      r.msgs_per_s, r.mib_per_s);
         } else {
-          std::printf("%-8s %-14s FAILED: %s\n", size_label(r.size).c_str(), name(r.kind),
+          std::printf("%-8s %-16s FAILED: %s\n", size_label(r.size).c_str(), row_label(r).c_str(),
                       r.error.c_str());
         }
         std::fflush(stdout);
@@ -444,9 +477,9 @@ int main(int argc, char** argv) {
   (void)plr::shm::remove_run_segments(run + "k");
   ::unlink(dds_config.c_str());
 
-  auto find = [&](Kind k, std::size_t s) -> const Row* {
+  auto find = [&](Kind k, std::size_t s, bool wake0 = false) -> const Row* {
     for (const Row& r : rows) {
-      if (r.kind == k && r.size == s && r.ok) return &r;
+      if (r.kind == k && r.size == s && r.wake0 == wake0 && r.ok) return &r;
     }
     return nullptr;
   };
@@ -455,6 +488,8 @@ int main(int argc, char** argv) {
   const Row* block64 = find(Kind::kShmBlock, 64);
   const Row* spin64 = find(Kind::kShmSpin, 64);
   const Row* same64 = find(Kind::kShmBlockSameCore, 64);
+  const Row* dds64w = find(Kind::kDds, 64, true);
+  const Row* block64w = find(Kind::kShmBlock, 64, true);
   const char* timed =
       "one-way latency = receiver clock when the message is in hand - sender clock before "
       "send (shm: before loan(); shm payload is not copied or rewritten, a 16-byte stamp is "
@@ -472,6 +507,7 @@ int main(int argc, char** argv) {
     j["results"] = nlohmann::json::array();
     for (const Row& r : rows) {
       nlohmann::json o{{"transport", name(r.kind)},
+                       {"wake0", r.wake0},
                        {"size_bytes", r.size},
                        {"ok", r.ok},
                        {"latency_iterations", r.latency_iters},
@@ -490,6 +526,8 @@ int main(int argc, char** argv) {
     if (dds64 && block64) j["dds_over_shm_futex_64B_p50"] = dds64->p50_us / block64->p50_us;
     if (dds64 && spin64) j["dds_over_shm_spin50_64B_p50"] = dds64->p50_us / spin64->p50_us;
     if (dds64 && same64) j["dds_over_shm_futex_1cpu_64B_p50"] = dds64->p50_us / same64->p50_us;
+    if (dds64w && block64w)
+      j["wake0_dds_over_shm_futex_64B_p50"] = dds64w->p50_us / block64w->p50_us;
     j["kernel_path"] = kernel_json;
     std::printf("%s\n", j.dump(2).c_str());
   } else {
@@ -503,6 +541,12 @@ int main(int argc, char** argv) {
           "shm-futex-1cpu = %.1fx\n",
           dds64->p50_us / poll64->p50_us, dds64->p50_us / block64->p50_us,
           dds64->p50_us / spin64->p50_us, dds64->p50_us / same64->p50_us);
+    }
+    if (dds64w && block64w) {
+      std::printf(
+          "64 B p50, wake0 (idle CPUs wake within 0 us): shm-futex %.2f us, DDS / "
+          "shm-futex = %.1fx\n",
+          block64w->p50_us, dds64w->p50_us / block64w->p50_us);
     }
   }
   ::munmap(mem, sizeof(Shared));

@@ -49,6 +49,7 @@ topics:
 remote:
   dds: {domain: 7, interfaces: [lo, eth0], export: ["telemetry/*"], import: [cmd/swap],
         allow_remote_control: true, security_dir: certs}
+cpu_wake_latency_us: 0
 )");
   const fs::path folder = fs::absolute("configs");
   EXPECT_EQ(c.file, (folder / "x.yaml").string());
@@ -95,6 +96,7 @@ remote:
   EXPECT_EQ(c.dds.import_patterns, std::vector<std::string>{"cmd/swap"});
   EXPECT_TRUE(c.dds.allow_remote_control);
   EXPECT_EQ(c.dds.security_dir, (folder / "certs").string());
+  EXPECT_EQ(c.cpu_wake_latency_us, 0);
 }
 
 TEST(Config, DefaultsForOptionalKeys) {
@@ -102,6 +104,7 @@ TEST(Config, DefaultsForOptionalKeys) {
   EXPECT_EQ(c.pipeline, "x");
   EXPECT_TRUE(c.plugin_paths.empty());
   EXPECT_EQ(c.clock, "wall");
+  EXPECT_FALSE(c.cpu_wake_latency_us);
   ASSERT_EQ(c.hosts.size(), 1u);
   EXPECT_EQ(c.hosts[0].name, "main");
   EXPECT_EQ(c.hosts[0].restart, RestartPolicy::OnFailure);
@@ -130,7 +133,7 @@ TEST(Config, UnknownKeySuggestsClosest) {
 TEST(Config, UnknownKeyWithoutNearMatchListsKnownKeys) {
   EXPECT_EQ(error_of("nodes: {a: {plugin: x}}\nwhatever: 1\n"),
             "configs/x.yaml:2:1: whatever: unknown key 'whatever' (known keys: pipeline, "
-            "plugin_paths, clock, hosts, nodes, topics, remote)");
+            "plugin_paths, clock, cpu_wake_latency_us, hosts, nodes, topics, remote)");
   EXPECT_EQ(error_of("nodes: {a: {plugin: x}}\nhosts: {h: {retries: 1}}\n"),
             "configs/x.yaml:2:13: hosts.h.retries: unknown key 'retries' (known keys: restart, "
             "max_restarts, backoff_ms)");
@@ -210,6 +213,8 @@ TEST(Config, SizesMustBePositive) {
   EXPECT_EQ(error_of("nodes: {a: {plugin: x}}\ntopics: {t: {depth: 99999999999999999999}}\n"),
             "configs/x.yaml:2:21: topics.t.depth: must be between 1 and 9223372036854775807, "
             "got 99999999999999999999");
+  EXPECT_EQ(error_of("cpu_wake_latency_us: -5\nnodes: {a: {plugin: x}}\n"),
+            "configs/x.yaml:1:22: cpu_wake_latency_us: must not be negative, got -5");
 }
 
 TEST(Config, DuplicateKeys) {

@@ -7,3 +7,4 @@
 #include "plr/shm/service.hpp"
 #include "plr/shm/topic.hpp"
 #include "plr/shm/types.hpp"
+#include "plr/shm/wake_latency.hpp"
