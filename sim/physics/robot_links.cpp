@@ -1,12 +1,50 @@
 #include "plr/sim/robot_links.hpp"
 
+#include <cmath>
+#include <optional>
+
 namespace plr::sim {
 
+namespace {
+
+// A real scoop gets under a box because its lip is pressed onto the floor and
+// cardboard's bottom edges are rounded. Rigid boxes with sharp edges resting
+// on the floor plane would need an edge of zero thickness: a blade of any
+// thickness meets their side face and pushes them. So near the floor the
+// physics continues the scoop's belt surface with a thin lip, sloped down
+// from its leading edge to kLipEdge below the floor plane. The planner does
+// not see it: it stands for contact, not for the robot's extent.
+constexpr double kLipReach = 0.06;   // m; the lip exists while the edge is this close to the floor
+constexpr double kScoopOut = 0.1;    // m; and the scoop is out this far (not a lowered nose)
+constexpr double kLipSlope = 0.45;   // rad below horizontal
+constexpr double kLipThick = 0.004;  // m
+constexpr double kLipEdge = 0.001;   // m below the floor plane
+
+std::optional<LinkGeometry> scoop_lip(const LinkGeometry& scoop) {
+  const Eigen::Vector3d edge =
+      scoop.pose * Eigen::Vector3d(0.5 * scoop.size.x(), 0.0, 0.5 * scoop.size.z());
+  const double drop = edge.z() + kLipEdge;
+  if (drop <= 0.0 || edge.z() > kLipReach) return std::nullopt;
+  const double length = drop / std::sin(kLipSlope);
+  const Eigen::Vector3d along(std::cos(kLipSlope), 0.0, -std::sin(kLipSlope));
+  const Eigen::Vector3d up(std::sin(kLipSlope), 0.0, std::cos(kLipSlope));
+  LinkGeometry lip = scoop;
+  lip.size = Eigen::Vector3d(length, scoop.size.y(), kLipThick);
+  lip.pose.linear() = Eigen::AngleAxisd(kLipSlope, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  lip.pose.translation() = edge + 0.5 * length * along - 0.5 * kLipThick * up;
+  lip.pose.translation().y() = scoop.pose.translation().y();
+  return lip;
+}
+
+}  // namespace
+
 std::vector<LinkGeometry> robot_link_geometry(const RobotModel& model, const Config& q,
-                                              double belt_speed, const std::string& conveyor_link) {
+                                              double belt_speed, const std::string& conveyor_link,
+                                              const std::string& feeder_link) {
   std::vector<Eigen::Isometry3d> poses;
   model.forwardKinematics(q, poses);
   const int conveyor = model.linkIndex(conveyor_link);
+  const int feeder = model.linkIndex(feeder_link);
   std::vector<LinkGeometry> out;
   for (std::size_t i = 0; i < model.links().size(); ++i) {
     for (const CollisionShape& s : model.links()[i].shapes) {
@@ -24,8 +62,12 @@ std::vector<LinkGeometry> robot_link_geometry(const RobotModel& model, const Con
           g.size = Eigen::Vector3d::Constant(2.0 * s.size.x());
           break;
       }
-      if (static_cast<int>(i) == conveyor) g.belt_speed = belt_speed;
+      if (static_cast<int>(i) == conveyor || static_cast<int>(i) == feeder)
+        g.belt_speed = belt_speed;
+      g.feeds_belt = static_cast<int>(i) == feeder;
       out.push_back(g);
+      if (g.feeds_belt && q[kNose3] > kScoopOut)
+        if (auto lip = scoop_lip(g)) out.push_back(*lip);
     }
   }
   return out;

@@ -151,17 +151,20 @@ struct Simulation::Impl {
   }
 
   // The nose conveyor hands boxes to the robot's body conveyor at its -x end:
-  // a box on a belt whose trailing edge reaches that end has left the trailer.
+  // a box lying on a belt whose trailing edge reaches that end has left the
+  // trailer. Lying on it: its lowest point near the belt's surface (a box
+  // pushed along the floor in front of the base is not on the belt).
   bool unloaded_by_belt(const Body& b) const {
     constexpr double kHandover = 0.05;  // m; the base's face stops a box this short of the end
+    constexpr double kOnBelt = 0.03;    // m between the box's lowest point and the belt
     for (const LinkGeometry& l : state.links) {
-      if (l.belt_speed <= 0.0) continue;
+      if (l.belt_speed <= 0.0 || l.feeds_belt) continue;
       const Eigen::Vector3d local = l.pose.inverse() * b.box.pose.translation();
       const Eigen::Matrix3d r = l.pose.linear().transpose() * b.box.pose.linear();
-      const double reach = (r.cwiseAbs() * (0.5 * b.box.size)).x();
-      if (local.x() - reach < -0.5 * l.size.x() + kHandover &&
-          std::abs(local.y()) < 0.5 * l.size.y() && local.z() > 0.0 &&
-          local.z() < 0.5 * l.size.z() + 1.0) {
+      const Eigen::Vector3d reach = r.cwiseAbs() * (0.5 * b.box.size);
+      const double above_belt = local.z() - reach.z() - 0.5 * l.size.z();
+      if (local.x() - reach.x() < -0.5 * l.size.x() + kHandover &&
+          std::abs(local.y()) < 0.5 * l.size.y() && above_belt > -kOnBelt && above_belt < kOnBelt) {
         return true;
       }
     }

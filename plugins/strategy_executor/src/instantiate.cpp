@@ -268,7 +268,7 @@ std::optional<SweepPlan> sweep_plan(const sim::SceneAnalysis& scene, sim::Action
                                     const Geometry& g, double scoop_extension,
                                     const sim::Config& current, double trailer_depth) {
   if (scene.front_pile.empty()) return std::nullopt;
-  const double tip = g.conveyor_length + scoop_extension;  // ahead of base_x
+  const double tip = g.conveyor_length + scoop_extension + g.scoop_lip;  // ahead of base_x
   SweepPlan p;
   p.swept = scene.front_pile;
   p.start_base_x = std::min(current[sim::kBaseX], scene.pile_near_x - tip - g.nose_clearance);

@@ -29,9 +29,11 @@ struct LinkGeometry {
   Eigen::Vector3d size{0.1, 0.1, 0.1};
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   // Conveyor belt on this shape: its surface moves along the shape's local -x
-  // axis at this speed (m/s). A box whose trailing edge reaches the local -x
-  // end is handed to the robot's body conveyor and counts as unloaded.
+  // axis at this speed (m/s). A box lying on it whose trailing edge reaches
+  // the local -x end is handed to the robot's body conveyor and counts as
+  // unloaded, unless that end feeds another belt (`feeds_belt`).
   double belt_speed = 0.0;
+  bool feeds_belt = false;
 };
 
 // The suction gripper: a grid of cups on a plate.
@@ -44,8 +46,8 @@ struct SuctionPlate {
   int cups_y = 3;
   double cup_radius = 0.03;  // m; a cup seals only with its whole rim on the face
   double cup_force = 90.0;   // N a cup holds (60 mm bellows cup, safety factor 2)
-  double reach = 0.02;      // largest gap between cup face and box face that still grips
-  double max_tilt = 0.26;   // rad between the plate normal and the box face normal
+  double reach = 0.02;       // largest gap between cup face and box face that still grips
+  double max_tilt = 0.26;    // rad between the plate normal and the box face normal
 };
 
 struct PhysicsOptions {
