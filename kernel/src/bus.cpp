@@ -299,9 +299,10 @@ Status Bus::call(Endpoint* caller, const std::string& service, std::uint64_t req
     id = next_id_++;
     const auto deadline = Clock::now() + timeout;
     pending_[id] = {caller, chosen.owner, fn, user, service, deadline, timeout};
-    // The timer thread sleeps until the earliest deadline: wake it only when
-    // this one comes first.
-    wake_timer = deadlines_.empty() || deadline < deadlines_.begin()->first;
+    // The timer thread keeps sleeping until the time it chose, even when the
+    // call it chose it for has completed: wake it only for an earlier
+    // deadline, not for every call made after a quiet moment.
+    wake_timer = deadline < timer_wakes_at_;
     deadlines_.emplace(deadline, id);
     request->type_id = request_type;
     request->stamp_ns = wall_now_ns();
@@ -395,11 +396,13 @@ void Bus::timer_loop() {
   std::unique_lock lock(m_);
   while (!stop_) {
     if (deadlines_.empty()) {
+      timer_wakes_at_ = Clock::time_point::max();
       timer_cv_.wait(lock);
       continue;
     }
     const auto first = deadlines_.begin()->first;
     if (Clock::now() < first) {
+      timer_wakes_at_ = first;
       timer_cv_.wait_until(lock, first);
       continue;
     }

@@ -163,6 +163,9 @@ class Bus {
   std::condition_variable replied_;
 
   std::condition_variable timer_cv_;
+  // When the timer thread wakes by itself (max: only when notified).
+  std::chrono::steady_clock::time_point timer_wakes_at_ =
+      std::chrono::steady_clock::time_point::max();
   bool stop_ = false;
   std::thread timer_;
 };

@@ -152,6 +152,11 @@ Expected<std::string> cyclone_config_xml(const DdsConfig& dds) {
     }
   }
   xml += "</Peers></Discovery>";
+  // The request and reply writers keep all samples until acknowledged; by
+  // default one starts throttling above 30 kB unacknowledged, so each large
+  // call or reply blocked its writer until the peer's ACK arrived (64 KiB
+  // round trip: several wake-ups more).
+  xml += "<Internal><Watermarks><WhcHighInit>500 kB</WhcHighInit></Watermarks></Internal>";
   if (!dds.security_dir.empty()) {
     namespace fs = std::filesystem;
     for (const char* f : {"identity_ca.pem", "identity.pem", "identity_key.pem",
@@ -212,6 +217,7 @@ struct DdsBridge::Reader {
   std::uint64_t type_id = 0;  // data readers: what local subscribers expect
   std::size_t max_size = 0;
   std::uint64_t publisher = 0;  // local publisher id, once known
+  Sample spare;                 // the sample to take into next (under m)
 };
 
 struct DdsBridge::Outgoing {
@@ -387,14 +393,17 @@ void DdsBridge::take(Reader* r) {
   // Samples are taken into memory of our own rather than Cyclone's loan, so
   // that a payload goes on to the bus without another copy (64 KiB: a few
   // microseconds per hop). A sample still referenced by a message is left to
-  // it and a fresh one taken next.
+  // it and a fresh one taken next; otherwise the reader's last one is reused,
+  // its buffers with it (not a fresh payload buffer per message).
   const auto fresh = [] {
     return Sample(
         static_cast<plr_dds_Envelope*>(dds_alloc(sizeof(plr_dds_Envelope))),
         [](plr_dds_Envelope* e) { dds_sample_free(e, &plr_dds_Envelope_desc, DDS_FREE_ALL); });
   };
   std::lock_guard lock(r->m);
-  for (Sample sample = fresh();; sample = sample.use_count() == 1 ? std::move(sample) : fresh()) {
+  for (;;) {
+    if (r->spare.use_count() != 1) r->spare = fresh();
+    const Sample& sample = r->spare;
     void* buffer = sample.get();
     dds_sample_info_t info;
     if (dds_take(r->reader, &buffer, &info, 1, 1) <= 0) return;

@@ -18,16 +18,24 @@ Executor::~Executor() {
   }
   cv_.notify_all();
   thread_.join();
+  // A poster may still be about to notify for a task that has already run.
+  while (posting_.load(std::memory_order_acquire) != 0) std::this_thread::yield();
 }
 
 bool Executor::post(std::function<void()> task) {
-  // Notified under the lock: once the task has run, a swap may destroy this
-  // executor, and the poster must not touch cv_ after that.
-  std::lock_guard lock(m_);
-  if (stop_ || queue_.size() >= max_queued_) return false;
-  queue_.push_back(std::move(task));
-  cv_.notify_one();
-  return true;
+  // Notified after unlocking, so the woken thread does not block on m_ at
+  // once (a second wake-up per task). Once the task has run, a swap may
+  // destroy this executor: the destructor waits for `posting_` first.
+  posting_.fetch_add(1, std::memory_order_relaxed);
+  bool queued = false;
+  {
+    std::lock_guard lock(m_);
+    queued = !stop_ && queue_.size() < max_queued_;
+    if (queued) queue_.push_back(std::move(task));
+  }
+  if (queued) cv_.notify_one();
+  posting_.fetch_sub(1, std::memory_order_release);
+  return queued;
 }
 
 void Executor::run_sync(const std::function<void()>& task) {

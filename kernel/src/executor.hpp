@@ -2,6 +2,7 @@
 // one at a time, so a plug-in needs no locks of its own for them.
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <functional>
@@ -38,6 +39,7 @@ class Executor {
   std::deque<std::function<void()>> queue_;
   bool busy_ = false;
   bool stop_ = false;
+  std::atomic<int> posting_{0};  // post() calls not yet returned
   std::thread thread_;
 };
 

@@ -125,8 +125,12 @@ class Client {
     bus_.attach(bridge_.get());
     return "";
   }
-  // One round trip; microseconds, or nothing when the call failed.
-  std::optional<double> call(const std::vector<std::uint8_t>& payload) {
+  struct RoundTrip {
+    double resumed_us;   // until the calling thread runs again
+    double callback_us;  // until the reply callback runs (Cyclone's receive thread)
+  };
+  // One round trip, or nothing when the call failed.
+  std::optional<RoundTrip> call(const std::vector<std::uint8_t>& payload) {
     done_.store(0);
     const auto t0 = Clock::now();
     auto s = bus_.call(&caller_, "echo", kEchoType,
@@ -135,12 +139,15 @@ class Client {
     if (!s) return std::nullopt;
     done_.wait(0);
     if (status_ != PLR_OK || reply_size_ != payload.size()) return std::nullopt;
-    return std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+    const auto t1 = Clock::now();
+    return RoundTrip{std::chrono::duration<double, std::micro>(t1 - t0).count(),
+                     std::chrono::duration<double, std::micro>(reply_at_ - t0).count()};
   }
 
  private:
   static void on_reply(void* user, plr_status status, const plr_msg* reply, const char*) {
     auto* self = static_cast<Client*>(user);
+    self->reply_at_ = Clock::now();
     self->status_ = status;
     self->reply_size_ = reply ? msg_view(reply).size : 0;
     self->done_.store(1);
@@ -153,6 +160,7 @@ class Client {
   std::unique_ptr<DdsBridge> bridge_;
   std::atomic<int> done_{0};
   plr_status status_ = PLR_OK;
+  Clock::time_point reply_at_;
   std::size_t reply_size_ = 0;
 };
 
@@ -234,23 +242,27 @@ int bench(bool quick, bool json) {
     for (auto size : sizes) {
       std::vector<std::uint8_t> payload(size, 0x5a);
       for (int i = 0; i < 200; ++i) (void)client.call(payload);  // warm-up
-      std::vector<double> rtt;
+      std::vector<double> rtt, at_callback;
       std::size_t failed = 0;
       const auto until = Clock::now() + std::chrono::seconds(seconds);
       while (Clock::now() < until) {
-        if (auto us = client.call(payload))
-          rtt.push_back(*us);
-        else
+        if (auto rt = client.call(payload)) {
+          rtt.push_back(rt->resumed_us);
+          at_callback.push_back(rt->callback_us);
+        } else {
           ++failed;
+        }
       }
       const auto f = summarize(rtt);
+      const auto cb = summarize(at_callback);
       results.push_back({{"size", size},
                          {"plr",
                           {{"median_us", f.median_us},
                            {"mean_us", f.mean_us},
                            {"p99_us", f.p99_us},
                            {"count", f.count},
-                           {"failed", failed}}}});
+                           {"failed", failed},
+                           {"reply_callback_median_us", cb.median_us}}}});
     }
   }
   finish(server);
@@ -280,19 +292,20 @@ int bench(bool quick, bool json) {
   }
   std::cout << fmt::format(
       "Service round trip over Cyclone DDS, loopback, two processes, {} s per size, not pinned\n"
-      "plr = caller node -> bus -> DDS bridge ~> DDS bridge -> bus -> echo node and back;\n"
+      "plr = caller node -> bus -> DDS bridge ~> DDS bridge -> bus -> echo node and back,\n"
+      "until the calling thread runs again (cb p50: until the reply callback runs);\n"
       "ddsperf = Cyclone's own ping/pong (same Cyclone config).\n\n",
       seconds);
-  std::cout << fmt::format("{:>8} | {:>10} {:>10} {:>10} | {:>10} {:>10} {:>10} | {:>8}\n", "size",
-                           "plr p50", "plr mean", "plr p99", "dds p50", "dds mean", "dds p99",
-                           "p50 x");
+  std::cout << fmt::format("{:>8} | {:>10} {:>10} {:>10} {:>10} | {:>10} {:>10} {:>10} | {:>8}\n",
+                           "size", "plr p50", "plr mean", "plr p99", "cb p50", "dds p50",
+                           "dds mean", "dds p99", "p50 x");
   for (const auto& r : results) {
     const auto& p = r["plr"];
     const auto& d = r["ddsperf"];
     std::cout << fmt::format(
-        "{:>8} | {:>8.1f}us {:>8.1f}us {:>8.1f}us | {:>8}   {:>8}   {:>8}   | {:>8}\n",
+        "{:>8} | {:>8.1f}us {:>8.1f}us {:>8.1f}us {:>8.1f}us | {:>8}   {:>8}   {:>8}   | {:>8}\n",
         r["size"].get<std::size_t>(), p["median_us"].get<double>(), p["mean_us"].get<double>(),
-        p["p99_us"].get<double>(),
+        p["p99_us"].get<double>(), p["reply_callback_median_us"].get<double>(),
         d.is_null() ? "-" : fmt::format("{:.1f}us", d["median_us"].get<double>()),
         d.is_null() ? "-" : fmt::format("{:.1f}us", d["mean_us"].get<double>()),
         d.is_null() ? "-" : fmt::format("{:.1f}us", d["p99_us"].get<double>()),
