@@ -244,6 +244,11 @@ struct Simulation::Impl {
         const Wrench& w = wrenches[static_cast<std::size_t>(slots[s])];
         multibody.set_wrench(static_cast<int>(s), w.force, w.torque);
       }
+      contacts.damp(state, dt, wrenches);
+      for (std::size_t s = 0; s < slots.size(); ++s) {
+        const Body& b = state.bodies[static_cast<std::size_t>(slots[s])];
+        multibody.set_velocity(static_cast<int>(s), b.v, b.w);
+      }
       multibody.step(dt);
       for (std::size_t s = 0; s < slots.size(); ++s) {
         Body& b = state.bodies[static_cast<std::size_t>(slots[s])];

@@ -44,8 +44,8 @@ struct SuctionPlate {
   int cups_y = 3;
   double cup_radius = 0.03;  // m; a cup seals only with its whole rim on the face
   double cup_force = 90.0;   // N a cup holds (60 mm bellows cup, safety factor 2)
-  double reach = 0.02;      // largest gap between cup face and box face that still grips
-  double max_tilt = 0.26;   // rad between the plate normal and the box face normal
+  double reach = 0.02;       // largest gap between cup face and box face that still grips
+  double max_tilt = 0.26;    // rad between the plate normal and the box face normal
 };
 
 struct PhysicsOptions {
@@ -57,7 +57,11 @@ struct PhysicsOptions {
   // Penalty contact: a pair's stiffness is reduced_mass * contact_omega^2, so
   // light and heavy boxes ring at the same frequency (stable at this step).
   double contact_omega = 600.0;  // rad/s
-  double damping_ratio = 0.5;
+  double damping_ratio = 0.5;    // contacts with robot shapes (explicit damper)
+  // Box-box and box-trailer contacts: cardboard does not bounce, and a stack
+  // must not rock on its contact springs. Damped implicitly, so any value is
+  // stable; normal c = 2 * ratio * reduced_mass * contact_omega, tangential half.
+  double box_damping_ratio = 4.0;
   bool sleeping = true;
   double sleep_speed = 0.01;  // m/s at the box's corners
   double sleep_time = 0.25;   // s below sleep_speed before a box freezes
