@@ -49,7 +49,16 @@ bool Contacts::collide(const fcl::CollisionGeometryd& ga, const Eigen::Isometry3
   for (std::size_t i = 0; i < result.numContacts(); ++i) {
     const auto& c = result.getContact(i);
     // FCL's normal points from a to b; the force on a pushes along -normal.
-    if (c.penetration_depth > 0.0) points_.push_back({c.pos, -c.normal, c.penetration_depth});
+    if (c.penetration_depth > 0.0) points_.push_back({c.pos, -c.normal, c.penetration_depth, 0.0});
+  }
+  for (Point& pt : points_) pt.weight = 1.0 / static_cast<double>(points_.size());
+  return !points_.empty();
+}
+
+bool Contacts::take(const Patch& patch) {
+  points_.clear();
+  for (const PatchPoint& pt : patch.points) {
+    points_.push_back({pt.p, patch.normal, pt.depth, pt.weight});
   }
   return !points_.empty();
 }
@@ -62,9 +71,12 @@ void Contacts::apply(State& state, int a, int b, const Other& o, const PairKey& 
   // a neighbour falling asleep does not change the force (and kick this box).
   const double m = o.mass > 0.0 ? ma * o.mass / (ma + o.mass) : ma;
   const double omega = options_.contact_omega;
-  const double n_points = static_cast<double>(points_.size());
-  const double k = m * omega * omega / n_points;
-  const double c = 2.0 * options_.damping_ratio * m * omega / n_points;
+  const double k = m * omega * omega;
+  const double c = 2.0 * options_.damping_ratio * m * omega;
+  // Box-box and box-trailer contacts are damped by damp(), after this step's
+  // forces; robot shapes keep the explicit damper.
+  const bool implicit = key.kind != kBoxLink;
+  const double c_box = 2.0 * options_.box_damping_ratio * m * omega;
   const Eigen::Vector3d ca = body.box.pose.translation();
   const auto relative_velocity = [&](const Eigen::Vector3d& p) -> Eigen::Vector3d {
     return (body.v + body.w.cross(p - ca)) - (o.v + o.w.cross(p - o.centre) + o.belt);
@@ -74,17 +86,20 @@ void Contacts::apply(State& state, int a, int b, const Other& o, const PairKey& 
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::Zero();
   for (const Point& pt : points_) {
     const double vn = relative_velocity(pt.p).dot(pt.n);
-    const double fn = std::max(0.0, k * pt.depth - c * vn);
+    const double fn = pt.weight * std::max(0.0, k * pt.depth - (implicit ? 0.0 : c * vn));
+    if (implicit) {
+      dampers_.push_back(
+          {a, b, pt.p, pt.n, pt.weight * c_box, pt.weight * k * pt.depth * dt, false});
+    }
     const Eigen::Vector3d f = fn * pt.n;
     on_a.force += f;
     on_a.torque += (pt.p - ca).cross(f);
     on_b.force -= f;
     on_b.torque -= (pt.p - o.centre).cross(f);
     normal_sum += fn;
-    centroid += pt.p;
-    normal += pt.n;
+    centroid += pt.weight * pt.p;
+    normal += pt.weight * pt.n;
   }
-  centroid /= n_points;
   normal.normalize();
   // Friction: a tangential spring-damper at the contact centroid plus a
   // torsional one about the normal, each capped by Coulomb's law; the springs
@@ -102,12 +117,15 @@ void Contacts::apply(State& state, int a, int b, const Other& o, const PairKey& 
       twist = old->twist;
     }
     s += vt * dt;
-    const double kt = 0.5 * k * n_points, ct = 0.5 * c * n_points;
-    Eigen::Vector3d ft = -kt * s - ct * vt;
+    const double kt = 0.5 * k, ct = 0.5 * c;
+    Eigen::Vector3d ft = -kt * s - (implicit ? 0.0 : ct) * vt;
     const double limit = mu * normal_sum;
     if (ft.norm() > limit) {
       ft *= limit / ft.norm();
       s = -ft / kt;  // slipping: the spring stays at the Coulomb limit
+    }
+    if (implicit) {  // the damper gets what Coulomb leaves of the limit
+      dampers_.push_back({a, b, centroid, normal, 0.5 * c_box, (limit - ft.norm()) * dt, true});
     }
     on_a.force += ft;
     on_a.torque += (centroid - ca).cross(ft);
@@ -118,8 +136,8 @@ void Contacts::apply(State& state, int a, int b, const Other& o, const PairKey& 
     for (const Point& pt : points_) {
       const Eigen::Vector3d r = pt.p - centroid;
       const double d2 = (r - normal * normal.dot(r)).squaredNorm();
-      arm += std::sqrt(d2) / n_points;
-      arm2 += d2 / n_points;
+      arm += pt.weight * std::sqrt(d2);
+      arm2 += pt.weight * d2;
     }
     if (arm > 1e-4) {
       const double spin = normal.dot(body.w - o.w);
@@ -154,6 +172,7 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
   wrenches.assign(bodies.size(), Wrench{});
   old_pairs_.swap(state.pairs);
   state.pairs.clear();
+  dampers_.clear();
   for (int i = 0; i < n; ++i) {
     const Body& b = bodies[static_cast<std::size_t>(i)];
     if (b.mode == Mode::kGone) continue;
@@ -189,16 +208,8 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
       // Quick reject: the AABB is on the inner side.
       const Eigen::Vector3d probe = (normal.array() > 0).select(lo_[ai], hi_[ai]);
       if (normal.dot(probe) >= offset) continue;
-      points_.clear();
-      for (int corner = 0; corner < 8; ++corner) {
-        const Eigen::Vector3d local(((corner & 1) ? 0.5 : -0.5) * a.box.size.x(),
-                                    ((corner & 2) ? 0.5 : -0.5) * a.box.size.y(),
-                                    ((corner & 4) ? 0.5 : -0.5) * a.box.size.z());
-        const Eigen::Vector3d x = a.box.pose * local;
-        const double depth = offset - normal.dot(x);
-        if (depth > 0.0) points_.push_back({x + 0.5 * depth * normal, normal, depth});
-      }
-      if (!points_.empty()) {
+      box_plane_patch(a.box.size, a.box.pose, normal, offset, patch_);
+      if (take(patch_)) {
         apply(state, i, -1, ground, {a.box.id, static_cast<std::uint32_t>(p), kBoxPlane},
               options_.friction_trailer, dt, wrenches);
       }
@@ -216,7 +227,8 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
         wake.push_back(j);
       }
       if (disjoint(lo_[ai], hi_[ai], lo_[bj], hi_[bj])) continue;
-      if (!collide(box_shapes_[ai], a.box.pose, box_shapes_[bj], b.box.pose)) continue;
+      box_box_patch(a.box.size, a.box.pose, b.box.size, b.box.pose, patch_);
+      if (!take(patch_)) continue;
       // Pressed into hard by a slow box (e.g. a growing load): wake up too.
       if (b.mode == Mode::kAsleep && deepest() > options_.wake_depth) wake.push_back(j);
       const Other other{b.box.mass, b.box.pose.translation(), b.v, b.w, Eigen::Vector3d::Zero()};
@@ -269,6 +281,63 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
             [](const PairState& x, const PairState& y) { return x.key < y.key; });
   std::sort(wake.begin(), wake.end());
   wake.erase(std::unique(wake.begin(), wake.end()), wake.end());
+}
+
+void Contacts::damp(State& state, double dt, std::vector<Wrench>& wrenches) {
+  std::vector<Body>& bodies = state.bodies;
+  inverse_inertia_.resize(bodies.size());
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    const Body& b = bodies[i];
+    if (b.mode != Mode::kAwake) continue;
+    const Eigen::Vector3d s2 = b.box.size.cwiseProduct(b.box.size);
+    const Eigen::Vector3d inverse(12.0 / (b.box.mass * (s2.y() + s2.z())),
+                                  12.0 / (b.box.mass * (s2.x() + s2.z())),
+                                  12.0 / (b.box.mass * (s2.x() + s2.y())));
+    const Eigen::Matrix3d r = b.box.pose.linear();
+    inverse_inertia_[i] = r * inverse.asDiagonal() * r.transpose();
+  }
+  for (const Damper& d : dampers_) {
+    Body& a = bodies[static_cast<std::size_t>(d.a)];
+    Body* b = d.b >= 0 ? &bodies[static_cast<std::size_t>(d.b)] : nullptr;
+    const bool b_free = b != nullptr && b->mode == Mode::kAwake;
+    const Eigen::Vector3d ra = d.p - a.box.pose.translation();
+    Eigen::Vector3d vrel = a.v + a.w.cross(ra), rb = Eigen::Vector3d::Zero();
+    if (b != nullptr) {
+      rb = d.p - b->box.pose.translation();
+      vrel -= b->v + b->w.cross(rb);
+    }
+    // Normal dampers act along n; tangential ones against the sliding velocity.
+    Eigen::Vector3d dir = d.n;
+    double speed = vrel.dot(d.n);
+    if (d.tangential) {
+      const Eigen::Vector3d vt = vrel - d.n * speed;
+      speed = vt.norm();
+      if (speed < 1e-12) continue;
+      dir = vt / speed;
+    }
+    const Eigen::Matrix3d& ia = inverse_inertia_[static_cast<std::size_t>(d.a)];
+    const Eigen::Vector3d ta = ra.cross(dir), tb = rb.cross(dir);
+    double inverse_mass = 1.0 / a.box.mass + ta.dot(ia * ta);
+    if (b_free) {
+      inverse_mass +=
+          1.0 / b->box.mass + tb.dot(inverse_inertia_[static_cast<std::size_t>(d.b)] * tb);
+    }
+    // The relative speed decays as exp(-c t / m_eff) over the step; a normal
+    // damper pulls no harder than its spring pushes, a tangential one stays
+    // within Coulomb's limit.
+    const double impulse =
+        std::max(-d.limit, -(1.0 - std::exp(-dt * d.c * inverse_mass)) * speed / inverse_mass);
+    a.v += (impulse / a.box.mass) * dir;
+    a.w += ia * (impulse * ta);
+    if (b_free) {
+      b->v -= (impulse / b->box.mass) * dir;
+      b->w -= inverse_inertia_[static_cast<std::size_t>(d.b)] * (impulse * tb);
+    } else if (b != nullptr && b->mode == Mode::kHeld) {  // the cups feel it
+      Wrench& wb = wrenches[static_cast<std::size_t>(d.b)];
+      wb.force -= (impulse / dt) * dir;
+      wb.torque -= (impulse / dt) * tb;
+    }
+  }
 }
 
 }  // namespace plr::sim::detail

@@ -1,6 +1,6 @@
 // Internal: penalty contact between boxes, the trailer and robot shapes.
-// Box-box and box-robot contact points come from FCL; box-trailer contact
-// from the box corners below each trailer plane.
+// Box-box and box-trailer contact are face-clipped patches (patch.hpp);
+// box-robot contact points come from FCL (robot shapes include cylinders).
 #pragma once
 
 #include <fcl/fcl.h>
@@ -8,6 +8,7 @@
 #include <memory>
 #include <vector>
 
+#include "patch.hpp"
 #include "state.hpp"
 
 namespace plr::sim::detail {
@@ -27,19 +28,38 @@ class Contacts {
   void compute(State& state, const std::vector<Mover>& links, double dt,
                std::vector<Wrench>& wrenches, std::vector<int>& wake);
 
+  // Damping of the box-box and box-trailer contacts found by the last
+  // compute(): applied to the awake boxes' velocities before the step, as
+  // impulses that let each damper's relative speed decay exactly over dt
+  // (Gauss-Seidel, one pass over the pairs' points and friction patches).
+  // Explicit damping is only stable while dt * c / m stays small, which
+  // leaves a stack of boxes rocking on its contact springs for seconds; this
+  // is stable at any c, so boxes are damped like cardboard (no bounce).
+  // Impulses on held boxes go to their wrenches, for the suction load.
+  void damp(State& state, double dt, std::vector<Wrench>& wrenches);
+
  private:
   struct Point {
     Eigen::Vector3d p, n;  // n points into body a
     double depth;
+    double weight;  // share of the pair's stiffness; a pair's weights sum to 1
   };
   struct Other {
     double mass;  // 0 for the trailer and robot shapes (immovable)
     Eigen::Vector3d centre, v, w, belt;
   };
+  struct Damper {
+    int a, b;  // b < 0: the trailer or a sleeping box; a held b moves but takes no impulse
+    Eigen::Vector3d p, n;
+    double c;      // N s/m
+    double limit;  // largest impulse against the motion (normal: the spring's this step)
+    bool tangential;
+  };
   void apply(State& state, int a, int b, const Other& other, const PairKey& key, double mu,
              double dt, std::vector<Wrench>& wrenches);
   bool collide(const fcl::CollisionGeometryd& ga, const Eigen::Isometry3d& pa,
                const fcl::CollisionGeometryd& gb, const Eigen::Isometry3d& pb);
+  bool take(const Patch& patch);  // into points_; false if empty
 
   PhysicsOptions options_;
   Trailer trailer_;
@@ -48,7 +68,10 @@ class Contacts {
   std::vector<Eigen::Vector3d> link_half_;  // bounding half extents in the link frame
   std::vector<Eigen::Vector3d> lo_, hi_;    // world AABBs of the bodies this step
   std::vector<Point> points_;
+  Patch patch_;
   std::vector<PairState> old_pairs_;
+  std::vector<Damper> dampers_;
+  std::vector<Eigen::Matrix3d> inverse_inertia_;
   fcl::CollisionRequestd request_;
 };
 

@@ -122,6 +122,16 @@ void Multibody::set_wrench(int i, const Eigen::Vector3d& force, const Eigen::Vec
   impl_->wrench[static_cast<std::size_t>(i)] = SimTK::SpatialVec(to_simtk(torque), to_simtk(force));
 }
 
+void Multibody::set_velocity(int i, const Eigen::Vector3d& v, const Eigen::Vector3d& w) {
+  // A free mobilizer's u is (angular, linear) velocity in the ground frame.
+  const int u0 = impl_->bodies[static_cast<std::size_t>(i)].getFirstUIndex(impl_->state);
+  SimTK::Vector& u = impl_->state.updU();
+  for (int k = 0; k < 3; ++k) {
+    u[u0 + k] = w[k];
+    u[u0 + 3 + k] = v[k];
+  }
+}
+
 void Multibody::step(double dt) {
   Impl& m = *impl_;
   SimTK::State& s = m.state;

@@ -34,6 +34,8 @@ class Multibody {
   void set_wrench(int i, const Eigen::Vector3d& force, const Eigen::Vector3d& torque);
   // One semi-explicit Euler step: u += dt * udot(q, u); q += dt * N(q) u.
   void step(double dt);
+  // Replaces body i's velocity (world frame, at the centre) after a step.
+  void set_velocity(int i, const Eigen::Vector3d& v, const Eigen::Vector3d& w);
 
  private:
   struct Impl;

@@ -247,6 +247,11 @@ struct Simulation::Impl {
         const Wrench& w = wrenches[static_cast<std::size_t>(slots[s])];
         multibody.set_wrench(static_cast<int>(s), w.force, w.torque);
       }
+      contacts.damp(state, dt, wrenches);
+      for (std::size_t s = 0; s < slots.size(); ++s) {
+        const Body& b = state.bodies[static_cast<std::size_t>(slots[s])];
+        multibody.set_velocity(static_cast<int>(s), b.v, b.w);
+      }
       multibody.step(dt);
       for (std::size_t s = 0; s < slots.size(); ++s) {
         Body& b = state.bodies[static_cast<std::size_t>(slots[s])];
@@ -283,7 +288,17 @@ struct Simulation::Impl {
         continue;
       }
       if (b.mode != Mode::kAwake || !options.sleeping) continue;
-      if (b.v.norm() + b.w.norm() * b.radius < options.sleep_speed) {
+      if (b.still == 0.0) b.rest = b.box.pose;
+      // Slow: below sleep_speed, or ringing on its contact springs a little
+      // faster while its corners stay within sleep_drift of where it was.
+      const double speed = b.v.norm() + b.w.norm() * b.radius;
+      const auto drift = [&] {
+        const Eigen::AngleAxisd turn(b.box.pose.linear() * b.rest.linear().transpose());
+        return (b.box.pose.translation() - b.rest.translation()).norm() +
+               std::abs(turn.angle()) * b.radius;
+      };
+      if (speed < options.sleep_speed ||
+          (speed < options.sleep_ring_speed && drift() < options.sleep_drift)) {
         b.still += dt;
         if (b.still >= options.sleep_time) {
           b.mode = Mode::kAsleep;

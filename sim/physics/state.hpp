@@ -19,8 +19,9 @@ struct Body {
   Eigen::Vector3d v = Eigen::Vector3d::Zero();  // world frame, at the centre
   Eigen::Vector3d w = Eigen::Vector3d::Zero();
   Mode mode = Mode::kAwake;
-  double still = 0.0;   // s spent below the sleep speed
-  double radius = 0.0;  // half diagonal
+  double still = 0.0;                                      // s spent slow enough to sleep
+  Eigen::Isometry3d rest = Eigen::Isometry3d::Identity();  // pose when `still` began
+  double radius = 0.0;                                     // half diagonal
   // While held: pose relative to the suction plate, what the cups hold.
   Eigen::Isometry3d grip = Eigen::Isometry3d::Identity();
   double capacity = 0.0;

@@ -11,8 +11,10 @@
 // them (no interpenetration, at rest within 2 s). --generators N only checks
 // the first N seeds of every family as generated (A walls stacked, B piles
 // before their drop): clean and at rest within 2 s; exit status 1 if not.
+// --families B1,B2 limits that check to the families listed.
 //
 //   bench_sim [--quick] [--json] [--repeat R] [--environments N] [--generators N]
+//             [--families LIST]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -295,11 +297,11 @@ std::string check_environments(int seeds, bool table) {
 // The generators as generated (piles not yet dropped): every world free of
 // interpenetration, then simulated until at rest, at most 2 s; a world at
 // rest must also stay clean (nothing sank).
-int check_generators(int seeds) {
+int check_generators(int seeds, const std::vector<EnvFamily>& families) {
   std::printf("%-6s %6s %8s %8s %10s %12s %12s %10s\n", "family", "seeds", "boxes", "clean",
               "settled", "rest med [s]", "rest max [s]", "wall [s]");
   int failures = 0;
-  for (EnvFamily f : {EnvFamily::kA1, EnvFamily::kA2, EnvFamily::kB1, EnvFamily::kB2}) {
+  for (const EnvFamily f : families) {
     int clean = 0, settled = 0;
     double boxes = 0.0;
     std::vector<double> rest;
@@ -333,6 +335,7 @@ int check_generators(int seeds) {
 int main(int argc, char** argv) {
   bool quick = false, json = false;
   int repeat = 3, environments = 0, generators = 0;
+  std::vector<EnvFamily> families{EnvFamily::kA1, EnvFamily::kA2, EnvFamily::kB1, EnvFamily::kB2};
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--quick") == 0) {
       quick = true;
@@ -344,14 +347,27 @@ int main(int argc, char** argv) {
       environments = std::max(0, std::atoi(argv[++i]));
     } else if (std::strcmp(argv[i], "--generators") == 0 && i + 1 < argc) {
       generators = std::max(1, std::atoi(argv[++i]));
+    } else if (std::strcmp(argv[i], "--families") == 0 && i + 1 < argc) {
+      families.clear();
+      const std::string list = argv[++i];
+      for (std::size_t at = 0; at <= list.size();) {
+        const std::size_t end = std::min(list.find(',', at), list.size());
+        const auto f = plr::sim::parse_env_family(std::string_view(list).substr(at, end - at));
+        if (!f) {
+          std::fprintf(stderr, "bench_sim: unknown family in '%s'\n", list.c_str());
+          return 2;
+        }
+        families.push_back(*f);
+        at = end + 1;
+      }
     } else {
       std::fprintf(stderr,
                    "usage: bench_sim [--quick] [--json] [--repeat R] [--environments N] "
-                   "[--generators N]\n");
+                   "[--generators N] [--families LIST]\n");
       return 2;
     }
   }
-  if (generators > 0) return check_generators(generators);
+  if (generators > 0) return check_generators(generators, families);
   if (quick) repeat = 1;
   const int sequence_actions = quick ? 3 : 10;
 

@@ -1,6 +1,7 @@
 // Generated worlds per family. The test runs two spread seeds per family by
 // default (PLR_SIM_SEEDS=N runs seeds 0..N-1 instead); `bench_sim
-// --generators 100` runs 100 per family and prints how many settle.
+// --generators 100` runs 100 per family and prints how many settle (not yet
+// every pile: docs/notes-sim.md).
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -21,24 +22,21 @@ std::vector<std::uint64_t> seeds() {
 
 class Environments : public ::testing::TestWithParam<EnvFamily> {};
 
-// Every generated world is free of interpenetration. Walls come out at rest
-// and must stay so (at rest within 2 s, nothing sinks). Piles are dropped
-// and settled for a while by make_environment; they must not sink into each
-// other either. (Not every B2 pile rests within 2 s yet, see
-// docs/notes-sim.md, so piles are not checked for rest here; bench_sim
-// --generators reports how many do.)
-TEST_P(Environments, WorldsAreCleanAndWallsSettleWithin2Seconds) {
+// Every generated world is free of interpenetration and, simulated from its
+// generated state (walls stacked, piles hovering before their drop), comes
+// to rest within 2 s without sinking. Piles settled for a while by
+// make_environment must not sink into each other either.
+TEST_P(Environments, WorldsAreCleanAndSettleWithin2Seconds) {
   const bool wall = GetParam() == EnvFamily::kA1 || GetParam() == EnvFamily::kA2;
   for (const std::uint64_t seed : seeds()) {
     const World generated = generate_world(GetParam(), seed);
     ASSERT_FALSE(generated.boxes.empty());
     EXPECT_TRUE(find_interpenetrations(generated, 1e-6).empty()) << "seed " << seed;
-    if (wall) {
-      Simulation sim(generated);
-      EXPECT_GE(sim.settle(2.0), 0.0) << "seed " << seed << " still moving after 2 s";
-      EXPECT_EQ(sim.world().boxes.size(), generated.boxes.size()) << "seed " << seed;
-      EXPECT_TRUE(find_interpenetrations(sim.world(), 0.005).empty()) << "seed " << seed;
-    } else {
+    Simulation sim(generated);
+    EXPECT_GE(sim.settle(2.0), 0.0) << "seed " << seed << " still moving after 2 s";
+    EXPECT_EQ(sim.world().boxes.size(), generated.boxes.size()) << "seed " << seed;
+    EXPECT_TRUE(find_interpenetrations(sim.world(), 0.005).empty()) << "seed " << seed;
+    if (!wall) {
       const World pile = make_environment(GetParam(), seed, Trailer{}, 1.0);
       EXPECT_EQ(pile.boxes.size(), generated.boxes.size()) << "seed " << seed;
       EXPECT_TRUE(find_interpenetrations(pile, 0.005).empty()) << "seed " << seed;

@@ -1,6 +1,7 @@
 // Contact, stacking, falling, robot pushing, snapshots.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <chrono>
 
 #include "plr/sim/generators.hpp"
@@ -95,6 +96,62 @@ TEST(Physics, WallOf150BoxesStands10Seconds) {
   EXPECT_LT(sim.stats().dynamic_steps, sim.stats().steps / 4);
 }
 
+Box yawed(Box b, double yaw) {
+  b.pose.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return b;
+}
+
+// A heavy box on a light one used to rock on the light box's soft contacts
+// for over a second; the stack must come to rest like cardboard does.
+TEST(Physics, HeavyBoxOnALightOneComesToRestQuickly) {
+  World w;
+  w.boxes.push_back(make_box(1, {0.4, 0.4, 0.4}, {10.0, 0.0, 0.2}, 2.0));
+  w.boxes.push_back(yawed(make_box(2, {0.4, 0.3, 0.3}, {10.05, 0.0, 0.556}, 30.0), 0.5));
+  Simulation sim(w);
+  const double rest = sim.settle(2.0);
+  EXPECT_GE(rest, 0.0);
+  EXPECT_LT(rest, 1.0);  // it rocked for over 3 s
+  EXPECT_NEAR(find(sim.world(), 2).pose.translation().z(), 0.55, 0.002);
+}
+
+// Five boxes, each turned against the one below, mixed masses: the stack
+// settles, and without sleeping it neither rings nor walks afterwards
+// (edge-face contacts between turned boxes used to chatter).
+TEST(Physics, StackOfTurnedBoxesSettlesAndStaysPut) {
+  World w;
+  const std::array<double, 5> mass{3.0, 12.0, 5.0, 9.0, 4.0}, yaw{0.0, 0.7, 0.2, 1.1, 0.4};
+  double z = 0.0;
+  for (std::size_t i = 0; i < 5; ++i) {
+    const double h = 0.25 + 0.02 * static_cast<double>(i);
+    w.boxes.push_back(yawed(
+        make_box(static_cast<std::uint32_t>(i + 1), {0.42, 0.36, h},
+                 {10.0 + 0.02 * static_cast<double>(i % 2), 0.0, z + 0.5 * h + 0.001}, mass[i]),
+        yaw[i]));
+    z += h + 0.002;
+  }
+  EXPECT_GE(Simulation(w).settle(1.5), 0.0);
+  PhysicsOptions awake;
+  awake.sleeping = false;
+  Simulation sim(w, awake);
+  sim.step(1.0);
+  const World landed = sim.world();
+  sim.step(2.0);
+  for (const Box& b : sim.world().boxes) {
+    EXPECT_LT((b.pose.translation() - find(landed, b.id).pose.translation()).norm(), 5e-4) << b.id;
+  }
+}
+
+// Damping and sleeping must not hold up what really falls: a box whose
+// centre overhangs the edge of the box below tips off.
+TEST(Physics, OverhangingBoxTipsOver) {
+  World w = column(1, 10.0, 0.0, 8.0);
+  w.boxes.push_back(make_box(2, {0.4, 0.3, 0.3}, {10.0 + 0.2 + 0.05, 0.0, 0.4 + 0.151}, 8.0));
+  Simulation sim(w);
+  EXPECT_GE(sim.settle(3.0), 0.0);
+  const Box top = find(sim.world(), 2);
+  EXPECT_LT(top.pose.translation().z(), 0.4);  // down beside the lower box
+}
+
 TEST(Physics, RemovingTheBottomBoxDropsTheColumn) {
   Simulation sim(column(4));
   ASSERT_GE(sim.settle(2.0), 0.0);
@@ -111,12 +168,17 @@ TEST(Physics, RemovingTheBottomBoxDropsTheColumn) {
 TEST(Physics, PushingTheBottomBoxOutDropsTheOnesAbove) {
   Simulation sim(column(3, 10.0, 0.0));
   ASSERT_GE(sim.settle(2.0), 0.0);
-  // A flat paddle, lower than the bottom box, sweeps it sideways out of the column.
-  LinkGeometry paddle;
+  // A flat paddle, lower than the bottom box, sweeps it sideways out of the
+  // column (stopping before it would squeeze it into the side wall). A fixed
+  // fence above the bottom box holds back the ones on top, which friction
+  // would otherwise carry along.
+  LinkGeometry paddle, fence;
   paddle.size = {0.3, 0.05, 0.3};
-  for (int k = 0; k <= 150; ++k) {
+  fence.size = {0.6, 0.05, 0.8};
+  fence.pose.translation() = Eigen::Vector3d(10.0, 0.25, 0.85);
+  for (int k = 0; k <= 120; ++k) {
     paddle.pose.translation() = Eigen::Vector3d(10.0, -0.5 + 0.01 * k, 0.16);
-    sim.set_robot_links({paddle});
+    sim.set_robot_links({paddle, fence});
     sim.step(0.01);
   }
   sim.set_robot_links({});

@@ -59,12 +59,22 @@ struct PhysicsOptions {
   // Penalty contact: a pair's stiffness is reduced_mass * contact_omega^2, so
   // light and heavy boxes ring at the same frequency (stable at this step).
   double contact_omega = 600.0;  // rad/s
-  double damping_ratio = 0.5;
+  double damping_ratio = 0.5;    // contacts with robot shapes (explicit damper)
+  // Box-box and box-trailer contacts: cardboard does not bounce, and a stack
+  // must not rock on its contact springs. Damped implicitly, so any value is
+  // stable; normal c = 2 * ratio * reduced_mass * contact_omega, tangential half.
+  double box_damping_ratio = 4.0;
   bool sleeping = true;
   double sleep_speed = 0.01;  // m/s at the box's corners
-  double sleep_time = 0.25;   // s below sleep_speed before a box freezes
-  double wake_speed = 0.05;   // m/s of a box touching a sleeping one that wakes it
-  double wake_depth = 0.003;  // m of penetration by something slower that wakes a box
+  double sleep_time = 0.25;   // s slow before a box freezes
+  // Also slow: up to sleep_ring_speed while the corners stay within
+  // sleep_drift of where they were when the box became slow: a box ringing on
+  // its contact springs. One really moving at sleep_speed or more leaves that
+  // behind within 0.1 s, well before sleep_time.
+  double sleep_ring_speed = 0.03;  // m/s
+  double sleep_drift = 0.001;      // m
+  double wake_speed = 0.05;        // m/s of a box touching a sleeping one that wakes it
+  double wake_depth = 0.003;       // m of penetration by something slower that wakes a box
 };
 
 struct UnloadEvent {
