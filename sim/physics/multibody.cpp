@@ -45,6 +45,7 @@ struct Multibody::Impl {
   std::vector<SimTK::SpatialVec> wrench;
   SimTK::State state;
   SimTK::Vector qdot;
+  SimTK::Vector kick;  // velocity changes for the next step
 };
 
 Multibody::Multibody() : impl_(std::make_unique<Impl>()) {}
@@ -89,6 +90,8 @@ void Multibody::build(const std::vector<FreeBody>& bodies, double gravity, doubl
     }
   }
   m.system->realize(m.state, SimTK::Stage::Velocity);
+  m.kick.resize(m.state.getNU());
+  m.kick = 0.0;
   impl_ = std::move(next);
 }
 
@@ -122,13 +125,13 @@ void Multibody::set_wrench(int i, const Eigen::Vector3d& force, const Eigen::Vec
   impl_->wrench[static_cast<std::size_t>(i)] = SimTK::SpatialVec(to_simtk(torque), to_simtk(force));
 }
 
-void Multibody::set_velocity(int i, const Eigen::Vector3d& v, const Eigen::Vector3d& w) {
+void Multibody::add_velocity(int i, const Eigen::Vector3d& dv, const Eigen::Vector3d& dw) {
   // A free mobilizer's u is (angular, linear) velocity in the ground frame.
-  const int u0 = impl_->bodies[static_cast<std::size_t>(i)].getFirstUIndex(impl_->state);
-  SimTK::Vector& u = impl_->state.updU();
+  Impl& m = *impl_;
+  const int u0 = m.bodies[static_cast<std::size_t>(i)].getFirstUIndex(m.state);
   for (int k = 0; k < 3; ++k) {
-    u[u0 + k] = w[k];
-    u[u0 + 3 + k] = v[k];
+    m.kick[u0 + k] += dw[k];
+    m.kick[u0 + 3 + k] += dv[k];
   }
 }
 
@@ -136,7 +139,10 @@ void Multibody::step(double dt) {
   Impl& m = *impl_;
   SimTK::State& s = m.state;
   m.system->realize(s, SimTK::Stage::Acceleration);
-  const SimTK::Vector u = s.getU() + dt * s.getUDot();
+  // Adding the kick here rather than to the state keeps the state realized
+  // to Velocity between steps (no second velocity realization per step).
+  const SimTK::Vector u = s.getU() + m.kick + dt * s.getUDot();
+  m.kick = 0.0;
   s.updU() = u;
   m.matter->multiplyByN(s, false, u, m.qdot);
   SimTK::Vector& q = s.updQ();

@@ -32,10 +32,11 @@ class Multibody {
   void read(int i, Eigen::Isometry3d& pose, Eigen::Vector3d& v, Eigen::Vector3d& w) const;
   // Force and torque (about the centre, world frame) for the next step.
   void set_wrench(int i, const Eigen::Vector3d& force, const Eigen::Vector3d& torque);
-  // One semi-explicit Euler step: u += dt * udot(q, u); q += dt * N(q) u.
+  // A velocity change (world frame, at the centre) for body i, added by the
+  // next step along with its forces' (impulses computed outside Simbody).
+  void add_velocity(int i, const Eigen::Vector3d& dv, const Eigen::Vector3d& dw);
+  // One semi-explicit Euler step: u += kick + dt * udot(q, u); q += dt * N(q) u.
   void step(double dt);
-  // Replaces body i's velocity (world frame, at the centre) after a step.
-  void set_velocity(int i, const Eigen::Vector3d& v, const Eigen::Vector3d& w);
 
  private:
   struct Impl;

@@ -78,6 +78,10 @@ struct Simulation::Impl {
   std::vector<Mover> movers;
   std::vector<Wrench> wrenches;
   std::vector<int> wake;
+  struct Velocity {
+    Eigen::Vector3d v, w;
+  };
+  std::vector<Velocity> undamped;  // awake boxes' velocities before damping
 
   Impl(const World& world, const PhysicsOptions& o)
       : options(o), trailer(world.trailer), contacts(o, world.trailer) {
@@ -247,10 +251,17 @@ struct Simulation::Impl {
         const Wrench& w = wrenches[static_cast<std::size_t>(slots[s])];
         multibody.set_wrench(static_cast<int>(s), w.force, w.torque);
       }
+      undamped.resize(slots.size());
+      for (std::size_t s = 0; s < slots.size(); ++s) {
+        const Body& b = state.bodies[static_cast<std::size_t>(slots[s])];
+        undamped[s] = {b.v, b.w};
+      }
       contacts.damp(state, dt, wrenches);
       for (std::size_t s = 0; s < slots.size(); ++s) {
         const Body& b = state.bodies[static_cast<std::size_t>(slots[s])];
-        multibody.set_velocity(static_cast<int>(s), b.v, b.w);
+        if (b.v != undamped[s].v || b.w != undamped[s].w) {
+          multibody.add_velocity(static_cast<int>(s), b.v - undamped[s].v, b.w - undamped[s].w);
+        }
       }
       multibody.step(dt);
       for (std::size_t s = 0; s < slots.size(); ++s) {

@@ -3,6 +3,7 @@
 #include <fcl/fcl.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <random>
@@ -16,6 +17,9 @@ namespace {
 constexpr double kGap = 0.01;           // between neighbouring columns, slabs and walls
 constexpr double kSupportStep = 0.03;   // m; a pile box rests on what is this close below it
 constexpr double kSupportShare = 0.75;  // of its footprint, at least
+constexpr double kLandingStep = 0.01;   // m; what a pile box lands on is this close below it
+constexpr double kSupportMargin =
+    0.15;  // of its size: landing support this far out from the centre
 
 struct WallParams {
   std::vector<double> depths;                           // box extent along x, per slab
@@ -160,7 +164,7 @@ class HeightMap {
         const Eigen::Vector2d cell((i + 0.5) * kCell, (j + 0.5) * kCell - 0.5 * t_.width);
         const Eigen::Vector2d local = r.topLeftCorner<2, 2>().transpose() * (cell - c);
         if (std::abs(local.x()) <= half.x() && std::abs(local.y()) <= half.y()) {
-          f(h_[static_cast<std::size_t>(i * ny_ + j)]);
+          f(h_[static_cast<std::size_t>(i * ny_ + j)], local);
         }
       }
     }
@@ -205,22 +209,32 @@ World make_pile(EnvFamily family, std::uint64_t seed, const Trailer& trailer) {
     const double y = y_lim * (2.0 * unit(rng) - 1.0);
     box.pose.translation() = Eigen::Vector3d(x, y, 0.0);
     double base = 0.0;
-    map.for_cells(box, [&](double& h) { base = std::max(base, h); });
+    map.for_cells(box, [&](double& h, const Eigen::Vector2d&) { base = std::max(base, h); });
     // Only keep drops whose centre is supported near the landing height:
     // boxes balanced on one corner would tumble for seconds.
     Box core = box;
     core.size.head<2>() *= 0.3;
     double centre = 0.0;
-    map.for_cells(core, [&](double& h) { centre = std::max(centre, h); });
+    map.for_cells(core, [&](double& h, const Eigen::Vector2d&) { centre = std::max(centre, h); });
     if (centre < base - 0.03) continue;
     // ... and whose footprint rests mostly at that height: a box on a ridge
     // or a corner topples, and a toppling box brings its neighbours down.
+    // What it lands on (the cells near the top) must also reach into all four
+    // quadrants around its centre, so its centre of mass lies inside that
+    // support with a margin: a box over a slope or a gap tips after the drop.
     int cells = 0, supported = 0;
-    map.for_cells(box, [&](double& h) {
+    std::array<bool, 4> quadrants{};
+    const Eigen::Array2d half = 0.5 * box.size.head<2>().array();
+    map.for_cells(box, [&](double& h, const Eigen::Vector2d& local) {
       ++cells;
       supported += h > base - kSupportStep;
+      const Eigen::Array2d d = local.cwiseAbs().array();
+      if (h > base - kLandingStep && (d > 2.0 * kSupportMargin * half).all() && (d <= half).all()) {
+        quadrants[static_cast<std::size_t>((local.x() > 0.0) + 2 * (local.y() > 0.0))] = true;
+      }
     });
     if (supported < kSupportShare * cells) continue;
+    if (!std::all_of(quadrants.begin(), quadrants.end(), [](bool q) { return q; })) continue;
     // Hover a little above the support so the drop starts free of contact.
     double z = base + 0.5 * box.size.z() + 0.003;
     const fcl::Boxd shape(box.size);
@@ -236,7 +250,7 @@ World make_pile(EnvFamily family, std::uint64_t seed, const Trailer& trailer) {
     }
     if (z + 0.5 * box.size.z() > std::min(trailer.height - 0.1, p.max_height)) continue;
     const double top = z + 0.5 * box.size.z();
-    map.for_cells(box, [&](double& h) { h = std::max(h, top); });
+    map.for_cells(box, [&](double& h, const Eigen::Vector2d&) { h = std::max(h, top); });
     world.boxes.push_back(box);
     shapes.emplace_back(box.size);
     ++n;
