@@ -39,6 +39,12 @@ std::string read(const fs::path& file) {
   return std::string((std::istreambuf_iterator<char>(in)), {});
 }
 
+// A name of its own: a pipeline's control socket is named after it, and two
+// runs of one name (this test in two build trees, say) cannot run at once.
+std::string pipeline_name() {
+  return "unload_small_" + std::to_string(::getpid());
+}
+
 // Runs the pipeline; `meanwhile`, if given, runs `at` seconds in with the pid
 // of the `plr run` process.
 Outcome unload(double at = 0, const std::function<void(pid_t)>& meanwhile = {}) {
@@ -46,11 +52,13 @@ Outcome unload(double at = 0, const std::function<void(pid_t)>& meanwhile = {}) 
   run.dir = make_dir();
   const std::string err = (run.dir / "stderr.txt").string();
   const std::string report = (run.dir / "report").string();
+  const std::string name = "pipeline=" + pipeline_name();
   const pid_t pid = fork();
   if (pid == 0) {
     const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
     dup2(fd, 2);
-    execl(PLR_BIN, PLR_BIN, "run", UNLOAD_SMALL_CONFIG, "--report", report.c_str(), nullptr);
+    execl(PLR_BIN, PLR_BIN, "run", UNLOAD_SMALL_CONFIG, "--report", report.c_str(), "--set",
+          name.c_str(), nullptr);
     _exit(127);
   }
   if (meanwhile) {
@@ -123,7 +131,7 @@ TEST(UnloadSmall, FinishesWhenThePlannerIsSwappedMidRun) {
   const Outcome run = unload(5.0, [](pid_t) {
     const auto swap = [](const char* plugin) {
       const std::string cmd =
-          std::string(PLR_BIN) + " swap planner " + plugin + " --pipeline unload_sim_small";
+          std::string(PLR_BIN) + " swap planner " + plugin + " --pipeline " + pipeline_name();
       EXPECT_EQ(std::system(cmd.c_str()), 0) << "plr swap planner " << plugin << " failed";
     };
     swap("planner_ompl");

@@ -471,8 +471,12 @@ class ExecutorNode : public plr::Node {
       log().info("{}: {} not planned: {}", action_name_, what, p.message);
       return false;
     }
-    log().debug("{}: {} ({} points)", action_name_, what, p.trajectory->points.size());
-    auto out = execute(*p.trajectory, before, after, run, settle_s_);
+    log().debug("{}: {} ({} points, {:.2f} s)", action_name_, what, p.trajectory->points.size(),
+                p.trajectory->points.empty() ? 0.0 : p.trajectory->points.back()->time_s);
+    // A robot goes straight on to its next move; only a grip or a release
+    // waits for what it moved to come to rest.
+    const bool suction_changes = before != Suction::Keep || after != Suction::Keep;
+    auto out = execute(*p.trajectory, before, after, run, suction_changes ? settle_s_ : 0.0);
     if (!out) return false;
     last_held_ = (*out)->held_box_ids()
                      ? std::vector<std::uint32_t>((*out)->held_box_ids()->begin(),
