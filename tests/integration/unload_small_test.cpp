@@ -126,16 +126,17 @@ TEST(UnloadSmall, SurvivesTheSimulatorBeingKilled) {
 }
 
 // RRTConnect has no M6: a start in collision (a box resting on the nose)
-// stalls it, so the planner goes back to ARA* after a while.
+// stalls it, so the planner goes back to ARA* after a while. Both swaps fall
+// well inside the run (about 8.5 s on the 2-core VM with nothing else running).
 TEST(UnloadSmall, FinishesWhenThePlannerIsSwappedMidRun) {
-  const Outcome run = unload(5.0, [](pid_t) {
+  const Outcome run = unload(3.0, [](pid_t) {
     const auto swap = [](const char* plugin) {
       const std::string cmd =
           std::string(PLR_BIN) + " swap planner " + plugin + " --pipeline " + pipeline_name();
       EXPECT_EQ(std::system(cmd.c_str()), 0) << "plr swap planner " << plugin << " failed";
     };
     swap("planner_ompl");
-    std::this_thread::sleep_for(std::chrono::seconds(4));
+    std::this_thread::sleep_for(std::chrono::seconds(3));
     swap("planner_arastar");
   });
   expect_unloaded(run, 20);

@@ -225,6 +225,45 @@ TEST_F(BusTest, UnansweredCallTimesOutAndALateAnswerIsRefused) {
   EXPECT_EQ(r.results.size(), 1u);
 }
 
+// The timer thread sleeps until the deadline it last chose, also after that
+// call has completed, and is woken only for an earlier one: every call must
+// still time out on time, before and after that deadline.
+TEST_F(BusTest, CallsTimeOutOnTimeWhateverTheTimerThreadSleepsUntil) {
+  using namespace std::chrono_literals;
+  Silent s;
+  ASSERT_TRUE(bus_->provide(&b_, "slow", kDoubleReq, kDoubleRep, &Silent::on, &s));
+  const auto cancelled_call = [&](std::chrono::milliseconds timeout) {
+    Replies r;
+    std::uint64_t id = 0;
+    ASSERT_TRUE(bus_->call(&a_, "slow", kDoubleReq, make_double_request(1), timeout, &Replies::on,
+                           &r, &id));
+    ASSERT_TRUE(bus_->cancel(id));
+    r.wait(1);
+  };
+  const auto time_out = [&](std::chrono::milliseconds timeout) {
+    Replies r;
+    const auto start = std::chrono::steady_clock::now();
+    EXPECT_TRUE(bus_->call(&a_, "slow", kDoubleReq, make_double_request(1), timeout, &Replies::on,
+                           &r, nullptr));
+    r.wait(1);
+    const auto took = std::chrono::steady_clock::now() - start;
+    EXPECT_EQ(r.results.size(), 1u);
+    if (!r.results.empty()) {
+      EXPECT_EQ(r.results[0].first, PLR_ERR_TIMEOUT);
+    }
+    return took;
+  };
+  // The timer sleeps until the first call's deadline; the second one's comes later.
+  cancelled_call(100ms);
+  const auto later = time_out(300ms);
+  EXPECT_GE(later, 300ms);
+  EXPECT_LT(later, 2s);
+  // The timer sleeps for 30 s; the next deadline comes first and must wake it.
+  cancelled_call(30s);
+  EXPECT_LT(time_out(50ms), 2s);
+  settle();
+}
+
 TEST_F(BusTest, CancelCompletesTheCallOnce) {
   Silent s;
   ASSERT_TRUE(bus_->provide(&b_, "slow", kDoubleReq, kDoubleRep, &Silent::on, &s));
