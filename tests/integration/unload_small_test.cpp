@@ -108,6 +108,20 @@ TEST(UnloadSmall, UnloadsTheTrailerWithoutHittingIt) {
   const Outcome run = unload();
   expect_unloaded(run, 27);
   EXPECT_EQ(run.report.value("recoveries", -1), 0);
+  // The unloading curve rises one box at a time, when each box left, and
+  // ends at the count unloaded.
+  const auto& curve = run.report["curve"];
+  ASSERT_TRUE(curve.is_array() && !curve.empty());
+  double last_t = 0;
+  int last_n = 0;
+  for (const auto& p : curve) {
+    EXPECT_GE(p[0].get<double>(), last_t);
+    EXPECT_GE(p[1].get<int>(), last_n);
+    EXPECT_LE(p[1].get<int>(), last_n + 1);
+    last_t = p[0].get<double>();
+    last_n = p[1].get<int>();
+  }
+  EXPECT_EQ(last_n, run.report.value("boxes_unloaded", -1));
   if (!HasFailure()) fs::remove_all(run.dir);
 }
 

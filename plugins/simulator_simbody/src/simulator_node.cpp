@@ -250,6 +250,7 @@ class SimulatorNode : public Node {
     }
     const auto before = sim_->world();
     const auto events_before = sim_->unloaded().size();
+    const double start_time = sim_->time();
     const auto suction_before = sim_->suction_events().size();
     const auto wall_start = std::chrono::steady_clock::now();
     std::set<std::uint32_t> gripped;
@@ -285,6 +286,7 @@ class SimulatorNode : public Node {
     robot_.held = sim_->held_boxes();
 
     std::vector<std::uint32_t> moved, unloaded;
+    std::vector<double> unloaded_after;
     const auto after = sim_->world();
     std::map<std::uint32_t, Eigen::Vector3d> end;
     for (const auto& b : after.boxes) end[b.id] = b.pose.translation();
@@ -294,7 +296,10 @@ class SimulatorNode : public Node {
         moved.push_back(b.id);
     }
     const auto& events = sim_->unloaded();
-    for (auto i = events_before; i < events.size(); ++i) unloaded.push_back(events[i].box_id);
+    for (auto i = events_before; i < events.size(); ++i) {
+      unloaded.push_back(events[i].box_id);
+      unloaded_after.push_back(events[i].time - start_time);
+    }
     const auto& suction = sim_->suction_events();
     for (auto i = suction_before; i < suction.size(); ++i) {
       const auto& e = suction[i];
@@ -311,9 +316,9 @@ class SimulatorNode : public Node {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count(),
         unloaded.size());
 
-    out.Finish(msg::CreateExecuteOutcomeDirect(out, true, "", sim_->time(), &moved, &unloaded,
-                                               &robot_.held, contacts,
-                                               static_cast<std::uint32_t>(after.boxes.size())));
+    out.Finish(msg::CreateExecuteOutcomeDirect(
+        out, true, "", sim_->time(), &moved, &unloaded, &robot_.held, contacts,
+        static_cast<std::uint32_t>(after.boxes.size()), &unloaded_after));
     publish_state();
     return {};
   }

@@ -79,6 +79,8 @@ struct ActionRun {
   std::uint64_t contacts = 0;
   double sim_time_s = 0;
   bool failed_grasp = false;
+  // When boxes left the trailer, in robot seconds after the action's start.
+  std::vector<double> unloaded_at_s;
 };
 
 class ExecutorNode : public plr::Node {
@@ -429,7 +431,14 @@ class ExecutorNode : public plr::Node {
     }
     const auto& out = r.value();
     check_clock(out->sim_time_s(), "sim/execute");
-    run.exec_s += (trajectory.points.empty() ? 0.0 : trajectory.points.back()->time_s) + settle_s;
+    const double duration =
+        (trajectory.points.empty() ? 0.0 : trajectory.points.back()->time_s) + settle_s;
+    // A box the belt carries out after the robot stopped is counted by the
+    // time the robot goes on.
+    if (const auto* after = out->unloaded_after_s())
+      for (double t : *after)
+        run.unloaded_at_s.push_back(run.plan_s + run.exec_s + std::clamp(t, 0.0, duration));
+    run.exec_s += duration;
     run.contacts += out->robot_trailer_contacts();
     run.sim_time_s = out->sim_time_s();
     if (!out->ok()) {
@@ -802,10 +811,18 @@ class ExecutorNode : public plr::Node {
       as.boxes += gained;
       as.plan_s.add(run.plan_s);
       as.exec_s.add(run.exec_s);
+      const double action_start = stats_.robot_time_s;
       stats_.robot_time_s += run.plan_s + run.exec_s;
       stats_.robot_trailer_collisions += run.contacts;
       if (run.sim_time_s > 0) stats_.sim_time_s = run.sim_time_s;
       stats_.failed_grasps += run.failed_grasp ? 1 : 0;
+      // The curve steps where each box left; the action's end has the count
+      // the simulator's state says.
+      std::sort(run.unloaded_at_s.begin(), run.unloaded_at_s.end());
+      std::uint32_t count = stats_.boxes_unloaded - gained;
+      for (double t : run.unloaded_at_s)
+        if (count < stats_.boxes_unloaded)
+          stats_.curve.push_back({std::min(action_start + t, stats_.robot_time_s), ++count});
       stats_.curve.push_back({stats_.robot_time_s, stats_.boxes_unloaded});
       stats_.wall_time_s = seconds_since(t0);
       report_progress(fmt::format("{}: +{} boxes", action_name_, gained), true);

@@ -115,7 +115,7 @@ std::string curve_svg(const std::vector<CurvePoint>& curve, std::uint32_t total,
       "<line x1=\"{}\" y1=\"{:.1f}\" x2=\"{}\" y2=\"{:.1f}\" stroke=\"#bbb\" "
       "stroke-dasharray=\"4 4\"/>\n",
       kL, py(total), kW - kR, py(total));
-  // A step curve: the count changes at the end of each action.
+  // A step curve: the count rises as each box leaves the trailer.
   std::string points = fmt::format("{:.1f},{:.1f}", px(0), py(0));
   std::uint32_t last = 0;
   for (const auto& p : curve) {
