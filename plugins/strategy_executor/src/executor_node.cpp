@@ -411,8 +411,11 @@ class ExecutorNode : public plr::Node {
 
   // Runs a trajectory; returns the outcome, or nullopt when the simulator refused it.
   std::optional<Message<msg::ExecuteOutcome>> execute(const msg::TrajectoryT& trajectory,
-                                                      Suction before, Suction after, ActionRun& run,
-                                                      double settle_s) {
+                                                      Suction before, Suction after,
+                                                      ActionRun& run) {
+    // A robot goes straight on to its next move; only a grip or a release
+    // waits for what it moved to come to rest.
+    const double settle_s = before != Suction::Keep || after != Suction::Keep ? settle_s_ : 0.0;
     msg::ExecuteRequestT req;
     req.trajectory = std::make_unique<msg::TrajectoryT>(trajectory);
     req.suction_before = before;
@@ -471,7 +474,7 @@ class ExecutorNode : public plr::Node {
     if (!p.ok && last_status_ == msg::PlanStatus::StartInvalid) {
       // The planner did not escape by itself: ask for M6 explicitly, then retry.
       PlanResult escape = plan_once(PlanMode::kEscape, w, {}, {}, run);
-      if (escape.ok && execute(*escape.trajectory, Suction::Keep, Suction::Keep, run, settle_s_)) {
+      if (escape.ok && execute(*escape.trajectory, Suction::Keep, Suction::Keep, run)) {
         w = observe();
         p = plan_goal(mode, w, goal, ignored, run);
       }
@@ -482,10 +485,7 @@ class ExecutorNode : public plr::Node {
     }
     log().debug("{}: {} ({} points, {:.2f} s)", action_name_, what, p.trajectory->points.size(),
                 p.trajectory->points.empty() ? 0.0 : p.trajectory->points.back()->time_s);
-    // A robot goes straight on to its next move; only a grip or a release
-    // waits for what it moved to come to rest.
-    const bool suction_changes = before != Suction::Keep || after != Suction::Keep;
-    auto out = execute(*p.trajectory, before, after, run, suction_changes ? settle_s_ : 0.0);
+    auto out = execute(*p.trajectory, before, after, run);
     if (!out) return false;
     last_held_ = (*out)->held_box_ids()
                      ? std::vector<std::uint32_t>((*out)->held_box_ids()->begin(),

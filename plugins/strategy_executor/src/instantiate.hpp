@@ -17,7 +17,7 @@ namespace plr::executor {
 // Robot dimensions the instantiation relies on (docs/notes-planner.md).
 struct Geometry {
   double conveyor_length = 1.0;     // nose hinge (at base_x) to conveyor end
-  double scoop_lip = 0.06;          // the scoop's lip, past the scoop's end
+  double scoop_lip = 0.06;          // lip the physics adds past the scoop's end near the floor
   double arm_yaw_offset = 0.45;     // arm_1 axis behind base_x
   double plate_half_width = 0.25;   // plate extent along y / 2
   double plate_half_height = 0.2;   // plate extent along z / 2

@@ -105,22 +105,5 @@ TEST(RobotLinks, TheScoopGetsUnderABoxAndItsBeltsCarryItOut) {
   EXPECT_EQ(sim.unloaded()[0].box_id, 1u);
 }
 
-TEST(RobotLinks, ABoxPushedAlongTheFloorIsNotOnTheBelt) {
-  const RobotModel model = RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
-  // Nose lifted, belt running over a box on the floor that the base's front
-  // face pushes ahead, right under the belt's rear end.
-  Config q = Config::Zero();
-  q[kBaseX] = 1.0;
-  q[kNose1] = 0.4;
-  Simulation sim(box_on_floor(1.0 + 0.21, 0.0, {0.4, 0.4, 0.4}, 8.0));
-  for (int k = 1; k <= 100; ++k) {
-    q[kBaseX] = 1.0 + 0.003 * k;
-    sim.set_robot_links(robot_link_geometry(model, q, 1.0));
-    sim.step(0.01);
-  }
-  EXPECT_GT(sim.world().boxes[0].pose.translation().x(), 1.0 + 0.21 + 0.2);  // pushed
-  EXPECT_TRUE(sim.unloaded().empty());
-}
-
 }  // namespace
 }  // namespace plr::sim

@@ -132,6 +132,23 @@ TEST(Conveyor, StoppedBeltHoldsTheBox) {
   EXPECT_TRUE(sim.unloaded().empty());
 }
 
+TEST(Conveyor, ABoxOnTheFloorAtTheBeltsEndIsNotOnTheBelt) {
+  // A low running belt (top 0.1 m) ending at x = 2; a 0.4 m box stands on the
+  // floor just behind that end, its centre above the belt's mid-plane. It has
+  // not reached the body conveyor: only a box lying on the belt has.
+  World w = one_box(6.0);
+  w.boxes[0].pose.translation() = Eigen::Vector3d(2.0 - 0.21, 0.0, 0.2);
+  Simulation sim(w);
+  LinkGeometry belt;
+  belt.size = {2.0, 0.8, 0.1};
+  belt.pose.translation() = Eigen::Vector3d(3.0, 0.0, 0.05);
+  belt.belt_speed = 0.8;
+  sim.set_robot_links({belt});
+  sim.step(0.5);
+  EXPECT_TRUE(sim.unloaded().empty());
+  ASSERT_EQ(sim.world().boxes.size(), 1u);
+}
+
 TEST(Conveyor, BoxLeavingThroughTheRearIsUnloaded) {
   World w = one_box(6.0);
   w.boxes[0].pose.translation() = Eigen::Vector3d(0.5, 0.0, 0.2);
