@@ -97,16 +97,20 @@ TEST(Suction, MissesABoxOutOfReach) {
   EXPECT_TRUE(sim.suction_events().empty());
 }
 
+// A 2 m belt lying at x 2..4, its centre at height z, running towards the rear.
+LinkGeometry belt(double z, double speed) {
+  LinkGeometry b;
+  b.size = {2.0, 0.8, 0.1};
+  b.pose.translation() = Eigen::Vector3d(3.0, 0.0, z);
+  b.belt_speed = speed;
+  return b;
+}
+
 TEST(Conveyor, CarriesABoxOutAndCountsIt) {
   World w = one_box(6.0);
   w.boxes[0].pose.translation() = Eigen::Vector3d(3.0, 0.0, 0.5 + 0.2 + 0.002);
   Simulation sim(w);
-  // A 2 m belt lying at x 2..4 with its surface at z = 0.5, running towards the rear.
-  LinkGeometry belt;
-  belt.size = {2.0, 0.8, 0.1};
-  belt.pose.translation() = Eigen::Vector3d(3.0, 0.0, 0.45);
-  belt.belt_speed = 0.8;
-  sim.set_robot_links({belt});
+  sim.set_robot_links({belt(0.45, 0.8)});  // its surface at z = 0.5
   sim.step(0.5);
   ASSERT_EQ(sim.world().boxes.size(), 1u);
   EXPECT_LT(sim.world().boxes[0].pose.translation().x(), 2.9);  // moving with the belt
@@ -122,10 +126,7 @@ TEST(Conveyor, StoppedBeltHoldsTheBox) {
   World w = one_box(6.0);
   w.boxes[0].pose.translation() = Eigen::Vector3d(3.0, 0.0, 0.5 + 0.2 + 0.002);
   Simulation sim(w);
-  LinkGeometry belt;
-  belt.size = {2.0, 0.8, 0.1};
-  belt.pose.translation() = Eigen::Vector3d(3.0, 0.0, 0.45);
-  sim.set_robot_links({belt});
+  sim.set_robot_links({belt(0.45, 0.0)});
   sim.step(2.0);
   ASSERT_EQ(sim.world().boxes.size(), 1u);
   EXPECT_NEAR(sim.world().boxes[0].pose.translation().x(), 3.0, 0.005);
@@ -139,11 +140,7 @@ TEST(Conveyor, ABoxOnTheFloorAtTheBeltsEndIsNotOnTheBelt) {
   World w = one_box(6.0);
   w.boxes[0].pose.translation() = Eigen::Vector3d(2.0 - 0.21, 0.0, 0.2);
   Simulation sim(w);
-  LinkGeometry belt;
-  belt.size = {2.0, 0.8, 0.1};
-  belt.pose.translation() = Eigen::Vector3d(3.0, 0.0, 0.05);
-  belt.belt_speed = 0.8;
-  sim.set_robot_links({belt});
+  sim.set_robot_links({belt(0.05, 0.8)});
   sim.step(0.5);
   EXPECT_TRUE(sim.unloaded().empty());
   ASSERT_EQ(sim.world().boxes.size(), 1u);
