@@ -1,18 +1,43 @@
 #include "bus.hpp"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <deque>
+#include <set>
 
 namespace plr::kernel {
+
+using Clock = std::chrono::steady_clock;
 
 namespace {
 // Callers whose reply callbacks this thread is running, innermost last.
 thread_local std::vector<const Endpoint*> t_replying;
-}  // namespace
 
-using Clock = std::chrono::steady_clock;
+// A quick service's handler may run on a transport's receive thread, where
+// a slow one holds up everything that thread delivers: said once per service.
+constexpr auto kQuickBudget = std::chrono::milliseconds(1);
+
+std::function<void()> timed_quick(const std::string& service, const std::string& node,
+                                  std::function<void()> task) {
+  return [service, node, task = std::move(task)] {
+    const auto start = Clock::now();
+    task();
+    const auto took = Clock::now() - start;
+    if (took <= kQuickBudget) return;
+    static std::mutex m;
+    static std::set<std::string> warned;
+    std::lock_guard lock(m);
+    if (warned.insert(service).second)
+      spdlog::warn(
+          "quick service '{}' of '{}' took {:.1f} ms: it may run on a receive thread, so it should "
+          "answer within {} ms (or drop the quick flag)",
+          service, node, std::chrono::duration<double, std::milli>(took).count(),
+          kQuickBudget.count());
+  };
+}
+}  // namespace
 
 struct Bus::Topic {
   std::string name;
@@ -49,6 +74,7 @@ struct Bus::Provider {
   std::uint64_t reply_type = 0;
   plr_service_fn fn = nullptr;
   void* user = nullptr;
+  bool quick = false;
 };
 
 struct Bus::Pending {
@@ -249,7 +275,10 @@ Status Bus::unsubscribe(std::uint64_t subscription) {
 }
 
 Status Bus::provide(Endpoint* owner, const std::string& service, std::uint64_t request_type,
-                    std::uint64_t reply_type, plr_service_fn fn, void* user) {
+                    std::uint64_t reply_type, plr_service_fn fn, void* user, std::uint32_t flags) {
+  if ((flags & ~std::uint32_t{PLR_SERVICE_QUICK}) != 0)
+    return make_error(PLR_ERR_INVALID,
+                      fmt::format("service '{}': unknown flags {:#x}", service, flags));
   std::lock_guard lock(m_);
   auto& providers = services_[service];
   for (const auto& p : providers) {
@@ -261,7 +290,8 @@ Status Bus::provide(Endpoint* owner, const std::string& service, std::uint64_t r
                         fmt::format("service '{}' is provided by '{}' with other message types",
                                     service, p.owner->endpoint_name()));
   }
-  providers.push_back({owner, request_type, reply_type, fn, user});
+  providers.push_back(
+      {owner, request_type, reply_type, fn, user, (flags & PLR_SERVICE_QUICK) != 0});
   for (auto* l : links_)
     if (owner != &l->link_endpoint()) l->service_provided(service);
   return {};
@@ -325,8 +355,10 @@ Status Bus::call(Endpoint* caller, const std::string& service, std::uint64_t req
       return make_error(PLR_ERR_UNAVAILABLE, fmt::format("no provider for service '{}'", service));
     return {};
   }
-  const bool posted = chosen.owner->executor().post(
-      [fn = chosen.fn, user = chosen.user, req, id] { fn(user, req.msg, id); });
+  auto task = [fn = chosen.fn, user = chosen.user, req, id] { fn(user, req.msg, id); };
+  const bool posted = chosen.quick ? chosen.owner->executor().dispatch(timed_quick(
+                                         service, chosen.owner->endpoint_name(), std::move(task)))
+                                   : chosen.owner->executor().post(std::move(task));
   if (!posted)
     complete(
         id, PLR_ERR_UNAVAILABLE, nullptr,

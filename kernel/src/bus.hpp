@@ -101,8 +101,10 @@ class Bus {
                                     std::uint64_t type_id, plr_subscription_fn fn, void* user);
   Status unsubscribe(std::uint64_t subscription);
 
+  // `flags`: PLR_SERVICE_* (plugin_abi.h). A quick service's handler runs
+  // on the thread that delivers the request when its node is idle.
   Status provide(Endpoint* owner, const std::string& service, std::uint64_t request_type,
-                 std::uint64_t reply_type, plr_service_fn fn, void* user);
+                 std::uint64_t reply_type, plr_service_fn fn, void* user, std::uint32_t flags = 0);
   // Adopts `request`. When this returns OK, `fn` runs exactly once (possibly
   // before call() returns); when it returns an error, never.
   Status call(Endpoint* caller, const std::string& service, std::uint64_t request_type,

@@ -25,6 +25,9 @@ constexpr std::size_t kMaxErrorText = 4096;
 // A remote call nobody answered for this long is forgotten (the bus has timed it out).
 constexpr auto kForgetCall = 15min;
 
+// Set on Cyclone's threads that run our listeners.
+thread_local bool t_on_receive_thread = false;
+
 std::size_t bounded_len(const char* s, std::size_t max) {
   return s == nullptr ? max + 1 : ::strnlen(s, max + 1);
 }
@@ -264,17 +267,18 @@ Status DdsBridge::open() {
     const char* name;
     std::int32_t depth;
     bool transient;
-    dds_entity_t* writer;  // or null
-    int reader;            // ReaderKind, or -1
+    dds_entity_t* writer;      // or null
+    int reader;                // ReaderKind, or -1
+    dds_entity_t* now_writer;  // or null: a second writer that never blocks
   };
   const Plane planes[] = {
-      {kDdsAnnounceTopic, 1, false, &announce_writer_, kAnnounceReader},
-      {kDdsTelemetryTopic, 1, true, &telemetry_writer_, -1},
-      {kDdsControlTopic, 0, false, nullptr, kControlReader},
+      {kDdsAnnounceTopic, 1, false, &announce_writer_, kAnnounceReader, nullptr},
+      {kDdsTelemetryTopic, 1, true, &telemetry_writer_, -1, nullptr},
+      {kDdsControlTopic, 0, false, nullptr, kControlReader, nullptr},
       // Kept for late readers: a CLI whose reader matched after the answer still gets it.
-      {kDdsResultTopic, 16, true, &result_writer_, -1},
-      {kDdsRequestTopic, 0, false, &request_writer_, kRequestReader},
-      {kDdsReplyTopic, 0, false, &reply_writer_, kReplyReader},
+      {kDdsResultTopic, 16, true, &result_writer_, -1, nullptr},
+      {kDdsRequestTopic, 0, false, &request_writer_, kRequestReader, nullptr},
+      {kDdsReplyTopic, 0, false, &reply_writer_, kReplyReader, &reply_now_writer_},
   };
   for (const auto& plane : planes) {
     const dds_entity_t t = topic(plane.name);
@@ -285,8 +289,12 @@ Status DdsBridge::open() {
     const dds_entity_t w = plane.writer ? dds_create_writer(participant_, t, q, nullptr) : 0;
     if (plane.writer) *plane.writer = w;
     Reader* r = plane.reader < 0 ? nullptr : add_reader(t, q, plane.reader, "", 0);
+    if (plane.now_writer) {
+      dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, 0);
+      *plane.now_writer = dds_create_writer(participant_, t, q, nullptr);
+    }
     dds_delete_qos(q);
-    if (w < 0 || (plane.reader >= 0 && r == nullptr))
+    if (w < 0 || (plane.reader >= 0 && r == nullptr) || (plane.now_writer && *plane.now_writer < 0))
       return make_error(PLR_ERR_INTERNAL,
                         fmt::format("dds: cannot create the endpoints of '{}'", plane.name));
   }
@@ -323,6 +331,7 @@ DdsBridge::Reader* DdsBridge::add_reader(dds_entity_t topic, const dds_qos_t* qo
   Reader* raw = r.get();
   dds_listener_t* listener = dds_create_listener(raw);
   dds_lset_data_available(listener, [](dds_entity_t, void* arg) {
+    t_on_receive_thread = true;
     auto* reader = static_cast<Reader*>(arg);
     if (!reader->bridge->stop_) reader->bridge->take(reader);
   });
@@ -494,8 +503,8 @@ void DdsBridge::on_request(const Sample& sample) {
   if (kernel_id_ != e.target) return;  // another provider's
   const std::string service = e.name;
   const auto send_error = [&](plr_status status, const std::string& why) {
-    write(reply_writer_, e.kernel, service, EnvelopeKind::kError, 0, 0, e.correlation_id, status,
-          reinterpret_cast<const std::uint8_t*>(why.data()), why.size());
+    write_reply(e.kernel, service, EnvelopeKind::kError, 0, 0, e.correlation_id, status,
+                reinterpret_cast<const std::uint8_t*>(why.data()), why.size());
   };
   bool served = false;
   {
@@ -523,13 +532,36 @@ void DdsBridge::send_reply(const ServerCall& c, plr_status status, const plr_msg
                            const char* error) {
   if (status == PLR_OK) {
     const auto v = msg_view(reply);
-    write(reply_writer_, c.caller, c.service, EnvelopeKind::kReply, v.type_id, v.schema_version,
-          c.corr, PLR_OK, v.data, v.size);
+    write_reply(c.caller, c.service, EnvelopeKind::kReply, v.type_id, v.schema_version, c.corr,
+                PLR_OK, v.data, v.size);
     return;
   }
   const std::string why = error ? error : "call failed";
-  write(reply_writer_, c.caller, c.service, EnvelopeKind::kError, 0, 0, c.corr, status,
-        reinterpret_cast<const std::uint8_t*>(why.data()), why.size());
+  write_reply(c.caller, c.service, EnvelopeKind::kError, 0, 0, c.corr, status,
+              reinterpret_cast<const std::uint8_t*>(why.data()), why.size());
+}
+
+// A reliable writer waits when too much of what it sent is unacknowledged.
+// On Cyclone's receive thread (a quick service answering, an error reply)
+// that wait would never end early: the acknowledgements arrive on that very
+// thread. There the reply goes to a writer that gives up at once instead, and
+// what it refuses is written by the bridge's own thread, which may wait.
+void DdsBridge::write_reply(const std::string& target, const std::string& service,
+                            EnvelopeKind kind, std::uint64_t type_id, std::uint32_t version,
+                            std::uint64_t corr, std::int32_t status, const std::uint8_t* data,
+                            std::size_t size) {
+  if (!t_on_receive_thread) {
+    write(reply_writer_, target, service, kind, type_id, version, corr, status, data, size);
+    return;
+  }
+  if (write(reply_now_writer_, target, service, kind, type_id, version, corr, status, data, size) !=
+      DDS_RETCODE_TIMEOUT)
+    return;
+  replies_handed_off_.fetch_add(1, std::memory_order_relaxed);
+  (void)executor_.post([=, this, bytes = std::vector<std::uint8_t>(data, data + size)] {
+    write(reply_writer_, target, service, kind, type_id, version, corr, status, bytes.data(),
+          bytes.size());
+  });
 }
 
 void DdsBridge::on_reply(const Sample& sample) {
@@ -740,6 +772,7 @@ dds_return_t DdsBridge::write(dds_entity_t writer, const std::string& target,
   e.payload._maximum = static_cast<std::uint32_t>(size);
   e.payload._release = false;
   const dds_return_t rc = dds_write(writer, &e);
+  if (rc == DDS_RETCODE_TIMEOUT && writer == reply_now_writer_) return rc;  // written again later
   (rc < 0 ? send_failures_ : sent_).fetch_add(1, std::memory_order_relaxed);
   return rc;
 }
@@ -788,6 +821,7 @@ nlohmann::json DdsBridge::stats() const {
           {"received", received_.load()},
           {"invalid", invalid_.load()},
           {"send_failures", send_failures_.load()},
+          {"replies_handed_off", replies_handed_off_.load()},
           {"calls_failed_provider_gone", provider_losses_.load()},
           {"calls_resent_provider_gone", resent_.load()},
           {"commands_refused", commands_refused_.load()}};

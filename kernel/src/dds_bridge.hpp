@@ -147,6 +147,11 @@ class DdsBridge final : public Endpoint, public Link {
                      EnvelopeKind kind, std::uint64_t type_id, std::uint32_t version,
                      std::uint64_t corr, std::int32_t status, const std::uint8_t* data,
                      std::size_t size);
+  // A reply or error reply. On Cyclone's receive thread it must not wait for
+  // acknowledgements, which only that thread takes in: see dds_bridge.cpp.
+  void write_reply(const std::string& target, const std::string& service, EnvelopeKind kind,
+                   std::uint64_t type_id, std::uint32_t version, std::uint64_t corr,
+                   std::int32_t status, const std::uint8_t* data, std::size_t size);
   void invalid(const char* why, const std::string& from);
   Reader* add_reader(dds_entity_t topic, const dds_qos_t* qos, int kind, std::string bus_topic,
                      std::uint64_t type_id);
@@ -164,6 +169,7 @@ class DdsBridge final : public Endpoint, public Link {
   dds_entity_t result_writer_ = 0;
   dds_entity_t request_writer_ = 0;
   dds_entity_t reply_writer_ = 0;
+  dds_entity_t reply_now_writer_ = 0;  // the same topic; gives up instead of waiting
 
   struct Peer {
     std::chrono::steady_clock::time_point seen;
@@ -201,6 +207,7 @@ class DdsBridge final : public Endpoint, public Link {
   std::atomic<std::uint64_t> provider_losses_{0};
   std::atomic<std::uint64_t> resent_{0};
   std::atomic<std::uint64_t> commands_refused_{0};
+  std::atomic<std::uint64_t> replies_handed_off_{0};
 
   Executor executor_;  // last: stops first, before what it works on
 };

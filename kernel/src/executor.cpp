@@ -18,7 +18,8 @@ Executor::~Executor() {
   }
   cv_.notify_all();
   thread_.join();
-  // A poster may still be about to notify for a task that has already run.
+  // A poster may still be about to notify for a task that has already run
+  // (or a dispatch() to finish its bookkeeping).
   while (posting_.load(std::memory_order_acquire) != 0) std::this_thread::yield();
 }
 
@@ -36,6 +37,29 @@ bool Executor::post(std::function<void()> task) {
   if (queued) cv_.notify_one();
   posting_.fetch_sub(1, std::memory_order_release);
   return queued;
+}
+
+bool Executor::dispatch(std::function<void()> task) {
+  posting_.fetch_add(1, std::memory_order_relaxed);
+  std::unique_lock lock(m_);
+  if (stop_ || busy_ || !queue_.empty()) {
+    lock.unlock();
+    const bool queued = post(std::move(task));
+    posting_.fetch_sub(1, std::memory_order_release);
+    return queued;
+  }
+  busy_ = true;
+  lock.unlock();
+  task();
+  lock.lock();
+  busy_ = false;
+  // What was queued meanwhile (or a stop) waited for this task: hand over.
+  const bool wake = stop_ || !queue_.empty();
+  if (!wake) idle_cv_.notify_all();
+  lock.unlock();
+  if (wake) cv_.notify_one();
+  posting_.fetch_sub(1, std::memory_order_release);
+  return true;
 }
 
 void Executor::run_sync(const std::function<void()>& task) {
@@ -71,7 +95,8 @@ std::size_t Executor::queued() const {
 void Executor::loop() {
   std::unique_lock lock(m_);
   for (;;) {
-    cv_.wait(lock, [&] { return stop_ || !queue_.empty(); });
+    // busy_ here means a dispatch() is running a task inline: wait for it.
+    cv_.wait(lock, [&] { return !busy_ && (stop_ || !queue_.empty()); });
     if (queue_.empty()) {
       if (stop_) return;
       continue;

@@ -21,6 +21,11 @@ class Executor {
 
   // False when the queue is full or the executor is stopping.
   bool post(std::function<void()> task);
+  // Runs `task` at once on the calling thread when the executor is idle
+  // (nothing queued, nothing running), else queues it like post(). Tasks
+  // still run one at a time. For short tasks whose hand-off to the executor
+  // thread would cost more than the task (quick services).
+  bool dispatch(std::function<void()> task);
   // Runs `task` on the executor thread and waits for it (inline when called from there).
   void run_sync(const std::function<void()>& task);
   // Waits until everything queued so far has run.

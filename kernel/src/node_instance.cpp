@@ -141,6 +141,7 @@ plr_host_api NodeInstance::host_table(NodeInstance* self) {
   api.node_name = &NodeInstance::node_name;
   api.log = &NodeInstance::log;
   api.now_ns = &NodeInstance::now_ns;
+  api.provide_flags = &NodeInstance::provide_flags;
   return api;
 }
 
@@ -189,10 +190,17 @@ plr_status NodeInstance::unsubscribe(void* ctx, std::uint64_t id) {
 }
 
 plr_status NodeInstance::provide(void* ctx, const char* service, std::uint64_t request_type,
-                                 std::uint64_t reply_type, std::uint32_t, plr_service_fn fn,
+                                 std::uint64_t reply_type, std::uint32_t version, plr_service_fn fn,
                                  void* user) {
+  return provide_flags(ctx, service, request_type, reply_type, version, fn, user, 0);
+}
+
+plr_status NodeInstance::provide_flags(void* ctx, const char* service, std::uint64_t request_type,
+                                       std::uint64_t reply_type, std::uint32_t, plr_service_fn fn,
+                                       void* user, std::uint32_t flags) {
   auto* self = self_of(ctx);
-  auto s = self->bus_.provide(self, self->resolve(service), request_type, reply_type, fn, user);
+  auto s =
+      self->bus_.provide(self, self->resolve(service), request_type, reply_type, fn, user, flags);
   if (!s) spdlog::error("{}: {}", self->config_.name, s.error().message);
   return code_of(s);
 }

@@ -65,6 +65,8 @@ class NodeInstance final : public Endpoint {
   static plr_status unsubscribe(void*, std::uint64_t);
   static plr_status provide(void*, const char*, std::uint64_t, std::uint64_t, std::uint32_t,
                             plr_service_fn, void*);
+  static plr_status provide_flags(void*, const char*, std::uint64_t, std::uint64_t, std::uint32_t,
+                                  plr_service_fn, void*, std::uint32_t);
   static plr_status respond(void*, std::uint64_t, plr_status, plr_msg*, std::size_t, std::size_t,
                             const char*);
   static plr_status call(void*, const char*, std::uint64_t, std::uint32_t, plr_msg*, std::size_t,

@@ -19,7 +19,10 @@ class DoublerNode : public plr::Node {
                    flatbuffers::FlatBufferBuilder& out) -> plr::Status {
               out.Finish(plr::msg::CreateDoubleReply(out, req->value() * factor_));
               return {};
-            });
+            },
+            // It answers at once and never waits: the kernel may answer on
+            // the thread that received the request.
+            plr::ServiceMode::kQuick);
         !s)
       return s;
     return ctx().subscribe<plr::msg::Count>(

@@ -7,9 +7,11 @@
 #include <plr/loan.hpp>
 #include <plr/message.hpp>
 #include <plr/params.hpp>
+#include <plr/spin_wait.hpp>
 
 #include <fmt/format.h>
 
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstring>
@@ -110,7 +112,7 @@ class Future {
   struct State {
     std::mutex m;
     std::condition_variable cv;
-    bool done = false;
+    std::atomic<bool> done{false};
     std::optional<Expected<Message<T>>> result;
     const plr_host_api* api = nullptr;
     std::uint64_t call = 0;
@@ -120,19 +122,22 @@ class Future {
   Future() = default;
 
   bool valid() const { return state_ != nullptr; }
-  bool ready() const {
+  bool ready() const { return state_->done.load(std::memory_order_acquire); }
+  // Waits for completion; the kernel's timeout bounds the wait. It watches
+  // for the reply for `spin` (a core kept busy) before it sleeps, since a
+  // sleeping thread is woken late (spin_wait.hpp).
+  Expected<Message<T>> get(std::chrono::nanoseconds spin = kCallSpin) const {
+    if (!spin_until(state_->done, spin)) {
+      std::unique_lock lock(state_->m);
+      state_->cv.wait(lock, [&] { return state_->done.load(std::memory_order_relaxed); });
+    }
     std::lock_guard lock(state_->m);
-    return state_->done;
-  }
-  // Waits for completion; the kernel's timeout bounds the wait.
-  Expected<Message<T>> get() const {
-    std::unique_lock lock(state_->m);
-    state_->cv.wait(lock, [&] { return state_->done; });
     return *state_->result;
   }
   bool wait_for(std::chrono::nanoseconds d) const {
     std::unique_lock lock(state_->m);
-    return state_->cv.wait_for(lock, d, [&] { return state_->done; });
+    return state_->cv.wait_for(lock, d,
+                               [&] { return state_->done.load(std::memory_order_relaxed); });
   }
   // Cancels a call still in flight; a no-op once it completed or was refused.
   void cancel() const {
@@ -146,8 +151,8 @@ class Future {
   static Future failed(Error e) {
     Future f;
     f.state_ = std::make_shared<State>();
-    f.state_->done = true;
     f.state_->result.emplace(std::move(e));
+    f.state_->done = true;
     return f;
   }
 
@@ -167,9 +172,11 @@ class Future {
       }
     }
     {
+      // Set under the lock (a sleeper checks it there) and after the result
+      // (a spinner reads the result once it sees the flag).
       std::lock_guard lock(state->m);
       state->result.emplace(std::move(result));
-      state->done = true;
+      state->done.store(true, std::memory_order_release);
     }
     state->cv.notify_all();
   }
@@ -208,6 +215,11 @@ class Responder {
   std::uint64_t token_;
 };
 
+// kQuick: the handler answers at once and never waits (no blocking call,
+// no sleep), so the kernel may run it on the thread that received the
+// request instead of handing it to the node's thread (PLR_SERVICE_QUICK).
+enum class ServiceMode { kNormal, kQuick };
+
 class Context {
  public:
   explicit Context(const plr_host_api* api)
@@ -238,26 +250,37 @@ class Context {
   // A synchronous provider: fill `reply` (Finish() it) or return an error.
   template <class Req, class Rep>
   Status provide(const std::string& service,
-                 std::function<Status(const Message<Req>&, flatbuffers::FlatBufferBuilder&)> fn) {
-    return provide_async<Req, Rep>(service,
-                                   [fn = std::move(fn)](const Message<Req>& req, Responder<Rep> r) {
-                                     flatbuffers::FlatBufferBuilder fbb;
-                                     if (auto s = fn(req, fbb); s) {
-                                       (void)r.reply(fbb);
-                                     } else {
-                                       (void)r.fail(s.error().code, s.error().message);
-                                     }
-                                   });
+                 std::function<Status(const Message<Req>&, flatbuffers::FlatBufferBuilder&)> fn,
+                 ServiceMode mode = ServiceMode::kNormal) {
+    return provide_async<Req, Rep>(
+        service,
+        [fn = std::move(fn)](const Message<Req>& req, Responder<Rep> r) {
+          flatbuffers::FlatBufferBuilder fbb;
+          if (auto s = fn(req, fbb); s) {
+            (void)r.reply(fbb);
+          } else {
+            (void)r.fail(s.error().code, s.error().message);
+          }
+        },
+        mode);
   }
 
   // An asynchronous provider: keep the Responder and answer later, from any thread.
   template <class Req, class Rep>
   Status provide_async(const std::string& service,
-                       std::function<void(const Message<Req>&, Responder<Rep>)> fn) {
+                       std::function<void(const Message<Req>&, Responder<Rep>)> fn,
+                       ServiceMode mode = ServiceMode::kNormal) {
     auto handler = std::make_unique<Service<Req, Rep>>(api_, std::move(fn));
-    const auto s = api_->provide(api_->ctx, service.c_str(), MessageTraits<Req>::type_id(),
-                                 MessageTraits<Rep>::type_id(), MessageTraits<Req>::schema_version,
-                                 &Service<Req, Rep>::on_request, handler.get());
+    const auto req_type = MessageTraits<Req>::type_id();
+    const auto rep_type = MessageTraits<Rep>::type_id();
+    const auto version = MessageTraits<Req>::schema_version;
+    // A kernel older than ABI 1.1 runs every handler on the node's thread.
+    const auto s =
+        mode == ServiceMode::kQuick && api_->abi_minor >= 1
+            ? api_->provide_flags(api_->ctx, service.c_str(), req_type, rep_type, version,
+                                  &Service<Req, Rep>::on_request, handler.get(), PLR_SERVICE_QUICK)
+            : api_->provide(api_->ctx, service.c_str(), req_type, rep_type, version,
+                            &Service<Req, Rep>::on_request, handler.get());
     if (s != PLR_OK) return make_error(s, "provide '" + service + "' failed");
     callbacks_.push_back(std::move(handler));
     return {};

@@ -20,7 +20,7 @@ extern "C" {
 #endif
 
 #define PLR_ABI_MAJOR 1u
-#define PLR_ABI_MINOR 0u
+#define PLR_ABI_MINOR 1u
 #define PLR_ENTRY_SYMBOL "plr_plugin_entry"
 
 typedef enum plr_kind {
@@ -36,8 +36,8 @@ typedef enum plr_kind {
 
 typedef enum plr_status {
   PLR_OK = 0,
-  PLR_ERR_STATE = 1,       /* call not allowed in the current life-cycle state */
-  PLR_ERR_INVALID = 2,     /* bad argument, parameter or message */
+  PLR_ERR_STATE = 1,   /* call not allowed in the current life-cycle state */
+  PLR_ERR_INVALID = 2, /* bad argument, parameter or message */
   PLR_ERR_TIMEOUT = 3,
   PLR_ERR_UNAVAILABLE = 4, /* no provider, provider gone, queue full */
   PLR_ERR_CANCELLED = 5,
@@ -62,6 +62,13 @@ typedef struct plr_msg_view {
   int64_t stamp_ns; /* when it was sent */
 } plr_msg_view;
 
+/* Service flags (provide_flags, ABI 1.1). QUICK: the handler answers at once
+ * and never waits (no blocking call, no sleep, no lock held by slow work).
+ * The kernel may then run it on the thread that received the request, when
+ * the node is idle, instead of handing it to the node's thread: still one
+ * callback of the node at a time, but not always on the node's thread. */
+#define PLR_SERVICE_QUICK 1u
+
 typedef void (*plr_subscription_fn)(void* user, const plr_msg* msg);
 /* A service request; answer exactly once with respond(token, ...), now or later. */
 typedef void (*plr_service_fn)(void* user, const plr_msg* request, uint64_t token);
@@ -85,28 +92,26 @@ typedef struct plr_host_api {
   void (*reject)(void* ctx, const plr_msg* msg, const char* reason);
 
   /* Topics. Names are resolved through the node's remaps. */
-  plr_status (*advertise)(void* ctx, const char* topic, uint64_t type_id,
-                          uint32_t schema_version, uint64_t* publisher);
+  plr_status (*advertise)(void* ctx, const char* topic, uint64_t type_id, uint32_t schema_version,
+                          uint64_t* publisher);
   /* A buffer of `capacity` bytes (8-byte aligned) for the next message of
    * `publisher`; publish it on that publisher or msg_release it unpublished.
    * When another process reads the topic it is a shared-memory slot, published
    * there without a copy; otherwise plain kernel memory. */
   plr_msg* (*loan)(void* ctx, uint64_t publisher, size_t capacity, uint8_t** data);
-  plr_status (*publish)(void* ctx, uint64_t publisher, plr_msg* msg, size_t offset,
-                        size_t size);
+  plr_status (*publish)(void* ctx, uint64_t publisher, plr_msg* msg, size_t offset, size_t size);
   plr_status (*subscribe)(void* ctx, const char* topic, uint64_t type_id, plr_subscription_fn fn,
                           void* user, uint64_t* subscription);
   plr_status (*unsubscribe)(void* ctx, uint64_t subscription);
 
   /* Services. */
-  plr_status (*provide)(void* ctx, const char* service, uint64_t request_type,
-                        uint64_t reply_type, uint32_t schema_version, plr_service_fn fn,
-                        void* user);
-  plr_status (*respond)(void* ctx, uint64_t token, plr_status status, plr_msg* reply,
-                        size_t offset, size_t size, const char* error);
-  plr_status (*call)(void* ctx, const char* service, uint64_t request_type,
-                     uint32_t schema_version, plr_msg* request, size_t offset, size_t size,
-                     int64_t timeout_ns, plr_reply_fn fn, void* user, uint64_t* call);
+  plr_status (*provide)(void* ctx, const char* service, uint64_t request_type, uint64_t reply_type,
+                        uint32_t schema_version, plr_service_fn fn, void* user);
+  plr_status (*respond)(void* ctx, uint64_t token, plr_status status, plr_msg* reply, size_t offset,
+                        size_t size, const char* error);
+  plr_status (*call)(void* ctx, const char* service, uint64_t request_type, uint32_t schema_version,
+                     plr_msg* request, size_t offset, size_t size, int64_t timeout_ns,
+                     plr_reply_fn fn, void* user, uint64_t* call);
   plr_status (*cancel)(void* ctx, uint64_t call);
 
   /* Parameters from config, as a JSON object text; valid while the node lives. */
@@ -115,6 +120,11 @@ typedef struct plr_host_api {
   void (*log)(void* ctx, plr_log_level level, const char* message);
   /* The pipeline's clock (wall or simulated), nanoseconds. */
   int64_t (*now_ns)(void* ctx);
+
+  /* ABI 1.1 (check abi_minor before use): provide with PLR_SERVICE_* flags. */
+  plr_status (*provide_flags)(void* ctx, const char* service, uint64_t request_type,
+                              uint64_t reply_type, uint32_t schema_version, plr_service_fn fn,
+                              void* user, uint32_t flags);
 } plr_host_api;
 
 /* Life-cycle hooks write a one-line reason into err (NUL-terminated) on failure. */
@@ -141,14 +151,22 @@ typedef const plr_plugin_descriptor* (*plr_plugin_entry_fn)(void);
 
 static inline const char* plr_kind_name(plr_kind kind) {
   switch (kind) {
-    case PLR_KIND_PLANNER: return "planner";
-    case PLR_KIND_EXECUTOR: return "executor";
-    case PLR_KIND_GENERATOR: return "generator";
-    case PLR_KIND_CHOOSER: return "chooser";
-    case PLR_KIND_SIMULATOR: return "simulator";
-    case PLR_KIND_DRIVER: return "driver";
-    case PLR_KIND_MONITOR: return "monitor";
-    case PLR_KIND_OTHER: return "other";
+    case PLR_KIND_PLANNER:
+      return "planner";
+    case PLR_KIND_EXECUTOR:
+      return "executor";
+    case PLR_KIND_GENERATOR:
+      return "generator";
+    case PLR_KIND_CHOOSER:
+      return "chooser";
+    case PLR_KIND_SIMULATOR:
+      return "simulator";
+    case PLR_KIND_DRIVER:
+      return "driver";
+    case PLR_KIND_MONITOR:
+      return "monitor";
+    case PLR_KIND_OTHER:
+      return "other";
   }
   return "unknown";
 }

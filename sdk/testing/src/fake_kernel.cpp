@@ -378,9 +378,16 @@ plr_status h_unsubscribe(void* ctx, std::uint64_t subscription) {
   return PLR_OK;
 }
 
-plr_status h_provide(void* ctx, const char* service, std::uint64_t request_type,
-                     std::uint64_t reply_type, std::uint32_t, plr_service_fn fn, void* user) {
+// Quick services are delivered like the others, on the node's thread: a
+// kernel may always do that.
+plr_status h_provide_flags(void* ctx, const char* service, std::uint64_t request_type,
+                           std::uint64_t reply_type, std::uint32_t, plr_service_fn fn, void* user,
+                           std::uint32_t flags) {
   Slot* s = slot_of(ctx);
+  if ((flags & ~std::uint32_t{PLR_SERVICE_QUICK}) != 0) {
+    s->k->log(s->name, PLR_LOG_ERROR, "provide: unknown service flags");
+    return PLR_ERR_INVALID;
+  }
   Kernel& k = *s->k;
   const std::string name = s->resolve(service);
   std::unique_lock lock(k.m);
@@ -399,6 +406,12 @@ plr_status h_provide(void* ctx, const char* service, std::uint64_t request_type,
   }
   providers.push_back({s, request_type, reply_type, fn, user, {}});
   return PLR_OK;
+}
+
+plr_status h_provide(void* ctx, const char* service, std::uint64_t request_type,
+                     std::uint64_t reply_type, std::uint32_t version, plr_service_fn fn,
+                     void* user) {
+  return h_provide_flags(ctx, service, request_type, reply_type, version, fn, user, 0);
 }
 
 plr_status h_respond(void* ctx, std::uint64_t token, plr_status status, plr_msg* reply,
@@ -459,13 +472,14 @@ std::int64_t h_now_ns(void* ctx) {
 }
 
 plr_host_api host_api(Slot* s) {
-  return {PLR_ABI_MAJOR,  PLR_ABI_MINOR, s,
-          &h_msg_alloc,   &retain,       &release,
-          &h_msg_view,    &h_reject,     &h_advertise,
-          &h_loan,        &h_publish,    &h_subscribe,
-          &h_unsubscribe, &h_provide,    &h_respond,
-          &h_call,        &h_cancel,     &h_params_json,
-          &h_node_name,   &h_log,        &h_now_ns};
+  return {PLR_ABI_MAJOR,   PLR_ABI_MINOR, s,
+          &h_msg_alloc,    &retain,       &release,
+          &h_msg_view,     &h_reject,     &h_advertise,
+          &h_loan,         &h_publish,    &h_subscribe,
+          &h_unsubscribe,  &h_provide,    &h_respond,
+          &h_call,         &h_cancel,     &h_params_json,
+          &h_node_name,    &h_log,        &h_now_ns,
+          &h_provide_flags};
 }
 
 }  // namespace

@@ -13,6 +13,8 @@
 namespace plr::kernel {
 namespace {
 
+using namespace std::chrono_literals;
+
 using testing::make_double_request;
 using testing::make_msg;
 using testing::TestEndpoint;
@@ -188,6 +190,92 @@ TEST_F(BusTest, ServiceCallIsAnsweredOnce) {
   EXPECT_NE(again.error().message.find("already answered"), std::string::npos);
 }
 
+// Where a handler ran, and whether another of its node's callbacks was
+// running at the time.
+struct Where {
+  explicit Where(Bus* b) : bus(b) {}
+  Bus* bus;
+  std::atomic<bool> inside{false};
+  std::atomic<int> overlaps{0};
+  std::mutex m;
+  std::vector<std::thread::id> threads;
+  static void on(void* user, const plr_msg* req, std::uint64_t token) {
+    auto* self = static_cast<Where*>(user);
+    if (self->inside.exchange(true)) ++self->overlaps;
+    {
+      std::lock_guard lock(self->m);
+      self->threads.push_back(std::this_thread::get_id());
+    }
+    self->inside = false;
+    Doubler d{self->bus};
+    Doubler::on(&d, req, token);
+  }
+};
+
+TEST_F(BusTest, AQuickServiceRunsOnTheCallersThreadWhenItsNodeIsIdle) {
+  Where quick{bus_.get()}, normal{bus_.get()};
+  ASSERT_TRUE(
+      bus_->provide(&b_, "quick", kDoubleReq, kDoubleRep, &Where::on, &quick, PLR_SERVICE_QUICK));
+  ASSERT_TRUE(bus_->provide(&c_, "normal", kDoubleReq, kDoubleRep, &Where::on, &normal));
+  for (const char* service : {"quick", "normal"}) {
+    Replies r;
+    ASSERT_TRUE(bus_->call(&a_, service, kDoubleReq, make_double_request(21), 1s, &Replies::on, &r,
+                           nullptr));
+    r.wait(1);
+    EXPECT_EQ(r.values, std::vector<std::int64_t>{42}) << service;
+  }
+  ASSERT_EQ(quick.threads.size(), 1u);
+  ASSERT_EQ(normal.threads.size(), 1u);
+  EXPECT_EQ(quick.threads[0], std::this_thread::get_id());
+  EXPECT_NE(normal.threads[0], std::this_thread::get_id());
+}
+
+TEST_F(BusTest, AQuickServiceWaitsForItsNodesOtherCallbacks) {
+  // The node is busy with a callback of its own: the quick request queues
+  // behind it instead of running beside it.
+  Where quick{bus_.get()};
+  ASSERT_TRUE(
+      bus_->provide(&b_, "quick", kDoubleReq, kDoubleRep, &Where::on, &quick, PLR_SERVICE_QUICK));
+  std::promise<void> release;
+  auto released = release.get_future().share();
+  ASSERT_TRUE(b_.executor().post([&quick, released] {
+    quick.inside = true;
+    released.wait();
+    quick.inside = false;
+  }));
+  Replies r;
+  ASSERT_TRUE(
+      bus_->call(&a_, "quick", kDoubleReq, make_double_request(1), 1s, &Replies::on, &r, nullptr));
+  EXPECT_TRUE(r.results.empty());  // not run inline: the node is busy
+  release.set_value();
+  r.wait(1);
+  EXPECT_EQ(quick.overlaps, 0);
+  ASSERT_EQ(quick.threads.size(), 1u);
+  EXPECT_NE(quick.threads[0], std::this_thread::get_id());
+
+  // Many callers at once: one callback of the node at a time, all answered.
+  constexpr int kCallers = 4, kCalls = 200;
+  Replies all;
+  std::vector<std::thread> callers;
+  for (int t = 0; t < kCallers; ++t)
+    callers.emplace_back([&] {
+      for (int i = 0; i < kCalls; ++i)
+        (void)bus_->call(&a_, "quick", kDoubleReq, make_double_request(i), 5s, &Replies::on, &all,
+                         nullptr);
+    });
+  for (auto& t : callers) t.join();
+  all.wait(kCallers * kCalls);
+  EXPECT_EQ(all.results.size(), static_cast<std::size_t>(kCallers * kCalls));
+  EXPECT_EQ(quick.overlaps, 0);
+}
+
+TEST_F(BusTest, UnknownServiceFlagsAreRefused) {
+  Doubler d{bus_.get()};
+  auto s = bus_->provide(&b_, "double", kDoubleReq, kDoubleRep, &Doubler::on, &d, 0x80);
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find("unknown flags"), std::string::npos);
+}
+
 TEST_F(BusTest, CallWithoutProviderFailsAtOnce) {
   Replies r;
   auto s = bus_->call(&a_, "nobody", kDoubleReq, make_double_request(1), std::chrono::seconds(1),
@@ -229,7 +317,6 @@ TEST_F(BusTest, UnansweredCallTimesOutAndALateAnswerIsRefused) {
 // call has completed, and is woken only for an earlier one: every call must
 // still time out on time, before and after that deadline.
 TEST_F(BusTest, CallsTimeOutOnTimeWhateverTheTimerThreadSleepsUntil) {
-  using namespace std::chrono_literals;
   Silent s;
   ASSERT_TRUE(bus_->provide(&b_, "slow", kDoubleReq, kDoubleRep, &Silent::on, &s));
   const auto cancelled_call = [&](std::chrono::milliseconds timeout) {

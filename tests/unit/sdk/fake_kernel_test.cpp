@@ -155,6 +155,34 @@ TEST(FakeKernel, TestCallsANodesService) {
   EXPECT_EQ(k.requests("double")[0].as<DoubleRequest>()->value(), 7);
 }
 
+// A quick service (ServiceMode::kQuick) is provided through ABI 1.1's
+// provide_flags; the fake kernel answers it like any other.
+class QuickDoubler : public plr::Node {
+ public:
+  using Node::Node;
+
+ protected:
+  plr::Status on_configure() override {
+    return ctx().provide<DoubleRequest, DoubleReply>(
+        "quick_double",
+        [](const Message<DoubleRequest>& req, flatbuffers::FlatBufferBuilder& reply) {
+          reply.Finish(plr::msg::CreateDoubleReply(reply, 2 * req->value()));
+          return plr::Status{};
+        },
+        plr::ServiceMode::kQuick);
+  }
+};
+
+TEST(FakeKernel, QuickServicesAreAnswered) {
+  FakeKernel k;
+  auto h = k.add<QuickDoubler>();
+  ASSERT_TRUE(h.configure());
+  ASSERT_TRUE(h.activate());
+  auto reply = k.call<DoubleRequest, DoubleReply>("quick_double", double_request(4));
+  ASSERT_TRUE(reply) << reply.error().message;
+  EXPECT_EQ(reply.value()->value(), 8);
+}
+
 TEST(FakeKernel, CallWithoutProviderFailsWithItsName) {
   FakeKernel k;
   auto reply = k.call<DoubleRequest, DoubleReply>("nope", double_request(1));
