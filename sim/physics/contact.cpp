@@ -76,7 +76,17 @@ void Contacts::apply(State& state, int a, int b, const Other& o, const PairKey& 
   // Box-box and box-trailer contacts are damped by damp(), after this step's
   // forces; robot shapes keep the explicit damper.
   const bool implicit = key.kind != kBoxLink;
-  const double c_box = 2.0 * options_.box_damping_ratio * m * omega;
+  // Their damping follows the mass the contact carries (its spring force / g)
+  // where that exceeds the pair's reduced mass: a heavy stack swaying on a
+  // light box is damped like one on a heavy box (the damping is implicit, so
+  // any amount is stable).
+  double carried = m;
+  if (implicit) {
+    double push = 0.0;
+    for (const Point& pt : points_) push += pt.weight * k * pt.depth;
+    carried = std::max(m, push / options_.gravity);
+  }
+  const double c_box = 2.0 * options_.box_damping_ratio * carried * omega;
   const Eigen::Vector3d ca = body.box.pose.translation();
   const auto relative_velocity = [&](const Eigen::Vector3d& p) -> Eigen::Vector3d {
     return (body.v + body.w.cross(p - ca)) - (o.v + o.w.cross(p - o.centre) + o.belt);

@@ -2,10 +2,12 @@
 // backwards; piles are built by dropping boxes onto a height map.
 #include <fcl/fcl.h>
 
+#include <Eigen/QR>
 #include <algorithm>
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <numeric>
 #include <random>
 #include <stdexcept>
 
@@ -19,7 +21,8 @@ constexpr double kSupportStep = 0.03;   // m; a pile box rests on what is this c
 constexpr double kSupportShare = 0.75;  // of its footprint, at least
 constexpr double kLandingStep = 0.01;   // m; what a pile box lands on is this close below it
 constexpr double kSupportMargin =
-    0.15;  // of its size: landing support this far out from the centre
+    0.15;                       // of its size: landing support this far out from the centre
+constexpr double kCell = 0.02;  // m; height map and support cells
 
 struct WallParams {
   std::vector<double> depths;                           // box extent along x, per slab
@@ -140,7 +143,6 @@ World make_wall(EnvFamily family, std::uint64_t seed, const Trailer& trailer) {
 // Height map over the trailer floor, cells of kCell metres.
 class HeightMap {
  public:
-  static constexpr double kCell = 0.02;
   explicit HeightMap(const Trailer& t)
       : t_(t),
         nx_(static_cast<int>(std::ceil(t.depth / kCell))),
@@ -176,6 +178,160 @@ class HeightMap {
   std::vector<double> h_;
 };
 
+// What one box rests on: cells of its bottom face (box frame) and, per cell,
+// the box below (index) or the floor (-1).
+struct Support {
+  std::vector<Eigen::Vector2d> cells;
+  std::vector<int> by;
+};
+
+Eigen::Matrix2d yaw_of(const Box& box) {
+  return box.pose.linear().topLeftCorner<2, 2>();
+}
+
+// Cells of `box`'s bottom face that rest on the floor or on the top of a box
+// in `others` (indices `candidates`) within kLandingStep below it (plus a few
+// mm: piles hover before their drop, settled boxes sink a little).
+Support find_support(const Box& box, const std::vector<Box>& others,
+                     const std::vector<int>& candidates) {
+  constexpr double kSlack = 0.005;
+  Support s;
+  const Eigen::Vector2d half = 0.5 * box.size.head<2>();
+  const double bottom = box.pose.translation().z() - 0.5 * box.size.z();
+  const int nx = std::max(2, static_cast<int>(std::lround(box.size.x() / kCell)));
+  const int ny = std::max(2, static_cast<int>(std::lround(box.size.y() / kCell)));
+  const Eigen::Matrix2d r = yaw_of(box);
+  const Eigen::Vector2d c = box.pose.translation().head<2>();
+  for (int i = 0; i < nx; ++i) {
+    for (int j = 0; j < ny; ++j) {
+      const Eigen::Vector2d local((i + 0.5) / nx * box.size.x() - half.x(),
+                                  (j + 0.5) / ny * box.size.y() - half.y());
+      int by = -2;
+      if (bottom < kLandingStep + kSlack) {
+        by = -1;
+      } else {
+        const Eigen::Vector2d p = c + r * local;
+        double best = -1.0;
+        for (const int k : candidates) {
+          const Box& o = others[static_cast<std::size_t>(k)];
+          const double top = o.pose.translation().z() + 0.5 * o.size.z();
+          if (top < bottom - kLandingStep - kSlack || top > bottom + kSlack || top <= best)
+            continue;
+          const Eigen::Vector2d q = yaw_of(o).transpose() * (p - o.pose.translation().head<2>());
+          if ((q.cwiseAbs().array() <= 0.5 * o.size.head<2>().array()).all()) {
+            best = top;
+            by = k;
+          }
+        }
+      }
+      if (by == -2) continue;
+      s.cells.push_back(local);
+      s.by.push_back(by);
+    }
+  }
+  return s;
+}
+
+// Statics of upright boxes: each box carries its weight plus what rests on
+// it, and that load's line of action (its resultant) must pass through the
+// box's support with a margin, the same one a single box's centre needs.
+// Otherwise the box (and all it carries) tips over: a column whose boxes each
+// sit on the one below can still lean over as a whole. A box on several
+// supports passes its load to them by the lever rule (the split closest to
+// one by contact area that puts the resultant where it is). Boxes are
+// processed top down (`order`: descending top height); returns the indices
+// of `check` (or of all, if empty) whose resultant falls outside.
+std::vector<int> tipping(const std::vector<Box>& boxes, const std::vector<Support>& supports,
+                         const std::vector<int>& order, std::vector<bool> check) {
+  const std::size_t n = boxes.size();
+  const bool all = check.empty();
+  check.resize(n, all);
+  std::vector<double> load(n);
+  std::vector<Eigen::Vector2d> moment(n);  // load-weighted xy of the line of action
+  for (std::size_t i = 0; i < n; ++i) {
+    load[i] = boxes[i].mass;
+    moment[i] = boxes[i].mass * boxes[i].pose.translation().head<2>();
+  }
+  std::vector<int> failed;
+  for (const int bi : order) {
+    const auto i = static_cast<std::size_t>(bi);
+    const Box& box = boxes[i];
+    const Support& s = supports[i];
+    const Eigen::Matrix2d r = yaw_of(box);
+    const Eigen::Vector2d x = moment[i] / load[i];
+    if (check[i]) {
+      const Eigen::Vector2d at = r.transpose() * (x - box.pose.translation().head<2>());
+      const Eigen::Array2d margin = 2.0 * kSupportMargin * 0.5 * box.size.head<2>().array();
+      std::array<bool, 4> quadrants{};
+      for (const Eigen::Vector2d& cell : s.cells) {
+        const Eigen::Vector2d d = cell - at;
+        if ((d.cwiseAbs().array() > margin).all()) {
+          quadrants[static_cast<std::size_t>((d.x() > 0.0) + 2 * (d.y() > 0.0))] = true;
+        }
+      }
+      if (!std::all_of(quadrants.begin(), quadrants.end(), [](bool q) { return q; })) {
+        failed.push_back(bi);
+      }
+    }
+    // Contact centroid and area per support.
+    std::vector<int> by;
+    std::vector<Eigen::Vector2d> centroid;
+    std::vector<double> area;
+    for (std::size_t c = 0; c < s.cells.size(); ++c) {
+      const auto k =
+          static_cast<std::size_t>(std::find(by.begin(), by.end(), s.by[c]) - by.begin());
+      if (k == by.size()) {
+        by.push_back(s.by[c]);
+        centroid.emplace_back(Eigen::Vector2d::Zero());
+        area.push_back(0.0);
+      }
+      centroid[k] += box.pose.translation().head<2>() + r * s.cells[c];
+      area[k] += 1.0;
+    }
+    if (by.empty()) continue;
+    const double total = static_cast<double>(s.cells.size());
+    Eigen::VectorXd w0(static_cast<Eigen::Index>(by.size()));
+    Eigen::MatrixXd a(3, static_cast<Eigen::Index>(by.size()));
+    for (std::size_t k = 0; k < by.size(); ++k) {
+      centroid[k] /= area[k];
+      w0[static_cast<Eigen::Index>(k)] = area[k] / total;
+      a.col(static_cast<Eigen::Index>(k)) << 1.0, centroid[k];
+    }
+    // Shares w closest to w0 (weighted by w0) with sum 1 and sum w c = x.
+    const Eigen::Vector3d target(1.0, x.x(), x.y());
+    const Eigen::MatrixXd aw = a * w0.asDiagonal();
+    const Eigen::Vector3d lambda =
+        (aw * a.transpose()).completeOrthogonalDecomposition().solve(target - a * w0);
+    Eigen::VectorXd w = (w0.array() * (1.0 + (a.transpose() * lambda).array())).max(0.0);
+    w /= w.sum();
+    Eigen::Vector2d through = Eigen::Vector2d::Zero();
+    for (std::size_t k = 0; k < by.size(); ++k)
+      through += w[static_cast<Eigen::Index>(k)] * centroid[k];
+    const Eigen::Vector2d shift = x - through;  // keeps the moment exact when x is off the hull
+    for (std::size_t k = 0; k < by.size(); ++k) {
+      if (by[k] < 0) continue;
+      const auto j = static_cast<std::size_t>(by[k]);
+      const double f = w[static_cast<Eigen::Index>(k)] * load[i];
+      load[j] += f;
+      moment[j] += f * (centroid[k] + shift);
+      check[j] = check[j] || check[i];
+    }
+  }
+  return failed;
+}
+
+// Boxes ordered top down.
+std::vector<int> top_down(const std::vector<Box>& boxes) {
+  std::vector<int> order(boxes.size());
+  std::iota(order.begin(), order.end(), 0);
+  const auto top = [&](int i) {
+    const Box& b = boxes[static_cast<std::size_t>(i)];
+    return b.pose.translation().z() + 0.5 * b.size.z();
+  };
+  std::stable_sort(order.begin(), order.end(), [&](int x, int y) { return top(x) > top(y); });
+  return order;
+}
+
 World make_pile(EnvFamily family, std::uint64_t seed, const Trailer& trailer) {
   const PileParams p = pile_params(family);
   std::mt19937_64 rng(seed);
@@ -185,6 +341,7 @@ World make_pile(EnvFamily family, std::uint64_t seed, const Trailer& trailer) {
   world.trailer = trailer;
   HeightMap map(trailer);
   std::vector<fcl::Boxd> shapes;
+  std::vector<Support> supports;
   shapes.reserve(static_cast<std::size_t>(p.count_max));
   const int count = count_dist(rng);
   fcl::CollisionRequestd request;
@@ -249,9 +406,28 @@ World make_pile(EnvFamily family, std::uint64_t seed, const Trailer& trailer) {
       if (!clear) z += 0.01;
     }
     if (z + 0.5 * box.size.z() > std::min(trailer.height - 0.1, p.max_height)) continue;
+    // The pile must stand with this box on it: every box below it, carrying
+    // its share of the new load, still has its load over its support.
+    std::vector<int> near;
+    const Eigen::Vector3d e = box.pose.linear().cwiseAbs() * (0.5 * box.size);
+    for (std::size_t i = 0; i < world.boxes.size(); ++i) {
+      const Box& o = world.boxes[i];
+      const Eigen::Vector3d oe = o.pose.linear().cwiseAbs() * (0.5 * o.size);
+      const Eigen::Vector3d d = (o.pose.translation() - box.pose.translation()).cwiseAbs();
+      if ((d.head<2>().array() < (e + oe).head<2>().array()).all())
+        near.push_back(static_cast<int>(i));
+    }
+    supports.push_back(find_support(box, world.boxes, near));
+    world.boxes.push_back(box);
+    std::vector<bool> check(world.boxes.size(), false);
+    check.back() = true;
+    if (!tipping(world.boxes, supports, top_down(world.boxes), check).empty()) {
+      world.boxes.pop_back();
+      supports.pop_back();
+      continue;
+    }
     const double top = z + 0.5 * box.size.z();
     map.for_cells(box, [&](double& h, const Eigen::Vector2d&) { h = std::max(h, top); });
-    world.boxes.push_back(box);
     shapes.emplace_back(box.size);
     ++n;
   }
@@ -283,6 +459,19 @@ std::optional<EnvFamily> parse_env_family(std::string_view name) {
     }
   }
   return std::nullopt;
+}
+
+std::vector<std::uint32_t> toppling_boxes(const World& world) {
+  std::vector<int> all(world.boxes.size());
+  std::iota(all.begin(), all.end(), 0);
+  std::vector<Support> supports;
+  for (const Box& box : world.boxes) supports.push_back(find_support(box, world.boxes, all));
+  std::vector<std::uint32_t> ids;
+  for (const int i : tipping(world.boxes, supports, top_down(world.boxes), {})) {
+    ids.push_back(world.boxes[static_cast<std::size_t>(i)].id);
+  }
+  std::sort(ids.begin(), ids.end());
+  return ids;
 }
 
 World generate_world(EnvFamily family, std::uint64_t seed, const Trailer& trailer) {

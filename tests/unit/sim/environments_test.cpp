@@ -1,7 +1,7 @@
 // Generated worlds per family. The test runs two spread seeds per family by
-// default (PLR_SIM_SEEDS=N runs seeds 0..N-1 instead); `bench_sim
-// --generators 100` runs 100 per family and prints how many settle (not yet
-// every pile: docs/notes-sim.md).
+// default, plus the seeds that once failed (PLR_SIM_SEEDS=N runs seeds
+// 0..N-1 instead); `bench_sim --generators 100` runs 100 per family and
+// prints how many settle (all: docs/notes-sim.md).
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -12,8 +12,14 @@
 namespace plr::sim {
 namespace {
 
-std::vector<std::uint64_t> seeds() {
+// Besides two spread seeds, those that once failed: B1 40 (just missed 2 s),
+// B2 8, 27, 95 (a column leaning over; a light box sinking under ~150 kg; a
+// heavy stack swaying on a 3 kg box) and 45 (a heavy box on a light column
+// swaying past 2 s until contact damping followed the carried load).
+std::vector<std::uint64_t> seeds(EnvFamily family) {
   const char* env = std::getenv("PLR_SIM_SEEDS");
+  if (env == nullptr && family == EnvFamily::kB1) return {0, 40, 57};
+  if (env == nullptr && family == EnvFamily::kB2) return {0, 8, 27, 45, 57, 95};
   if (env == nullptr) return {0, 57};
   std::vector<std::uint64_t> all(static_cast<std::size_t>(std::max(1, std::atoi(env))));
   for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
@@ -28,7 +34,7 @@ class Environments : public ::testing::TestWithParam<EnvFamily> {};
 // make_environment must not sink into each other either.
 TEST_P(Environments, WorldsAreCleanAndSettleWithin2Seconds) {
   const bool wall = GetParam() == EnvFamily::kA1 || GetParam() == EnvFamily::kA2;
-  for (const std::uint64_t seed : seeds()) {
+  for (const std::uint64_t seed : seeds(GetParam())) {
     const World generated = generate_world(GetParam(), seed);
     ASSERT_FALSE(generated.boxes.empty());
     EXPECT_TRUE(find_interpenetrations(generated, 1e-6).empty()) << "seed " << seed;

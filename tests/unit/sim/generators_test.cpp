@@ -84,6 +84,60 @@ TEST(Generators, FindsInterpenetrationAndBoxesOutsideTheTrailer) {
             found.end());
 }
 
+Box upright(std::uint32_t id, const Eigen::Vector3d& size, const Eigen::Vector3d& centre,
+            double mass) {
+  Box b;
+  b.id = id;
+  b.size = size;
+  b.pose = Eigen::Isometry3d::Identity();
+  b.pose.translation() = centre;
+  b.mass = mass;
+  return b;
+}
+
+// Each box of a leaning column rests on the one below with its centre over
+// that box's top, but the top two together lean out too far over the middle
+// one: the middle one (and what it carries) tips.
+TEST(Generators, StaticsFindsAColumnLeaningOverAsAWhole) {
+  World w;
+  const Eigen::Vector3d size(0.4, 0.4, 0.3);
+  w.boxes.push_back(upright(1, size, {10.0, 0.0, 0.15}, 5.0));
+  w.boxes.push_back(upright(2, size, {10.1, 0.0, 0.45}, 5.0));
+  EXPECT_TRUE(toppling_boxes(w).empty());
+  w.boxes.push_back(upright(3, size, {10.2, 0.0, 0.75}, 5.0));
+  EXPECT_EQ(toppling_boxes(w), std::vector<std::uint32_t>{2});
+  // A heavy box on top of the light leaning one makes it worse, a light one
+  // matters less: loads count, not box counts.
+  w.boxes[2].pose.translation().x() = 10.14;
+  w.boxes[2].mass = 1.0;
+  EXPECT_TRUE(toppling_boxes(w).empty());
+  w.boxes[2].mass = 30.0;
+  EXPECT_EQ(toppling_boxes(w), std::vector<std::uint32_t>{2});
+}
+
+// A box bridging two supports stands, its load shared by the lever rule;
+// off-centre loads on a bridge move its load towards one support.
+TEST(Generators, StaticsSharesABridgedLoad) {
+  World w;
+  w.boxes.push_back(upright(1, {0.3, 0.3, 0.3}, {10.0, 0.0, 0.15}, 5.0));
+  w.boxes.push_back(upright(2, {0.3, 0.3, 0.3}, {10.4, 0.0, 0.15}, 5.0));
+  w.boxes.push_back(upright(3, {0.6, 0.3, 0.2}, {10.2, 0.0, 0.4}, 20.0));
+  EXPECT_TRUE(toppling_boxes(w).empty());
+  // Shifted so that it hangs mostly over box 2: box 1 holds little and box
+  // 2's load passes near its outer edge, but both still stand.
+  w.boxes[2].pose.translation().x() = 10.3;
+  EXPECT_TRUE(toppling_boxes(w).empty());
+}
+
+TEST(Generators, PilesStand) {
+  for (EnvFamily f : {EnvFamily::kB1, EnvFamily::kB2}) {
+    for (std::uint64_t seed = 0; seed < 20; ++seed) {
+      EXPECT_TRUE(toppling_boxes(generate_world(f, seed)).empty())
+          << to_string(f) << " seed " << seed;
+    }
+  }
+}
+
 TEST(Generators, NamesAndPerception) {
   EXPECT_EQ(parse_env_family("b2"), EnvFamily::kB2);
   EXPECT_EQ(parse_env_family("A1"), EnvFamily::kA1);

@@ -33,6 +33,12 @@ World generate_world(EnvFamily family, std::uint64_t seed, const Trailer& traile
 std::vector<std::pair<std::uint32_t, std::uint32_t>> find_interpenetrations(const World& world,
                                                                             double tolerance);
 
+// Ids of upright (yaw-only) boxes that tip over: the resultant of a box's
+// weight and of what rests on it (shared among several supports by the lever
+// rule) falls outside its support, less a margin of 15% of its size. A box
+// rests on the floor or on box tops up to 1.5 cm below its bottom face.
+std::vector<std::uint32_t> toppling_boxes(const World& world);
+
 // The perceived world W: same boxes without masses.
 World without_masses(const World& world);
 

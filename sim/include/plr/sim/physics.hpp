@@ -62,7 +62,9 @@ struct PhysicsOptions {
   double damping_ratio = 0.5;    // contacts with robot shapes (explicit damper)
   // Box-box and box-trailer contacts: cardboard does not bounce, and a stack
   // must not rock on its contact springs. Damped implicitly, so any value is
-  // stable; normal c = 2 * ratio * reduced_mass * contact_omega, tangential half.
+  // stable; normal c = 2 * ratio * mass * contact_omega, tangential half, with
+  // the larger of the pair's reduced mass and the mass the contact carries
+  // (its spring force / gravity).
   double box_damping_ratio = 4.0;
   bool sleeping = true;
   double sleep_speed = 0.01;  // m/s at the box's corners
