@@ -5,9 +5,13 @@
  * the kernel only through the plr_host_api table they are created with.
  *
  * Threading: the kernel runs each node's callbacks (subscriptions, service
- * handlers) one at a time on that node's own thread. Call completions run on
- * whichever kernel thread delivers the reply; the C++ SDK turns them into
- * futures. Every host function may be called from any thread.
+ * handlers) one at a time on that node's own thread (quick services: one at a
+ * time, possibly on the thread that received the request). Call completions
+ * run on whichever kernel thread delivers the reply; the C++ SDK turns them
+ * into futures. Every host function may be called from any thread.
+ *
+ * ABI minor versions only add entries at the end of plr_host_api: a plug-in
+ * checks abi_minor before using a newer entry (1.1: provide_flags).
  */
 #ifndef PLR_PLUGIN_ABI_H
 #define PLR_PLUGIN_ABI_H

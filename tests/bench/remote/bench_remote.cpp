@@ -219,8 +219,7 @@ std::optional<Figures> ddsperf(int domain, const std::string& uri, std::size_t s
 int bench(bool quick, bool json) {
   const int domain = 100 + ::getpid() % 60;  // ddsperf uses domain + 60: both <= 232
   const int seconds = quick ? 1 : 3;
-  std::vector<std::size_t> sizes{64, 64 * 1024};
-  if (getenv("HACK_SMALL")) sizes = {64};
+  const std::vector<std::size_t> sizes{64, 64 * 1024};
   DdsConfig dds;
   dds.domain = domain;
   auto xml = cyclone_config_xml(dds);
