@@ -49,9 +49,11 @@ bool Executor::dispatch(std::function<void()> task) {
     return queued;
   }
   busy_ = true;
+  inline_on_.store(std::this_thread::get_id(), std::memory_order_relaxed);
   lock.unlock();
   task();
   lock.lock();
+  inline_on_.store(std::thread::id{}, std::memory_order_relaxed);
   busy_ = false;
   // What was queued meanwhile (or a stop) waited for this task: hand over.
   const bool wake = stop_ || !queue_.empty();

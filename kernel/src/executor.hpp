@@ -30,7 +30,11 @@ class Executor {
   void run_sync(const std::function<void()>& task);
   // Waits until everything queued so far has run.
   void drain();
-  bool on_this_thread() const { return std::this_thread::get_id() == thread_.get_id(); }
+  // True on the executor's thread, and on a thread running a task of it inline.
+  bool on_this_thread() const {
+    const auto self = std::this_thread::get_id();
+    return self == thread_.get_id() || self == inline_on_.load(std::memory_order_relaxed);
+  }
   std::size_t queued() const;
 
  private:
@@ -44,7 +48,8 @@ class Executor {
   std::deque<std::function<void()>> queue_;
   bool busy_ = false;
   bool stop_ = false;
-  std::atomic<int> posting_{0};  // post() calls not yet returned
+  std::atomic<int> posting_{0};               // post() calls not yet returned
+  std::atomic<std::thread::id> inline_on_{};  // the thread in dispatch()'s task, if any
   std::thread thread_;
 };
 

@@ -47,6 +47,20 @@ TEST(NodeExecutor, DispatchRunsInlineWhenIdleAndQueuesWhenBusy) {
   EXPECT_NE(ran_on, std::this_thread::get_id());
 }
 
+TEST(NodeExecutor, AnInlineTaskCountsAsOnTheExecutor) {
+  // What a callback may do on its executor's thread (run_sync inline, no
+  // waiting for its own queue) it may do in an inline task too.
+  Executor ex("test");
+  bool on = false, nested = false;
+  ASSERT_TRUE(ex.dispatch([&] {
+    on = ex.on_this_thread();
+    ex.run_sync([&] { nested = true; });
+  }));
+  EXPECT_TRUE(on);
+  EXPECT_TRUE(nested);
+  EXPECT_FALSE(ex.on_this_thread());
+}
+
 TEST(NodeExecutor, PostedAndDispatchedTasksNeverOverlap) {
   Probe probe;
   {
