@@ -24,14 +24,6 @@ constexpr std::size_t kMaxKernelId = 128;
 constexpr std::size_t kMaxErrorText = 4096;
 // A remote call nobody answered for this long is forgotten (the bus has timed it out).
 constexpr auto kForgetCall = 15min;
-// Request and reply writers keep this many samples (per sending kernel) for
-// retransmission, as ROS 2's services keep 10. Keeping all until acknowledged
-// made a writer gather unacknowledged large samples, and Cyclone then
-// throttles it and trades heartbeats for acknowledgements: at 64 KiB, half
-// again the round trip (ddsperf's writers keep 1). A request lost on the wire
-// and pushed out by 8 newer ones before its retransmission ends in the
-// call's timeout. Readers keep all: their listener takes every sample at once.
-constexpr std::int32_t kCallHistory = 8;
 
 // Set on Cyclone's threads that run our listeners.
 thread_local bool t_on_receive_thread = false;
@@ -277,17 +269,16 @@ Status DdsBridge::open() {
     bool transient;
     dds_entity_t* writer;      // or null
     int reader;                // ReaderKind, or -1
-    bool calls;                // requests or replies: writers keep kCallHistory
     dds_entity_t* now_writer;  // or null: a second writer that never blocks
   };
   const Plane planes[] = {
-      {kDdsAnnounceTopic, 1, false, &announce_writer_, kAnnounceReader, false, nullptr},
-      {kDdsTelemetryTopic, 1, true, &telemetry_writer_, -1, false, nullptr},
-      {kDdsControlTopic, 0, false, nullptr, kControlReader, false, nullptr},
+      {kDdsAnnounceTopic, 1, false, &announce_writer_, kAnnounceReader, nullptr},
+      {kDdsTelemetryTopic, 1, true, &telemetry_writer_, -1, nullptr},
+      {kDdsControlTopic, 0, false, nullptr, kControlReader, nullptr},
       // Kept for late readers: a CLI whose reader matched after the answer still gets it.
-      {kDdsResultTopic, 16, true, &result_writer_, -1, false, nullptr},
-      {kDdsRequestTopic, 0, false, &request_writer_, kRequestReader, true, nullptr},
-      {kDdsReplyTopic, 0, false, &reply_writer_, kReplyReader, true, &reply_now_writer_},
+      {kDdsResultTopic, 16, true, &result_writer_, -1, nullptr},
+      {kDdsRequestTopic, 0, false, &request_writer_, kRequestReader, nullptr},
+      {kDdsReplyTopic, 0, false, &reply_writer_, kReplyReader, &reply_now_writer_},
   };
   for (const auto& plane : planes) {
     const dds_entity_t t = topic(plane.name);
@@ -295,10 +286,9 @@ Status DdsBridge::open() {
       return make_error(PLR_ERR_INTERNAL,
                         fmt::format("dds: topic '{}': {}", plane.name, dds_strretcode(t)));
     dds_qos_t* q = control_qos(plane.depth, plane.transient);
-    Reader* r = plane.reader < 0 ? nullptr : add_reader(t, q, plane.reader, "", 0);
-    if (plane.calls) dds_qset_history(q, DDS_HISTORY_KEEP_LAST, kCallHistory);
     const dds_entity_t w = plane.writer ? dds_create_writer(participant_, t, q, nullptr) : 0;
     if (plane.writer) *plane.writer = w;
+    Reader* r = plane.reader < 0 ? nullptr : add_reader(t, q, plane.reader, "", 0);
     if (plane.now_writer) {
       dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, 0);
       *plane.now_writer = dds_create_writer(participant_, t, q, nullptr);

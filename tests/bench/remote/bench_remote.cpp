@@ -4,8 +4,7 @@
 // ping/pong between the same two places (two processes, same Cyclone config).
 // Nothing is pinned: both sides float over the machine's cores alike.
 //   bench_remote [--quick] [--json]
-#include "bus.hpp"
-#include "dds_bridge.hpp"
+#include "bare_kernel.hpp"
 
 #include <plr/message.hpp>
 #include <plr/spin_wait.hpp>
@@ -34,57 +33,24 @@ namespace {
 
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
-constexpr std::uint64_t kEchoType = fnv1a("plr.bench.Echo");
-
-class Node final : public Endpoint {
- public:
-  explicit Node(std::string name) : name_(std::move(name)), executor_(name_) {}
-  Executor& executor() override { return executor_; }
-  const std::string& endpoint_name() const override { return name_; }
-
- private:
-  std::string name_;
-  Executor executor_;
-};
+using remote_test::BareKernel;
+using remote_test::BareNode;
+using remote_test::kEchoType;
 
 // Two echo services: "echo" is quick (answered on the thread that took the
 // request off the network), "echo_node" is answered on its node's thread.
 constexpr const char* kServices[] = {"echo", "echo_node"};
 
-Config bench_config(int domain, bool server) {
-  Config c;
-  c.pipeline = server ? "bench_server" : "bench_client";
-  c.dds.enabled = true;
-  c.dds.domain = domain;
-  (server ? c.dds.export_patterns : c.dds.import_patterns) = {"echo*"};
-  return c;
-}
-
 int serve(int domain) {
-  const Config config = bench_config(domain, true);
-  Bus bus([&](const std::string& t) { return config.topic(t); });
-  auto bridge = DdsBridge::create(
-      bus, config, make_kernel_id(config.pipeline), [] { return std::string("{}"); },
-      [](const nlohmann::json&) -> Status { return make_error(PLR_ERR_STATE, "bench"); });
-  if (!bridge) {
-    std::cerr << bridge.error().message << "\n";
+  BareKernel k(domain, "bench_server", true, "echo*");
+  if (const auto e = k.open(); !e.empty()) {
+    std::cerr << e << "\n";
     return 1;
   }
-  bus.attach(bridge->get());
-  Node quick("echo"), node("echo_node");
-  for (Node* n : {&quick, &node}) bus.set_live(n, true);
-  // Answers with the request's own bytes, as ddsperf's pong writes back the
-  // sample it took: no copy of its own.
-  const auto answer = [](void* user, const plr_msg* req, std::uint64_t token) {
-    msg_retain(req);
-    (void)static_cast<Bus*>(user)->respond(token, PLR_OK, const_cast<plr_msg*>(req), "");
-  };
-  (void)bus.provide(&quick, "echo", kEchoType, kEchoType, answer, &bus, PLR_SERVICE_QUICK);
-  (void)bus.provide(&node, "echo_node", kEchoType, kEchoType, answer, &bus);
+  (void)k.provide_echo(k.add_node("echo"), "echo", PLR_SERVICE_QUICK);
+  (void)k.provide_echo(k.add_node("echo_node"), "echo_node", 0);
   // Until the parent goes.
   while (::getppid() != 1) std::this_thread::sleep_for(100ms);
-  for (Node* n : {&quick, &node}) bus.remove_endpoint(n);
-  bus.detach(bridge->get());
   return 0;
 }
 
@@ -109,24 +75,8 @@ Figures summarize(std::vector<double> v) {
 class Client {
  public:
   explicit Client(int domain)
-      : config_(bench_config(domain, false)),
-        bus_([this](const std::string& t) { return config_.topic(t); }),
-        caller_("caller") {
-    bus_.set_live(&caller_, true);
-  }
-  ~Client() {
-    bus_.remove_endpoint(&caller_);
-    if (bridge_) bus_.detach(bridge_.get());
-  }
-  std::string open() {
-    auto b = DdsBridge::create(
-        bus_, config_, make_kernel_id(config_.pipeline), [] { return std::string("{}"); },
-        [](const nlohmann::json&) -> Status { return make_error(PLR_ERR_STATE, "bench"); });
-    if (!b) return b.error().message;
-    bridge_ = std::move(*b);
-    bus_.attach(bridge_.get());
-    return "";
-  }
+      : kernel_(domain, "bench_client", false, "echo*"), caller_(kernel_.add_node("caller")) {}
+  std::string open() { return kernel_.open(); }
   struct RoundTrip {
     double resumed_us;   // until the calling thread runs again
     double callback_us;  // until the reply callback runs (Cyclone's receive thread)
@@ -137,7 +87,8 @@ class Client {
     plr_msg* request = msg_copy(payload.data(), payload.size(), kEchoType, 1, 0);
     done_.store(false);
     const auto t0 = Clock::now();
-    auto s = bus_.call(&caller_, service, kEchoType, request, 2s, &Client::on_reply, this, nullptr);
+    auto s = kernel_.bus().call(&caller_, service, kEchoType, request, 2s, &Client::on_reply, this,
+                                nullptr);
     if (!s) return std::nullopt;
     if (!spin_until(done_, kCallSpin)) done_.wait(false);
     const auto t1 = Clock::now();
@@ -156,14 +107,12 @@ class Client {
     self->done_.notify_one();
   }
 
-  Config config_;
-  Bus bus_;
-  Node caller_;
-  std::unique_ptr<DdsBridge> bridge_;
   std::atomic<bool> done_{false};
   plr_status status_ = PLR_OK;
   Clock::time_point reply_at_;
   std::size_t reply_size_ = 0;
+  BareKernel kernel_;  // last: stops before what its reply callbacks write
+  BareNode& caller_;
 };
 
 pid_t spawn(const std::vector<std::string>& argv, const std::string& uri, const char* out) {
