@@ -11,13 +11,16 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <set>
 #include <thread>
+#include <unordered_set>
 
 #include "instantiate.hpp"
 #include "plr/sim/observation.hpp"
@@ -71,6 +74,27 @@ struct PlanResult {
   std::unique_ptr<msg::TrajectoryT> trajectory;
 };
 
+// Sets a value for a scope (the trajectories' time scale while a box is carried).
+class Slowed {
+ public:
+  Slowed(double& value, double scale) : value_(value) { value_ = scale; }
+  ~Slowed() { value_ = 1.0; }
+  Slowed(const Slowed&) = delete;
+  Slowed& operator=(const Slowed&) = delete;
+
+ private:
+  double& value_;
+};
+
+// A box whose grip failed in this run, and what the next attempt changes.
+struct GripHistory {
+  int failures = 0;
+  int drops = 0;  // held, then lost while carried: the load, not the weight alone
+  int cups = 0;   // cups the last failed grasp pose covered
+  bool given_up = false;
+  std::string last, why;  // the last failure; why no more attempts are made
+};
+
 // What one action cost, committed to the statistics only when it completes
 // (an action interrupted by a simulator crash is repeated, not counted twice).
 struct ActionRun {
@@ -110,6 +134,7 @@ class ExecutorNode : public plr::Node {
                          "max_idle_actions",
                          "max_actions",
                          "pick_candidates",
+                         "grip_attempts",
                          "settle_s",
                          "nose_home",
                          "nose_down",
@@ -145,6 +170,7 @@ class ExecutorNode : public plr::Node {
     max_idle_ = params().get<std::uint64_t>("max_idle_actions", 6);
     max_actions_ = params().get<std::uint64_t>("max_actions", 0);
     max_candidates_ = params().get<std::uint64_t>("pick_candidates", 4);
+    grip_attempts_ = params().get<std::uint64_t>("grip_attempts", grip_attempts_);
     settle_s_ = params().get<double>("settle_s", 0.3);
     retreat_m_ = params().get<double>("retreat_m", 0.3);
     dropoff_backoff_m_ = params().get<double>("dropoff_backoff_m", 0.5);
@@ -167,6 +193,8 @@ class ExecutorNode : public plr::Node {
       return make_error(PLR_ERR_INVALID, "param 'max_idle_actions': must be >= 1");
     if (max_candidates_ == 0)
       return make_error(PLR_ERR_INVALID, "param 'pick_candidates': must be >= 1");
+    if (grip_attempts_ == 0)
+      return make_error(PLR_ERR_INVALID, "param 'grip_attempts': must be >= 1");
     try {
       robot_ = sim::RobotModel::fromUrdfFile(params().get<std::string>("urdf", PLR_UNLOADER_URDF));
     } catch (const std::exception& e) {
@@ -185,6 +213,8 @@ class ExecutorNode : public plr::Node {
   plr::Status on_activate() override {
     stop_ = false;
     stats_ = {};
+    grips_.clear();
+    unreached_.clear();
     worker_ = std::thread([this] { run(); });
     return {};
   }
@@ -418,6 +448,11 @@ class ExecutorNode : public plr::Node {
     const double settle_s = before != Suction::Keep || after != Suction::Keep ? settle_s_ : 0.0;
     msg::ExecuteRequestT req;
     req.trajectory = std::make_unique<msg::TrajectoryT>(trajectory);
+    // A uniform time scaling: the same path, accelerations divided by its square.
+    for (auto& p : req.trajectory->points) {
+      p->time_s *= time_scale_;
+      for (auto& v : p->velocities) v /= time_scale_;
+    }
     req.suction_before = before;
     req.suction_after = after;
     req.conveyor = true;
@@ -434,8 +469,8 @@ class ExecutorNode : public plr::Node {
     }
     const auto& out = r.value();
     check_clock(out->sim_time_s(), "sim/execute");
-    const double duration =
-        (trajectory.points.empty() ? 0.0 : trajectory.points.back()->time_s) + settle_s;
+    const auto& points = req.trajectory->points;
+    const double duration = (points.empty() ? 0.0 : points.back()->time_s) + settle_s;
     // A box the belt carries out after the robot stopped is counted by the
     // time the robot goes on.
     if (const auto* after = out->unloaded_after_s())
@@ -481,12 +516,16 @@ class ExecutorNode : public plr::Node {
     }
     if (!p.ok) {
       log().info("{}: {} not planned: {}", action_name_, what, p.message);
+      step_failure_ = what + " not planned: " + p.message;
       return false;
     }
     log().debug("{}: {} ({} points, {:.2f} s)", action_name_, what, p.trajectory->points.size(),
                 p.trajectory->points.empty() ? 0.0 : p.trajectory->points.back()->time_s);
     auto out = execute(*p.trajectory, before, after, run);
-    if (!out) return false;
+    if (!out) {
+      step_failure_ = what + " not executed";
+      return false;
+    }
     last_held_ = (*out)->held_box_ids()
                      ? std::vector<std::uint32_t>((*out)->held_box_ids()->begin(),
                                                   (*out)->held_box_ids()->end())
@@ -544,8 +583,18 @@ class ExecutorNode : public plr::Node {
 
   void pick(sim::Action action, const Observed& w0, ActionRun& run) {
     const auto scene = sim::analyse(w0.world, obs_);
-    auto candidates =
-        pick_candidates(w0.world, scene, action, obs_, robot_, geometry_, w0.q, max_candidates_);
+    std::unordered_set<std::uint32_t> failed;
+    std::size_t given_up = 0;
+    for (const auto& [id, h] : grips_) {
+      failed.insert(id);
+      given_up += h.given_up ? 1 : 0;
+    }
+    // Boxes given up still come out of pick_candidates: ask for as many more.
+    std::vector<PickCandidate> candidates;
+    for (auto& c : pick_candidates(w0.world, scene, action, obs_, robot_, geometry_, w0.q,
+                                   max_candidates_ + given_up, failed))
+      if (candidates.size() < max_candidates_ && worth_another_grip(c))
+        candidates.push_back(std::move(c));
     // A box the cups did not hold is tried again only after the others.
     std::stable_partition(candidates.begin(), candidates.end(),
                           [&](const PickCandidate& c) { return !ungripped_.count(c.box); });
@@ -559,31 +608,51 @@ class ExecutorNode : public plr::Node {
       // Nose down before anything else in reach of the boxes moves; a pile in
       // front may leave only a lifted nose possible.
       if (!step("base to pick point", PlanMode::kBaseLine, joints({{sim::kBaseX, c.base_x}}),
-                Suction::Keep, Suction::Keep, run))
+                Suction::Keep, Suction::Keep, run)) {
+        unreached_[c.box] = step_failure_;
         continue;
+      }
       if (!step("nose down", PlanMode::kNose, nose(nose_down_), Suction::Keep, Suction::Keep,
                 run) &&
           !step("nose down (lifted)", PlanMode::kNose, nose(nose_down_, 0.15), Suction::Keep,
-                Suction::Keep, run))
+                Suction::Keep, run)) {
+        unreached_[c.box] = step_failure_;
         continue;
-      log().debug("{}: box {}, plate at ({:.2f}, {:.2f}, {:.2f}) yaw {:.2f}", action_name_, c.box,
-                  c.grasp.position.x(), c.grasp.position.y(), c.grasp.position.z(), c.grasp.yaw);
+      }
+      log().debug("{}: box {}, plate at ({:.2f}, {:.2f}, {:.2f}) yaw {:.2f}, {} cups", action_name_,
+                  c.box, c.grasp.position.x(), c.grasp.position.y(), c.grasp.position.z(),
+                  c.grasp.yaw, c.cups);
       if (!step("pre-grasp", PlanMode::kArmBase, pose(c.pregrasp, {c.grasp, c.lift, c.retract}),
-                Suction::Keep, Suction::On, run))
+                Suction::Keep, Suction::On, run)) {
+        unreached_[c.box] = step_failure_;
         continue;
+      }
       // The plate ends touching the box (a settled box may lean a little).
       if (!step("approach", PlanMode::kArmCartesian, pose(c.grasp), Suction::Keep, Suction::On, run,
-                {c.box}))
+                {c.box})) {
+        unreached_[c.box] = step_failure_;
         continue;
+      }
       chosen = &c;
       break;
     }
     if (chosen != nullptr) {
-      if (last_held_.empty()) {
+      const bool gripped = !last_held_.empty();
+      if (!gripped) {
         run.failed_grasp = true;
         ungripped_.insert(chosen->box);
         log().info("{}: grasp of box {} failed (nothing held)", action_name_, chosen->box);
       }
+      // A box dropped before is carried slower: half the speed, a quarter of
+      // the acceleration, for each drop.
+      const auto history = grips_.find(chosen->box);
+      const int drops = history == grips_.end() ? 0 : history->second.drops;
+      const double scale = std::pow(2.0, drops);
+      if (history != grips_.end())
+        log().info("{}: box {} again (attempt {} of {}): {} cups{}", action_name_, chosen->box,
+                   history->second.failures + 1, grip_attempts_, chosen->cups,
+                   drops > 0 ? fmt::format(", carried at 1/{:.0f} of the speed", scale) : "");
+      const Slowed slowed(time_scale_, scale);
       step("lift", PlanMode::kArmCartesian, pose(chosen->lift), Suction::Keep, Suction::Keep, run);
       const bool out = step("retract", PlanMode::kArmCartesian, pose(chosen->retract),
                             Suction::Keep, Suction::Keep, run);
@@ -598,11 +667,20 @@ class ExecutorNode : public plr::Node {
       }
       const Observed w = observe();
       if (!w.held.empty() && last_held_.empty()) run.failed_grasp = false;
-      if (out && w.held.empty() && !run.failed_grasp) {
+      if (!gripped && w.held.empty()) grip_failed(*chosen, false, "not held after the approach");
+      if (out && w.held.empty() && gripped) {
         run.failed_grasp = true;
         log().info("{}: box {} dropped while retracting", action_name_, chosen->box);
+        grip_failed(*chosen, true, "dropped while lifted or retracted");
       }
-      if (!w.held.empty()) delivered = drop_off(w, run);
+      if (!w.held.empty()) {
+        const Delivery d = drop_off(w, run);
+        delivered = d == Delivery::kDelivered;
+        if (d == Delivery::kLost) {
+          run.failed_grasp = true;
+          grip_failed(*chosen, true, "dropped while carried to the nose");
+        }
+      }
     }
     // After a delivered box the robot stays as it is, nose down and the arm
     // over the belt: the next pick starts from there (its nose-down step is
@@ -615,15 +693,49 @@ class ExecutorNode : public plr::Node {
          Suction::Keep, Suction::Keep, run);
   }
 
+  // A grip that failed: the next attempt at that box must change what failed
+  // (more cups on its face; after a drop, a slower carry too).
+  void grip_failed(const PickCandidate& c, bool dropped, const char* what) {
+    auto& h = grips_[c.box];
+    h.last =
+        fmt::format("{} ({} cups{})", what, c.cups,
+                    h.drops > 0 ? fmt::format(", 1/{:.0f} speed", std::pow(2.0, h.drops)) : "");
+    ++h.failures;
+    h.drops += dropped ? 1 : 0;
+    h.cups = c.cups;
+  }
+
+  // Whether a box whose grip failed before is worth another attempt from
+  // this candidate; gives it up (for this run) when not: after grip_attempts
+  // failures, or when the cups refused its weight and no plate pose covers
+  // more of them.
+  bool worth_another_grip(const PickCandidate& c) {
+    const auto it = grips_.find(c.box);
+    if (it == grips_.end()) return true;
+    GripHistory& h = it->second;
+    if (h.given_up) return false;
+    if (h.failures >= static_cast<int>(grip_attempts_))
+      h.why = fmt::format("{} grips failed, the last {}", h.failures, h.last);
+    else if (h.drops == 0 && c.cups <= h.cups)
+      h.why = fmt::format("{}, and no plate pose covers more cups", h.last);
+    else
+      return true;
+    h.given_up = true;
+    log().info("{}: box {} given up: {}", action_name_, c.box, h.why);
+    return false;
+  }
+
   // The folded arm leaves the belt free, and the nose room to rise.
   void stow(ActionRun& run) {
     step("arm clear", PlanMode::kArm, arm_clear(), Suction::Keep, Suction::Keep, run);
     step("nose home", PlanMode::kNose, nose(nose_home_), Suction::Keep, Suction::Keep, run);
   }
 
-  // Releases what the plate holds over the nose's conveyor; false when no
-  // drop-off place could be reached.
-  bool drop_off(const Observed& w, ActionRun& run) {
+  enum class Delivery { kDelivered, kNoPlace, kLost };
+
+  // Releases what the plate holds over the nose's conveyor: kNoPlace when no
+  // drop-off place could be reached, kLost when the load fell on the way.
+  Delivery drop_off(const Observed& w, ActionRun& run) {
     // Room for the arm to swing the box down to the nose: back away from
     // the structure first.
     step("back off", PlanMode::kBaseLine,
@@ -642,13 +754,17 @@ class ExecutorNode : public plr::Node {
     }
     // A place the arm reaches may still fold it into itself: try the next.
     const Observed at = observe();
+    if (at.held.empty()) {
+      log().info("{}: the load fell while carried to the nose", action_name_);
+      return Delivery::kLost;
+    }
     for (const auto& drop :
          dropoff_targets(at.world, at.held, robot_, geometry_, at.q, max_candidates_)) {
       if (step("drop-off", PlanMode::kArm, pose(drop), Suction::Keep, Suction::Off, run))
-        return true;
+        return Delivery::kDelivered;
     }
     log().warn("{}: no drop-off pose could be planned", action_name_);
-    return false;
+    return Delivery::kNoPlace;
   }
 
   void sweep(sim::Action action, const Observed& w0, ActionRun& run) {
@@ -765,6 +881,8 @@ class ExecutorNode : public plr::Node {
         continue;
       }
       stats_.boxes_unloaded = w.unloaded - unloaded_at_start;
+      left_.clear();
+      for (const auto& b : w.world.boxes) left_.push_back(b.id);
       if (w.world.boxes.empty()) {
         stats_.stop_reason = "trailer empty";
         break;
@@ -847,6 +965,19 @@ class ExecutorNode : public plr::Node {
     log().info("done: {} of {} boxes in {:.1f} s robot time ({:.1f} s wall): {}",
                stats_.boxes_unloaded, stats_.boxes_total, stats_.robot_time_s, stats_.wall_time_s,
                stats_.stop_reason);
+    if (!left_.empty()) {
+      std::string why;
+      for (const auto id : left_) {
+        if (const auto it = grips_.find(id); it != grips_.end() && it->second.given_up) {
+          stats_.boxes_given_up[id] = it->second.why;
+          why += fmt::format("; box {} given up: {}", id, it->second.why);
+        } else if (const auto miss = unreached_.find(id); miss != unreached_.end()) {
+          why += fmt::format("; box {}: its last pick stopped at {}", id, miss->second);
+        }
+      }
+      log().info("left in the trailer: {} boxes ({}; the others no pick or sweep took){}",
+                 left_.size(), stats_.stop_reason, why);
+    }
     std::string report_error;
     try {
       write_report();
@@ -949,6 +1080,9 @@ class ExecutorNode : public plr::Node {
   double retreat_m_ = 0.3, dropoff_backoff_m_ = 0.5;
   std::chrono::milliseconds retry_{50};
   std::uint64_t max_idle_ = 6, max_actions_ = 0, max_candidates_ = 4;
+  // Different grips tried per box (more cups, slower carries) before it is
+  // left to a sweep or in the trailer.
+  std::uint64_t grip_attempts_ = 3;
   // A budget of search expansions, not of time, makes each plan (and so the
   // run) the same for a seed whatever the machine's load; 0 plans until the
   // time limit. ARA* spends the whole budget lowering ε, so by default it
@@ -977,6 +1111,12 @@ class ExecutorNode : public plr::Node {
   double sim_clock_s_ = -1.0;          // the simulator's clock when last heard, s
   double carry_height_m_ = 1.4;        // plate height a load is lowered to before the drop-off
   std::set<std::uint32_t> ungripped_;  // boxes whose grasp failed since the last unloaded box
+  std::map<std::uint32_t, GripHistory> grips_;
+  // Why the last pick of a box stopped before its grasp: for the final log.
+  std::map<std::uint32_t, std::string> unreached_;
+  std::string step_failure_;  // why the last step that failed did
+  double time_scale_ = 1.0;   // of the trajectories executed: > 1 carries a box that dropped slower
+  std::vector<std::uint32_t> left_;  // boxes in the trailer when last observed
   msg::PlanStatus last_status_ = msg::PlanStatus::Solved;
   double checkpoint_robot_time_ = 0;
   std::size_t checkpoint_curve_ = 0;

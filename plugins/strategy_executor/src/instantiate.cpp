@@ -37,10 +37,24 @@ bool reachable(const sim::RobotModel& robot, const sim::PlateTarget& t, const si
 
 }  // namespace
 
+int covered_cups(const Geometry& g, double half_across, double half_up, double across, double up) {
+  auto on_face = [&](int count, double plate_half, double offset, double face_half) {
+    int n = 0;
+    for (int k = 0; k < count; ++k) {
+      const double at = offset + (k + 0.5) / count * 2 * plate_half - plate_half;
+      if (std::abs(at) <= face_half - g.cup_radius) ++n;
+    }
+    return n;
+  };
+  return on_face(g.cups_across, g.plate_half_width, across, half_across) *
+         on_face(g.cups_up, g.plate_half_height, up, half_up);
+}
+
 std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::SceneAnalysis& scene,
                                            sim::Action action, const sim::ObservationParams& obs,
                                            const sim::RobotModel& robot, const Geometry& g,
-                                           const sim::Config& current, std::size_t max_count) {
+                                           const sim::Config& current, std::size_t max_count,
+                                           const std::unordered_set<std::uint32_t>& most_cups) {
   std::unordered_set<std::uint32_t> wall(scene.first_wall.begin(), scene.first_wall.end());
   std::unordered_set<std::uint32_t> front(scene.front_pile.begin(), scene.front_pile.end());
   std::vector<std::size_t> members;
@@ -138,30 +152,56 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     // out (by its leading corner, if the plate is turned off the trailer's
     // axis). The cups reach the face across kProud of extra gap.
     const double half_h = (b[i].z1 - b[i].z0) / 2;
+    const double half_up = box.size[up_axis] / 2;
     const double reach_y = pw * std::abs(n.x());
     const double lead = pw * std::abs(n.y());
+    auto plate_at = [&](double dy, double dz) {
+      Eigen::Vector3d p = face + dy * lateral;
+      p.y() = std::clamp(p.y(), -ylim, ylim);
+      p.z() = std::clamp(face.z() + dz, ph + kMargin, world.trailer.height - ph - kMargin);
+      return p;
+    };
+    auto cups_at = [&](const Eigen::Vector3d& p) {
+      return covered_cups(g, half_w, half_up, (p - face_centre).dot(lateral),
+                          p.z() - face_centre.z());
+    };
+    // Plate offsets (across, up) from the face's centre, in the order tried.
+    std::vector<std::pair<double, double>> offsets;
+    for (const double dz : slides(half_h))
+      for (const double dy : slides(half_w)) offsets.emplace_back(dy, dz);
+    if (most_cups.count(box.id)) {
+      // Half a cup pitch off centre puts two columns (or rows) of cups on a
+      // face the centred grid covers with one.
+      const double across = pw / g.cups_across, up = ph / g.cups_up;
+      for (const double dz : {0.0, up, -up})
+        for (const double dy : {0.0, across, -across}) offsets.emplace_back(dy, dz);
+      std::vector<int> cups;
+      for (const auto& [dy, dz] : offsets) cups.push_back(cups_at(plate_at(dy, dz)));
+      std::vector<std::size_t> order(offsets.size());
+      for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+      std::stable_sort(order.begin(), order.end(),
+                       [&](std::size_t a, std::size_t b) { return cups[a] > cups[b]; });
+      std::vector<std::pair<double, double>> sorted;
+      for (auto k : order) sorted.push_back(offsets[k]);
+      offsets = std::move(sorted);
+    }
     std::optional<Eigen::Vector3d> at_face;
     double stop_x = 0.0;
-    for (const double dz : slides(half_h)) {
-      for (const double dy : slides(half_w)) {
-        Eigen::Vector3d p = face + dy * lateral;
-        p.y() = std::clamp(p.y(), -ylim, ylim);
-        p.z() = std::clamp(face.z() + dz, ph + kMargin, world.trailer.height - ph - kMargin);
-        const double at_target = p.x() - g.grasp_gap * n.x();
-        double stop = at_target;
-        for (std::size_t j = 0; j < world.boxes.size(); ++j) {
-          if (j != i && near(b[i].x0 - g.pregrasp_distance, b[i].x0, b[j].x0, b[j].x1) &&
-              near(p.y() - reach_y - lead, p.y() + reach_y + lead, b[j].y0, b[j].y1) &&
-              near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1))
-            stop = std::min(stop, b[j].x0 - g.grasp_gap - lead);
-        }
-        if (at_target - stop <= kProud) {
-          at_face = p;
-          stop_x = stop;
-          break;
-        }
+    for (const auto& [dy, dz] : offsets) {
+      const Eigen::Vector3d p = plate_at(dy, dz);
+      const double at_target = p.x() - g.grasp_gap * n.x();
+      double stop = at_target;
+      for (std::size_t j = 0; j < world.boxes.size(); ++j) {
+        if (j != i && near(b[i].x0 - g.pregrasp_distance, b[i].x0, b[j].x0, b[j].x1) &&
+            near(p.y() - reach_y - lead, p.y() + reach_y + lead, b[j].y0, b[j].y1) &&
+            near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1))
+          stop = std::min(stop, b[j].x0 - g.grasp_gap - lead);
       }
-      if (at_face) break;
+      if (at_target - stop <= kProud) {
+        at_face = p;
+        stop_x = stop;
+        break;
+      }
     }
     // The box is lifted off what it rests on (and over the lowered nose)
     // before it comes out: nothing may rest on it.
@@ -179,6 +219,7 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     c.box = box.id;
     c.matches = mismatches == 0;
     c.base_x = base_x;
+    c.cups = cups_at(*at_face);
     c.grasp = {*at_face - (at_face->x() - stop_x) / n.x() * n, plate_yaw};
     c.pregrasp = {*at_face - g.pregrasp_distance * n, plate_yaw};
     // Lifted, then pulled out until clear of what it rested on: the

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "plr/sim/observation.hpp"
@@ -30,7 +31,17 @@ struct Geometry {
   double dropoff_ahead = 0.5;       // held box centre ahead of base_x
   double sweep_overshoot = 0.1;     // scoop tip past the pile's far end
   double nose_top = 0.25;           // m, top of the lowered nose and conveyor
+  // The suction cups: a grid over the plate (as the simulator's), each
+  // sealing only with its whole rim on the face.
+  int cups_across = 3;
+  int cups_up = 4;
+  double cup_radius = 0.03;
 };
+
+// Cups of the plate's grid whose whole rim lies on a face of half-extents
+// (half_across, half_up) when the plate's centre is (across, up) off the
+// face's centre.
+int covered_cups(const Geometry& g, double half_across, double half_up, double across, double up);
 
 struct PickCandidate {
   std::uint32_t box = 0;
@@ -40,6 +51,7 @@ struct PickCandidate {
   // is pulled out: dragged out, it would press into that one.
   sim::PlateTarget lift;
   bool matches = false;  // the box has the action's height class and side
+  int cups = 0;          // cups the grasp pose covers on the face
 };
 
 // Pick points for Pick(height, side), best first: boxes of the structure in
@@ -47,11 +59,14 @@ struct PickCandidate {
 // out over what stands in front of them; near the robot first (0.2 m bins),
 // then those matching the action's height class and side, then high up.
 // Candidates whose plate poses the arm cannot reach from their base position
-// are left out.
+// are left out. The plate is centred on the face, or as near as the corridor
+// allows; for the boxes in `most_cups` (a grip failed) it goes where it covers
+// the most cups, off centre if need be.
 std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::SceneAnalysis& scene,
                                            sim::Action action, const sim::ObservationParams& obs,
                                            const sim::RobotModel& robot, const Geometry& g,
-                                           const sim::Config& current, std::size_t max_count);
+                                           const sim::Config& current, std::size_t max_count,
+                                           const std::unordered_set<std::uint32_t>& most_cups = {});
 
 // Where the plate may release held boxes over the nose, for a base at
 // base_x, the plate facing forward: reachable places, best first, at most

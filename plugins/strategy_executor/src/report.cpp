@@ -59,6 +59,8 @@ nlohmann::json to_json(const RunStats& s) {
         {"max_expansions", ms.max_expansions}};
   }
   modes["M6"]["implicit"] = s.m6_implicit;
+  nlohmann::json given_up = nlohmann::json::object();
+  for (const auto& [id, why] : s.boxes_given_up) given_up[std::to_string(id)] = why;
   nlohmann::json curve = nlohmann::json::array();
   for (const auto& p : s.curve) curve.push_back({p.robot_time_s, p.boxes});
   return {{"boxes_total", s.boxes_total},
@@ -75,6 +77,7 @@ nlohmann::json to_json(const RunStats& s) {
           {"strategies_asked", s.strategies_asked},
           {"strategy_steps", s.strategy_steps},
           {"stop_reason", s.stop_reason},
+          {"boxes_given_up", given_up},
           {"planner_modes", modes},
           {"planners", s.planners},
           {"plan_calls_unanswered", s.plan_calls_unanswered},

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -76,6 +77,13 @@ class FakeSim {
   }
 
   bool suction_works = true;
+  // Suction as the simulator's (docs/notes-sim.md) when > 0: a cup holds
+  // cup_force with its whole rim on the face; a box heavier than its cups
+  // hold is refused, and one whose load while carried (weight plus mass times
+  // the peak acceleration of a rest-to-rest move over the trajectory's time)
+  // exceeds them falls back where it was gripped. 0: the plate holds any box
+  // it faces.
+  double cup_force = 0.0;
   int crash_at_execute = -1;  // the n-th execute dies with the host
   // After the n-th execute the host dies and restarts unseen, between two
   // calls: it resumes from its checkpoint on disk, clock and all.
@@ -83,6 +91,7 @@ class FakeSim {
   int observes_while_down = 3;
 
   const SimState& state() const { return s_; }
+  int drops() const { return drops_; }
   int restores() const { return restores_; }
   int executes() const { return executes_; }
 
@@ -103,10 +112,19 @@ class FakeSim {
     const auto* last = pts->Get(pts->size() - 1);
     const Eigen::Isometry3d plate_before = robot_.platePose(s_.q);
     for (int j = 0; j < sim::kNumJoints; ++j) s_.q[j] = last->positions()->Get(j);
-    // Held boxes ride on the plate.
+    // Held boxes ride on the plate, unless their cups let go.
     const Eigen::Isometry3d carry = robot_.platePose(s_.q) * plate_before.inverse();
-    for (auto& b : s_.world.boxes)
-      if (std::find(s_.held.begin(), s_.held.end(), b.id) != s_.held.end()) b.pose = carry * b.pose;
+    const double accel = 4 * carry.translation().norm() / std::pow(last->time_s(), 2);
+    for (auto& b : s_.world.boxes) {
+      if (std::find(s_.held.begin(), s_.held.end(), b.id) == s_.held.end()) continue;
+      if (cup_force > 0 && b.mass * (kGravity + accel) > capacity_.at(b.id)) {
+        b.pose = gripped_at_.at(b.id);
+        std::erase(s_.held, b.id);
+        ++drops_;
+        continue;
+      }
+      b.pose = carry * b.pose;
+    }
     s_.t += last->time_s() + r.settle_s();
     sweep();
     suction(r.suction_after());
@@ -137,10 +155,33 @@ class FakeSim {
                        std::abs(c.y() - p.y()) < 0.25
                  : bb.x0 > p.x() - 0.01 && bb.x0 < p.x() + 0.08 && std::abs(c.y() - p.y()) < 0.25 &&
                        std::abs(c.z() - p.z()) < 0.2;
-        if (faces && std::find(s_.held.begin(), s_.held.end(), b.id) == s_.held.end())
-          s_.held.push_back(b.id);
+        if (!faces || std::find(s_.held.begin(), s_.held.end(), b.id) != s_.held.end()) continue;
+        if (cup_force > 0) {
+          const double capacity = cups_on_front_face(plate, b) * cup_force;
+          if (b.mass * kGravity > capacity) continue;
+          capacity_[b.id] = capacity;
+          gripped_at_[b.id] = b.pose;
+        }
+        s_.held.push_back(b.id);
       }
     }
+  }
+
+  // The plate's 3 x 4 cups (0.5 m across, 0.4 m up) whose rim lies on the
+  // box's front face (an unturned box).
+  static int cups_on_front_face(const Eigen::Isometry3d& plate, const sim::Box& b) {
+    constexpr double kRim = 0.03;
+    int n = 0;
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 4; ++j) {
+        const Eigen::Vector3d cup =
+            plate * Eigen::Vector3d(0.0, (i + 0.5) / 3 * 0.5 - 0.25, (j + 0.5) / 4 * 0.4 - 0.2);
+        const Eigen::Vector3d d = cup - b.pose.translation();
+        if (std::abs(d.y()) <= b.size.y() / 2 - kRim && std::abs(d.z()) <= b.size.z() / 2 - kRim)
+          ++n;
+      }
+    }
+    return n;
   }
 
   void sweep() {
@@ -155,8 +196,12 @@ class FakeSim {
     s_.unloaded += static_cast<std::uint32_t>(before - s_.world.boxes.size());
   }
 
+  static constexpr double kGravity = 9.81;
   sim::RobotModel robot_ = sim::RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
   SimState s_;
+  std::map<std::uint32_t, double> capacity_;  // N the cups of a held box hold
+  std::map<std::uint32_t, Eigen::Isometry3d> gripped_at_;
+  int drops_ = 0;
   std::map<std::string, SimState> snapshots_;
   bool down_ = false;
   int restores_ = 0;
@@ -403,6 +448,55 @@ TEST_F(Executor, FailedGraspsEndInNoProgress) {
   EXPECT_EQ(report["boxes_unloaded"], 0);
   EXPECT_EQ(report["failed_grasps"], 3);
   EXPECT_EQ(report["actions"]["pick"]["executions"], 3);
+}
+
+// The small wall with its bottom middle box swapped for a heavy one with a
+// 0.29 m face (as B1's 15 kg boxes): the plate centred on it covers two cups,
+// which hold its weight but not the fast retract.
+sim::World wall_with_heavy_box(double mass) {
+  sim::World w;
+  test::add_wall(w, 5.0, 3, 2);
+  for (auto& b : w.boxes) b.mass = 5.0;
+  auto& heavy = *std::find_if(w.boxes.begin(), w.boxes.end(), [](const sim::Box& b) {
+    return std::abs(b.pose.translation().y()) < 0.01 && b.pose.translation().z() < 0.3;
+  });
+  heavy = test::make_box(heavy.id, 5.2, 0.0, 0.0, {0.4, 0.29, 0.29});
+  heavy.mass = mass;
+  return w;
+}
+
+bool logged(const FakeKernel& k, const std::string& text) {
+  for (const auto& l : k.logs())
+    if (l.node == "executor" && l.text.find(text) != std::string::npos) return true;
+  return false;
+}
+
+TEST_F(Executor, GripsADroppedBoxWithMoreCupsAndASlowerCarry) {
+  FakeSim sim(wall_with_heavy_box(16.0));
+  sim.cup_force = 90.0;
+  FakePlanner planner;
+  sim.serve(kernel_);
+  planner.serve(kernel_);
+  const auto report = run();
+  // Before, the same centred grip was retried until no progress was left.
+  EXPECT_EQ(done_reason_, "trailer empty: 6/6 boxes unloaded");
+  EXPECT_EQ(sim.drops(), 1);
+  EXPECT_EQ(report["failed_grasps"], 1);
+  EXPECT_TRUE(logged(kernel_, "(attempt 2 of 3): 4 cups, carried at 1/2 of the speed"));
+}
+
+TEST_F(Executor, GivesUpABoxNoGripHoldsAndUnloadsTheOthers) {
+  FakeSim sim(wall_with_heavy_box(40.0));  // 392 N: more than all 4 cups that fit its face
+  sim.cup_force = 90.0;
+  FakePlanner planner;
+  sim.serve(kernel_);
+  planner.serve(kernel_);
+  const auto report = run(R"(, "max_idle_actions": 3)");
+  EXPECT_EQ(done_reason_, "no progress in 3 actions: 5/6 boxes unloaded");
+  // Refused with 2 cups, then with 4; no pose covers more: not tried again.
+  EXPECT_EQ(report["failed_grasps"], 2);
+  ASSERT_EQ(report["boxes_given_up"].size(), 1u);
+  EXPECT_TRUE(logged(kernel_, "left in the trailer: 1 boxes"));
 }
 
 TEST_F(Executor, FollowsTheStrategyTreeAndAsksAgainWhenItEnds) {

@@ -121,6 +121,33 @@ TEST(PickCandidates, ATurnedBoxIsFacedSquarely) {
   EXPECT_LT((d - d.dot(n) * n).norm(), 1e-9);
 }
 
+TEST(CoveredCups, CountsTheCupsWhoseRimLiesOnTheFace) {
+  const Geometry g;
+  EXPECT_EQ(covered_cups(g, 0.25, 0.25, 0, 0), 12);  // a 0.5 m face takes the whole grid
+  // A 0.29 m face: the centred grid straddles it with one column of three,
+  // half a cup pitch off centre puts two columns on it.
+  EXPECT_EQ(covered_cups(g, 0.145, 0.145, 0, 0), 2);
+  EXPECT_EQ(covered_cups(g, 0.145, 0.145, 0.25 / 3, 0), 4);
+  EXPECT_EQ(covered_cups(g, 0.145, 0.145, 0.5, 0), 0);
+}
+
+TEST(PickCandidates, AfterAFailedGripThePlateCoversMoreCups) {
+  // A 0.29 m box on the floor: the plate, kept off the floor, covers its two
+  // lower rows; centred across, one column.
+  sim::World w = trailer_world();
+  w.boxes.push_back(test::make_box(1, 6.2, 0.0, 0.0, {0.4, 0.29, 0.29}));
+  const auto centred = candidates(w);
+  ASSERT_EQ(centred.size(), 1u);
+  EXPECT_EQ(centred[0].cups, 2);
+  EXPECT_NEAR(centred[0].grasp.position.y(), 0.0, 1e-9);
+  const auto moved =
+      pick_candidates(w, sim::analyse(w), sim::make_pick(sim::Height::kHigh, sim::Side::kCenter),
+                      {}, robot(), {}, home(8.0), 1000, {1});
+  ASSERT_EQ(moved.size(), 1u);
+  EXPECT_EQ(moved[0].cups, 4);
+  EXPECT_NEAR(std::abs(moved[0].grasp.position.y()), 0.25 / 3, 1e-9);
+}
+
 TEST(DropOff, PlacesHoldTheBoxOverTheConveyorAndTurnTheWristSideways) {
   sim::World w = trailer_world();
   w.boxes.push_back(test::make_box(7, 6.0, 0.0, 1.0, {0.45, 0.55, 0.35}));
