@@ -871,7 +871,10 @@ class ExecutorNode : public plr::Node {
 
     sim::Strategy strategy;
     std::optional<std::uint32_t> node;
-    std::optional<sim::Action> repeat;
+    // The action a lost simulator interrupted, done again once it is back
+    // (a flag, not an optional: GCC 12 warns falsely on optional<enum> here).
+    bool repeating = false;
+    sim::Action repeat{};
     std::uint64_t idle = 0, actions = 0;
     for (;;) {
       try {
@@ -891,9 +894,9 @@ class ExecutorNode : public plr::Node {
         stats_.stop_reason = fmt::format("action limit ({})", max_actions_);
         break;
       }
-      sim::Action action;
-      if (repeat) {
-        action = *repeat;
+      sim::Action action{};
+      if (repeating) {
+        action = repeat;
       } else {
         const auto observation = *sim::classify(w.world, obs_);
         if (const auto child = node ? strategy.next(*node, observation) : std::nullopt) {
@@ -909,12 +912,13 @@ class ExecutorNode : public plr::Node {
       ActionRun run;
       try {
         repeat = action;
+        repeating = true;
         if (sim::kind(action) == sim::ActionKind::kPick)
           pick(action, w, run);
         else
           sweep(action, w, run);
         w = observe();
-        repeat.reset();
+        repeating = false;
       } catch (const SimulatorLost& lost) {
         recover(lost.what);
         continue;
