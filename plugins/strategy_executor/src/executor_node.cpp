@@ -979,8 +979,8 @@ class ExecutorNode : public plr::Node {
           why += fmt::format("; box {}: its last pick stopped at {}", id, miss->second);
         }
       }
-      log().info("left in the trailer: {} boxes ({}; the others no pick or sweep took){}",
-                 left_.size(), stats_.stop_reason, why);
+      log().info("left in the trailer: {} box{} ({}; the others no pick or sweep took){}",
+                 left_.size(), left_.size() == 1 ? "" : "es", stats_.stop_reason, why);
     }
     std::string report_error;
     try {
