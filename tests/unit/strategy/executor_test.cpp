@@ -496,7 +496,7 @@ TEST_F(Executor, GivesUpABoxNoGripHoldsAndUnloadsTheOthers) {
   // Refused with 2 cups, then with 4; no pose covers more: not tried again.
   EXPECT_EQ(report["failed_grasps"], 2);
   ASSERT_EQ(report["boxes_given_up"].size(), 1u);
-  EXPECT_TRUE(logged(kernel_, "left in the trailer: 1 boxes"));
+  EXPECT_TRUE(logged(kernel_, "left in the trailer: 1 box ("));
 }
 
 TEST_F(Executor, FollowsTheStrategyTreeAndAsksAgainWhenItEnds) {
