@@ -19,23 +19,17 @@ thread_local std::vector<const Endpoint*> t_replying;
 // a slow one holds up everything that thread delivers: said once per service.
 constexpr auto kQuickBudget = std::chrono::milliseconds(1);
 
-std::function<void()> timed_quick(const std::string& service, const std::string& node,
-                                  std::function<void()> task) {
-  return [service, node, task = std::move(task)] {
-    const auto start = Clock::now();
-    task();
-    const auto took = Clock::now() - start;
-    if (took <= kQuickBudget) return;
-    static std::mutex m;
-    static std::set<std::string> warned;
-    std::lock_guard lock(m);
-    if (warned.insert(service).second)
-      spdlog::warn(
-          "quick service '{}' of '{}' took {:.1f} ms: it may run on a receive thread, so it should "
-          "answer within {} ms (or drop the quick flag)",
-          service, node, std::chrono::duration<double, std::milli>(took).count(),
-          kQuickBudget.count());
-  };
+void note_quick_time(const std::string& service, const Endpoint& node, Clock::duration took) {
+  if (took <= kQuickBudget) return;
+  static std::mutex m;
+  static std::set<std::string> warned;
+  std::lock_guard lock(m);
+  if (warned.insert(service).second)
+    spdlog::warn(
+        "quick service '{}' of '{}' took {:.1f} ms: it may run on a receive thread, so it should "
+        "answer within {} ms (or drop the quick flag)",
+        service, node.endpoint_name(), std::chrono::duration<double, std::milli>(took).count(),
+        kQuickBudget.count());
 }
 }  // namespace
 
@@ -355,10 +349,14 @@ Status Bus::call(Endpoint* caller, const std::string& service, std::uint64_t req
       return make_error(PLR_ERR_UNAVAILABLE, fmt::format("no provider for service '{}'", service));
     return {};
   }
-  auto task = [fn = chosen.fn, user = chosen.user, req, id] { fn(user, req.msg, id); };
-  const bool posted = chosen.quick ? chosen.owner->executor().dispatch(timed_quick(
-                                         service, chosen.owner->endpoint_name(), std::move(task)))
-                                   : chosen.owner->executor().post(std::move(task));
+  const auto run = [fn = chosen.fn, user = chosen.user, req, id] { fn(user, req.msg, id); };
+  Executor& executor = chosen.owner->executor();
+  const bool posted = chosen.quick ? executor.dispatch([run, service, owner = chosen.owner] {
+    const auto start = Clock::now();
+    run();
+    note_quick_time(service, *owner, Clock::now() - start);
+  })
+                                   : executor.post(run);
   if (!posted)
     complete(
         id, PLR_ERR_UNAVAILABLE, nullptr,

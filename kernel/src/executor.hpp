@@ -48,7 +48,7 @@ class Executor {
   std::deque<std::function<void()>> queue_;
   bool busy_ = false;
   bool stop_ = false;
-  std::atomic<int> posting_{0};               // post() calls not yet returned
+  std::atomic<int> posting_{0};               // post() and dispatch() calls not yet returned
   std::atomic<std::thread::id> inline_on_{};  // the thread in dispatch()'s task, if any
   std::thread thread_;
 };

@@ -189,6 +189,21 @@ Eigen::Matrix2d yaw_of(const Box& box) {
   return box.pose.linear().topLeftCorner<2, 2>();
 }
 
+// Which of the four quadrants around a point the offsets added reach: a
+// weight is over its support when that support reaches all four.
+class Quadrants {
+ public:
+  void add(const Eigen::Vector2d& d) {
+    seen_[static_cast<std::size_t>((d.x() > 0.0) + 2 * (d.y() > 0.0))] = true;
+  }
+  bool all() const {
+    return std::all_of(seen_.begin(), seen_.end(), [](bool q) { return q; });
+  }
+
+ private:
+  std::array<bool, 4> seen_{};
+};
+
 // Cells of `box`'s bottom face that rest on the floor or on the top of a box
 // in `others` (indices `candidates`) within kLandingStep below it (plus a few
 // mm: piles hover before their drop, settled boxes sink a little).
@@ -262,16 +277,12 @@ std::vector<int> tipping(const std::vector<Box>& boxes, const std::vector<Suppor
     if (check[i]) {
       const Eigen::Vector2d at = r.transpose() * (x - box.pose.translation().head<2>());
       const Eigen::Array2d margin = 2.0 * kSupportMargin * 0.5 * box.size.head<2>().array();
-      std::array<bool, 4> quadrants{};
+      Quadrants quadrants;
       for (const Eigen::Vector2d& cell : s.cells) {
         const Eigen::Vector2d d = cell - at;
-        if ((d.cwiseAbs().array() > margin).all()) {
-          quadrants[static_cast<std::size_t>((d.x() > 0.0) + 2 * (d.y() > 0.0))] = true;
-        }
+        if ((d.cwiseAbs().array() > margin).all()) quadrants.add(d);
       }
-      if (!std::all_of(quadrants.begin(), quadrants.end(), [](bool q) { return q; })) {
-        failed.push_back(bi);
-      }
+      if (!quadrants.all()) failed.push_back(bi);
     }
     // Contact centroid and area per support.
     std::vector<int> by;
@@ -380,18 +391,16 @@ World make_pile(EnvFamily family, std::uint64_t seed, const Trailer& trailer) {
     // quadrants around its centre, so its centre of mass lies inside that
     // support with a margin: a box over a slope or a gap tips after the drop.
     int cells = 0, supported = 0;
-    std::array<bool, 4> quadrants{};
+    Quadrants quadrants;
     const Eigen::Array2d half = 0.5 * box.size.head<2>().array();
     map.for_cells(box, [&](double& h, const Eigen::Vector2d& local) {
       ++cells;
       supported += h > base - kSupportStep;
       const Eigen::Array2d d = local.cwiseAbs().array();
-      if (h > base - kLandingStep && (d > 2.0 * kSupportMargin * half).all() && (d <= half).all()) {
-        quadrants[static_cast<std::size_t>((local.x() > 0.0) + 2 * (local.y() > 0.0))] = true;
-      }
+      if (h > base - kLandingStep && (d > 2.0 * kSupportMargin * half).all() && (d <= half).all())
+        quadrants.add(local);
     });
-    if (supported < kSupportShare * cells) continue;
-    if (!std::all_of(quadrants.begin(), quadrants.end(), [](bool q) { return q; })) continue;
+    if (supported < kSupportShare * cells || !quadrants.all()) continue;
     // Hover a little above the support so the drop starts free of contact.
     double z = base + 0.5 * box.size.z() + 0.003;
     const fcl::Boxd shape(box.size);

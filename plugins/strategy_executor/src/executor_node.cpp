@@ -74,16 +74,18 @@ struct PlanResult {
   std::unique_ptr<msg::TrajectoryT> trajectory;
 };
 
-// Sets a value for a scope (the trajectories' time scale while a box is carried).
+// Sets a value for a scope, then puts the old one back (the trajectories'
+// time scale while a box is carried).
 class Slowed {
  public:
-  Slowed(double& value, double scale) : value_(value) { value_ = scale; }
-  ~Slowed() { value_ = 1.0; }
+  Slowed(double& value, double scale) : value_(value), old_(value) { value_ = scale; }
+  ~Slowed() { value_ = old_; }
   Slowed(const Slowed&) = delete;
   Slowed& operator=(const Slowed&) = delete;
 
  private:
   double& value_;
+  const double old_;
 };
 
 // A box whose grip failed in this run, and what the next attempt changes.

@@ -38,16 +38,16 @@ bool reachable(const sim::RobotModel& robot, const sim::PlateTarget& t, const si
 }  // namespace
 
 int covered_cups(const Geometry& g, double half_across, double half_up, double across, double up) {
-  auto on_face = [&](int count, double plate_half, double offset, double face_half) {
+  auto on_face = [&](int count, double field, double offset, double face_half) {
     int n = 0;
     for (int k = 0; k < count; ++k) {
-      const double at = offset + (k + 0.5) / count * 2 * plate_half - plate_half;
-      if (std::abs(at) <= face_half - g.cup_radius) ++n;
+      const double at = offset + ((k + 0.5) / count - 0.5) * field;
+      if (std::abs(at) <= face_half - g.cups.cup_radius) ++n;
     }
     return n;
   };
-  return on_face(g.cups_across, g.plate_half_width, across, half_across) *
-         on_face(g.cups_up, g.plate_half_height, up, half_up);
+  return on_face(g.cups.cups_y, g.cups.extent.y(), across, half_across) *
+         on_face(g.cups.cups_x, g.cups.extent.x(), up, half_up);
 }
 
 std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::SceneAnalysis& scene,
@@ -172,7 +172,8 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     if (most_cups.count(box.id)) {
       // Half a cup pitch off centre puts two columns (or rows) of cups on a
       // face the centred grid covers with one.
-      const double across = pw / g.cups_across, up = ph / g.cups_up;
+      const double across = 0.5 * g.cups.extent.y() / g.cups.cups_y;
+      const double up = 0.5 * g.cups.extent.x() / g.cups.cups_x;
       for (const double dz : {0.0, up, -up})
         for (const double dy : {0.0, across, -across}) offsets.emplace_back(dy, dz);
       std::vector<int> cups;

@@ -12,6 +12,7 @@
 #include "plr/sim/observation.hpp"
 #include "plr/sim/robot_model.hpp"
 #include "plr/sim/strategy.hpp"
+#include "plr/sim/suction_plate.hpp"
 
 namespace plr::executor {
 
@@ -31,11 +32,8 @@ struct Geometry {
   double dropoff_ahead = 0.5;       // held box centre ahead of base_x
   double sweep_overshoot = 0.1;     // scoop tip past the pile's far end
   double nose_top = 0.25;           // m, top of the lowered nose and conveyor
-  // The suction cups: a grid over the plate (as the simulator's), each
-  // sealing only with its whole rim on the face.
-  int cups_across = 3;
-  int cups_up = 4;
-  double cup_radius = 0.03;
+  // The suction cups: the robot's grid (its x runs up the plate, its y across).
+  sim::SuctionPlate cups;
 };
 
 // Cups of the plate's grid whose whole rim lies on a face of half-extents

@@ -34,8 +34,8 @@ namespace {
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 using remote_test::BareKernel;
-using remote_test::BareNode;
 using remote_test::kEchoType;
+using testing::TestEndpoint;
 
 // Two echo services: "echo" is quick (answered on the thread that took the
 // request off the network), "echo_node" is answered on its node's thread.
@@ -112,7 +112,7 @@ class Client {
   Clock::time_point reply_at_;
   std::size_t reply_size_ = 0;
   BareKernel kernel_;  // last: stops before what its reply callbacks write
-  BareNode& caller_;
+  TestEndpoint& caller_;
 };
 
 pid_t spawn(const std::vector<std::string>& argv, const std::string& uri, const char* out) {

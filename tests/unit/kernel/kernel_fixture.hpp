@@ -1,9 +1,10 @@
-// Shared pieces of the kernel tests: an endpoint the test thread drives, and
-// configs that find the test plug-ins.
+// Shared pieces of the kernel tests: an endpoint the test thread drives
+// (test_endpoint.hpp), and configs that find the test plug-ins.
 #pragma once
 
 #include "bus.hpp"
 #include "config.hpp"
+#include "test_endpoint.hpp"
 
 #include <plr/message.hpp>
 #include <plr/messages.hpp>
@@ -14,17 +15,6 @@
 #include <vector>
 
 namespace plr::kernel::testing {
-
-class TestEndpoint final : public Endpoint {
- public:
-  explicit TestEndpoint(std::string name = "test") : name_(std::move(name)), executor_(name_) {}
-  Executor& executor() override { return executor_; }
-  const std::string& endpoint_name() const override { return name_; }
-
- private:
-  std::string name_;
-  Executor executor_;
-};
 
 // A config whose plug-in path is the test plug-in folder.
 Config config_from_yaml(const std::string& yaml);

@@ -6,6 +6,7 @@
 
 #include "bus.hpp"
 #include "dds_bridge.hpp"
+#include "test_endpoint.hpp"
 
 #include <plr/message.hpp>
 
@@ -16,17 +17,6 @@
 namespace plr::kernel::remote_test {
 
 constexpr std::uint64_t kEchoType = plr::fnv1a("plr.test.Echo");
-
-class BareNode final : public Endpoint {
- public:
-  explicit BareNode(std::string name) : name_(std::move(name)), executor_(name_) {}
-  Executor& executor() override { return executor_; }
-  const std::string& endpoint_name() const override { return name_; }
-
- private:
-  std::string name_;
-  Executor executor_;
-};
 
 class BareKernel {
  public:
@@ -53,14 +43,15 @@ class BareKernel {
     return "";
   }
   Bus& bus() { return bus_; }
-  BareNode& add_node(std::string name) {
-    nodes_.push_back(std::make_unique<BareNode>(std::move(name)));
+  testing::TestEndpoint& add_node(std::string name) {
+    nodes_.push_back(std::make_unique<testing::TestEndpoint>(std::move(name)));
     bus_.set_live(nodes_.back().get(), true);
     return *nodes_.back();
   }
   // `node` answers `service` with each request's own bytes, as ddsperf's
   // pong writes back the sample it took: no copy of its own.
-  Status provide_echo(BareNode& node, const std::string& service, std::uint32_t flags) {
+  Status provide_echo(testing::TestEndpoint& node, const std::string& service,
+                      std::uint32_t flags) {
     return bus_.provide(
         &node, service, kEchoType, kEchoType,
         [](void* user, const plr_msg* req, std::uint64_t token) {
@@ -83,7 +74,7 @@ class BareKernel {
   Config config_;
   Bus bus_;
   std::unique_ptr<DdsBridge> bridge_;
-  std::vector<std::unique_ptr<BareNode>> nodes_;
+  std::vector<std::unique_ptr<testing::TestEndpoint>> nodes_;
 };
 
 }  // namespace plr::kernel::remote_test

@@ -45,7 +45,7 @@ TEST(RemoteQuickService, LargeRepliesFromTheReceiveThreadNeverStall) {
 
   BareKernel k(domain, "quick_caller", false, "echo");
   ASSERT_EQ(k.open(), "");
-  BareNode& caller = k.add_node("caller");
+  testing::TestEndpoint& caller = k.add_node("caller");
 
   // `n` calls of `size` bytes at once; how many failed, and how long the
   // slowest took.

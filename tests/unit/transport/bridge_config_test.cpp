@@ -3,6 +3,7 @@
 #include "bus.hpp"
 #include "config.hpp"
 #include "shm_bridge.hpp"
+#include "test_endpoint.hpp"
 #include "test_util.hpp"
 
 #include <gtest/gtest.h>
@@ -14,16 +15,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-class TestEndpoint final : public Endpoint {
- public:
-  TestEndpoint() : executor_(name_) {}
-  Executor& executor() override { return executor_; }
-  const std::string& endpoint_name() const override { return name_; }
-
- private:
-  std::string name_ = "publisher";
-  Executor executor_;
-};
+using testing::TestEndpoint;
 
 Expected<Config> config_with(const std::string& topics) {
   return parse_config(
@@ -40,7 +32,7 @@ shm::TopicConfig exported(const Config& config, const std::string& topic) {
   Bus bus([&](const std::string& t) { return config.topic(t); });
   ShmBridge bridge(bus, config, "main", {"main", "b"}, run);
   bus.attach(&bridge);
-  TestEndpoint ep;
+  TestEndpoint ep("publisher");
   EXPECT_TRUE(bus.advertise(&ep, topic, 7, 1).has_value());
   shm::TopicConfig seen;
   for (int i = 0; i < 500; ++i) {

@@ -9,6 +9,7 @@
 #include "node_instance.hpp"
 #include "plugin_loader.hpp"
 #include "shm_bridge.hpp"
+#include "test_endpoint.hpp"
 #include "test_util.hpp"
 
 #include <plr/message.hpp>
@@ -30,16 +31,7 @@ namespace {
 using namespace std::chrono_literals;
 using Blob = plr::msg::NextStrategyRequest;
 
-class TestEndpoint final : public Endpoint {
- public:
-  explicit TestEndpoint(std::string name) : name_(std::move(name)), executor_(name_) {}
-  Executor& executor() override { return executor_; }
-  const std::string& endpoint_name() const override { return name_; }
-
- private:
-  std::string name_;
-  Executor executor_;
-};
+using testing::TestEndpoint;
 
 // Checks every blob: verified, `bytes` long, all bytes (n & 0xff) for the n-th one.
 struct Reader {
