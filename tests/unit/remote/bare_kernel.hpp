@@ -43,6 +43,7 @@ class BareKernel {
     return "";
   }
   Bus& bus() { return bus_; }
+  nlohmann::json bridge_stats() const { return bridge_->stats(); }
   testing::TestEndpoint& add_node(std::string name) {
     nodes_.push_back(std::make_unique<testing::TestEndpoint>(std::move(name)));
     bus_.set_live(nodes_.back().get(), true);
