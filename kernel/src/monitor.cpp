@@ -140,16 +140,19 @@ std::string render(const std::map<std::string, nlohmann::json>& kernels, int dom
   std::strftime(clock, sizeof clock, "%H:%M:%S", std::localtime(&now));
   out += fmt::format("PLR monitor   domain {}   {} kernel(s)   {}   (Ctrl-C quits)\n\n", domain,
                      kernels.size(), clock);
-  out += fmt::format("{:<40} {:<16} {:>7} {:>6} {:>10} {:>10} {:>8}\n", "KERNEL", "HOSTNAME", "PID",
-                     "NODES", "DDS OUT", "DDS IN", "INVALID");
+  // WAITS: how often this kernel's DDS writers had to wait for a peer's
+  // acknowledgements (a slow or lossy peer shows here first).
+  out += fmt::format("{:<40} {:<16} {:>7} {:>6} {:>10} {:>10} {:>8} {:>7}\n", "KERNEL", "HOSTNAME",
+                     "PID", "NODES", "DDS OUT", "DDS IN", "INVALID", "WAITS");
   for (const auto& [id, k] : kernels) {
     const auto t = field(k, "telemetry", nlohmann::json::object());
     const auto dds = field(t, "dds", nlohmann::json::object());
     out += fmt::format(
-        "{:<40} {:<16} {:>7} {:>6} {:>10} {:>10} {:>8}\n", id,
+        "{:<40} {:<16} {:>7} {:>6} {:>10} {:>10} {:>8} {:>7}\n", id,
         field<std::string>(k, "hostname", "?"), field<std::int64_t>(k, "pid", 0),
         field(t, "nodes", nlohmann::json::array()).size(), field<std::uint64_t>(dds, "sent", 0),
-        field<std::uint64_t>(dds, "received", 0), field<std::uint64_t>(dds, "invalid", 0));
+        field<std::uint64_t>(dds, "received", 0), field<std::uint64_t>(dds, "invalid", 0),
+        field<std::uint64_t>(dds, "writer_waits", 0));
   }
   out += fmt::format("\n{:<40} {:<16} {:<22} {:<10} {:<10}\n", "KERNEL", "NODE", "PLUG-IN",
                      "VERSION", "STATE");
