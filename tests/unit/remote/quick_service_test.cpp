@@ -38,71 +38,35 @@ using Clock = std::chrono::steady_clock;
   for (;;) ::pause();
 }
 
-// The provider's process, for the life of one test.
-class Provider {
- public:
-  Provider() : child_(::fork()) {  // before this process has threads
-    if (child_ == 0) provide_echo(domain);
+// A caller kernel in this process; one quick echo provider in a child for
+// all the tests, forked before this process has threads.
+class RemoteQuickService : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    domain_ = 100 + (::getpid() + 20) % 100;
+    provider_ = ::fork();
+    if (provider_ == 0) provide_echo(domain_);
   }
-  ~Provider() {
-    if (child_ <= 0) return;
-    ::kill(child_, SIGKILL);
-    ::waitpid(child_, nullptr, 0);
+  static void TearDownTestSuite() {
+    if (provider_ <= 0) return;
+    ::kill(provider_, SIGKILL);
+    ::waitpid(provider_, nullptr, 0);
   }
-  bool started() const { return child_ > 0; }
-  Provider(const Provider&) = delete;
-  Provider& operator=(const Provider&) = delete;
 
-  const int domain = 100 + (::getpid() + 20) % 100;
+  // Until the provider answers.
+  void SetUp() override {
+    ASSERT_GT(provider_, 0) << "fork failed";
+    ASSERT_EQ(kernel_.open(), "");
+    const auto ready_by = Clock::now() + 20s;
+    while (calls(1, 64).failed != 0 && Clock::now() < ready_by) std::this_thread::sleep_for(50ms);
+  }
 
- private:
-  pid_t child_;
-};
-
-// Calls of `size` bytes, one after the other; how many failed.
-int one_by_one(BareKernel& k, testing::TestEndpoint& caller, int n, std::size_t size) {
-  struct Answer {
-    std::mutex m;
-    std::condition_variable cv;
-    bool done = false, ok = false;
-    std::size_t size = 0;
+  struct Outcome {
+    int failed = 0;
+    Clock::duration took{};
   };
-  const std::vector<std::uint8_t> payload(size, 0x5a);
-  int failed = 0;
-  for (int i = 0; i < n; ++i) {
-    Answer a;
-    a.size = size;
-    auto s = k.bus().call(
-        &caller, "echo", kEchoType, msg_copy(payload.data(), size, kEchoType, 1, 0), 3s,
-        [](void* user, plr_status status, const plr_msg* reply, const char*) {
-          auto* a = static_cast<Answer*>(user);
-          std::lock_guard lock(a->m);
-          a->ok = status == PLR_OK && msg_view(reply).size == a->size;
-          a->done = true;
-          a->cv.notify_all();
-        },
-        &a, nullptr);
-    if (!s) {
-      ++failed;
-      continue;
-    }
-    std::unique_lock lock(a.m);
-    a.cv.wait(lock, [&] { return a.done; });
-    failed += !a.ok;
-  }
-  return failed;
-}
-
-TEST(RemoteQuickService, LargeRepliesFromTheReceiveThreadNeverStall) {
-  Provider provider;
-  ASSERT_TRUE(provider.started());
-  BareKernel k(provider.domain, "quick_caller", false, "echo");
-  ASSERT_EQ(k.open(), "");
-  testing::TestEndpoint& caller = k.add_node("caller");
-
-  // `n` calls of `size` bytes at once; how many failed, and how long the
-  // slowest took.
-  const auto burst = [&](int n, std::size_t size) {
+  // `n` calls of `size` bytes, all sent at once; waits for every answer.
+  Outcome calls(int n, std::size_t size) {
     struct Answers {
       std::mutex m;
       std::condition_variable cv;
@@ -114,8 +78,8 @@ TEST(RemoteQuickService, LargeRepliesFromTheReceiveThreadNeverStall) {
     const std::vector<std::uint8_t> payload(size, 0x5a);
     const auto t0 = Clock::now();
     for (int i = 0; i < n; ++i) {
-      auto s = k.bus().call(
-          &caller, "echo", kEchoType, msg_copy(payload.data(), size, kEchoType, 1, 0), 3s,
+      auto s = kernel_.bus().call(
+          &caller_, "echo", kEchoType, msg_copy(payload.data(), size, kEchoType, 1, 0), 3s,
           [](void* user, plr_status status, const plr_msg* reply, const char*) {
             auto* a = static_cast<Answers*>(user);
             std::lock_guard lock(a->m);
@@ -132,20 +96,25 @@ TEST(RemoteQuickService, LargeRepliesFromTheReceiveThreadNeverStall) {
     }
     std::unique_lock lock(a.m);
     a.cv.wait(lock, [&] { return a.left == 0; });
-    return std::make_pair(a.failed, Clock::now() - t0);
-  };
-  const auto ready_by = Clock::now() + 20s;
-  while (burst(1, 64).first != 0 && Clock::now() < ready_by) std::this_thread::sleep_for(50ms);
+    return {a.failed, Clock::now() - t0};
+  }
 
+  static inline int domain_ = 0;
+  static inline pid_t provider_ = -1;
+  BareKernel kernel_{domain_, "quick_caller", false, "echo"};
+  testing::TestEndpoint& caller_ = kernel_.add_node("caller");
+};
+
+TEST_F(RemoteQuickService, LargeRepliesFromTheReceiveThreadNeverStall) {
   // Bursts of 16 calls of 256 KiB: the provider's receive thread answers
   // them faster than acknowledgements come back, past the 2 MB a writer may
   // leave unacknowledged.
   int failed = 0;
   auto slowest = Clock::duration::zero();
   for (int i = 0; i < 20; ++i) {
-    const auto [f, took] = burst(16, 256 * 1024);
-    failed += f;
-    slowest = std::max(slowest, took);
+    const auto burst = calls(16, 256 * 1024);
+    failed += burst.failed;
+    slowest = std::max(slowest, burst.took);
   }
   EXPECT_EQ(failed, 0);
   EXPECT_LT(slowest, 500ms)
@@ -156,19 +125,12 @@ TEST(RemoteQuickService, LargeRepliesFromTheReceiveThreadNeverStall) {
 // Back-to-back calls of 64 KiB: the writer must get its acknowledgements
 // before its unacknowledged data reaches the limit, or every few calls it
 // waits a round trip for them (with Cyclone's defaults, every 8th call).
-TEST(RemoteQuickService, BackToBackLargeCallsKeepAheadOfAcknowledgements) {
-  Provider provider;
-  ASSERT_TRUE(provider.started());
-  BareKernel k(provider.domain, "quick_caller", false, "echo");
-  ASSERT_EQ(k.open(), "");
-  testing::TestEndpoint& caller = k.add_node("caller");
-  const auto ready_by = Clock::now() + 20s;
-  while (one_by_one(k, caller, 1, 64) != 0 && Clock::now() < ready_by)
-    std::this_thread::sleep_for(50ms);
-
-  EXPECT_EQ(one_by_one(k, caller, 400, 64 * 1024), 0);
+TEST_F(RemoteQuickService, BackToBackLargeCallsKeepAheadOfAcknowledgements) {
+  int failed = 0;
+  for (int i = 0; i < 400; ++i) failed += calls(1, 64 * 1024).failed;
+  EXPECT_EQ(failed, 0);
   // A few waits are allowed for a loaded machine's late ACK: 1 call in 100.
-  const auto stats = k.bridge_stats();
+  const auto stats = kernel_.bridge_stats();
   EXPECT_LE(stats["writer_waits"].get<int>(), 4) << stats.dump();
 }
 

@@ -94,8 +94,10 @@ class Slow : public plr::Node {
   }
 };
 
-plr::testing::NodeHandle active_echo(FakeKernel& k, plr::testing::NodeOptions o = {}) {
-  auto h = k.add<Echo>(std::move(o));
+// A node of type N, added, configured and activated.
+template <class N>
+plr::testing::NodeHandle active(FakeKernel& k, plr::testing::NodeOptions o = {}) {
+  auto h = k.add<N>(std::move(o));
   EXPECT_TRUE(h.configure());
   EXPECT_TRUE(h.activate());
   return h;
@@ -103,7 +105,7 @@ plr::testing::NodeHandle active_echo(FakeKernel& k, plr::testing::NodeOptions o 
 
 TEST(FakeKernel, DeliversOnlyWhenSpun) {
   FakeKernel k({.start_ns = 5'000, .echo_level = PLR_LOG_WARN});
-  auto echo = active_echo(k);
+  auto echo = active<Echo>(k);
   ASSERT_TRUE(k.publish<Count>("in", count(41)));
   EXPECT_TRUE(k.published("out").empty());
   EXPECT_EQ(k.spin(), 1u);
@@ -132,7 +134,7 @@ TEST(FakeKernel, InactiveNodesReceiveNothing) {
 
 TEST(FakeKernel, CleanupDropsTheNodesRegistrations) {
   FakeKernel k;
-  auto echo = active_echo(k);
+  auto echo = active<Echo>(k);
   EXPECT_TRUE(k.has_provider("double"));
   EXPECT_EQ(k.subscribers("in"), 1u);
   EXPECT_EQ(k.publishers("out"), 1u);
@@ -147,7 +149,7 @@ TEST(FakeKernel, CleanupDropsTheNodesRegistrations) {
 
 TEST(FakeKernel, TestCallsANodesService) {
   FakeKernel k;
-  active_echo(k, NodeOptions().with_params(R"({"factor": 3})"));
+  active<Echo>(k, NodeOptions().with_params(R"({"factor": 3})"));
   auto reply = k.call<DoubleRequest, DoubleReply>("double", double_request(7));
   ASSERT_TRUE(reply) << reply.error().message;
   EXPECT_EQ(reply.value()->value(), 21);
@@ -175,9 +177,7 @@ class QuickDoubler : public plr::Node {
 
 TEST(FakeKernel, QuickServicesAreAnswered) {
   FakeKernel k;
-  auto h = k.add<QuickDoubler>();
-  ASSERT_TRUE(h.configure());
-  ASSERT_TRUE(h.activate());
+  active<QuickDoubler>(k);
   auto reply = k.call<DoubleRequest, DoubleReply>("quick_double", double_request(4));
   ASSERT_TRUE(reply) << reply.error().message;
   EXPECT_EQ(reply.value()->value(), 8);
@@ -193,7 +193,7 @@ TEST(FakeKernel, CallWithoutProviderFailsWithItsName) {
 
 TEST(FakeKernel, NodeCallWithoutProviderIsRefused) {
   FakeKernel k;
-  auto echo = active_echo(k);
+  auto echo = active<Echo>(k);
   ASSERT_TRUE(k.publish<Count>("ask", count(4)));
   k.spin();
   ASSERT_TRUE(echo.get<Echo>().remote_error.has_value());
@@ -209,8 +209,8 @@ std::int64_t doubled(FakeKernel& k, std::int64_t v) {
 
 TEST(FakeKernel, FirstActiveProviderAnswers) {
   FakeKernel k;
-  auto a = active_echo(k, NodeOptions().with_name("a").with_params(R"({"factor": 2})"));
-  auto b = active_echo(k, NodeOptions().with_name("b").with_params(R"({"factor": 5})"));
+  auto a = active<Echo>(k, NodeOptions().with_name("a").with_params(R"({"factor": 2})"));
+  auto b = active<Echo>(k, NodeOptions().with_name("b").with_params(R"({"factor": 5})"));
   EXPECT_EQ(doubled(k, 1), 2);
   ASSERT_TRUE(a.deactivate());
   EXPECT_EQ(doubled(k, 1), 5);
@@ -224,7 +224,7 @@ TEST(FakeKernel, FakeServiceAnswersANodeSynchronously) {
         reply.Finish(plr::msg::CreateDoubleReply(reply, req.value() * 10));
         return plr::Status{};
       });
-  auto echo = active_echo(k);
+  auto echo = active<Echo>(k);
   ASSERT_TRUE(k.publish<Count>("ask", count(4)));
   k.spin();
   EXPECT_EQ(echo.get<Echo>().remote_answer, 40);
@@ -236,7 +236,7 @@ TEST(FakeKernel, FakeServiceAnswersANodeSynchronously) {
 TEST(FakeKernel, FakeServiceScriptsAnError) {
   FakeKernel k;
   k.fake_service_error("remote", PLR_ERR_TIMEOUT, "planner busy");
-  auto echo = active_echo(k);
+  auto echo = active<Echo>(k);
   ASSERT_TRUE(k.publish<Count>("ask", count(4)));
   k.spin();
   ASSERT_TRUE(echo.get<Echo>().remote_error.has_value());
@@ -246,9 +246,7 @@ TEST(FakeKernel, FakeServiceScriptsAnError) {
 
 TEST(FakeKernel, TimeoutsFollowTheManualClock) {
   FakeKernel k;
-  auto slow = k.add<Slow>();
-  ASSERT_TRUE(slow.configure());
-  ASSERT_TRUE(slow.activate());
+  auto slow = active<Slow>(k);
   auto call = k.call_async<DoubleRequest, DoubleReply>("slow", double_request(1), 1s);
   k.spin();
   ASSERT_TRUE(slow.get<Slow>().held.has_value()) << "the request reached the node";
@@ -270,9 +268,7 @@ TEST(FakeKernel, TimeoutsFollowTheManualClock) {
 
 TEST(FakeKernel, AsyncAnswerCompletesTheCall) {
   FakeKernel k;
-  auto slow = k.add<Slow>();
-  ASSERT_TRUE(slow.configure());
-  ASSERT_TRUE(slow.activate());
+  auto slow = active<Slow>(k);
   auto call = k.call_async<DoubleRequest, DoubleReply>("slow", double_request(1));
   k.spin();
   EXPECT_FALSE(call.ready());
@@ -286,9 +282,7 @@ TEST(FakeKernel, AsyncAnswerCompletesTheCall) {
 
 TEST(FakeKernel, ProviderDeactivatedBeforeDeliveryFailsTheCall) {
   FakeKernel k;
-  auto slow = k.add<Slow>();
-  ASSERT_TRUE(slow.configure());
-  ASSERT_TRUE(slow.activate());
+  auto slow = active<Slow>(k);
   auto call = k.call_async<DoubleRequest, DoubleReply>("slow", double_request(1));
   ASSERT_TRUE(slow.deactivate());
   k.spin();
@@ -300,9 +294,7 @@ TEST(FakeKernel, ProviderDeactivatedBeforeDeliveryFailsTheCall) {
 
 TEST(FakeKernel, DestroyingAProviderAnswersItsHeldRequests) {
   FakeKernel k;
-  auto slow = k.add<Slow>();
-  ASSERT_TRUE(slow.configure());
-  ASSERT_TRUE(slow.activate());
+  auto slow = active<Slow>(k);
   auto call = k.call_async<DoubleRequest, DoubleReply>("slow", double_request(1));
   k.spin();
   slow.destroy();
@@ -313,7 +305,7 @@ TEST(FakeKernel, DestroyingAProviderAnswersItsHeldRequests) {
 
 TEST(FakeKernel, GarbageIsRejectedNotDelivered) {
   FakeKernel k;
-  auto echo = active_echo(k);
+  auto echo = active<Echo>(k);
   const std::uint8_t garbage[] = {0xff, 0xff, 0xff, 0x7f, 1, 2, 3, 4};
   ASSERT_TRUE(
       k.publish_raw("in", plr::MessageTraits<Count>::type_id(), 1, garbage, sizeof garbage));
@@ -326,7 +318,7 @@ TEST(FakeKernel, GarbageIsRejectedNotDelivered) {
 
 TEST(FakeKernel, TopicTypesMustAgree) {
   FakeKernel k;
-  active_echo(k);
+  active<Echo>(k);
   EXPECT_EQ(k.subscribers("in"), 1u);
   auto s = k.publish<DoubleReply>("in", count(1));
   ASSERT_FALSE(s);
@@ -336,7 +328,7 @@ TEST(FakeKernel, TopicTypesMustAgree) {
 
 TEST(FakeKernel, RemapsRenameTopicsAndServices) {
   FakeKernel k;
-  auto echo = active_echo(
+  auto echo = active<Echo>(
       k, NodeOptions().with_remap("in", "sensors/count").with_remap("double", "math/double"));
   EXPECT_EQ(echo.state(), plr::NodeState::Active);
   EXPECT_EQ(k.subscribers("sensors/count"), 1u);
@@ -349,7 +341,7 @@ TEST(FakeKernel, RemapsRenameTopicsAndServices) {
 
 TEST(FakeKernel, CountsLiveMessageBuffers) {
   FakeKernel k;
-  auto echo = active_echo(k);
+  auto echo = active<Echo>(k);
   ASSERT_TRUE(k.publish<Count>("in", count(1)));
   EXPECT_EQ(k.live_messages(), 1) << "queued for the subscriber";
   k.spin();
