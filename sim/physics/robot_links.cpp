@@ -38,13 +38,13 @@ std::optional<LinkGeometry> scoop_lip(const LinkGeometry& scoop) {
 
 }  // namespace
 
-std::vector<LinkGeometry> robot_link_geometry(const RobotModel& model, const Config& q,
+std::vector<LinkGeometry> robot_link_geometry(const RobotModel& model, const JointVector& q,
                                               double belt_speed, const std::string& conveyor_link,
                                               const std::string& feeder_link) {
   std::vector<Eigen::Isometry3d> poses;
-  model.forwardKinematics(q, poses);
-  const int conveyor = model.linkIndex(conveyor_link);
-  const int feeder = model.linkIndex(feeder_link);
+  model.forward_kinematics(q, poses);
+  const int conveyor = model.link_index(conveyor_link);
+  const int feeder = model.link_index(feeder_link);
   std::vector<LinkGeometry> out;
   for (std::size_t i = 0; i < model.links().size(); ++i) {
     for (const CollisionShape& s : model.links()[i].shapes) {
@@ -73,9 +73,10 @@ std::vector<LinkGeometry> robot_link_geometry(const RobotModel& model, const Con
   return out;
 }
 
-SuctionPlate suction_plate_at(const RobotModel& model, const Config& q, const SuctionPlate& cups) {
+SuctionPlate suction_plate_at(const RobotModel& model, const JointVector& q,
+                              const SuctionPlate& cups) {
   SuctionPlate p = cups;
-  p.pose = model.platePose(q) * Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitY());
+  p.pose = model.plate_pose(q) * Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitY());
   return p;
 }
 

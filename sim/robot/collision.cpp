@@ -10,7 +10,7 @@
 
 namespace plr::sim {
 
-std::shared_ptr<octomap::OcTree> makeTrailerOctree(const Trailer& trailer, double resolution) {
+std::shared_ptr<octomap::OcTree> make_trailer_octree(const Trailer& trailer, double resolution) {
   auto tree = std::make_shared<octomap::OcTree>(resolution);
   const double r = resolution;
   const double x0 = -5.0, x1 = trailer.depth + r;
@@ -40,7 +40,7 @@ std::shared_ptr<octomap::OcTree> makeTrailerOctree(const Trailer& trailer, doubl
 
 namespace {
 
-fcl::Transform3d toFcl(const Eigen::Isometry3d& t) {
+fcl::Transform3d to_fcl(const Eigen::Isometry3d& t) {
   fcl::Transform3d f = fcl::Transform3d::Identity();
   f.linear() = t.linear();
   f.translation() = t.translation();
@@ -125,18 +125,18 @@ class OccupancyGrid {
   }
 
   // One cell per voxel (the table was not coarsened to fit in memory).
-  bool voxelSized() const { return voxel_sized_; }
+  bool voxel_sized() const { return voxel_sized_; }
 
   // Whether `shape`, an oriented box within `bounds`, meets an occupied
   // cell: the block of cells under `bounds` is halved, longest side first,
   // while a part holds occupied cells and its box meets the shape.
-  bool mayHit(const fcl::OBBd& shape, const fcl::AABBd& bounds) const {
+  bool may_hit(const fcl::OBBd& shape, const fcl::AABBd& bounds) const {
     Eigen::Vector3i lo, hi;
-    return range(bounds.min_, bounds.max_, lo, hi) && occupiedTouching(shape, lo, hi);
+    return range(bounds.min_, bounds.max_, lo, hi) && occupied_touching(shape, lo, hi);
   }
 
  private:
-  bool occupiedTouching(const fcl::OBBd& shape, Eigen::Vector3i lo, Eigen::Vector3i hi) const {
+  bool occupied_touching(const fcl::OBBd& shape, Eigen::Vector3i lo, Eigen::Vector3i hi) const {
     if (occupied(lo, hi) == 0) return false;
     // Shrunk to its occupied cells first: a block of floor under a link
     // just above it is then one thin slab, apart from the link.
@@ -174,7 +174,7 @@ class OccupancyGrid {
     Eigen::Vector3i first_hi = hi, second_lo = lo;
     first_hi[axis] = lo[axis] + span / 2;
     second_lo[axis] = first_hi[axis] + 1;
-    return occupiedTouching(shape, lo, first_hi) || occupiedTouching(shape, second_lo, hi);
+    return occupied_touching(shape, lo, first_hi) || occupied_touching(shape, second_lo, hi);
   }
   // Occupied cells in the block [lo, hi].
   std::int64_t occupied(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi) const {
@@ -211,7 +211,7 @@ class OccupancyGrid {
 
 // The box enclosing an object's shape as an FCL OBB: exact for a box,
 // conservative for a cylinder or a sphere, its AABB for anything else.
-fcl::OBBd enclosingBox(const fcl::CollisionObjectd& o) {
+fcl::OBBd enclosing_box(const fcl::CollisionObjectd& o) {
   fcl::OBBd box;
   const fcl::CollisionGeometryd& g = *o.collisionGeometry();
   switch (o.getNodeType()) {
@@ -241,7 +241,7 @@ bool collide(const fcl::CollisionObjectd* a, const fcl::CollisionObjectd* b) {
   if (!a->getAABB().overlap(b->getAABB())) return false;
   // FCL's 15-axis box test settles most near pairs before the narrow phase,
   // and every pair of boxes (it is exact for them, up to 1e-6 m of slack).
-  if (!enclosingBox(*a).overlap(enclosingBox(*b))) return false;
+  if (!enclosing_box(*a).overlap(enclosing_box(*b))) return false;
   if (a->getNodeType() == fcl::GEOM_BOX && b->getNodeType() == fcl::GEOM_BOX) return true;
   fcl::CollisionRequestd req;
   fcl::CollisionResultd res;
@@ -269,12 +269,12 @@ struct CollisionChecker::Impl {
   mutable std::vector<std::pair<std::uint64_t, std::uint64_t>> pair_free_exact, pair_free_swept;
   mutable std::uint64_t next_epoch = 1;
   mutable std::vector<Eigen::Isometry3d> poses;
-  mutable std::vector<double> d_self;  // per shape, from motionBounds()
+  mutable std::vector<double> d_self;  // per shape, from motion_bounds()
   mutable CollisionStats stats;
 
-  void addShape(int link, const Eigen::Isometry3d& origin,
-                std::shared_ptr<fcl::CollisionGeometryd> geom, const Eigen::Vector3d& half,
-                std::string label) {
+  void add_shape(int link, const Eigen::Isometry3d& origin,
+                 std::shared_ptr<fcl::CollisionGeometryd> geom, const Eigen::Vector3d& half,
+                 std::string label) {
     RobotShape s;
     s.link = link;
     s.origin = origin;
@@ -296,7 +296,7 @@ struct CollisionChecker::Impl {
     pair_free_swept.assign(self_pairs.size(), {0, 0});
   }
 
-  void rebuildPairs() {
+  void rebuild_pairs() {
     self_pairs.clear();
     for (std::size_t i = 0; i < shapes.size(); ++i) {
       for (std::size_t j = i + 1; j < shapes.size(); ++j) {
@@ -308,8 +308,8 @@ struct CollisionChecker::Impl {
     invalidate();
   }
 
-  void place(const Config& q) const {
-    robot->forwardKinematics(q, poses);
+  void place(const JointVector& q) const {
+    robot->forward_kinematics(q, poses);
     for (auto& s : const_cast<std::vector<RobotShape>&>(shapes)) {
       const Eigen::Isometry3d pose = poses[s.link] * s.origin;
       const RobotShape::Placement at = placement(pose, Eigen::Vector3d::Zero());
@@ -317,21 +317,21 @@ struct CollisionChecker::Impl {
       s.exact_at = at;
       s.exact_epoch = next_epoch++;
       s.exact_world_free = false;
-      s.exact->setTransform(toFcl(pose));
+      s.exact->setTransform(to_fcl(pose));
       s.exact->computeAABB();
     }
   }
 
-  bool hitsOctree(const fcl::CollisionObjectd* o) const {
-    if (!octree_obj || !grid->mayHit(enclosingBox(*o), o->getAABB())) return false;
+  bool hits_octree(const fcl::CollisionObjectd* o) const {
+    if (!octree_obj || !grid->may_hit(enclosing_box(*o), o->getAABB())) return false;
     // With voxel-sized cells that was the exact test for a box; other
     // shapes, only enclosed by their box, go on to FCL's octree test.
-    return (o->getNodeType() == fcl::GEOM_BOX && grid->voxelSized()) ||
+    return (o->getNodeType() == fcl::GEOM_BOX && grid->voxel_sized()) ||
            collide(o, octree_obj.get());
   }
 
   // World box hit by `o` (not ignored), or -1.
-  long hitBox(const fcl::CollisionObjectd* o) const {
+  long hit_box(const fcl::CollisionObjectd* o) const {
     const fcl::AABBd& a = o->getAABB();
     auto i = std::lower_bound(box_min_x.begin(), box_min_x.end(), a.min_.x() - box_max_len_x) -
              box_min_x.begin();
@@ -346,10 +346,10 @@ struct CollisionChecker::Impl {
 
   // The first collision of the exact shapes as placed by place(), as text
   // ("plate - box 12"), or empty.
-  std::string firstHit() const {
+  std::string first_hit() const {
     for (const auto& s : shapes) {
-      if (hitsOctree(s.exact.get())) return s.label + " - trailer";
-      const long b = hitBox(s.exact.get());
+      if (hits_octree(s.exact.get())) return s.label + " - trailer";
+      const long b = hit_box(s.exact.get());
       if (b >= 0)
         return s.label + " - box " + std::to_string(boxes[static_cast<std::size_t>(b)].id);
     }
@@ -362,10 +362,10 @@ struct CollisionChecker::Impl {
   }
 
   // Exact shapes as placed by place().
-  bool anyHit() const {
+  bool any_hit() const {
     for (auto& s : const_cast<std::vector<RobotShape>&>(shapes)) {
       if (s.exact_world_free) continue;
-      if (hitsOctree(s.exact.get()) || hitBox(s.exact.get()) >= 0) return true;
+      if (hits_octree(s.exact.get()) || hit_box(s.exact.get()) >= 0) return true;
       s.exact_world_free = true;
     }
     for (std::size_t k = 0; k < self_pairs.size(); ++k) {
@@ -379,11 +379,11 @@ struct CollisionChecker::Impl {
     return false;
   }
 
-  bool stateValid(const Config& q) const {
+  bool state_valid(const JointVector& q) const {
     ++stats.state_checks;
-    if (!robot->withinLimits(q, options.limit_tolerance)) return false;
+    if (!robot->within_limits(q, options.limit_tolerance)) return false;
     place(q);
-    return !anyHit();
+    return !any_hit();
   }
 
   // Sweep of the motion a->b (a, b valid) with midpoint m: every shape
@@ -396,7 +396,7 @@ struct CollisionChecker::Impl {
   // |dq_j| times its distance from j's axis, and that distance can itself
   // grow by what the joints below j move it: D += |dq_j| (r_j + D).
   // Returns the largest bound plus the base's travel.
-  double motionBounds(const Config& half_step) const {
+  double motion_bounds(const JointVector& half_step) const {
     double worst = 0.0;
     d_self.resize(shapes.size());
     const auto& links = robot->links();
@@ -425,25 +425,27 @@ struct CollisionChecker::Impl {
     return worst + std::abs(half_step[kBaseX]);
   }
 
-  bool hitsWorld(const fcl::CollisionObjectd* o) const { return hitsOctree(o) || hitBox(o) >= 0; }
+  bool hits_world(const fcl::CollisionObjectd* o) const {
+    return hits_octree(o) || hit_box(o) >= 0;
+  }
 
   // Stretching a shape's box along its own axes covers a base translation
   // exactly only when world x is one of them. For a tilted shape (the scoop,
   // pitched a little, just above the floor) the box in world axes covering
   // the inflated shape, stretched along x, is the tighter bound below and
   // beside it: try that before splitting the segment.
-  bool alignedSweepFree(RobotShape& s, const Eigen::Isometry3d& pose, double d,
-                        const Config& half_step) const {
+  bool aligned_sweep_free(RobotShape& s, const Eigen::Isometry3d& pose, double d,
+                          const JointVector& half_step) const {
     const Eigen::Vector3d half =
         pose.linear().cwiseAbs() * s.half + Eigen::Vector3d(std::abs(half_step[kBaseX]) + d, d, d);
     s.swept_box->side = 2.0 * half;
     s.swept_box->computeLocalAABB();
-    s.swept->setTransform(toFcl(Eigen::Isometry3d(Eigen::Translation3d(pose.translation()))));
+    s.swept->setTransform(to_fcl(Eigen::Isometry3d(Eigen::Translation3d(pose.translation()))));
     s.swept->computeAABB();
-    return !hitsWorld(s.swept.get());
+    return !hits_world(s.swept.get());
   }
 
-  bool sweepFree(const Config& half_step) const {
+  bool sweep_free(const JointVector& half_step) const {
     ++stats.sweep_checks;
     for (std::size_t i = 0; i < shapes.size(); ++i) {
       RobotShape& s = const_cast<RobotShape&>(shapes[i]);
@@ -460,12 +462,12 @@ struct CollisionChecker::Impl {
       if (!(s.swept_world_free && world_at == s.swept_world_free_at)) {
         s.swept_box->side = world_side;
         s.swept_box->computeLocalAABB();
-        s.swept->setTransform(toFcl(pose));
+        s.swept->setTransform(to_fcl(pose));
         s.swept->computeAABB();
         s.swept_at =
             RobotShape::Placement::Constant(std::nan(""));  // object now differs from swept_at
-        if (hitsWorld(s.swept.get()) &&
-            !(half_step[kBaseX] != 0.0 && alignedSweepFree(s, pose, d, half_step))) {
+        if (hits_world(s.swept.get()) &&
+            !(half_step[kBaseX] != 0.0 && aligned_sweep_free(s, pose, d, half_step))) {
           return false;
         }
         s.swept_world_free = true;
@@ -478,7 +480,7 @@ struct CollisionChecker::Impl {
         s.swept_epoch = next_epoch++;
         s.swept_box->side = self_side;
         s.swept_box->computeLocalAABB();
-        s.swept->setTransform(toFcl(pose));
+        s.swept->setTransform(to_fcl(pose));
         s.swept->computeAABB();
       }
     }
@@ -502,15 +504,15 @@ CollisionChecker::CollisionChecker(const RobotModel& robot, const World& world,
   m.robot = &robot;
   m.options = options;
   m.octree =
-      octree ? std::move(octree) : makeTrailerOctree(world.trailer, options.octree_resolution);
+      octree ? std::move(octree) : make_trailer_octree(world.trailer, options.octree_resolution);
   m.octree_obj = std::make_unique<fcl::CollisionObjectd>(std::make_shared<fcl::OcTreed>(m.octree));
   m.octree_obj->computeAABB();
   m.grid = std::make_unique<OccupancyGrid>(*m.octree);
   for (const Box& b : world.boxes) {
     WorldBox wb;
     wb.id = b.id;
-    wb.obj =
-        std::make_unique<fcl::CollisionObjectd>(std::make_shared<fcl::Boxd>(b.size), toFcl(b.pose));
+    wb.obj = std::make_unique<fcl::CollisionObjectd>(std::make_shared<fcl::Boxd>(b.size),
+                                                     to_fcl(b.pose));
     wb.obj->computeAABB();
     m.boxes.push_back(std::move(wb));
   }
@@ -541,7 +543,7 @@ CollisionChecker::CollisionChecker(const RobotModel& robot, const World& world,
           half = Eigen::Vector3d::Constant(cs.size.x());
           break;
       }
-      m.addShape(static_cast<int>(l), cs.origin, std::move(geom), half, links[l].name);
+      m.add_shape(static_cast<int>(l), cs.origin, std::move(geom), half, links[l].name);
     }
   }
   m.robot_shape_count = static_cast<int>(m.shapes.size());
@@ -551,8 +553,8 @@ CollisionChecker::CollisionChecker(const RobotModel& robot, const World& world,
       m.allowed[l][links[l].parent_link] = m.allowed[links[l].parent_link][l] = true;
     }
   }
-  for (const auto& [a, b] : robot.allowedCollisions()) m.allowed[a][b] = m.allowed[b][a] = true;
-  m.rebuildPairs();
+  for (const auto& [a, b] : robot.allowed_collisions()) m.allowed[a][b] = m.allowed[b][a] = true;
+  m.rebuild_pairs();
 }
 
 CollisionChecker::~CollisionChecker() = default;
@@ -566,72 +568,73 @@ const CollisionOptions& CollisionChecker::options() const {
   return impl_->options;
 }
 
-void CollisionChecker::allowCollision(const std::string& a, const std::string& b) {
-  const int ia = impl_->robot->linkIndex(a), ib = impl_->robot->linkIndex(b);
+void CollisionChecker::allow_collision(const std::string& a, const std::string& b) {
+  const int ia = impl_->robot->link_index(a), ib = impl_->robot->link_index(b);
   if (ia < 0 || ib < 0)
-    throw std::invalid_argument("allowCollision: unknown link '" + (ia < 0 ? a : b) + "'");
+    throw std::invalid_argument("allow_collision: unknown link '" + (ia < 0 ? a : b) + "'");
   impl_->allowed[ia][ib] = impl_->allowed[ib][ia] = true;
-  impl_->rebuildPairs();
+  impl_->rebuild_pairs();
 }
 
-void CollisionChecker::ignoreBox(std::uint32_t id) {
+void CollisionChecker::ignore_box(std::uint32_t id) {
   impl_->ignored.insert(id);
   impl_->invalidate();
 }
-void CollisionChecker::clearIgnoredBoxes() {
+void CollisionChecker::clear_ignored_boxes() {
   impl_->ignored.clear();
   impl_->invalidate();
 }
 
-void CollisionChecker::attachBox(const Box& box, const Config& q) {
+void CollisionChecker::attach_box(const Box& box, const JointVector& q) {
   Impl& m = *impl_;
-  const int plate = m.robot->plateLink();
-  const Eigen::Isometry3d in_plate = m.robot->platePose(q).inverse() * box.pose;
+  const int plate = m.robot->plate_link();
+  const Eigen::Isometry3d in_plate = m.robot->plate_pose(q).inverse() * box.pose;
   constexpr double kSlack = 0.003;  // m per side
   const Eigen::Vector3d size = (box.size.array() - 2 * kSlack).max(kSlack).matrix();
-  m.addShape(plate, in_plate, std::make_shared<fcl::Boxd>(size), size / 2.0,
-             "held box " + std::to_string(box.id));
+  m.add_shape(plate, in_plate, std::make_shared<fcl::Boxd>(size), size / 2.0,
+              "held box " + std::to_string(box.id));
   m.ignored.insert(box.id);
-  m.rebuildPairs();
+  m.rebuild_pairs();
 }
 
-void CollisionChecker::detachAll() {
+void CollisionChecker::detach_all() {
   impl_->shapes.resize(impl_->robot_shape_count);
-  impl_->rebuildPairs();
+  impl_->rebuild_pairs();
 }
 
-bool CollisionChecker::isValid(const Config& q) const {
-  return impl_->stateValid(q);
+bool CollisionChecker::is_valid(const JointVector& q) const {
+  return impl_->state_valid(q);
 }
 
-bool CollisionChecker::isMotionValid(const Config& a, const Config& b, bool check_endpoints) const {
+bool CollisionChecker::is_motion_valid(const JointVector& a, const JointVector& b,
+                                       bool check_endpoints) const {
   const Impl& m = *impl_;
-  if (check_endpoints && (!m.stateValid(a) || !m.stateValid(b))) return false;
+  if (check_endpoints && (!m.state_valid(a) || !m.state_valid(b))) return false;
   const double res = m.options.motion_resolution;
   struct Segment {
-    Config a, b;
+    JointVector a, b;
   };
   std::vector<Segment> todo{{a, b}};
   while (!todo.empty()) {
     const Segment s = todo.back();
     todo.pop_back();
-    const Config half = (s.b - s.a) / 2.0;
-    const Config mid = s.a + half;
-    m.robot->forwardKinematics(mid, m.poses);
-    if (m.motionBounds(half) <= res / 2.0) {
+    const JointVector half = (s.b - s.a) / 2.0;
+    const JointVector mid = s.a + half;
+    m.robot->forward_kinematics(mid, m.poses);
+    if (m.motion_bounds(half) <= res / 2.0) {
       // Down to resolution: the checked states are at most `res` apart.
-      if (!m.stateValid(mid)) return false;
+      if (!m.state_valid(mid)) return false;
       continue;
     }
-    if (m.sweepFree(half)) continue;
-    if (!m.stateValid(mid)) return false;
+    if (m.sweep_free(half)) continue;
+    if (!m.state_valid(mid)) return false;
     todo.push_back({mid, s.b});
     todo.push_back({s.a, mid});
   }
   return true;
 }
 
-std::string CollisionChecker::describeCollision(const Config& q) const {
+std::string CollisionChecker::describe_collision(const JointVector& q) const {
   const Impl& m = *impl_;
   for (int i = 0; i < kNumJoints; ++i) {
     const JointLimits& l = m.robot->limits(i);
@@ -641,13 +644,13 @@ std::string CollisionChecker::describeCollision(const Config& q) const {
     }
   }
   m.place(q);
-  return m.firstHit();
+  return m.first_hit();
 }
 
 const CollisionStats& CollisionChecker::stats() const {
   return impl_->stats;
 }
-void CollisionChecker::resetStats() {
+void CollisionChecker::reset_stats() {
   impl_->stats = {};
 }
 

@@ -18,16 +18,16 @@ namespace {
   throw std::invalid_argument("PlanRequest." + field + ": " + why);
 }
 
-Config toConfig(const flatbuffers::Vector<double>* v, const char* field) {
+JointVector to_joint_vector(const flatbuffers::Vector<double>* v, const char* field) {
   if (v == nullptr || v->size() != kNumJoints) {
     bad(field, "needs 8 joint values, got " + std::to_string(v == nullptr ? 0 : v->size()));
   }
-  Config q;
+  JointVector q;
   for (int i = 0; i < kNumJoints; ++i) q[i] = v->Get(static_cast<flatbuffers::uoffset_t>(i));
   return q;
 }
 
-Eigen::Isometry3d toPose(const plr::msg::Pose& p) {
+Eigen::Isometry3d to_pose(const plr::msg::Pose& p) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   t.translation() = Eigen::Vector3d(p.position().x(), p.position().y(), p.position().z());
   const auto& o = p.orientation();
@@ -37,7 +37,7 @@ Eigen::Isometry3d toPose(const plr::msg::Pose& p) {
   return t;
 }
 
-plr::msg::PlanStatus toMsg(PlanStatus s) {
+plr::msg::PlanStatus to_msg(PlanStatus s) {
   switch (s) {
     case PlanStatus::kSolved:
       return plr::msg::PlanStatus::Solved;
@@ -73,16 +73,16 @@ std::shared_ptr<const octomap::OcTree> parse_octree(std::string_view bytes, doub
 
 }  // namespace
 
-DecodedPlanRequest decodePlanRequest(const plr::msg::PlanRequest& r) {
+DecodedPlanRequest decode_plan_request(const plr::msg::PlanRequest& r) {
   DecodedPlanRequest d;
   PlanQuery& q = d.query;
   const int mode = static_cast<int>(r.mode());
   if (mode < 1 || mode > 6) bad("mode", "unknown mode " + std::to_string(mode));
   q.mode = static_cast<PlanMode>(mode);
-  q.start = toConfig(r.start(), "start");
+  q.start = to_joint_vector(r.start(), "start");
   if (r.has_goal_pose()) {
     if (r.goal_pose() == nullptr) bad("goal_pose", "has_goal_pose is set but goal_pose is missing");
-    const Eigen::Isometry3d pose = toPose(*r.goal_pose());
+    const Eigen::Isometry3d pose = to_pose(*r.goal_pose());
     const Eigen::Vector3d n = pose.linear().col(0);
     PoseGoal g;
     // The plate is always vertical: only the yaw of its normal is a goal.
@@ -90,7 +90,7 @@ DecodedPlanRequest decodePlanRequest(const plr::msg::PlanRequest& r) {
     q.goal = g;
   } else if (r.goal_joints() != nullptr && r.goal_joints()->size() > 0) {
     JointGoal g;
-    g.q = toConfig(r.goal_joints(), "goal_joints");
+    g.q = to_joint_vector(r.goal_joints(), "goal_joints");
     q.goal = g;
   }
   q.time_limit_s = r.timeout_s();
@@ -113,7 +113,7 @@ DecodedPlanRequest decodePlanRequest(const plr::msg::PlanRequest& r) {
       box.size = Eigen::Vector3d(b->size().x(), b->size().y(), b->size().z());
       if (!(box.size.minCoeff() > 0.0))
         bad("world.boxes", "box " + std::to_string(box.id) + " has a bad size");
-      box.pose = toPose(b->pose());
+      box.pose = to_pose(b->pose());
       box.mass = b->mass();
       d.world.boxes.push_back(box);
     }
@@ -136,8 +136,8 @@ DecodedPlanRequest decodePlanRequest(const plr::msg::PlanRequest& r) {
   return d;
 }
 
-void encodePlanResponse(const PlanResult& result, const std::string& planner, double sample_dt,
-                        flatbuffers::FlatBufferBuilder& out) {
+void encode_plan_response(const PlanResult& result, const std::string& planner, double sample_dt,
+                          flatbuffers::FlatBufferBuilder& out) {
   std::vector<flatbuffers::Offset<plr::msg::TrajectoryPoint>> points;
   if (!result.trajectory.empty()) {
     for (const auto& [t, s] : result.trajectory.sampled(sample_dt)) {
@@ -151,7 +151,7 @@ void encodePlanResponse(const PlanResult& result, const std::string& planner, do
   const auto stats = plr::msg::CreatePlanStats(
       out, st.expansions, 1e3 * st.first_solution_s, 1e3 * st.planning_time_s, st.final_eps,
       st.cost, st.escaped, 1e3 * st.escape_time_s, st.budget_exhausted, st.time_limit_hit);
-  out.Finish(plr::msg::CreatePlanResponseDirect(out, toMsg(result.status), result.message.c_str(),
+  out.Finish(plr::msg::CreatePlanResponseDirect(out, to_msg(result.status), result.message.c_str(),
                                                 traj, stats, planner.c_str()));
 }
 

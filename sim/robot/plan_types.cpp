@@ -6,7 +6,7 @@
 
 namespace plr::sim {
 
-const char* toString(PlanMode mode) {
+const char* to_string(PlanMode mode) {
   switch (mode) {
     case PlanMode::kArm:
       return "M1 arm";
@@ -24,7 +24,7 @@ const char* toString(PlanMode mode) {
   return "unknown";
 }
 
-const char* toString(PlanStatus status) {
+const char* to_string(PlanStatus status) {
   switch (status) {
     case PlanStatus::kSolved:
       return "solved";
@@ -42,7 +42,7 @@ const char* toString(PlanStatus status) {
   return "unknown";
 }
 
-std::vector<int> plannedJoints(PlanMode mode) {
+std::vector<int> planned_joints(PlanMode mode) {
   switch (mode) {
     case PlanMode::kArm:
     case PlanMode::kArmCartesian:
@@ -59,8 +59,8 @@ std::vector<int> plannedJoints(PlanMode mode) {
   return {};
 }
 
-std::string validateQuery(const PlanQuery& q, const RobotModel& robot) {
-  const std::string mode = toString(q.mode);
+std::string validate_query(const PlanQuery& q, const RobotModel& robot) {
+  const std::string mode = to_string(q.mode);
   if (mode == "unknown") return "unknown plan mode " + std::to_string(static_cast<int>(q.mode));
   if (!q.start.allFinite()) return "start configuration has a non-finite value";
   if (!(q.time_limit_s > 0.0) || !std::isfinite(q.time_limit_s))
@@ -92,7 +92,7 @@ std::string validateQuery(const PlanQuery& q, const RobotModel& robot) {
     const JointGoal& g = std::get<JointGoal>(q.goal);
     if (!g.q.allFinite()) return "joint goal has a non-finite value";
     if (!(g.tolerance > 0.0)) return "joint goal tolerance must be positive";
-    for (int j : plannedJoints(q.mode)) {
+    for (int j : planned_joints(q.mode)) {
       const JointLimits& l = robot.limits(j);
       if (g.q[j] < l.lower || g.q[j] > l.upper) {
         return std::string("joint goal ") + kJointNames[j] + " = " + std::to_string(g.q[j]) +
@@ -116,43 +116,43 @@ std::string validateQuery(const PlanQuery& q, const RobotModel& robot) {
 }
 
 QueryScope::QueryScope(CollisionChecker& checker, const PlanQuery& query) : checker_(checker) {
-  checker_.detachAll();
-  checker_.clearIgnoredBoxes();
-  for (std::uint32_t id : query.ignored_boxes) checker_.ignoreBox(id);
-  for (const Box& b : query.held_boxes) checker_.attachBox(b, query.start);
+  checker_.detach_all();
+  checker_.clear_ignored_boxes();
+  for (std::uint32_t id : query.ignored_boxes) checker_.ignore_box(id);
+  for (const Box& b : query.held_boxes) checker_.attach_box(b, query.start);
 }
 
 QueryScope::~QueryScope() {
-  checker_.detachAll();
-  checker_.clearIgnoredBoxes();
+  checker_.detach_all();
+  checker_.clear_ignored_boxes();
 }
 
-double threadCpuSeconds() {
+double thread_cpu_seconds() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-std::vector<Config> shortcutPath(const std::vector<Config>& input,
-                                 const CollisionChecker& checker) {
+std::vector<JointVector> shortcut_path(const std::vector<JointVector>& input,
+                                       const CollisionChecker& checker) {
   // Lattice paths repeat primitives: drop waypoints inside straight runs
   // first (exact, no check needed), which leaves few candidates.
-  std::vector<Config> path;
-  for (const Config& q : input) {
+  std::vector<JointVector> path;
+  for (const JointVector& q : input) {
     if (!path.empty() && (q - path.back()).norm() < 1e-12) continue;
     if (path.size() >= 2) {
-      const Config d1 = path.back() - path[path.size() - 2], d2 = q - path.back();
+      const JointVector d1 = path.back() - path[path.size() - 2], d2 = q - path.back();
       if (d1.normalized().dot(d2.normalized()) > 1.0 - 1e-9) path.pop_back();
     }
     path.push_back(q);
   }
   if (path.size() <= 2) return path;
-  std::vector<Config> out{path.front()};
+  std::vector<JointVector> out{path.front()};
   std::size_t i = 0;
   while (i + 1 < path.size()) {
     std::size_t next = i + 1;
     for (std::size_t j = path.size() - 1; j > i + 1; --j) {
-      if (checker.isMotionValid(path[i], path[j])) {
+      if (checker.is_motion_valid(path[i], path[j])) {
         next = j;
         break;
       }

@@ -21,7 +21,7 @@ class PlannerNode : public plr::Node {
   // From on_configure, after params().allow_only(...) (which must list
   // "urdf" and "sample_dt") and building the planner. `planner` names the
   // planner in responses. Throws "<file>: <cause>" for a bad URDF.
-  plr::Status provideService(std::string planner);
+  plr::Status provide_service(std::string planner);
   const RobotModel& robot() const { return *robot_; }
   virtual PlanResult plan(const PlanQuery& query, CollisionChecker& checker) = 0;
 

@@ -30,7 +30,7 @@ class CaptureErrors : public console_bridge::OutputHandler {
   std::string first_error;
 };
 
-Eigen::Isometry3d toIsometry(const urdf::Pose& p) {
+Eigen::Isometry3d to_isometry(const urdf::Pose& p) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   t.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
   t.linear() = Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z)
@@ -40,7 +40,7 @@ Eigen::Isometry3d toIsometry(const urdf::Pose& p) {
 }
 
 // Acceleration limits are not part of URDF; read our extension element.
-std::map<std::string, double> readAccelerationLimits(const TiXmlDocument& doc) {
+std::map<std::string, double> read_acceleration_limits(const TiXmlDocument& doc) {
   std::map<std::string, double> out;
   const TiXmlElement* robot = doc.FirstChildElement("robot");
   if (robot == nullptr) return out;
@@ -57,12 +57,12 @@ std::map<std::string, double> readAccelerationLimits(const TiXmlDocument& doc) {
   return out;
 }
 
-bool isPureOffset(const Eigen::Isometry3d& t, const Eigen::Vector3d& along) {
+bool is_pure_offset(const Eigen::Isometry3d& t, const Eigen::Vector3d& along) {
   const Eigen::Vector3d p = t.translation();
   return t.linear().isIdentity(1e-9) && (p - p.dot(along) * along).norm() < 1e-9;
 }
 
-double wrapNear(double a, double lo, double hi) {
+double wrap_near(double a, double lo, double hi) {
   // Bring an angle into [lo, hi] by whole turns if possible.
   while (a > hi + 1e-12) a -= 2.0 * M_PI;
   while (a < lo - 1e-12) a += 2.0 * M_PI;
@@ -71,15 +71,15 @@ double wrapNear(double a, double lo, double hi) {
 
 }  // namespace
 
-RobotModel RobotModel::fromUrdfFile(const std::string& path) {
+RobotModel RobotModel::from_urdf_file(const std::string& path) {
   std::ifstream in(path);
   if (!in) fail(path, "cannot open file");
   std::stringstream ss;
   ss << in.rdbuf();
-  return fromUrdfString(ss.str(), path);
+  return from_urdf_string(ss.str(), path);
 }
 
-RobotModel RobotModel::fromUrdfString(const std::string& xml, const std::string& source) {
+RobotModel RobotModel::from_urdf_string(const std::string& xml, const std::string& source) {
   TiXmlDocument doc;
   doc.Parse(xml.c_str());
   if (doc.Error()) {
@@ -96,7 +96,7 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const std::string&
          "invalid URDF: " + (capture.first_error.empty() ? std::string("rejected by urdfdom")
                                                          : capture.first_error));
   }
-  const auto accel = readAccelerationLimits(doc);
+  const auto accel = read_acceleration_limits(doc);
 
   RobotModel m;
   // Links in parent-before-child order: breadth-first from the root.
@@ -112,7 +112,7 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const std::string&
     Link& cj = link;
     if (const auto& j = l->parent_joint) {
       link.parent_link = index.at(j->parent_link_name);
-      cj.origin = toIsometry(j->parent_to_joint_origin_transform);
+      cj.origin = to_isometry(j->parent_to_joint_origin_transform);
       cj.axis = Eigen::Vector3d(j->axis.x, j->axis.y, j->axis.z);
       switch (j->type) {
         case urdf::Joint::FIXED:
@@ -162,7 +162,7 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const std::string&
     for (const auto& c : l->collision_array) {
       if (!c || !c->geometry) continue;
       CollisionShape s;
-      s.origin = toIsometry(c->origin);
+      s.origin = to_isometry(c->origin);
       switch (c->geometry->type) {
         case urdf::Geometry::BOX: {
           const auto& b = static_cast<const urdf::Box&>(*c->geometry);
@@ -210,7 +210,7 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const std::string&
   // The closed-form IK assumes yaw about z, then two pitch joints about y
   // offset along the link's x, then a level flange turning about z (arm_4),
   // then the plate offset along x.
-  auto jointLink = [&](int qi) {
+  auto joint_link = [&](int qi) {
     for (std::size_t i = 0; i < m.links_.size(); ++i) {
       if (m.links_[i].joint == qi && m.links_[i].mimic_multiplier == 1.0 &&
           m.links_[i].mimic_offset == 0.0)
@@ -218,40 +218,40 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const std::string&
     }
     return -1;
   };
-  const int l1 = jointLink(kArm1), l2 = jointLink(kArm2), l3 = jointLink(kArm3),
-            l4 = jointLink(kArm4);
+  const int l1 = joint_link(kArm1), l2 = joint_link(kArm2), l3 = joint_link(kArm3),
+            l4 = joint_link(kArm4);
   const auto plate = index.find("plate");
   if (plate == index.end()) fail(source, "missing link 'plate'");
   m.plate_link_ = plate->second;
   const Eigen::Vector3d ex = Eigen::Vector3d::UnitX(), ey = Eigen::Vector3d::UnitY(),
                         ez = Eigen::Vector3d::UnitZ();
-  if (m.links_[l1].parent_link != jointLink(kBaseX) || !m.links_[l1].axis.isApprox(ez) ||
+  if (m.links_[l1].parent_link != joint_link(kBaseX) || !m.links_[l1].axis.isApprox(ez) ||
       !m.links_[l1].origin.linear().isIdentity(1e-9)) {
     fail(source, "arm_1 must turn about z on base_link (closed-form IK)");
   }
   if (m.links_[l2].parent_link != l1 || !m.links_[l2].axis.isApprox(ey) ||
-      !isPureOffset(m.links_[l2].origin, ez)) {
+      !is_pure_offset(m.links_[l2].origin, ez)) {
     fail(source, "arm_2 must pitch about y straight above arm_1 (closed-form IK)");
   }
   if (m.links_[l3].parent_link != l2 || !m.links_[l3].axis.isApprox(ey) ||
-      !isPureOffset(m.links_[l3].origin, ex)) {
+      !is_pure_offset(m.links_[l3].origin, ex)) {
     fail(source, "arm_3 must pitch about y, offset along x from arm_2 (closed-form IK)");
   }
   if (!m.links_[l4].axis.isApprox(ez)) fail(source, "arm_4 must turn about z (closed-form IK)");
   if (m.links_[m.plate_link_].parent_link != l4 ||
       m.links_[m.plate_link_].joint_type != JointType::kFixed ||
-      !isPureOffset(m.links_[m.plate_link_].origin, ex)) {
+      !is_pure_offset(m.links_[m.plate_link_].origin, ex)) {
     fail(source, "link 'plate' must be fixed to the arm_4 link, offset along x (closed-form IK)");
   }
   // Whatever the shoulder and elbow do, arm_4's frame must stay level and
   // keep its offset along the forearm: the parallelogram.
   std::vector<Eigen::Isometry3d> poses;
   for (const auto& [a2, a3] : {std::pair{0.0, 0.0}, std::pair{0.7, -1.3}, std::pair{-1.1, 2.0}}) {
-    Config q = Config::Zero();
+    JointVector q = JointVector::Zero();
     q[kArm1] = 0.3;
     q[kArm2] = a2;
     q[kArm3] = a3;
-    m.forwardKinematics(q, poses);
+    m.forward_kinematics(q, poses);
     const Eigen::Isometry3d fore_to_wrist = poses[l3].inverse() * poses[l4];
     const Eigen::Matrix3d level = Eigen::AngleAxisd(0.3, ez).toRotationMatrix();
     const Eigen::Vector3d offset = fore_to_wrist.translation();
@@ -269,21 +269,22 @@ RobotModel RobotModel::fromUrdfString(const std::string& xml, const std::string&
   return m;
 }
 
-int RobotModel::linkIndex(const std::string& name) const {
+int RobotModel::link_index(const std::string& name) const {
   for (std::size_t i = 0; i < links_.size(); ++i) {
     if (links_[i].name == name) return static_cast<int>(i);
   }
   return -1;
 }
 
-bool RobotModel::withinLimits(const Config& q, double tol) const {
+bool RobotModel::within_limits(const JointVector& q, double tol) const {
   for (int i = 0; i < kNumJoints; ++i) {
     if (!(q[i] >= limits_[i].lower - tol && q[i] <= limits_[i].upper + tol)) return false;
   }
   return true;
 }
 
-void RobotModel::forwardKinematics(const Config& q, std::vector<Eigen::Isometry3d>& poses) const {
+void RobotModel::forward_kinematics(const JointVector& q,
+                                    std::vector<Eigen::Isometry3d>& poses) const {
   poses.resize(links_.size());
   for (std::size_t i = 0; i < links_.size(); ++i) {
     const Link& cj = links_[i];
@@ -300,20 +301,21 @@ void RobotModel::forwardKinematics(const Config& q, std::vector<Eigen::Isometry3
   }
 }
 
-Eigen::Isometry3d RobotModel::platePose(const Config& q) const {
+Eigen::Isometry3d RobotModel::plate_pose(const JointVector& q) const {
   std::vector<Eigen::Isometry3d> poses;
-  forwardKinematics(q, poses);
+  forward_kinematics(q, poses);
   return poses[plate_link_];
 }
 
-PlateTarget RobotModel::plateTarget(const Config& q) const {
-  const Eigen::Isometry3d p = platePose(q);
+PlateTarget RobotModel::plate_target(const JointVector& q) const {
+  const Eigen::Isometry3d p = plate_pose(q);
   const Eigen::Vector3d n = p.linear().col(0);
   return {p.translation(), std::atan2(n.y(), n.x())};
 }
 
-std::vector<Config> RobotModel::armIk(const PlateTarget& target, const Config& seed) const {
-  std::vector<Config> out;
+std::vector<JointVector> RobotModel::arm_ik(const PlateTarget& target,
+                                            const JointVector& seed) const {
+  std::vector<JointVector> out;
   const Eigen::Vector3d yaw_origin = arm_.yaw_origin + Eigen::Vector3d(seed[kBaseX], 0.0, 0.0);
   // The wrist axis stands behind the plate, along its normal.
   const Eigen::Vector3d wrist =
@@ -334,19 +336,19 @@ std::vector<Config> RobotModel::armIk(const PlateTarget& target, const Config& s
     const double base3 = std::acos(std::clamp(c3, -1.0, 1.0));
     for (double q3 : {base3, -base3}) {
       const double q2 = std::atan2(v, u) - std::atan2(l2 * std::sin(q3), l1 + l2 * std::cos(q3));
-      Config q = seed;
-      q[kArm1] = wrapNear(yaw, limits_[kArm1].lower, limits_[kArm1].upper);
-      q[kArm2] = wrapNear(q2, limits_[kArm2].lower, limits_[kArm2].upper);
-      q[kArm3] = wrapNear(q3, limits_[kArm3].lower, limits_[kArm3].upper);
-      q[kArm4] = wrapNear(target.yaw - q[kArm1], limits_[kArm4].lower, limits_[kArm4].upper);
-      if (!withinLimits(q)) continue;
-      const bool duplicate = std::any_of(out.begin(), out.end(),
-                                         [&](const Config& o) { return (o - q).norm() < 1e-9; });
+      JointVector q = seed;
+      q[kArm1] = wrap_near(yaw, limits_[kArm1].lower, limits_[kArm1].upper);
+      q[kArm2] = wrap_near(q2, limits_[kArm2].lower, limits_[kArm2].upper);
+      q[kArm3] = wrap_near(q3, limits_[kArm3].lower, limits_[kArm3].upper);
+      q[kArm4] = wrap_near(target.yaw - q[kArm1], limits_[kArm4].lower, limits_[kArm4].upper);
+      if (!within_limits(q)) continue;
+      const bool duplicate = std::any_of(
+          out.begin(), out.end(), [&](const JointVector& o) { return (o - q).norm() < 1e-9; });
       if (!duplicate) out.push_back(q);
       if (base3 == 0.0) break;
     }
   }
-  std::sort(out.begin(), out.end(), [&](const Config& x, const Config& y) {
+  std::sort(out.begin(), out.end(), [&](const JointVector& x, const JointVector& y) {
     return (x - seed).squaredNorm() < (y - seed).squaredNorm();
   });
   return out;

@@ -14,7 +14,7 @@ struct ScalarLimits {
 };
 
 // Limits on ds/dt and d2s/dt2 for s in [0, 1] along a -> b.
-ScalarLimits pathLimits(const Config& a, const Config& b, const Limits& limits) {
+ScalarLimits path_limits(const JointVector& a, const JointVector& b, const Limits& limits) {
   ScalarLimits s;
   for (int j = 0; j < kNumJoints; ++j) {
     const double d = std::abs(b[j] - a[j]);
@@ -27,20 +27,21 @@ ScalarLimits pathLimits(const Config& a, const Config& b, const Limits& limits) 
 
 }  // namespace
 
-double segmentDuration(const Config& a, const Config& b, const Limits& limits) {
-  const ScalarLimits s = pathLimits(a, b, limits);
+double segment_duration(const JointVector& a, const JointVector& b, const Limits& limits) {
+  const ScalarLimits s = path_limits(a, b, limits);
   if (!std::isfinite(s.speed)) return 0.0;
   if (s.speed * s.speed / s.accel >= 1.0) return 2.0 * std::sqrt(1.0 / s.accel);
   return 1.0 / s.speed + s.speed / s.accel;
 }
 
-Trajectory Trajectory::fromWaypoints(const std::vector<Config>& waypoints, const Limits& limits) {
+Trajectory Trajectory::from_waypoints(const std::vector<JointVector>& waypoints,
+                                      const Limits& limits) {
   if (waypoints.empty()) throw std::invalid_argument("Trajectory: no waypoints");
   Trajectory t;
   t.waypoints_ = waypoints;
   t.start_times_.push_back(0.0);
   for (std::size_t i = 0; i + 1 < waypoints.size(); ++i) {
-    const ScalarLimits s = pathLimits(waypoints[i], waypoints[i + 1], limits);
+    const ScalarLimits s = path_limits(waypoints[i], waypoints[i + 1], limits);
     Profile p;
     if (std::isfinite(s.speed)) {
       p.accel = s.accel;
@@ -74,7 +75,7 @@ TrajectorySample Trajectory::sample(double t) const {
     return out;
   }
   const Profile& p = profiles_[i];
-  const Config d = waypoints_[i + 1] - waypoints_[i];
+  const JointVector d = waypoints_[i + 1] - waypoints_[i];
   const double tau = std::clamp(t - start_times_[i], 0.0, p.duration);
   double s = 1.0, sd = 0.0, sdd = 0.0;
   if (p.duration > 0.0) {

@@ -8,14 +8,14 @@
 
 namespace plr::arastar {
 
-using sim::Config;
+using sim::JointVector;
 using sim::PlanMode;
 using sim::PlanResult;
 using sim::PlanStatus;
 
 namespace {
 
-double secondsSince(std::chrono::steady_clock::time_point t0) {
+double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -26,7 +26,7 @@ PlanResult fail(PlanStatus status, std::string message) {
   return r;
 }
 
-std::string budgetMessage(std::uint64_t budget) {
+std::string budget_message(std::uint64_t budget) {
   return "no solution within the expansion budget of " + std::to_string(budget);
 }
 
@@ -34,13 +34,15 @@ std::string budgetMessage(std::uint64_t budget) {
 // base planned, every base position from which the arm reaches the target.
 // The search ends at the first one it meets; the path's last move is
 // re-aimed at the one it reaches soonest.
-void aimAtQuickestGoal(std::vector<Config>& path, const sim::PoseGoal& goal,
-                       const ModeLattice& lattice, const sim::CollisionChecker& checker) {
+void aim_at_quickest_goal(std::vector<JointVector>& path, const sim::PoseGoal& goal,
+                          const ModeLattice& lattice, const sim::CollisionChecker& checker) {
   if (path.size() < 2) return;
   const sim::RobotModel& robot = checker.robot();
-  const Config from = path[path.size() - 2];
+  const JointVector from = path[path.size() - 2];
   // How long the last move takes, timed as the trajectory will time it.
-  auto time = [&](const Config& q) { return sim::segmentDuration(from, q, robot.allLimits()); };
+  auto time = [&](const JointVector& q) {
+    return sim::segment_duration(from, q, robot.all_limits());
+  };
   std::vector<double> bases{path.back()[sim::kBaseX]};
   if (std::find(lattice.joints.begin(), lattice.joints.end(), sim::kBaseX) !=
       lattice.joints.end()) {
@@ -53,14 +55,14 @@ void aimAtQuickestGoal(std::vector<Config>& path, const sim::PoseGoal& goal,
     }
     std::erase_if(bases, [&](double b) { return b < lb.lower || b > lb.upper; });
   }
-  Config best = path.back();
+  JointVector best = path.back();
   double best_time = time(best);
   for (double b : bases) {
-    Config seed = path.back();
+    JointVector seed = path.back();
     seed[sim::kBaseX] = b;
-    for (const Config& q : robot.armIk(goal.target, seed)) {
+    for (const JointVector& q : robot.arm_ik(goal.target, seed)) {
       const double t = time(q);
-      if (t < best_time - 1e-9 && checker.isValid(q) && checker.isMotionValid(from, q, false)) {
+      if (t < best_time - 1e-9 && checker.is_valid(q) && checker.is_motion_valid(from, q, false)) {
         best = q;
         best_time = t;
       }
@@ -73,7 +75,7 @@ void aimAtQuickestGoal(std::vector<Config>& path, const sim::PoseGoal& goal,
 
 Planner::Planner(LatticeConfig config) : config_(std::move(config)) {}
 
-Planner::Escape Planner::escape(const Config& start, sim::CollisionChecker& checker,
+Planner::Escape Planner::escape(const JointVector& start, sim::CollisionChecker& checker,
                                 const sim::PlanQuery& query, sim::PlanStats& stats) {
   JointLattice graph(config_.modes.at(PlanMode::kEscape), checker, start, std::monostate{}, true);
   search::ZeroHeuristic zero;
@@ -103,36 +105,36 @@ Planner::Escape Planner::escape(const Config& start, sim::CollisionChecker& chec
 
 PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& checker) {
   const auto t0 = std::chrono::steady_clock::now();
-  const double cpu0 = sim::threadCpuSeconds();
+  const double cpu0 = sim::thread_cpu_seconds();
   const sim::RobotModel& robot = checker.robot();
-  if (const std::string err = sim::validateQuery(query, robot); !err.empty()) {
+  if (const std::string err = sim::validate_query(query, robot); !err.empty()) {
     return fail(PlanStatus::kInvalidRequest, err);
   }
   const sim::QueryScope scope(checker, query);
-  checker.resetStats();
+  checker.reset_stats();
   PlanResult result;
   auto finish = [&](PlanResult r) {
-    r.stats.planning_time_s = secondsSince(t0);
+    r.stats.planning_time_s = seconds_since(t0);
     r.stats.collision_checks = checker.stats().state_checks + checker.stats().sweep_checks;
     return r;
   };
 
   // Leave a start in collision first (M6), then plan from there.
-  std::vector<Config> prefix;
-  Config start = query.start;
-  if (!robot.withinLimits(start)) {
-    return finish(fail(PlanStatus::kStartInvalid, "start: " + checker.describeCollision(start)));
+  std::vector<JointVector> prefix;
+  JointVector start = query.start;
+  if (!robot.within_limits(start)) {
+    return finish(fail(PlanStatus::kStartInvalid, "start: " + checker.describe_collision(start)));
   }
-  if (query.mode == PlanMode::kEscape || !checker.isValid(start)) {
+  if (query.mode == PlanMode::kEscape || !checker.is_valid(start)) {
     if (query.mode != PlanMode::kEscape && !query.escape_if_start_invalid) {
       return finish(fail(PlanStatus::kStartInvalid,
-                         "start in collision: " + checker.describeCollision(start)));
+                         "start in collision: " + checker.describe_collision(start)));
     }
-    const std::string why = checker.describeCollision(start);
+    const std::string why = checker.describe_collision(start);
     Escape e = escape(start, checker, query, result.stats);
     result.stats.escaped = query.mode != PlanMode::kEscape || !why.empty();
-    result.stats.escape_time_s = secondsSince(t0);
-    result.stats.escape_cpu_s = sim::threadCpuSeconds() - cpu0;
+    result.stats.escape_time_s = seconds_since(t0);
+    result.stats.escape_cpu_s = sim::thread_cpu_seconds() - cpu0;
     if (e.status != PlanStatus::kSolved) {
       PlanResult r = fail(PlanStatus::kStartInvalid,
                           "start in collision (" + why + ") and no escape found: " + e.why);
@@ -144,9 +146,9 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
     if (query.mode == PlanMode::kEscape) {
       result.status = PlanStatus::kSolved;
       result.path = prefix;
-      result.stats.first_solution_s = secondsSince(t0);
-      result.stats.first_solution_cpu_s = sim::threadCpuSeconds() - cpu0;
-      result.trajectory = sim::Trajectory::fromWaypoints(result.path, robot.allLimits());
+      result.stats.first_solution_s = seconds_since(t0);
+      result.stats.first_solution_cpu_s = sim::thread_cpu_seconds() - cpu0;
+      result.trajectory = sim::Trajectory::from_waypoints(result.path, robot.all_limits());
       return finish(result);
     }
     prefix.pop_back();  // the query's path starts with this state
@@ -155,25 +157,25 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
   const ModeLattice& lattice = config_.modes.at(query.mode);
   // Goals that can be judged before searching.
   if (const auto* jg = std::get_if<sim::JointGoal>(&query.goal)) {
-    Config g = start;
+    JointVector g = start;
     for (int j : lattice.joints) g[j] = jg->q[j];
-    if (!checker.isValid(g))
-      return finish(fail(PlanStatus::kGoalInvalid, "goal: " + checker.describeCollision(g)));
+    if (!checker.is_valid(g))
+      return finish(fail(PlanStatus::kGoalInvalid, "goal: " + checker.describe_collision(g)));
   } else if (const auto* pg = std::get_if<sim::PoseGoal>(&query.goal);
              pg && query.mode != PlanMode::kArmBase) {
-    const auto sols = robot.armIk(pg->target, start);
+    const auto sols = robot.arm_ik(pg->target, start);
     if (sols.empty())
       return finish(fail(PlanStatus::kGoalInvalid, "goal: no arm IK solution within joint limits"));
     bool any = false;
-    for (const Config& q : sols) any = any || checker.isValid(q);
+    for (const JointVector& q : sols) any = any || checker.is_valid(q);
     if (!any) {
       return finish(fail(
           PlanStatus::kGoalInvalid,
-          "goal: every IK solution collides (" + checker.describeCollision(sols.front()) + ")"));
+          "goal: every IK solution collides (" + checker.describe_collision(sols.front()) + ")"));
     }
   }
 
-  const double remaining = query.time_limit_s - secondsSince(t0);
+  const double remaining = query.time_limit_s - seconds_since(t0);
   search::SearchOptions o;
   o.time_limit_s = std::max(0.0, remaining);
   if (query.max_expansions != 0) {
@@ -182,7 +184,7 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
     if (result.stats.expansions >= query.max_expansions) {
       result.status = PlanStatus::kTimeout;
       result.stats.budget_exhausted = true;
-      result.message = budgetMessage(query.max_expansions);
+      result.message = budget_message(query.max_expansions);
       return finish(result);
     }
     o.max_expansions = query.max_expansions - result.stats.expansions;
@@ -192,9 +194,9 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
   o.eps_final = query.eps_final;
   o.eps_decrement = query.eps_decrement;
   search::SearchResult sr;
-  std::vector<Config> path;
-  const double before = secondsSince(t0);
-  const double before_cpu = sim::threadCpuSeconds() - cpu0;
+  std::vector<JointVector> path;
+  const double before = seconds_since(t0);
+  const double before_cpu = sim::thread_cpu_seconds() - cpu0;
   if (query.mode == PlanMode::kArmCartesian) {
     LineLattice graph(lattice, checker, start, std::get<sim::PoseGoal>(query.goal));
     GraphHeuristic<LineLattice> h(graph);
@@ -202,9 +204,9 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
     o.eps_initial = o.eps_final = 1.0;
     sr = search_.search(graph, h, graph.start(), o);
     for (auto id : sr.path) path.push_back(graph.config(id));
-    if (sr.status != search::SearchStatus::kSolved && graph.brokenAt() >= 0) {
+    if (sr.status != search::SearchStatus::kSolved && graph.broken_at() >= 0) {
       result.message = "the line leaves the arm's reach or IK branch at " +
-                       std::to_string(graph.brokenAt() * lattice.resolution[0]) + " m";
+                       std::to_string(graph.broken_at() * lattice.resolution[0]) + " m";
     }
   } else {
     JointLattice graph(lattice, checker, start, query.goal, false);
@@ -221,7 +223,7 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
     result.status =
         sr.status == search::SearchStatus::kTimeout ? PlanStatus::kTimeout : PlanStatus::kNoPath;
     if (sr.budget_exhausted) {
-      result.message = budgetMessage(query.max_expansions);
+      result.message = budget_message(query.max_expansions);
     } else if (result.message.empty()) {
       result.message = sr.status == search::SearchStatus::kTimeout
                            ? "no solution within the time limit"
@@ -235,13 +237,13 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
   result.stats.cost = sr.cost;
   // The line must stay a line; elsewhere drop lattice detours.
   if (query.mode != PlanMode::kArmCartesian) {
-    path = sim::shortcutPath(path, checker);
+    path = sim::shortcut_path(path, checker);
     if (const auto* pg = std::get_if<sim::PoseGoal>(&query.goal))
-      aimAtQuickestGoal(path, *pg, lattice, checker);
+      aim_at_quickest_goal(path, *pg, lattice, checker);
   }
   result.path = prefix;
   result.path.insert(result.path.end(), path.begin(), path.end());
-  result.trajectory = sim::Trajectory::fromWaypoints(result.path, robot.allLimits());
+  result.trajectory = sim::Trajectory::from_waypoints(result.path, robot.all_limits());
   return finish(result);
 }
 

@@ -1,6 +1,6 @@
 // The ARA* lattice planner: one entry point for every mode.
 //
-//   plr::arastar::Planner planner(LatticeConfig::fromFile(".../unloader.yaml"));
+//   plr::arastar::Planner planner(LatticeConfig::from_file(".../unloader.yaml"));
 //   plr::sim::PlanResult r = planner.plan(query, checker);
 //
 // M1/M2/M3/M5 run ARA* on the joint lattice (ε from the query's schedule,
@@ -30,9 +30,9 @@ class Planner {
   struct Escape {
     sim::PlanStatus status = sim::PlanStatus::kNoPath;
     std::string why;  // when not solved
-    std::vector<sim::Config> path;
+    std::vector<sim::JointVector> path;
   };
-  Escape escape(const sim::Config& start, sim::CollisionChecker& checker,
+  Escape escape(const sim::JointVector& start, sim::CollisionChecker& checker,
                 const sim::PlanQuery& query, sim::PlanStats& stats);
 
   LatticeConfig config_;

@@ -17,9 +17,9 @@ class PlannerArastarNode : public plr::sim::PlannerNode {
   plr::Status on_configure() override {
     params().allow_only({"urdf", "primitives", "sample_dt"});
     // Throws "<file>: <cause>", which configure reports as invalid.
-    planner_ = std::make_unique<plr::arastar::Planner>(plr::arastar::LatticeConfig::fromFile(
+    planner_ = std::make_unique<plr::arastar::Planner>(plr::arastar::LatticeConfig::from_file(
         params().get<std::string>("primitives", PLR_ARASTAR_PRIMITIVES)));
-    return provideService("arastar");
+    return provide_service("arastar");
   }
 
   plr::Status on_cleanup() override {

@@ -20,14 +20,14 @@ namespace plr::ompl_planner {
 
 namespace ob = ompl::base;
 namespace og = ompl::geometric;
-using sim::Config;
+using sim::JointVector;
 using sim::PlanMode;
 using sim::PlanResult;
 using sim::PlanStatus;
 
 namespace {
 
-double secondsSince(std::chrono::steady_clock::time_point t0) {
+double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -43,14 +43,14 @@ class Mapping {
  public:
   virtual ~Mapping() = default;
   // False if the state has no configuration (M4: no IK).
-  virtual bool toConfig(const ob::State* s, Config& q) const = 0;
+  virtual bool to_joint_vector(const ob::State* s, JointVector& q) const = 0;
 };
 
 class JointMapping final : public Mapping {
  public:
-  JointMapping(std::vector<int> joints, const Config& fixed)
+  JointMapping(std::vector<int> joints, const JointVector& fixed)
       : joints_(std::move(joints)), fixed_(fixed) {}
-  bool toConfig(const ob::State* s, Config& q) const override {
+  bool to_joint_vector(const ob::State* s, JointVector& q) const override {
     const auto* v = s->as<ob::RealVectorStateSpace::StateType>();
     q = fixed_;
     for (std::size_t i = 0; i < joints_.size(); ++i) q[joints_[i]] = v->values[i];
@@ -59,22 +59,22 @@ class JointMapping final : public Mapping {
 
  private:
   std::vector<int> joints_;
-  Config fixed_;
+  JointVector fixed_;
 };
 
 // M4: progress s in [0, 1] along the plate's line; the IK solution nearest
 // to the start configuration keeps one branch along the line.
 class LineMapping final : public Mapping {
  public:
-  LineMapping(const sim::RobotModel& robot, const Config& start, const sim::PlateTarget& goal)
-      : robot_(robot), start_(start), from_(robot.plateTarget(start)), to_(goal) {
+  LineMapping(const sim::RobotModel& robot, const JointVector& start, const sim::PlateTarget& goal)
+      : robot_(robot), start_(start), from_(robot.plate_target(start)), to_(goal) {
     to_.yaw = from_.yaw + std::remainder(to_.yaw - from_.yaw, 2.0 * M_PI);
   }
-  bool toConfig(const ob::State* s, Config& q) const override {
+  bool to_joint_vector(const ob::State* s, JointVector& q) const override {
     const double t = s->as<ob::RealVectorStateSpace::StateType>()->values[0];
     const sim::PlateTarget p{from_.position + t * (to_.position - from_.position),
                              from_.yaw + t * (to_.yaw - from_.yaw)};
-    const auto sols = robot_.armIk(p, start_);
+    const auto sols = robot_.arm_ik(p, start_);
     if (sols.empty()) return false;
     q = sols.front();
     return true;
@@ -83,7 +83,7 @@ class LineMapping final : public Mapping {
 
  private:
   const sim::RobotModel& robot_;
-  Config start_;
+  JointVector start_;
   sim::PlateTarget from_, to_;
 };
 
@@ -92,8 +92,8 @@ class Validity final : public ob::StateValidityChecker {
   Validity(const ob::SpaceInformationPtr& si, const Mapping& map, const sim::CollisionChecker& cc)
       : ob::StateValidityChecker(si), map_(map), cc_(cc) {}
   bool isValid(const ob::State* s) const override {
-    Config q;
-    return map_.toConfig(s, q) && cc_.isValid(q);
+    JointVector q;
+    return map_.to_joint_vector(s, q) && cc_.is_valid(q);
   }
 
  private:
@@ -107,8 +107,9 @@ class Motion final : public ob::MotionValidator {
   Motion(const ob::SpaceInformationPtr& si, const Mapping& map, const sim::CollisionChecker& cc)
       : ob::MotionValidator(si), map_(map), cc_(cc) {}
   bool checkMotion(const ob::State* a, const ob::State* b) const override {
-    Config qa, qb;
-    const bool ok = map_.toConfig(a, qa) && map_.toConfig(b, qb) && cc_.isMotionValid(qa, qb);
+    JointVector qa, qb;
+    const bool ok =
+        map_.to_joint_vector(a, qa) && map_.to_joint_vector(b, qb) && cc_.is_motion_valid(qa, qb);
     if (ok) {
       ++valid_;
     } else {
@@ -148,7 +149,7 @@ class QueryHash {
     std::memcpy(bytes, &v, sizeof(T));
     for (unsigned char b : bytes) h_ = (h_ ^ b) * 1099511628211ull;
   }
-  void add(const Config& q) {
+  void add(const JointVector& q) {
     for (int i = 0; i < sim::kNumJoints; ++i) add(q[i]);
   }
   std::uint64_t value() const { return h_; }
@@ -157,7 +158,7 @@ class QueryHash {
   std::uint64_t h_ = 1469598103934665603ull;
 };
 
-std::uint32_t querySeed(const sim::PlanQuery& q, std::uint32_t seed) {
+std::uint32_t query_seed(const sim::PlanQuery& q, std::uint32_t seed) {
   QueryHash h;
   h.add(seed);
   h.add(static_cast<int>(q.mode));
@@ -178,12 +179,12 @@ std::uint32_t querySeed(const sim::PlanQuery& q, std::uint32_t seed) {
 }
 
 // Randomised shortcutting between points inside segments (what OMPL's
-// PathSimplifier::shortcutPath does), on the query's own generator. Lengths
+// PathSimplifier::shortcut_path does), on the query's own generator. Lengths
 // are joint-space distances scaled by velocity limits.
-std::vector<Config> randomShortcut(std::vector<Config> path, const sim::CollisionChecker& cc,
-                                   std::mt19937& rng) {
+std::vector<JointVector> random_shortcut(std::vector<JointVector> path,
+                                         const sim::CollisionChecker& cc, std::mt19937& rng) {
   const sim::RobotModel& robot = cc.robot();
-  auto dist = [&](const Config& a, const Config& b) {
+  auto dist = [&](const JointVector& a, const JointVector& b) {
     double s = 0.0;
     for (int j = 0; j < sim::kNumJoints; ++j) {
       const double d = (b[j] - a[j]) / robot.limits(j).velocity;
@@ -206,16 +207,16 @@ std::vector<Config> randomShortcut(std::vector<Config> path, const sim::Collisio
       seg = std::clamp<std::size_t>(seg, 1, path.size() - 1) - 1;
       const double len = acc[seg + 1] - acc[seg];
       const double f = len > 0.0 ? (s - acc[seg]) / len : 0.0;
-      return Config(path[seg] + f * (path[seg + 1] - path[seg]));
+      return JointVector(path[seg] + f * (path[seg + 1] - path[seg]));
     };
     std::size_t ia = 0, ib = 0;
-    const Config pa = at(a, ia), pb = at(b, ib);
-    if (ia == ib || !cc.isMotionValid(pa, pb)) {
+    const JointVector pa = at(a, ia), pb = at(b, ib);
+    if (ia == ib || !cc.is_motion_valid(pa, pb)) {
       ++failures;
       continue;
     }
     failures = 0;
-    std::vector<Config> next(path.begin(), path.begin() + static_cast<std::ptrdiff_t>(ia) + 1);
+    std::vector<JointVector> next(path.begin(), path.begin() + static_cast<std::ptrdiff_t>(ia) + 1);
     next.push_back(pa);
     next.push_back(pb);
     next.insert(next.end(), path.begin() + static_cast<std::ptrdiff_t>(ib) + 1, path.end());
@@ -233,9 +234,9 @@ Planner::Planner(const Options& options) : options_(options) {
 
 PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& checker) {
   const auto t0 = std::chrono::steady_clock::now();
-  const double cpu0 = sim::threadCpuSeconds();
+  const double cpu0 = sim::thread_cpu_seconds();
   const sim::RobotModel& robot = checker.robot();
-  if (const std::string err = sim::validateQuery(query, robot); !err.empty()) {
+  if (const std::string err = sim::validate_query(query, robot); !err.empty()) {
     return fail(PlanStatus::kInvalidRequest, err);
   }
   if (query.mode == PlanMode::kEscape) {
@@ -243,19 +244,19 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
                 "M6 escape is a Dijkstra search: use the ARA* planner");
   }
   const sim::QueryScope scope(checker, query);
-  checker.resetStats();
+  checker.reset_stats();
   auto finish = [&](PlanResult r) {
-    r.stats.planning_time_s = secondsSince(t0);
+    r.stats.planning_time_s = seconds_since(t0);
     r.stats.collision_checks = checker.stats().state_checks + checker.stats().sweep_checks;
     return r;
   };
-  if (!checker.isValid(query.start)) {
+  if (!checker.is_valid(query.start)) {
     return finish(
-        fail(PlanStatus::kStartInvalid, "start: " + checker.describeCollision(query.start)));
+        fail(PlanStatus::kStartInvalid, "start: " + checker.describe_collision(query.start)));
   }
 
   const bool line = query.mode == PlanMode::kArmCartesian;
-  const std::vector<int> joints = sim::plannedJoints(query.mode);
+  const std::vector<int> joints = sim::planned_joints(query.mode);
   const unsigned dims = line ? 1u : static_cast<unsigned>(joints.size());
   auto space = std::make_shared<ob::RealVectorStateSpace>(dims);
   ob::RealVectorBounds bounds(dims);
@@ -273,7 +274,7 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
     mapping = std::make_unique<JointMapping>(joints, query.start);
   }
   space->setBounds(bounds);
-  const std::uint32_t seed = querySeed(query, options_.seed);
+  const std::uint32_t seed = query_seed(query, options_.seed);
   space->setStateSamplerAllocator([seed, n = 0u](const ob::StateSpace* sp) mutable {
     return std::make_shared<SeededSampler>(sp, seed + n++);
   });
@@ -288,14 +289,14 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
   }
   si->setup();
 
-  auto toState = [&](const Config& q, ob::ScopedState<>& s) {
+  auto to_state = [&](const JointVector& q, ob::ScopedState<>& s) {
     for (unsigned i = 0; i < dims; ++i) s[i] = q[joints[i]];
   };
   ob::ScopedState<> start(space);
   if (line) {
     start[0] = 0.0;
   } else {
-    toState(query.start, start);
+    to_state(query.start, start);
   }
   auto pdef = std::make_shared<ob::ProblemDefinition>(si);
   pdef->addStartState(start);
@@ -307,12 +308,12 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
       return finish(fail(PlanStatus::kGoalInvalid, "goal: no valid IK at the line's end"));
     goals->addState(g);
   } else if (const auto* jg = std::get_if<sim::JointGoal>(&query.goal)) {
-    Config q = query.start;
+    JointVector q = query.start;
     for (int j : joints) q[j] = jg->q[j];
-    if (!checker.isValid(q))
-      return finish(fail(PlanStatus::kGoalInvalid, "goal: " + checker.describeCollision(q)));
+    if (!checker.is_valid(q))
+      return finish(fail(PlanStatus::kGoalInvalid, "goal: " + checker.describe_collision(q)));
     ob::ScopedState<> g(space);
-    toState(q, g);
+    to_state(q, g);
     goals->addState(g);
   } else {
     const auto& pg = std::get<sim::PoseGoal>(query.goal);
@@ -327,12 +328,12 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
       }
     }
     for (double b : bases) {
-      Config seed = query.start;
+      JointVector seed = query.start;
       seed[sim::kBaseX] = b;
-      for (const Config& q : robot.armIk(pg.target, seed)) {
-        if (!checker.isValid(q)) continue;
+      for (const JointVector& q : robot.arm_ik(pg.target, seed)) {
+        if (!checker.is_valid(q)) continue;
         ob::ScopedState<> g(space);
-        toState(q, g);
+        to_state(q, g);
         goals->addState(g);
       }
       if (goals->getStateCount() >= 8) break;
@@ -372,28 +373,28 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
                                 : "no solution within the time limit";
     return finish(result);
   }
-  result.stats.first_solution_s = secondsSince(t0);
-  result.stats.first_solution_cpu_s = sim::threadCpuSeconds() - cpu0;
+  result.stats.first_solution_s = seconds_since(t0);
+  result.stats.first_solution_cpu_s = sim::thread_cpu_seconds() - cpu0;
   auto& path = *pdef->getSolutionPath()->as<og::PathGeometric>();
-  std::vector<Config> configs;
+  std::vector<JointVector> configs;
   if (line) {
     // Densify to 1 cm of plate travel so the IK path follows the line.
     const double len = static_cast<const LineMapping&>(*mapping).length();
     path.interpolate(std::max(2u, static_cast<unsigned>(std::ceil(len / 0.01)) + 1));
   }
   for (std::size_t i = 0; i < path.getStateCount(); ++i) {
-    Config q;
-    if (!mapping->toConfig(path.getState(i), q))
+    JointVector q;
+    if (!mapping->to_joint_vector(path.getState(i), q))
       return finish(fail(PlanStatus::kNoPath, "lost IK on the line"));
     configs.push_back(q);
   }
   if (!line) {
     std::mt19937 rng(seed);
-    configs = sim::shortcutPath(randomShortcut(configs, checker, rng), checker);
+    configs = sim::shortcut_path(random_shortcut(configs, checker, rng), checker);
   }
   result.status = PlanStatus::kSolved;
   result.path = configs;
-  result.trajectory = sim::Trajectory::fromWaypoints(configs, robot.allLimits());
+  result.trajectory = sim::Trajectory::from_waypoints(configs, robot.all_limits());
   double cost = 0.0;
   for (std::size_t i = 1; i < configs.size(); ++i) {
     double t = 0.0;

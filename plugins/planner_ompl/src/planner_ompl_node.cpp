@@ -14,7 +14,7 @@ class PlannerOmplNode : public plr::sim::PlannerNode {
  protected:
   plr::Status on_configure() override {
     params().allow_only({"urdf", "sample_dt"});
-    return provideService("rrtconnect");
+    return provide_service("rrtconnect");
   }
 
   plr::sim::PlanResult plan(const plr::sim::PlanQuery& query,

@@ -32,8 +32,8 @@ constexpr double kStartTolerance = 1e-4;
 
 // Where the robot starts: base front edge at the trailer's open rear, arm
 // folded, nose raised (see docs/notes-planner.md).
-sim::Config home_configuration() {
-  sim::Config q;
+sim::JointVector home_configuration() {
+  sim::JointVector q;
   q << 0.0, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
   return q;
 }
@@ -53,7 +53,7 @@ class SimulatorNode : public Node {
     params().allow_only({"urdf", "octree_resolution", "control_period_s", "belt_speed",
                          "checkpoint_dir", "max_settle_s", "carry_max_s"});
     model_.emplace(
-        sim::RobotModel::fromUrdfFile(params().get<std::string>("urdf", PLR_UNLOADER_URDF)));
+        sim::RobotModel::from_urdf_file(params().get<std::string>("urdf", PLR_UNLOADER_URDF)));
     resolution_ = params().get<double>("octree_resolution", 0.05);
     period_ = params().get<double>("control_period_s", 0.01);
     belt_speed_ = params().get<double>("belt_speed", 0.8);
@@ -174,7 +174,7 @@ class SimulatorNode : public Node {
   }
 
   // Robot links and plate follow q; the belt runs while the conveyor is on.
-  void move_robot(const sim::Config& q, bool conveyor) {
+  void move_robot(const sim::JointVector& q, bool conveyor) {
     sim_->set_robot_links(sim::robot_link_geometry(*model_, q, conveyor ? belt_speed_ : 0.0));
     sim_->set_suction_plate(sim::suction_plate_at(*model_, q));
   }
@@ -225,13 +225,13 @@ class SimulatorNode : public Node {
 
   Status execute(const msg::ExecuteRequest& r, flatbuffers::FlatBufferBuilder& out) {
     if (!sim_) return make_error(PLR_ERR_STATE, "no world yet: call sim/reset first");
-    std::vector<std::pair<double, sim::Config>> points;
+    std::vector<std::pair<double, sim::JointVector>> points;
     if (const auto* traj = r.trajectory(); traj && traj->points()) {
       for (const auto* p : *traj->points()) {
         if (!p->positions() || p->positions()->size() != sim::kNumJoints)
           return make_error(PLR_ERR_INVALID,
                             "sim/execute: every trajectory point needs 8 positions");
-        sim::Config q;
+        sim::JointVector q;
         for (int i = 0; i < sim::kNumJoints; ++i) q[i] = p->positions()->Get(i);
         if (!points.empty() && p->time_s() < points.back().first)
           return make_error(PLR_ERR_INVALID, "sim/execute: trajectory times must not decrease");
@@ -256,7 +256,7 @@ class SimulatorNode : public Node {
     std::set<std::uint32_t> gripped;
     std::uint32_t contacts = 0;
     bool touching = false;
-    auto advance = [&](double dt, const sim::Config& q) {
+    auto advance = [&](double dt, const sim::JointVector& q) {
       move_robot(q, r.conveyor());
       sim_->step(dt);
       const bool now = touches_trailer();

@@ -13,7 +13,7 @@
 namespace plr::simulator {
 
 struct RobotState {
-  sim::Config q = sim::Config::Zero();
+  sim::JointVector q = sim::JointVector::Zero();
   std::vector<std::uint32_t> held;
 };
 

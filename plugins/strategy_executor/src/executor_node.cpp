@@ -54,7 +54,7 @@ struct Observed {
   Message<msg::WorldState> message;
   msg::WorldStateT state;
   sim::World world;
-  sim::Config q = sim::Config::Zero();
+  sim::JointVector q = sim::JointVector::Zero();
   std::vector<std::uint32_t> held;
   std::uint32_t unloaded = 0;
 };
@@ -198,7 +198,8 @@ class ExecutorNode : public plr::Node {
     if (grip_attempts_ == 0)
       return make_error(PLR_ERR_INVALID, "param 'grip_attempts': must be >= 1");
     try {
-      robot_ = sim::RobotModel::fromUrdfFile(params().get<std::string>("urdf", PLR_UNLOADER_URDF));
+      robot_ =
+          sim::RobotModel::from_urdf_file(params().get<std::string>("urdf", PLR_UNLOADER_URDF));
     } catch (const std::exception& e) {
       return make_error(PLR_ERR_INVALID, std::string("param 'urdf': ") + e.what());
     }
@@ -369,7 +370,7 @@ class ExecutorNode : public plr::Node {
                                       msg::Quat(q.x(), q.y(), q.z(), q.w()));
       req.has_goal_pose = true;
     } else if (mode != PlanMode::kEscape) {
-      sim::Config g = w.q;
+      sim::JointVector g = w.q;
       for (auto [j, v] : goal.joints) g[j] = v;
       req.goal_joints.assign(g.data(), g.data() + sim::kNumJoints);
     }
@@ -424,9 +425,9 @@ class ExecutorNode : public plr::Node {
                        const std::vector<std::uint32_t>& leave_out, ActionRun& run) {
     if (!goal.pose || (mode != PlanMode::kArm && mode != PlanMode::kArmBase))
       return plan_once(mode, w, goal, leave_out, run);
-    auto solutions = robot_.armIk(*goal.pose, w.q);
+    auto solutions = robot_.arm_ik(*goal.pose, w.q);
     std::erase_if(solutions,
-                  [&](const sim::Config& q) { return !follows_lines(robot_, q, goal.then); });
+                  [&](const sim::JointVector& q) { return !follows_lines(robot_, q, goal.then); });
     PlanResult p;
     p.message = goal.then.empty() ? "no arm IK solution for the goal pose"
                                   : "no arm IK solution for the goal pose from which the "
@@ -539,10 +540,10 @@ class ExecutorNode : public plr::Node {
   std::vector<std::uint32_t> boxes_on_nose(const Observed& w) const {
     constexpr double kTouch = 0.02;
     std::vector<Eigen::Isometry3d> poses;
-    robot_.forwardKinematics(w.q, poses);
+    robot_.forward_kinematics(w.q, poses);
     std::vector<sim::Bounds> nose;
     for (const char* name : {"nose_conveyor", "nose_scoop"}) {
-      const int l = robot_.linkIndex(name);
+      const int l = robot_.link_index(name);
       if (l < 0) continue;
       for (const auto& shape : robot_.links()[static_cast<std::size_t>(l)].shapes) {
         if (shape.type != sim::CollisionShape::Type::kBox) continue;
@@ -748,7 +749,7 @@ class ExecutorNode : public plr::Node {
     // first, on a straight line.
     {
       const Observed now = observe();
-      const sim::PlateTarget p = robot_.plateTarget(now.q);
+      const sim::PlateTarget p = robot_.plate_target(now.q);
       if (p.position.z() > carry_height_m_)
         step("lower", PlanMode::kArmCartesian,
              pose({{p.position.x(), p.position.y(), carry_height_m_}, p.yaw}), Suction::Keep,
@@ -1020,7 +1021,7 @@ class ExecutorNode : public plr::Node {
       sim::RenderOptions options;
       options.title = fmt::format("final scene: {} boxes left", w.world.boxes.size());
       std::vector<Eigen::Isometry3d> poses;
-      robot_.forwardKinematics(w.q, poses);
+      robot_.forward_kinematics(w.q, poses);
       for (std::size_t i = 0; i < robot_.links().size(); ++i) {
         for (const auto& shape : robot_.links()[i].shapes) {
           sim::Overlay o;

@@ -31,8 +31,9 @@ sim::Side side_of(double y, const sim::World& w, const sim::ObservationParams& o
   return y > band ? sim::Side::kLeft : (y < -band ? sim::Side::kRight : sim::Side::kCenter);
 }
 
-bool reachable(const sim::RobotModel& robot, const sim::PlateTarget& t, const sim::Config& seed) {
-  return !robot.armIk(t, seed).empty();
+bool reachable(const sim::RobotModel& robot, const sim::PlateTarget& t,
+               const sim::JointVector& seed) {
+  return !robot.arm_ik(t, seed).empty();
 }
 
 }  // namespace
@@ -53,7 +54,7 @@ int covered_cups(const Geometry& g, double half_across, double half_up, double a
 std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::SceneAnalysis& scene,
                                            sim::Action action, const sim::ObservationParams& obs,
                                            const sim::RobotModel& robot, const Geometry& g,
-                                           const sim::Config& current, std::size_t max_count,
+                                           const sim::JointVector& current, std::size_t max_count,
                                            const std::unordered_set<std::uint32_t>& most_cups) {
   std::unordered_set<std::uint32_t> wall(scene.first_wall.begin(), scene.first_wall.end());
   std::unordered_set<std::uint32_t> front(scene.front_pile.begin(), scene.front_pile.end());
@@ -120,7 +121,7 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
             ? face.x() - g.pregrasp_distance - g.conveyor_length - g.nose_clearance
             : by_reach;
     const double base_x = std::min({by_reach, by_nose, by_plate});
-    sim::Config at = current;
+    sim::JointVector at = current;
     at[sim::kBaseX] = base_x;
     // The plate is wider than many boxes: the corridor it moves through to
     // the face must be clear of every other box. Where a neighbour is in the
@@ -248,7 +249,7 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
 std::vector<sim::PlateTarget> dropoff_targets(const sim::World& world,
                                               const std::vector<std::uint32_t>& held,
                                               const sim::RobotModel& robot, const Geometry& g,
-                                              const sim::Config& at, std::size_t max_count) {
+                                              const sim::JointVector& at, std::size_t max_count) {
   // The held load's extents: along the plate's normal (depth: it sticks out
   // of the plate by that much), across it, and its height.
   double depth = 0.3, across = 0.3, height = 0.3;
@@ -263,7 +264,7 @@ std::vector<sim::PlateTarget> dropoff_targets(const sim::World& world,
   // yaw axis, which folds the forearm over the plate; turned sideways the
   // wrist stands beside the box and the arm reaches further out. Sideways
   // first, the wrist on the side the plate comes from.
-  const double side = robot.plateTarget(at).position.y() < 0 ? 1.0 : -1.0;
+  const double side = robot.plate_target(at).position.y() < 0 ? 1.0 : -1.0;
   std::vector<sim::PlateTarget> out;
   const double base_x = at[sim::kBaseX];
   // The folded arm cannot bend enough to reach right over the nose hinge,
@@ -286,18 +287,18 @@ std::vector<sim::PlateTarget> dropoff_targets(const sim::World& world,
   return out;
 }
 
-bool follows_lines(const sim::RobotModel& robot, const sim::Config& from,
+bool follows_lines(const sim::RobotModel& robot, const sim::JointVector& from,
                    const std::vector<sim::PlateTarget>& through) {
   constexpr double kStep = 0.01, kMaxJump = 0.25;  // as the planner's M4 lattice
-  sim::Config q = from;
+  sim::JointVector q = from;
   for (const auto& to : through) {
-    const sim::PlateTarget start = robot.plateTarget(q);
+    const sim::PlateTarget start = robot.plate_target(q);
     const double yaw_change = std::remainder(to.yaw - start.yaw, 2.0 * M_PI);
     const int n =
         std::max(1, static_cast<int>(std::ceil((to.position - start.position).norm() / kStep)));
     for (int k = 1; k <= n; ++k) {
       const double s = static_cast<double>(k) / n;
-      const auto sols = robot.armIk(
+      const auto sols = robot.arm_ik(
           {start.position + s * (to.position - start.position), start.yaw + s * yaw_change}, q);
       if (sols.empty() || (sols.front() - q).cwiseAbs().maxCoeff() > kMaxJump) return false;
       q = sols.front();
@@ -308,7 +309,7 @@ bool follows_lines(const sim::RobotModel& robot, const sim::Config& from,
 
 std::optional<SweepPlan> sweep_plan(const sim::SceneAnalysis& scene, sim::Action action,
                                     const Geometry& g, double scoop_extension,
-                                    const sim::Config& current, double trailer_depth) {
+                                    const sim::JointVector& current, double trailer_depth) {
   if (scene.front_pile.empty()) return std::nullopt;
   const double tip = g.conveyor_length + scoop_extension + g.scoop_lip;  // ahead of base_x
   SweepPlan p;

@@ -63,7 +63,7 @@ struct PickCandidate {
 std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::SceneAnalysis& scene,
                                            sim::Action action, const sim::ObservationParams& obs,
                                            const sim::RobotModel& robot, const Geometry& g,
-                                           const sim::Config& current, std::size_t max_count,
+                                           const sim::JointVector& current, std::size_t max_count,
                                            const std::unordered_set<std::uint32_t>& most_cups = {});
 
 // Where the plate may release held boxes over the nose, for a base at
@@ -72,14 +72,14 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
 std::vector<sim::PlateTarget> dropoff_targets(const sim::World& world,
                                               const std::vector<std::uint32_t>& held,
                                               const sim::RobotModel& robot, const Geometry& g,
-                                              const sim::Config& at, std::size_t max_count);
+                                              const sim::JointVector& at, std::size_t max_count);
 
 // Whether the plate, starting at `from`, can follow straight lines through
 // each of `through` in turn with the arm's IK on one branch all the way (no
 // joint jumping between 1 cm steps): what the planner's straight-line mode
 // (M4) needs. An IK solution for a pre-grasp that fails this leads into an
 // approach or retract that cannot be planned.
-bool follows_lines(const sim::RobotModel& robot, const sim::Config& from,
+bool follows_lines(const sim::RobotModel& robot, const sim::JointVector& from,
                    const std::vector<sim::PlateTarget>& through);
 
 struct SweepPlan {
@@ -93,6 +93,6 @@ struct SweepPlan {
 // the first wall behind the pile, and of the trailer's front wall.
 std::optional<SweepPlan> sweep_plan(const sim::SceneAnalysis& scene, sim::Action action,
                                     const Geometry& g, double scoop_extension,
-                                    const sim::Config& current, double trailer_depth);
+                                    const sim::JointVector& current, double trailer_depth);
 
 }  // namespace plr::executor

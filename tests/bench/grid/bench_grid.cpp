@@ -36,8 +36,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const auto map = plr::search::loadGridMap(map_path);
-    const auto queries = plr::search::loadScenario(scen_path);
+    const auto map = plr::search::load_grid_map(map_path);
+    const auto queries = plr::search::load_scenario(scen_path);
     plr::search::GridGraph graph(map);
     plr::search::OctileHeuristic h(map);
     plr::search::AraStar search;
@@ -47,8 +47,8 @@ int main(int argc, char** argv) {
     double worst_ratio = 1.0;
     const auto t0 = std::chrono::steady_clock::now();
     for (const auto& q : queries) {
-      graph.setGoal(q.goal_x, q.goal_y);
-      h.setGoal(q.goal_x, q.goal_y);
+      graph.set_goal(q.goal_x, q.goal_y);
+      h.set_goal(q.goal_x, q.goal_y);
       const auto r = search.search(graph, h, graph.id(q.start_x, q.start_y), opt);
       expansions += r.expansions;
       if (r.status != plr::search::SearchStatus::kSolved) continue;

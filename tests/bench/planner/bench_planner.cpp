@@ -36,13 +36,13 @@ const std::map<PlanMode, double> kPaperMs = {
 
 std::map<std::string, int> g_skipped;  // pick queries not generated, by reason
 
-Config home(double base) {
-  Config q;
+JointVector home(double base) {
+  JointVector q;
   q << base, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
   return q;
 }
 
-Config withNose(Config q, double lift, double pitch, double ext) {
+JointVector with_nose(JointVector q, double lift, double pitch, double ext) {
   q[kNose1] = lift;
   q[kNose2] = pitch;
   q[kNose3] = ext;
@@ -66,7 +66,8 @@ Eigen::AlignedBox3d aabb(const Box& b) {
   return out;
 }
 
-PlanQuery poseQuery(PlanMode mode, const Config& start, const Eigen::Vector3d& p, double yaw) {
+PlanQuery pose_query(PlanMode mode, const JointVector& start, const Eigen::Vector3d& p,
+                     double yaw) {
   PlanQuery q;
   q.mode = mode;
   q.start = start;
@@ -76,7 +77,7 @@ PlanQuery poseQuery(PlanMode mode, const Config& start, const Eigen::Vector3d& p
   return q;
 }
 
-PlanQuery jointQuery(PlanMode mode, const Config& start, const Config& goal) {
+PlanQuery joint_query(PlanMode mode, const JointVector& start, const JointVector& goal) {
   PlanQuery q;
   q.mode = mode;
   q.start = start;
@@ -87,11 +88,11 @@ PlanQuery jointQuery(PlanMode mode, const Config& start, const Config& goal) {
 }
 
 // First collision-free IK solution (with held/ignored boxes of `scope_q`).
-bool solveIk(CollisionChecker& cc, const PlanQuery& scope_q, const PlateTarget& t,
-             const Config& seed, Config& out) {
+bool solve_ik(CollisionChecker& cc, const PlanQuery& scope_q, const PlateTarget& t,
+              const JointVector& seed, JointVector& out) {
   const QueryScope scope(cc, scope_q);
-  for (const Config& q : cc.robot().armIk(t, seed)) {
-    if (cc.isValid(q)) {
+  for (const JointVector& q : cc.robot().arm_ik(t, seed)) {
+    if (cc.is_valid(q)) {
       out = q;
       return true;
     }
@@ -99,19 +100,19 @@ bool solveIk(CollisionChecker& cc, const PlanQuery& scope_q, const PlateTarget& 
   return false;
 }
 
-bool startValid(CollisionChecker& cc, const PlanQuery& q) {
+bool start_valid(CollisionChecker& cc, const PlanQuery& q) {
   const QueryScope scope(cc, q);
-  return cc.isValid(q.start);
+  return cc.is_valid(q.start);
 }
 
 // Executor-like queries for one scene: picks of front boxes and a sweep.
-void makeQueries(Scene& s, std::mt19937_64& rng, int picks) {
+void make_queries(Scene& s, std::mt19937_64& rng, int picks) {
   CollisionChecker& cc = *s.checker;
   double front = s.world.trailer.depth;
   for (const Box& b : s.world.boxes) front = std::min(front, aabb(b).min().x());
   const double b0 = front - 1.35;
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  const Config nose_down = withNose(home(b0), 0.0, 0.05, 0.3);
+  const JointVector nose_down = with_nose(home(b0), 0.0, 0.05, 0.3);
 
   // Boxes whose front face is exposed: nothing in front of them.
   std::vector<const Box*> exposed;
@@ -132,14 +133,14 @@ void makeQueries(Scene& s, std::mt19937_64& rng, int picks) {
   if (exposed.empty()) return;
 
   // Nose and base moves of Pick and Sweep.
-  s.queries.push_back(jointQuery(PlanMode::kNose, home(b0), nose_down));
-  s.queries.push_back(jointQuery(PlanMode::kNose, nose_down, home(b0)));
-  s.queries.push_back(jointQuery(PlanMode::kNose, home(b0 - 0.5),
-                                 withNose(home(b0 - 0.5), 0.1 * u(rng), 0.05, 0.5)));
-  s.queries.push_back(jointQuery(PlanMode::kBaseLine, home(b0), home(b0 - 0.4 - 0.8 * u(rng))));
-  s.queries.push_back(jointQuery(PlanMode::kBaseLine, home(b0 - 1.0), home(b0 - 0.05 * u(rng))));
+  s.queries.push_back(joint_query(PlanMode::kNose, home(b0), nose_down));
+  s.queries.push_back(joint_query(PlanMode::kNose, nose_down, home(b0)));
+  s.queries.push_back(joint_query(PlanMode::kNose, home(b0 - 0.5),
+                                  with_nose(home(b0 - 0.5), 0.1 * u(rng), 0.05, 0.5)));
+  s.queries.push_back(joint_query(PlanMode::kBaseLine, home(b0), home(b0 - 0.4 - 0.8 * u(rng))));
+  s.queries.push_back(joint_query(PlanMode::kBaseLine, home(b0 - 1.0), home(b0 - 0.05 * u(rng))));
   s.queries.push_back(
-      jointQuery(PlanMode::kBaseLine, nose_down, withNose(home(b0 - 1.5), 0.0, 0.05, 0.3)));
+      joint_query(PlanMode::kBaseLine, nose_down, with_nose(home(b0 - 1.5), 0.0, 0.05, 0.3)));
 
   for (int k = 0; k < picks; ++k) {
     const Box& box = *exposed[static_cast<std::size_t>(u(rng) * exposed.size()) % exposed.size()];
@@ -148,63 +149,63 @@ void makeQueries(Scene& s, std::mt19937_64& rng, int picks) {
     const double far = b0 - 0.3 - 0.7 * u(rng);
     PlanQuery scope;  // target box ignored while approaching
     scope.ignored_boxes = {box.id};
-    Config pre, contact, back;
+    JointVector pre, contact, back;
     // The wrist turns the plate square to the face: stop it 1.2 cm short.
     const Eigen::Vector3d touch = face - Eigen::Vector3d(0.012, 0, 0);
     const PlateTarget pre_t{touch - Eigen::Vector3d(0.15, 0, 0), 0.0};
-    if (!solveIk(cc, PlanQuery{}, pre_t, nose_down, pre)) {
+    if (!solve_ik(cc, PlanQuery{}, pre_t, nose_down, pre)) {
       ++g_skipped["pre-grasp IK"];
       continue;
     }
-    if (!solveIk(cc, scope, {touch, 0.0}, pre, contact)) {
+    if (!solve_ik(cc, scope, {touch, 0.0}, pre, contact)) {
       ++g_skipped["contact IK"];
       continue;
     }
     // M2: from home (further back, nose down) to the pre-grasp pose.
     s.queries.push_back(
-        poseQuery(PlanMode::kArmBase, withNose(home(far), 0.0, 0.05, 0.3), pre_t.position, 0.0));
+        pose_query(PlanMode::kArmBase, with_nose(home(far), 0.0, 0.05, 0.3), pre_t.position, 0.0));
     // M1: arm alone to the pre-grasp pose.
-    s.queries.push_back(poseQuery(PlanMode::kArm, nose_down, pre_t.position, 0.0));
+    s.queries.push_back(pose_query(PlanMode::kArm, nose_down, pre_t.position, 0.0));
     // M4 approach (target ignored) and retract holding it.
-    PlanQuery approach = poseQuery(PlanMode::kArmCartesian, pre, touch, 0.0);
+    PlanQuery approach = pose_query(PlanMode::kArmCartesian, pre, touch, 0.0);
     approach.ignored_boxes = {box.id};
     s.queries.push_back(approach);
     PlanQuery held_scope;
     held_scope.held_boxes = {box};
     held_scope.start = contact;
     const Eigen::Vector3d back_p = touch - Eigen::Vector3d(0.35, 0, 0);
-    if (!solveIk(cc, held_scope, {back_p, 0.0}, contact, back)) {
+    if (!solve_ik(cc, held_scope, {back_p, 0.0}, contact, back)) {
       ++g_skipped["retract IK"];
       continue;
     }
-    PlanQuery retract = poseQuery(PlanMode::kArmCartesian, contact, back_p, 0.0);
+    PlanQuery retract = pose_query(PlanMode::kArmCartesian, contact, back_p, 0.0);
     retract.held_boxes = {box};
-    if (startValid(cc, retract)) s.queries.push_back(retract);
+    if (start_valid(cc, retract)) s.queries.push_back(retract);
     // M1: drop-off over the nose, holding the box in front of the plate.
     const Eigen::Vector3d drop_p(b0 + 0.6 - bb.sizes().x() / 2, 0.0, 0.55 + bb.sizes().z() / 2);
-    PlanQuery drop = poseQuery(PlanMode::kArm, back, drop_p, 0.0);
+    PlanQuery drop = pose_query(PlanMode::kArm, back, drop_p, 0.0);
     drop.held_boxes = {box};
     drop.start = back;
-    Config drop_q;
-    if (solveIk(cc, drop, {drop_p, 0.0}, back, drop_q)) s.queries.push_back(drop);
+    JointVector drop_q;
+    if (solve_ik(cc, drop, {drop_p, 0.0}, back, drop_q)) s.queries.push_back(drop);
     // M1: back home from the drop-off.
-    Config dropped;
+    JointVector dropped;
     held_scope.start = back;
-    if (solveIk(cc, PlanQuery{}, {drop_p, 0.0}, back, dropped)) {
-      s.queries.push_back(jointQuery(PlanMode::kArm, dropped, nose_down));
+    if (solve_ik(cc, PlanQuery{}, {drop_p, 0.0}, back, dropped)) {
+      s.queries.push_back(joint_query(PlanMode::kArm, dropped, nose_down));
     }
     // M6: drive forward from the pre-grasp pose until the first contact,
     // then 8 mm further (light contact): an escape, and an M1 query that has
     // to escape first.
-    Config pressed = pre;
-    while (cc.isValid(pressed) && pressed[kBaseX] < pre[kBaseX] + 0.3) pressed[kBaseX] += 0.002;
+    JointVector pressed = pre;
+    while (cc.is_valid(pressed) && pressed[kBaseX] < pre[kBaseX] + 0.3) pressed[kBaseX] += 0.002;
     pressed[kBaseX] += 0.008;
-    if (!cc.isValid(pressed)) {
+    if (!cc.is_valid(pressed)) {
       PlanQuery esc;
       esc.mode = PlanMode::kEscape;
       esc.start = pressed;
       s.queries.push_back(esc);
-      PlanQuery home_from_contact = jointQuery(PlanMode::kArm, pressed, nose_down);
+      PlanQuery home_from_contact = joint_query(PlanMode::kArm, pressed, nose_down);
       s.queries.push_back(home_from_contact);
     }
   }
@@ -255,8 +256,8 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  const RobotModel robot = RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
-  plr::arastar::Planner arastar(plr::arastar::LatticeConfig::fromFile(primitives));
+  const RobotModel robot = RobotModel::from_urdf_file(PLR_UNLOADER_URDF);
+  plr::arastar::Planner arastar(plr::arastar::LatticeConfig::from_file(primitives));
   plr::ompl_planner::Planner rrt({0.0, static_cast<std::uint32_t>(seed)});
 
   std::mt19937_64 rng(seed);
@@ -269,7 +270,7 @@ int main(int argc, char** argv) {
     s.name = std::string(wall ? "A1" : "B1") + "/" + std::to_string(seed * 100 + i);
     std::shared_ptr<const octomap::OcTree> tree = build_trailer_octree(s.world.trailer);
     s.checker = std::make_unique<CollisionChecker>(robot, s.world, tree);
-    makeQueries(s, rng, picks);
+    make_queries(s, rng, picks);
     scenes.push_back(std::move(s));
   }
 
@@ -281,14 +282,14 @@ int main(int argc, char** argv) {
       q.max_expansions = budget;
       double exec[2] = {NAN, NAN};
       for (int p = 0; p < 2; ++p) {
-        if (p == 1 && (q.mode == PlanMode::kEscape || !startValid(*s.checker, q))) continue;
+        if (p == 1 && (q.mode == PlanMode::kEscape || !start_valid(*s.checker, q))) continue;
         const PlanResult r = p == 0 ? arastar.plan(q, *s.checker) : rrt.plan(q, *s.checker);
         if (verbose) {
           std::fprintf(stderr,
                        "%s %s %-10s %s: first %.2f ms cpu %.2f ms, %zu exp, %llu checks, %zu wp, "
                        "exec %.2f s %s\n",
-                       s.name.c_str(), toString(q.mode), p == 0 ? "ARA*" : "RRTConnect",
-                       toString(r.status), 1e3 * r.stats.first_solution_s,
+                       s.name.c_str(), to_string(q.mode), p == 0 ? "ARA*" : "RRTConnect",
+                       to_string(r.status), 1e3 * r.stats.first_solution_s,
                        1e3 * r.stats.first_solution_cpu_s, r.stats.expansions,
                        static_cast<unsigned long long>(r.stats.collision_checks), r.path.size(),
                        r.trajectory.duration(), r.message.c_str());
@@ -298,7 +299,7 @@ int main(int argc, char** argv) {
         ++row.queries;
         if (r.status != PlanStatus::kSolved) {
           ++row.failures;
-          ++row.why[std::string(toString(r.status)) + ": " + r.message.substr(0, 60)];
+          ++row.why[std::string(to_string(r.status)) + ": " + r.message.substr(0, 60)];
           continue;
         }
         if (p == 0 && r.stats.escaped && q.mode != PlanMode::kEscape) {
@@ -344,7 +345,7 @@ int main(int argc, char** argv) {
       const double paper = kPaperMs.at(mode);
       if (json) {
         out.push_back(
-            {{"mode", toString(mode)},
+            {{"mode", to_string(mode)},
              {"planner", planner},
              {"queries", row.queries},
              {"failures", row.failures},
@@ -362,7 +363,7 @@ int main(int argc, char** argv) {
         const double n = std::max<double>(1.0, row.first_ms.size());
         std::printf(
             "%-13s %-22s %7d %5d %9.3f %9.3f %9.3f %9.3f %8.2f %8.2f %8.0f %8.0f %9.1f %9.2f\n",
-            toString(mode), planner.c_str(), row.queries, row.failures, med, p95, cmed, cp95,
+            to_string(mode), planner.c_str(), row.queries, row.failures, med, p95, cmed, cp95,
             cp95 / cmed, exec, row.expansions / n, row.checks / n, paper, paper / 10.0);
         for (const auto& [w, n] : row.why) std::printf("%38s %dx %s\n", "", n, w.c_str());
       }
@@ -372,10 +373,10 @@ int main(int argc, char** argv) {
   for (auto& [mode, v] : exec_ratio) {
     const double med = percentile(v, 0.5), worst = *std::max_element(v.begin(), v.end());
     if (json) {
-      ratios[toString(mode)] = {{"median", med}, {"max", worst}, {"pairs", v.size()}};
+      ratios[to_string(mode)] = {{"median", med}, {"max", worst}, {"pairs", v.size()}};
     } else {
       std::printf("exec time ARA*/RRTConnect %-13s median %.2f  max %.2f  (%zu pairs)\n",
-                  toString(mode), med, worst, v.size());
+                  to_string(mode), med, worst, v.size());
     }
   }
   if (json)

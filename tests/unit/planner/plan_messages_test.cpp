@@ -23,10 +23,11 @@ flatbuffers::FlatBufferBuilder request(std::uint64_t budget) {
 
 TEST(PlanMessages, ExpansionBudgetIsDecoded) {
   const auto fbb = request(1234);
-  const auto d = decodePlanRequest(*flatbuffers::GetRoot<msg::PlanRequest>(fbb.GetBufferPointer()));
+  const auto d =
+      decode_plan_request(*flatbuffers::GetRoot<msg::PlanRequest>(fbb.GetBufferPointer()));
   EXPECT_EQ(d.query.max_expansions, 1234u);
   const auto none = request(0);
-  EXPECT_EQ(decodePlanRequest(*flatbuffers::GetRoot<msg::PlanRequest>(none.GetBufferPointer()))
+  EXPECT_EQ(decode_plan_request(*flatbuffers::GetRoot<msg::PlanRequest>(none.GetBufferPointer()))
                 .query.max_expansions,
             0u);
 }
@@ -40,7 +41,7 @@ TEST(PlanMessages, StopReasonsAndEscapeTimeAreEncoded) {
   r.stats.escaped = true;
   r.stats.escape_time_s = 0.004;
   flatbuffers::FlatBufferBuilder fbb;
-  encodePlanResponse(r, "arastar", 0.02, fbb);
+  encode_plan_response(r, "arastar", 0.02, fbb);
   const auto* m = flatbuffers::GetRoot<msg::PlanResponse>(fbb.GetBufferPointer());
   EXPECT_EQ(m->status(), msg::PlanStatus::Timeout);
   EXPECT_EQ(m->message()->str(), r.message);

@@ -19,12 +19,12 @@ using namespace plr::sim;
 namespace {
 
 const RobotModel& robot() {
-  static const RobotModel m = RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
+  static const RobotModel m = RobotModel::from_urdf_file(PLR_UNLOADER_URDF);
   return m;
 }
 
-Config home(double base) {
-  Config q;
+JointVector home(double base) {
+  JointVector q;
   q << base, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
   return q;
 }
@@ -52,11 +52,12 @@ const Box& at(const World& w, int r, int c) {
 }
 
 plr::arastar::Planner& arastar() {
-  static plr::arastar::Planner p(plr::arastar::LatticeConfig::fromFile(PLR_ARASTAR_PRIMITIVES));
+  static plr::arastar::Planner p(plr::arastar::LatticeConfig::from_file(PLR_ARASTAR_PRIMITIVES));
   return p;
 }
 
-PlanQuery poseQuery(PlanMode mode, const Config& start, const Eigen::Vector3d& p, double yaw) {
+PlanQuery pose_query(PlanMode mode, const JointVector& start, const Eigen::Vector3d& p,
+                     double yaw) {
   PlanQuery q;
   q.mode = mode;
   q.start = start;
@@ -66,7 +67,7 @@ PlanQuery poseQuery(PlanMode mode, const Config& start, const Eigen::Vector3d& p
   return q;
 }
 
-PlanQuery jointQuery(PlanMode mode, const Config& start, const Config& goal) {
+PlanQuery joint_query(PlanMode mode, const JointVector& start, const JointVector& goal) {
   PlanQuery q;
   q.mode = mode;
   q.start = start;
@@ -79,8 +80,8 @@ PlanQuery jointQuery(PlanMode mode, const Config& start, const Config& goal) {
 // Independent re-check: samples the trajectory every 2 ms and collides every
 // link box/cylinder with every world box and the trailer's inner walls as
 // half-spaces with FCL directly (no octree, no sweeps, no caches).
-std::string denseCollision(const Trajectory& traj, const World& world,
-                           const std::vector<std::uint32_t>& ignored) {
+std::string dense_collision(const Trajectory& traj, const World& world,
+                            const std::vector<std::uint32_t>& ignored) {
   const RobotModel& m = robot();
   std::vector<std::pair<std::shared_ptr<fcl::CollisionGeometryd>, std::uint32_t>> boxes;
   for (const Box& b : world.boxes) {
@@ -97,8 +98,8 @@ std::string denseCollision(const Trajectory& traj, const World& world,
       std::make_shared<fcl::Halfspaced>(Eigen::Vector3d(-1, 0, 0), -world.trailer.depth - 1e-3)};
   std::vector<Eigen::Isometry3d> poses;
   for (double t = 0.0;; t += 0.002) {
-    const Config q = traj.sample(std::min(t, traj.duration())).position;
-    m.forwardKinematics(q, poses);
+    const JointVector q = traj.sample(std::min(t, traj.duration())).position;
+    m.forward_kinematics(q, poses);
     for (std::size_t l = 0; l < m.links().size(); ++l) {
       for (const CollisionShape& s : m.links()[l].shapes) {
         std::shared_ptr<fcl::CollisionGeometryd> g;
@@ -148,8 +149,8 @@ std::string denseCollision(const Trajectory& traj, const World& world,
   return {};
 }
 
-void expectWithinLimits(const Trajectory& traj) {
-  const Limits& lim = robot().allLimits();
+void expect_within_limits(const Trajectory& traj) {
+  const Limits& lim = robot().all_limits();
   for (const auto& [t, s] : traj.sampled(0.005)) {
     for (int j = 0; j < kNumJoints; ++j) {
       EXPECT_GE(s.position[j], lim[j].lower - 1e-9) << kJointNames[j] << " t=" << t;
@@ -174,17 +175,17 @@ class Planners : public ::testing::TestWithParam<int> {
 TEST_P(Planners, ArmToPreGraspIsCollisionFreeAndWithinLimits) {
   const World w = wall(4.0);
   CollisionChecker cc(robot(), w);
-  const Config start = home(4.0 - 1.35);
+  const JointVector start = home(4.0 - 1.35);
   // Plate 15 cm in front of a box's face (row 2, column 1), square to it.
   const Eigen::Vector3d target(3.85, at(w, 2, 1).pose.translation().y(),
                                at(w, 2, 1).pose.translation().z());
-  const PlanResult r = plan(poseQuery(PlanMode::kArm, start, target, 0.0), cc);
+  const PlanResult r = plan(pose_query(PlanMode::kArm, start, target, 0.0), cc);
   ASSERT_EQ(r.status, PlanStatus::kSolved) << r.message;
   EXPECT_EQ(r.path.front(), start);
-  const PlateTarget reached = robot().plateTarget(r.path.back());
+  const PlateTarget reached = robot().plate_target(r.path.back());
   EXPECT_LT((reached.position - target).norm(), 0.005 + 1e-6);
-  EXPECT_EQ(denseCollision(r.trajectory, w, {}), "");
-  expectWithinLimits(r.trajectory);
+  EXPECT_EQ(dense_collision(r.trajectory, w, {}), "");
+  expect_within_limits(r.trajectory);
   // Only arm joints moved.
   for (int j : {kBaseX, kNose1, kNose2, kNose3}) EXPECT_EQ(r.path.back()[j], start[j]);
 }
@@ -192,34 +193,34 @@ TEST_P(Planners, ArmToPreGraspIsCollisionFreeAndWithinLimits) {
 TEST_P(Planners, ArmAndBaseReachFromFarBack) {
   const World w = wall(5.0);
   CollisionChecker cc(robot(), w);
-  const Config start = home(2.0);
+  const JointVector start = home(2.0);
   const Eigen::Vector3d target(4.85, 0.4, 1.8);
-  const PlanResult r = plan(poseQuery(PlanMode::kArmBase, start, target, 0.0), cc);
+  const PlanResult r = plan(pose_query(PlanMode::kArmBase, start, target, 0.0), cc);
   ASSERT_EQ(r.status, PlanStatus::kSolved) << r.message;
   EXPECT_GT(r.path.back()[kBaseX], start[kBaseX] + 0.3);  // had to drive
-  EXPECT_EQ(denseCollision(r.trajectory, w, {}), "");
-  expectWithinLimits(r.trajectory);
+  EXPECT_EQ(dense_collision(r.trajectory, w, {}), "");
+  expect_within_limits(r.trajectory);
 }
 
 TEST_P(Planners, NoseDownAndBaseLine) {
   const World w = wall(6.0);
   CollisionChecker cc(robot(), w);
-  Config down = home(4.0);
+  JointVector down = home(4.0);
   down[kNose1] = 0.0;
   down[kNose2] = 0.05;
   down[kNose3] = 0.3;
-  const PlanResult nose = plan(jointQuery(PlanMode::kNose, home(4.0), down), cc);
+  const PlanResult nose = plan(joint_query(PlanMode::kNose, home(4.0), down), cc);
   ASSERT_EQ(nose.status, PlanStatus::kSolved) << nose.message;
   EXPECT_LT((nose.path.back() - down).cwiseAbs().maxCoeff(), 1e-3);
-  EXPECT_EQ(denseCollision(nose.trajectory, w, {}), "");
-  expectWithinLimits(nose.trajectory);
+  EXPECT_EQ(dense_collision(nose.trajectory, w, {}), "");
+  expect_within_limits(nose.trajectory);
 
-  Config back = down;
+  JointVector back = down;
   back[kBaseX] = 2.5;
-  const PlanResult base = plan(jointQuery(PlanMode::kBaseLine, down, back), cc);
+  const PlanResult base = plan(joint_query(PlanMode::kBaseLine, down, back), cc);
   ASSERT_EQ(base.status, PlanStatus::kSolved) << base.message;
-  EXPECT_EQ(denseCollision(base.trajectory, w, {}), "");
-  expectWithinLimits(base.trajectory);
+  EXPECT_EQ(dense_collision(base.trajectory, w, {}), "");
+  expect_within_limits(base.trajectory);
   // Straight along the trailer axis: one segment.
   EXPECT_EQ(base.path.size(), 2u);
 }
@@ -229,26 +230,26 @@ TEST_P(Planners, CartesianApproachStaysOnTheLine) {
   CollisionChecker cc(robot(), w);
   const Box& box = at(w, 2, 2);
   const Eigen::Vector3d face(4.0, box.pose.translation().y(), box.pose.translation().z());
-  const auto pre = robot().armIk({face - Eigen::Vector3d(0.15, 0, 0), 0.0}, home(4.0 - 1.35));
+  const auto pre = robot().arm_ik({face - Eigen::Vector3d(0.15, 0, 0), 0.0}, home(4.0 - 1.35));
   ASSERT_FALSE(pre.empty());
   PlanQuery q =
-      poseQuery(PlanMode::kArmCartesian, pre.front(), face - Eigen::Vector3d(0.005, 0, 0), 0.0);
+      pose_query(PlanMode::kArmCartesian, pre.front(), face - Eigen::Vector3d(0.005, 0, 0), 0.0);
   q.ignored_boxes = {box.id};
   const PlanResult r = plan(q, cc);
   ASSERT_EQ(r.status, PlanStatus::kSolved) << r.message;
   for (const auto& [t, s] : r.trajectory.sampled(0.01)) {
-    const Eigen::Vector3d p = robot().platePose(s.position).translation();
+    const Eigen::Vector3d p = robot().plate_pose(s.position).translation();
     EXPECT_LT(std::hypot(p.y() - face.y(), p.z() - face.z()), 0.006) << "t=" << t;
   }
-  EXPECT_EQ(denseCollision(r.trajectory, w, {box.id}), "");
+  EXPECT_EQ(dense_collision(r.trajectory, w, {box.id}), "");
 }
 
 TEST_P(Planners, GoalInCollisionIsReportedAsSuch) {
   const World w = wall(4.0);
   CollisionChecker cc(robot(), w);
-  Config goal = home(4.0 - 1.35);
+  JointVector goal = home(4.0 - 1.35);
   goal[kBaseX] = 4.5;  // inside the wall
-  const PlanResult r = plan(jointQuery(PlanMode::kBaseLine, home(2.0), goal), cc);
+  const PlanResult r = plan(joint_query(PlanMode::kBaseLine, home(2.0), goal), cc);
   EXPECT_EQ(r.status, PlanStatus::kGoalInvalid);
   EXPECT_NE(r.message.find("box"), std::string::npos) << r.message;
 }
@@ -265,13 +266,13 @@ TEST_P(Planners, InvalidRequestsGetClearErrors) {
   EXPECT_EQ(r.status, PlanStatus::kInvalidRequest);
   EXPECT_EQ(r.message, "M3 nose needs a joint goal");
 
-  q = jointQuery(PlanMode::kNose, home(1.0), home(1.0));
+  q = joint_query(PlanMode::kNose, home(1.0), home(1.0));
   std::get<JointGoal>(q.goal).q[kNose1] = 2.0;
   r = plan(q, cc);
   EXPECT_EQ(r.status, PlanStatus::kInvalidRequest);
   EXPECT_EQ(r.message.rfind("joint goal nose_1 = 2.000000 is beyond limits", 0), 0u) << r.message;
 
-  q = jointQuery(PlanMode::kArm, home(1.0), home(1.0));
+  q = joint_query(PlanMode::kArm, home(1.0), home(1.0));
   q.time_limit_s = 0.0;
   r = plan(q, cc);
   EXPECT_EQ(r.status, PlanStatus::kInvalidRequest);
@@ -292,37 +293,37 @@ TEST(Arastar, EscapesLightContactThenReachesTheGoal) {
   CollisionChecker cc(robot(), w);
   const Box& box = at(w, 2, 2);
   const Eigen::Vector3d face(4.0, box.pose.translation().y(), box.pose.translation().z());
-  const auto pre = robot().armIk({face - Eigen::Vector3d(0.08, 0, 0), 0.0}, home(4.0 - 1.35));
+  const auto pre = robot().arm_ik({face - Eigen::Vector3d(0.08, 0, 0), 0.0}, home(4.0 - 1.35));
   ASSERT_FALSE(pre.empty());
-  Config pressed = pre.front();
+  JointVector pressed = pre.front();
   pressed[kBaseX] += 0.088;  // plate 8 mm into the box
-  ASSERT_FALSE(cc.isValid(pressed));
+  ASSERT_FALSE(cc.is_valid(pressed));
 
   PlanQuery esc;
   esc.mode = PlanMode::kEscape;
   esc.start = pressed;
   const PlanResult e = arastar().plan(esc, cc);
   ASSERT_EQ(e.status, PlanStatus::kSolved) << e.message;
-  EXPECT_TRUE(cc.isValid(e.path.back()));
+  EXPECT_TRUE(cc.is_valid(e.path.back()));
   EXPECT_TRUE(e.stats.escaped);
   // The nearest free state: about 1 cm away, not a long retreat.
   EXPECT_LT(
-      (robot().platePose(e.path.back()).translation() - robot().platePose(pressed).translation())
+      (robot().plate_pose(e.path.back()).translation() - robot().plate_pose(pressed).translation())
           .norm(),
       0.03);
 
   const PlanResult r =
-      arastar().plan(jointQuery(PlanMode::kArm, pressed, home(pressed[kBaseX])), cc);
+      arastar().plan(joint_query(PlanMode::kArm, pressed, home(pressed[kBaseX])), cc);
   ASSERT_EQ(r.status, PlanStatus::kSolved) << r.message;
   EXPECT_TRUE(r.stats.escaped);
   EXPECT_EQ(r.path.front(), pressed);
   EXPECT_LT((r.path.back() - home(pressed[kBaseX])).cwiseAbs().maxCoeff(), 1e-3);
   // After the escape part, the trajectory is collision-free.
   Trajectory rest =
-      Trajectory::fromWaypoints({r.path.begin() + 1, r.path.end()}, robot().allLimits());
-  EXPECT_EQ(denseCollision(rest, w, {}), "");
+      Trajectory::from_waypoints({r.path.begin() + 1, r.path.end()}, robot().all_limits());
+  EXPECT_EQ(dense_collision(rest, w, {}), "");
 
-  PlanQuery no_escape = jointQuery(PlanMode::kArm, pressed, home(pressed[kBaseX]));
+  PlanQuery no_escape = joint_query(PlanMode::kArm, pressed, home(pressed[kBaseX]));
   no_escape.escape_if_start_invalid = false;
   const PlanResult n = arastar().plan(no_escape, cc);
   EXPECT_EQ(n.status, PlanStatus::kStartInvalid);
@@ -338,18 +339,18 @@ TEST(Arastar, UnreachableGoalGivesNoPathWithinTheTimeLimit) {
   wall.pose.translation() = Eigen::Vector3d(3.2, 0.0, 1.345);
   w.boxes.push_back(wall);
   CollisionChecker cc(robot(), w);
-  ASSERT_TRUE(cc.isValid(home(1.0)));
-  ASSERT_TRUE(cc.isValid(home(5.0)));
+  ASSERT_TRUE(cc.is_valid(home(1.0)));
+  ASSERT_TRUE(cc.is_valid(home(5.0)));
 
   // M5: the base line is exhausted on this side of the wall.
-  PlanQuery base = jointQuery(PlanMode::kBaseLine, home(1.0), home(5.0));
+  PlanQuery base = joint_query(PlanMode::kBaseLine, home(1.0), home(5.0));
   base.time_limit_s = 2.0;
   const PlanResult nb = arastar().plan(base, cc);
   EXPECT_EQ(nb.status, PlanStatus::kNoPath) << nb.message;
   EXPECT_LT(nb.stats.planning_time_s, 2.0);
 
   // M2: the lattice is too large to exhaust; the time limit ends it.
-  PlanQuery arm = poseQuery(PlanMode::kArmBase, home(1.0), Eigen::Vector3d(5.2, 0.0, 1.2), 0.0);
+  PlanQuery arm = pose_query(PlanMode::kArmBase, home(1.0), Eigen::Vector3d(5.2, 0.0, 1.2), 0.0);
   arm.time_limit_s = 0.5;
   const PlanResult na = arastar().plan(arm, cc);
   EXPECT_EQ(na.status, PlanStatus::kTimeout) << na.message;
@@ -359,17 +360,17 @@ TEST(Arastar, UnreachableGoalGivesNoPathWithinTheTimeLimit) {
 }
 
 TEST(Trajectory, TrapezoidRespectsLimitsAndReachesWaypoints) {
-  const Limits& lim = robot().allLimits();
-  const std::vector<Config> wps = {home(1.0), home(3.0), home(2.6)};
-  const Trajectory t = Trajectory::fromWaypoints(wps, lim);
-  EXPECT_NEAR(t.sample(t.waypointTime(1)).position[kBaseX], 3.0, 1e-9);
+  const Limits& lim = robot().all_limits();
+  const std::vector<JointVector> wps = {home(1.0), home(3.0), home(2.6)};
+  const Trajectory t = Trajectory::from_waypoints(wps, lim);
+  EXPECT_NEAR(t.sample(t.waypoint_time(1)).position[kBaseX], 3.0, 1e-9);
   EXPECT_LT((t.sample(t.duration()).position - wps.back()).norm(), 1e-12);
   // 2 m at 0.6 m/s, 0.8 m/s^2: 2/0.6 + 0.6/0.8 s.
-  EXPECT_NEAR(t.waypointTime(1), 2.0 / 0.6 + 0.6 / 0.8, 1e-9);
+  EXPECT_NEAR(t.waypoint_time(1), 2.0 / 0.6 + 0.6 / 0.8, 1e-9);
   // 0.4 m: triangular (0.6^2 / 0.8 > 0.4), 2 sqrt(0.4 / 0.8) s.
-  EXPECT_NEAR(t.duration() - t.waypointTime(1), 2.0 * std::sqrt(0.4 / 0.8), 1e-9);
-  expectWithinLimits(t);
-  EXPECT_NEAR(segmentDuration(wps[0], wps[1], lim), t.waypointTime(1), 1e-12);
+  EXPECT_NEAR(t.duration() - t.waypoint_time(1), 2.0 * std::sqrt(0.4 / 0.8), 1e-9);
+  expect_within_limits(t);
+  EXPECT_NEAR(segment_duration(wps[0], wps[1], lim), t.waypoint_time(1), 1e-12);
 }
 
 // Deterministic planning: with an expansion budget the same request gives the
@@ -379,7 +380,7 @@ TEST(Trajectory, TrapezoidRespectsLimitsAndReachesWaypoints) {
 // between the two runs.
 TEST_P(Planners, ExpansionBudgetMakesPlansIndependentOfLoad) {
   const World w = wall(5.0);
-  PlanQuery q = poseQuery(PlanMode::kArmBase, home(2.0), Eigen::Vector3d(4.85, 0.4, 1.8), 0.0);
+  PlanQuery q = pose_query(PlanMode::kArmBase, home(2.0), Eigen::Vector3d(4.85, 0.4, 1.8), 0.0);
   // Past the first solution (ARA*: ~100 expansions), short of ε = 1.
   q.max_expansions = 400;
   // The budget decides, not the clock: sanitizer builds run ~10x slower.
@@ -426,7 +427,7 @@ TEST_P(Planners, ExpansionBudgetMakesPlansIndependentOfLoad) {
 TEST_P(Planners, ExhaustedBudgetWithoutSolutionSaysSo) {
   const World w = wall(5.0);
   CollisionChecker cc(robot(), w);
-  PlanQuery q = poseQuery(PlanMode::kArmBase, home(2.0), Eigen::Vector3d(4.85, 0.4, 1.8), 0.0);
+  PlanQuery q = pose_query(PlanMode::kArmBase, home(2.0), Eigen::Vector3d(4.85, 0.4, 1.8), 0.0);
   q.max_expansions = 3;
   const PlanResult r = plan(q, cc);
   EXPECT_EQ(r.status, PlanStatus::kTimeout);
@@ -439,7 +440,7 @@ TEST_P(Planners, ExhaustedBudgetWithoutSolutionSaysSo) {
 // iteration's solution, the same every time.
 TEST(Arastar, BudgetEndingTheImprovementReturnsTheLastSolution) {
   const World w = wall(5.0);
-  PlanQuery q = poseQuery(PlanMode::kArmBase, home(2.0), Eigen::Vector3d(4.85, 0.4, 1.8), 0.0);
+  PlanQuery q = pose_query(PlanMode::kArmBase, home(2.0), Eigen::Vector3d(4.85, 0.4, 1.8), 0.0);
   q.improve_time_s = 10.0;
   q.max_expansions = 400;
   CollisionChecker cc(robot(), w);

@@ -8,19 +8,19 @@
 #include <sstream>
 #include <stdexcept>
 
-using plr::sim::Config;
+using plr::sim::JointVector;
 using plr::sim::RobotModel;
 
 namespace {
 
 const RobotModel& robot() {
-  static const RobotModel m = RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
+  static const RobotModel m = RobotModel::from_urdf_file(PLR_UNLOADER_URDF);
   return m;
 }
 
-std::string errorOf(const std::string& xml) {
+std::string error_of(const std::string& xml) {
   try {
-    RobotModel::fromUrdfString(xml, "bad.urdf");
+    RobotModel::from_urdf_string(xml, "bad.urdf");
   } catch (const std::runtime_error& e) {
     return e.what();
   }
@@ -32,7 +32,7 @@ std::string errorOf(const std::string& xml) {
 TEST(RobotModel, LoadsShippedUrdf) {
   const RobotModel& m = robot();
   EXPECT_GE(m.links().size(), 10u);
-  EXPECT_GE(m.plateLink(), 0);
+  EXPECT_GE(m.plate_link(), 0);
   for (int j = 0; j < plr::sim::kNumJoints; ++j) {
     EXPECT_LT(m.limits(j).lower, m.limits(j).upper) << j;
     EXPECT_GT(m.limits(j).velocity, 0.0) << j;
@@ -48,10 +48,10 @@ TEST(RobotModel, LoadsShippedUrdf) {
 TEST(RobotModel, ZeroConfigurationPlatePose) {
   // Arm stretched forward: plate at yaw origin + upper + fore + plate along x.
   const RobotModel& m = robot();
-  Config q = Config::Zero();
+  JointVector q = JointVector::Zero();
   q[plr::sim::kBaseX] = 2.0;
   const auto& a = m.arm();
-  const Eigen::Vector3d p = m.platePose(q).translation();
+  const Eigen::Vector3d p = m.plate_pose(q).translation();
   EXPECT_NEAR(p.x(), 2.0 + a.yaw_origin.x() + a.upper + a.fore + a.plate, 1e-9);
   EXPECT_NEAR(p.y(), 0.0, 1e-9);
   EXPECT_NEAR(p.z(), a.yaw_origin.z() + a.shoulder_height, 1e-9);
@@ -59,10 +59,10 @@ TEST(RobotModel, ZeroConfigurationPlatePose) {
 
 TEST(RobotModel, ReachesFloorToCeilingAcrossTheWidth) {
   const RobotModel& m = robot();
-  Config seed = Config::Zero();
+  JointVector seed = JointVector::Zero();
   for (double y : {-1.0, 0.0, 1.0}) {
     for (double z : {0.2, 1.3, 2.5}) {
-      const auto sols = m.armIk({Eigen::Vector3d(1.2, y, z), 0.0}, seed);
+      const auto sols = m.arm_ik({Eigen::Vector3d(1.2, y, z), 0.0}, seed);
       EXPECT_FALSE(sols.empty()) << "y=" << y << " z=" << z;
     }
   }
@@ -73,22 +73,22 @@ TEST(RobotModel, IkInvertsFkOnRandomConfigurations) {
   std::mt19937 rng(7);
   int checked = 0;
   for (int i = 0; i < 500; ++i) {
-    Config q;
+    JointVector q;
     for (int j = 0; j < plr::sim::kNumJoints; ++j) {
       std::uniform_real_distribution<double> u(m.limits(j).lower, m.limits(j).upper);
       q[j] = u(rng);
     }
-    const auto target = m.plateTarget(q);
+    const auto target = m.plate_target(q);
     // The arm reaching back over itself is the turned-away branch; both are covered.
-    const auto sols = m.armIk(target, q);
+    const auto sols = m.arm_ik(target, q);
     ASSERT_FALSE(sols.empty()) << "no IK for a reachable FK pose, i=" << i;
     bool found_original = false;
-    for (const Config& s : sols) {
-      EXPECT_TRUE(m.withinLimits(s));
-      const auto back = m.plateTarget(s);
+    for (const JointVector& s : sols) {
+      EXPECT_TRUE(m.within_limits(s));
+      const auto back = m.plate_target(s);
       EXPECT_LT((back.position - target.position).norm(), 1e-7);
       EXPECT_NEAR(std::remainder(back.yaw - target.yaw, 2 * M_PI), 0.0, 1e-7);
-      EXPECT_TRUE(m.platePose(s).linear().isApprox(m.platePose(q).linear(), 1e-6));
+      EXPECT_TRUE(m.plate_pose(s).linear().isApprox(m.plate_pose(q).linear(), 1e-6));
       if ((s - q).norm() < 1e-6) found_original = true;
     }
     EXPECT_TRUE(found_original) << "i=" << i;
@@ -103,16 +103,16 @@ TEST(RobotModel, PlateStaysVerticalWhateverTheArmDoes) {
   const RobotModel& m = robot();
   std::mt19937 rng(11);
   for (int i = 0; i < 200; ++i) {
-    Config q;
+    JointVector q;
     for (int j = 0; j < plr::sim::kNumJoints; ++j) {
       std::uniform_real_distribution<double> u(m.limits(j).lower, m.limits(j).upper);
       q[j] = u(rng);
     }
-    const Eigen::Matrix3d r = m.platePose(q).linear();
+    const Eigen::Matrix3d r = m.plate_pose(q).linear();
     EXPECT_NEAR(r.col(0).z(), 0.0, 1e-9) << "i=" << i;
     EXPECT_NEAR(r.col(2).z(), 1.0, 1e-9) << "i=" << i;
     EXPECT_NEAR(
-        std::remainder(m.plateTarget(q).yaw - q[plr::sim::kArm1] - q[plr::sim::kArm4], 2 * M_PI),
+        std::remainder(m.plate_target(q).yaw - q[plr::sim::kArm1] - q[plr::sim::kArm4], 2 * M_PI),
         0.0, 1e-9);
   }
 }
@@ -123,12 +123,12 @@ TEST(RobotModel, FacesEveryColumnSquarelyFromBehindTheLoweredNose) {
   // grasp and at the pre-grasp 0.25 m back, from the floor to under the
   // ceiling and out to the side walls.
   const RobotModel& m = robot();
-  Config seed = Config::Zero();
+  JointVector seed = JointVector::Zero();
   const double face_x = 1.1;
   for (double y : {-0.97, -0.5, 0.0, 0.5, 0.97}) {
     for (double z : {0.3, 0.8, 1.3, 1.9, 2.47}) {
       for (double back : {0.005, 0.25}) {
-        const auto sols = m.armIk({Eigen::Vector3d(face_x - back, y, z), 0.0}, seed);
+        const auto sols = m.arm_ik({Eigen::Vector3d(face_x - back, y, z), 0.0}, seed);
         EXPECT_FALSE(sols.empty()) << "y=" << y << " z=" << z << " back=" << back;
       }
     }
@@ -136,12 +136,12 @@ TEST(RobotModel, FacesEveryColumnSquarelyFromBehindTheLoweredNose) {
 }
 
 TEST(RobotModel, UnreachableTargetHasNoSolution) {
-  EXPECT_TRUE(robot().armIk({Eigen::Vector3d(6.0, 0.0, 1.0), 0.0}, Config::Zero()).empty());
+  EXPECT_TRUE(robot().arm_ik({Eigen::Vector3d(6.0, 0.0, 1.0), 0.0}, JointVector::Zero()).empty());
 }
 
 TEST(RobotModel, MissingFileNamesFileAndCause) {
   try {
-    RobotModel::fromUrdfFile("/nonexistent/robot.urdf");
+    RobotModel::from_urdf_file("/nonexistent/robot.urdf");
     FAIL();
   } catch (const std::runtime_error& e) {
     EXPECT_STREQ(e.what(), "/nonexistent/robot.urdf: cannot open file");
@@ -149,17 +149,17 @@ TEST(RobotModel, MissingFileNamesFileAndCause) {
 }
 
 TEST(RobotModel, XmlSyntaxErrorGivesLine) {
-  const std::string msg = errorOf("<robot name='r'>\n<link name='a'>\n</robot>");
+  const std::string msg = error_of("<robot name='r'>\n<link name='a'>\n</robot>");
   EXPECT_EQ(msg.rfind("bad.urdf: XML error at line", 0), 0u) << msg;
 }
 
 TEST(RobotModel, MissingJointIsNamed) {
-  const std::string msg = errorOf("<robot name='r'><link name='a'/></robot>");
+  const std::string msg = error_of("<robot name='r'><link name='a'/></robot>");
   EXPECT_EQ(msg, "bad.urdf: missing joint 'base_x'");
 }
 
 TEST(RobotModel, UrdfdomRejectionCarriesItsReason) {
-  const std::string msg = errorOf(
+  const std::string msg = error_of(
       "<robot name='r'><link name='a'/><joint name='j' type='revolute'><parent link='a'/>"
       "<child link='nope'/></joint></robot>");
   EXPECT_EQ(msg.rfind("bad.urdf: invalid URDF: ", 0), 0u) << msg;
@@ -167,7 +167,7 @@ TEST(RobotModel, UrdfdomRejectionCarriesItsReason) {
 }
 
 namespace {
-std::string shippedUrdf() {
+std::string shipped_urdf() {
   std::ifstream in(PLR_UNLOADER_URDF);
   std::stringstream ss;
   ss << in.rdbuf();
@@ -176,30 +176,30 @@ std::string shippedUrdf() {
 }  // namespace
 
 TEST(RobotModel, MovableJointThatIsNeitherPlannedNorMimicIsNamed) {
-  std::string xml = shippedUrdf();
+  std::string xml = shipped_urdf();
   const std::string mimic = "<mimic joint=\"arm_2\" multiplier=\"-1\" offset=\"0\"/>";
   const auto pos = xml.find(mimic);
   ASSERT_NE(pos, std::string::npos);
   xml.erase(pos, mimic.size());
-  EXPECT_EQ(errorOf(xml),
+  EXPECT_EQ(error_of(xml),
             "bad.urdf: joint 'arm_level_2' is movable but neither one of the 8 planned joints "
             "nor a <mimic> of one");
 }
 
 TEST(RobotModel, WristThatDoesNotStayLevelIsRefused) {
-  std::string xml = shippedUrdf();
+  std::string xml = shipped_urdf();
   const std::string mimic = "<mimic joint=\"arm_3\" multiplier=\"-1\"";
   const auto pos = xml.find(mimic);
   ASSERT_NE(pos, std::string::npos);
   xml.replace(pos, mimic.size(), "<mimic joint=\"arm_3\" multiplier=\"-0.5\"");
-  EXPECT_EQ(errorOf(xml).rfind("bad.urdf: arm_4 must sit on a level flange", 0), 0u)
-      << errorOf(xml);
+  EXPECT_EQ(error_of(xml).rfind("bad.urdf: arm_4 must sit on a level flange", 0), 0u)
+      << error_of(xml);
 }
 
 TEST(RobotModel, MissingAccelerationLimitIsNamed) {
-  std::string xml = shippedUrdf();
+  std::string xml = shipped_urdf();
   const auto pos = xml.find("<acceleration_limit value=\"2.5\"/>");
   ASSERT_NE(pos, std::string::npos);
   xml.erase(pos, std::string("<acceleration_limit value=\"2.5\"/>").size());
-  EXPECT_EQ(errorOf(xml), "bad.urdf: joint 'arm_1' has no positive <acceleration_limit value=..>");
+  EXPECT_EQ(error_of(xml), "bad.urdf: joint 'arm_1' has no positive <acceleration_limit value=..>");
 }

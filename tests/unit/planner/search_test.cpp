@@ -25,7 +25,7 @@ class TableGraph final : public Graph, public Heuristic {
     const auto it = edges_.find(s);
     if (it != edges_.end()) out.insert(out.end(), it->second.begin(), it->second.end());
   }
-  bool isGoal(StateId s) override { return s == goal; }
+  bool is_goal(StateId s) override { return s == goal; }
   double estimate(StateId s) override { return h.count(s) ? h[s] : 0.0; }
   StateId goal = kNoState;
   std::map<StateId, double> h;
@@ -136,15 +136,15 @@ TEST(Search, WeightedAStarTakesGreedyRouteAndAraStarImprovesIt) {
 }
 
 TEST(Search, AraStarBoundHoldsOnGridsAtEveryEpsilon) {
-  const auto map = loadGridMap(PLR_MOVINGAI_DIR "/den011d.map");
-  const auto queries = loadScenario(PLR_MOVINGAI_DIR "/den011d.map.scen");
+  const auto map = load_grid_map(PLR_MOVINGAI_DIR "/den011d.map");
+  const auto queries = load_scenario(PLR_MOVINGAI_DIR "/den011d.map.scen");
   GridGraph graph(map);
   OctileHeuristic h(map);
   AraStar ara;
   for (std::size_t i = 0; i < queries.size(); i += 37) {
     const auto& q = queries[i];
-    graph.setGoal(q.goal_x, q.goal_y);
-    h.setGoal(q.goal_x, q.goal_y);
+    graph.set_goal(q.goal_x, q.goal_y);
+    h.set_goal(q.goal_x, q.goal_y);
     for (bool first_only : {true, false}) {
       SearchOptions o;
       o.eps_initial = 3.0;
@@ -170,7 +170,7 @@ TEST(Search, TimeLimitStopsASearchWithoutSolution) {
     void successors(StateId s, std::vector<Successor>& out) override {
       out.push_back({s + 1, 1.0});
     }
-    bool isGoal(StateId) override { return false; }
+    bool is_goal(StateId) override { return false; }
   } line;
   ZeroHeuristic zero;
   AraStar ara;
@@ -224,16 +224,16 @@ class MovingAi : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(MovingAi, AStarMatchesPublishedOptimum) {
   const std::string base = std::string(PLR_MOVINGAI_DIR "/") + GetParam();
-  const auto map = loadGridMap(base);
-  const auto queries = loadScenario(base + ".scen");
+  const auto map = load_grid_map(base);
+  const auto queries = load_scenario(base + ".scen");
   ASSERT_FALSE(queries.empty());
   GridGraph graph(map);
   OctileHeuristic h(map);
   AraStar search;
   std::size_t mismatches = 0;
   for (const auto& q : queries) {
-    graph.setGoal(q.goal_x, q.goal_y);
-    h.setGoal(q.goal_x, q.goal_y);
+    graph.set_goal(q.goal_x, q.goal_y);
+    h.set_goal(q.goal_x, q.goal_y);
     SearchOptions o;
     const auto r = search.search(graph, h, graph.id(q.start_x, q.start_y), o);
     ASSERT_EQ(r.status, SearchStatus::kSolved);
@@ -247,7 +247,7 @@ INSTANTIATE_TEST_SUITE_P(Maps, MovingAi,
 
 TEST(Grid, BadFilesNameFileAndCause) {
   try {
-    loadGridMap("/nonexistent.map");
+    load_grid_map("/nonexistent.map");
     FAIL();
   } catch (const std::runtime_error& e) {
     EXPECT_STREQ(e.what(), "/nonexistent.map: cannot open file");

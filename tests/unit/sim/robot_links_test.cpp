@@ -9,8 +9,8 @@ namespace plr::sim {
 namespace {
 
 TEST(RobotLinks, ShapesFollowTheModel) {
-  const RobotModel model = RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
-  const Config q = Config::Zero();
+  const RobotModel model = RobotModel::from_urdf_file(PLR_UNLOADER_URDF);
+  const JointVector q = JointVector::Zero();
   const std::vector<LinkGeometry> links = robot_link_geometry(model, q, 0.5);
   std::size_t shapes = 0;
   for (const Link& l : model.links()) shapes += l.shapes.size();
@@ -24,13 +24,13 @@ TEST(RobotLinks, ShapesFollowTheModel) {
   EXPECT_EQ(feeders, 1);
   // The physics plate's normal (+z) is the model's plate normal (+x).
   const SuctionPlate plate = suction_plate_at(model, q);
-  EXPECT_TRUE(plate.pose.linear().col(2).isApprox(model.platePose(q).linear().col(0), 1e-12));
-  EXPECT_TRUE(plate.pose.translation().isApprox(model.platePose(q).translation(), 1e-12));
+  EXPECT_TRUE(plate.pose.linear().col(2).isApprox(model.plate_pose(q).linear().col(0), 1e-12));
+  EXPECT_TRUE(plate.pose.translation().isApprox(model.plate_pose(q).translation(), 1e-12));
 }
 
 TEST(RobotLinks, DrivingTheBaseForwardPushesABox) {
-  const RobotModel model = RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
-  Config q = Config::Zero();
+  const RobotModel model = RobotModel::from_urdf_file(PLR_UNLOADER_URDF);
+  JointVector q = JointVector::Zero();
   q[kBaseX] = 1.0;
   // A box just in front of everything the robot has at this configuration.
   double front = -1e9;
@@ -69,8 +69,8 @@ World box_on_floor(double x, double y, const Eigen::Vector3d& size, double mass)
 
 // The sweep: nose pitched down until the scoop's blade meets the floor, scoop
 // out, belts running, base driven forward at 0.3 m/s.
-Config sweep_pose(double base_x) {
-  Config q = Config::Zero();
+JointVector sweep_pose(double base_x) {
+  JointVector q = JointVector::Zero();
   q[kBaseX] = base_x;
   q[kArm2] = -1.0;  // arm folded over the base
   q[kArm3] = 2.0;
@@ -80,9 +80,9 @@ Config sweep_pose(double base_x) {
 }
 
 TEST(RobotLinks, TheScoopGetsUnderABoxAndItsBeltsCarryItOut) {
-  const RobotModel model = RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
+  const RobotModel model = RobotModel::from_urdf_file(PLR_UNLOADER_URDF);
   // A box near the side wall's lane, 0.1 m ahead of the blade.
-  Config q = sweep_pose(1.0);
+  JointVector q = sweep_pose(1.0);
   const auto shapes = robot_link_geometry(model, q, 1.0);
   const auto feeders = std::count_if(shapes.begin(), shapes.end(),
                                      [](const LinkGeometry& g) { return g.feeds_belt; });

@@ -29,7 +29,7 @@ using testing::NodeOptions;
 
 struct SimState {
   sim::World world;
-  sim::Config q;
+  sim::JointVector q;
   std::vector<std::uint32_t> held;
   std::uint32_t unloaded = 0;
   double t = 0;
@@ -110,10 +110,10 @@ class FakeSim {
     suction(r.suction_before());
     const auto* pts = r.trajectory()->points();
     const auto* last = pts->Get(pts->size() - 1);
-    const Eigen::Isometry3d plate_before = robot_.platePose(s_.q);
+    const Eigen::Isometry3d plate_before = robot_.plate_pose(s_.q);
     for (int j = 0; j < sim::kNumJoints; ++j) s_.q[j] = last->positions()->Get(j);
     // Held boxes ride on the plate, unless their cups let go.
-    const Eigen::Isometry3d carry = robot_.platePose(s_.q) * plate_before.inverse();
+    const Eigen::Isometry3d carry = robot_.plate_pose(s_.q) * plate_before.inverse();
     const double accel = 4 * carry.translation().norm() / std::pow(last->time_s(), 2);
     for (auto& b : s_.world.boxes) {
       if (std::find(s_.held.begin(), s_.held.end(), b.id) == s_.held.end()) continue;
@@ -144,7 +144,7 @@ class FakeSim {
       }
       s_.held.clear();
     } else if (s == msg::Suction::On && suction_works) {
-      const Eigen::Isometry3d plate = robot_.platePose(s_.q);
+      const Eigen::Isometry3d plate = robot_.plate_pose(s_.q);
       const Eigen::Vector3d p = plate.translation();
       const bool down = plate.linear().col(0).z() < -0.7;  // plate normal pointing down
       for (const auto& b : s_.world.boxes) {
@@ -197,7 +197,7 @@ class FakeSim {
   }
 
   static constexpr double kGravity = 9.81;
-  sim::RobotModel robot_ = sim::RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
+  sim::RobotModel robot_ = sim::RobotModel::from_urdf_file(PLR_UNLOADER_URDF);
   SimState s_;
   std::map<std::uint32_t, double> capacity_;  // N the cups of a held box hold
   std::map<std::uint32_t, Eigen::Isometry3d> gripped_at_;
@@ -228,7 +228,7 @@ class FakePlanner {
   Status plan(const msg::PlanRequest& r, flatbuffers::FlatBufferBuilder& fbb) {
     EXPECT_EQ(r.start()->size(), 8u);
     EXPECT_NE(r.world(), nullptr);
-    sim::Config start, goal;
+    sim::JointVector start, goal;
     for (int j = 0; j < 8; ++j) start[j] = r.start()->Get(j);
     goal = start;
     const auto mode = static_cast<sim::PlanMode>(r.mode());
@@ -239,17 +239,17 @@ class FakePlanner {
       const Eigen::Vector3d n = q.toRotationMatrix().col(0);  // plate normal
       sim::PlateTarget t{{p.position().x(), p.position().y(), p.position().z()},
                          std::atan2(n.y(), n.x())};
-      const auto sols = robot_.armIk(t, start);
+      const auto sols = robot_.arm_ik(t, start);
       if (sols.empty()) return reply(fbb, msg::PlanStatus::GoalInvalid, {});
       goal = sols.front();
     } else if (mode != sim::PlanMode::kEscape) {
-      for (int j : sim::plannedJoints(mode)) goal[j] = r.goal_joints()->Get(j);
+      for (int j : sim::planned_joints(mode)) goal[j] = r.goal_joints()->Get(j);
     }
     return reply(fbb, msg::PlanStatus::Solved, {start, goal});
   }
 
   Status reply(flatbuffers::FlatBufferBuilder& fbb, msg::PlanStatus status,
-               const std::vector<sim::Config>& path) {
+               const std::vector<sim::JointVector>& path) {
     std::vector<flatbuffers::Offset<msg::TrajectoryPoint>> points;
     for (std::size_t i = 0; i < path.size(); ++i) {
       const std::vector<double> pos(path[i].data(), path[i].data() + 8), vel(8, 0.0);
@@ -261,7 +261,7 @@ class FakePlanner {
     return {};
   }
 
-  sim::RobotModel robot_ = sim::RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
+  sim::RobotModel robot_ = sim::RobotModel::from_urdf_file(PLR_UNLOADER_URDF);
   int calls_ = 0;
   std::map<int, int> modes_;
 };

@@ -15,12 +15,12 @@ namespace plr::executor {
 namespace {
 
 const sim::RobotModel& robot() {
-  static const sim::RobotModel m = sim::RobotModel::fromUrdfFile(PLR_UNLOADER_URDF);
+  static const sim::RobotModel m = sim::RobotModel::from_urdf_file(PLR_UNLOADER_URDF);
   return m;
 }
 
-sim::Config home(double base_x) {
-  sim::Config q;
+sim::JointVector home(double base_x) {
+  sim::JointVector q;
   q << base_x, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
   return q;
 }
@@ -152,7 +152,7 @@ TEST(DropOff, PlacesHoldTheBoxOverTheConveyorAndTurnTheWristSideways) {
   sim::World w = trailer_world();
   w.boxes.push_back(test::make_box(7, 6.0, 0.0, 1.0, {0.45, 0.55, 0.35}));
   const Geometry g;
-  const sim::Config at = home(5.0);
+  const sim::JointVector at = home(5.0);
   const auto places = dropoff_targets(w, {7}, robot(), g, at, 6);
   ASSERT_FALSE(places.empty());
   EXPECT_NEAR(std::abs(places.front().yaw), M_PI / 2, 1e-9);
@@ -164,13 +164,13 @@ TEST(DropOff, PlacesHoldTheBoxOverTheConveyorAndTurnTheWristSideways) {
     EXPECT_GE(centre.x() - along / 2, at[sim::kBaseX] - 1e-9);
     EXPECT_LE(centre.x() + along / 2, at[sim::kBaseX] + g.conveyor_length + 1e-9);
     EXPECT_NEAR(centre.y(), 0.0, 1e-9);
-    EXPECT_FALSE(robot().armIk(t, at).empty());
+    EXPECT_FALSE(robot().arm_ik(t, at).empty());
   }
 }
 
 TEST(FollowsLines, SeesALineLeaveTheArmsReach) {
-  const sim::Config q = home(5.0);
-  const sim::PlateTarget here = robot().plateTarget(q);
+  const sim::JointVector q = home(5.0);
+  const sim::PlateTarget here = robot().plate_target(q);
   const Eigen::Vector3d ahead = here.position + Eigen::Vector3d(0.3, 0.0, 0.0);
   EXPECT_TRUE(follows_lines(robot(), q, {{ahead, 0.0}, {here.position, 0.0}}));
   EXPECT_FALSE(follows_lines(robot(), q, {{here.position + Eigen::Vector3d(3.0, 0, 0), 0.0}}));

@@ -13,9 +13,9 @@ namespace {
   throw std::runtime_error(source + ": " + cause);
 }
 
-ModeLattice parseMode(const YAML::Node& n, sim::PlanMode mode, const std::string& where) {
+ModeLattice parse_mode(const YAML::Node& n, sim::PlanMode mode, const std::string& where) {
   ModeLattice m;
-  m.joints = sim::plannedJoints(mode);
+  m.joints = sim::planned_joints(mode);
   const std::size_t dims = mode == sim::PlanMode::kArmCartesian ? 1 : m.joints.size();
   if (!n["resolution"]) fail(where, "missing 'resolution'");
   m.resolution = n["resolution"].as<std::vector<double>>();
@@ -58,15 +58,15 @@ ModeLattice parseMode(const YAML::Node& n, sim::PlanMode mode, const std::string
 
 }  // namespace
 
-LatticeConfig LatticeConfig::fromFile(const std::string& path) {
+LatticeConfig LatticeConfig::from_file(const std::string& path) {
   std::ifstream in(path);
   if (!in) fail(path, "cannot open file");
   std::stringstream ss;
   ss << in.rdbuf();
-  return fromString(ss.str(), path);
+  return from_string(ss.str(), path);
 }
 
-LatticeConfig LatticeConfig::fromString(const std::string& yaml, const std::string& source) {
+LatticeConfig LatticeConfig::from_string(const std::string& yaml, const std::string& source) {
   YAML::Node root;
   try {
     root = YAML::Load(yaml);
@@ -79,7 +79,7 @@ LatticeConfig LatticeConfig::fromString(const std::string& yaml, const std::stri
     const std::string key = "M" + std::to_string(i);
     if (!root[key]) fail(source, "missing mode '" + key + "'");
     try {
-      c.modes[mode] = parseMode(root[key], mode, source + ": " + key);
+      c.modes[mode] = parse_mode(root[key], mode, source + ": " + key);
     } catch (const YAML::Exception& e) {
       fail(source, key + ": " + e.what());
     }

@@ -25,8 +25,8 @@ struct LatticeConfig {
   std::map<sim::PlanMode, ModeLattice> modes;
 
   // Throw std::runtime_error "<source>: <cause>".
-  static LatticeConfig fromFile(const std::string& path);
-  static LatticeConfig fromString(const std::string& yaml, const std::string& source = "<string>");
+  static LatticeConfig from_file(const std::string& path);
+  static LatticeConfig from_string(const std::string& yaml, const std::string& source = "<string>");
 };
 
 }  // namespace plr::arastar

@@ -7,12 +7,12 @@
 namespace plr::arastar {
 
 using search::StateId;
-using sim::Config;
+using sim::JointVector;
 
 // ---- JointLattice -------------------------------------------------------
 
 JointLattice::JointLattice(const ModeLattice& lattice, const sim::CollisionChecker& checker,
-                           const Config& start, const Goal& goal, bool escape)
+                           const JointVector& start, const Goal& goal, bool escape)
     : lattice_(lattice),
       checker_(checker),
       robot_(checker.robot()),
@@ -27,20 +27,20 @@ JointLattice::JointLattice(const ModeLattice& lattice, const sim::CollisionCheck
   intern(Key{}, start);
 }
 
-double JointLattice::time(const Config& a, const Config& b) const {
+double JointLattice::time(const JointVector& a, const JointVector& b) const {
   double t = 0.0;
   for (int j : lattice_.joints) t = std::max(t, std::abs(b[j] - a[j]) / robot_.limits(j).velocity);
   return t;
 }
 
-void JointLattice::fillPlate(State& st) const {
+void JointLattice::fill_plate(State& st) const {
   if (!std::holds_alternative<sim::PoseGoal>(goal_)) return;
-  const sim::PlateTarget t = robot_.plateTarget(st.q);
+  const sim::PlateTarget t = robot_.plate_target(st.q);
   st.plate = t.position;
   st.yaw = t.yaw;
 }
 
-bool JointLattice::withinGoal(const State& st) const {
+bool JointLattice::within_goal(const State& st) const {
   if (const auto* jg = std::get_if<sim::JointGoal>(&goal_)) {
     for (int j : lattice_.joints) {
       if (std::abs(st.q[j] - jg->q[j]) > jg->tolerance) return false;
@@ -54,7 +54,7 @@ bool JointLattice::withinGoal(const State& st) const {
   return false;
 }
 
-StateId JointLattice::intern(const Key& key, const Config& q, bool off_lattice) {
+StateId JointLattice::intern(const Key& key, const JointVector& q, bool off_lattice) {
   const auto it = index_.find(key);
   if (it != index_.end()) return it->second;
   const auto id = static_cast<StateId>(states_.size());
@@ -62,20 +62,20 @@ StateId JointLattice::intern(const Key& key, const Config& q, bool off_lattice) 
   st.q = q;
   st.key = key;
   st.off_lattice = off_lattice || key[sim::kNumJoints - 1] != 0;
-  fillPlate(st);
-  st.goal = !escape_ && withinGoal(st);
+  fill_plate(st);
+  st.goal = !escape_ && within_goal(st);
   states_.push_back(st);
   index_.emplace(key, id);
   return id;
 }
 
-StateId JointLattice::addGoalState(const Config& q) {
+StateId JointLattice::add_goal_state(const JointVector& q) {
   for (StateId id : snapped_) {
     if ((states_[static_cast<std::size_t>(id)].q - q).norm() < 1e-9) return id;
   }
   State st;
   st.q = q;
-  fillPlate(st);
+  fill_plate(st);
   st.goal = true;
   st.snapped = true;
   st.valid = 1;  // checked by the caller
@@ -86,11 +86,11 @@ StateId JointLattice::addGoalState(const Config& q) {
 
 bool JointLattice::valid(StateId s) {
   State& st = states_[static_cast<std::size_t>(s)];
-  if (st.valid < 0) st.valid = checker_.isValid(st.q) ? 1 : 0;
+  if (st.valid < 0) st.valid = checker_.is_valid(st.q) ? 1 : 0;
   return st.valid == 1;
 }
 
-bool JointLattice::isGoal(StateId s) {
+bool JointLattice::is_goal(StateId s) {
   if (escape_) return valid(s);
   return states_[static_cast<std::size_t>(s)].goal;
 }
@@ -112,25 +112,25 @@ void JointLattice::successors(StateId s, std::vector<search::Successor>& out) {
   // Adaptive primitives first: straight to the goal when it is near.
   if (const auto* pg = std::get_if<sim::PoseGoal>(&goal_)) {
     if ((from.plate - pg->target.position).norm() <= lattice_.snap_distance) {
-      for (const Config& q : robot_.armIk(pg->target, from.q)) {
-        if (!checker_.isValid(q) || !checker_.isMotionValid(from.q, q, false)) continue;
-        out.push_back({addGoalState(q), std::max(time(from.q, q), 1e-6)});
+      for (const JointVector& q : robot_.arm_ik(pg->target, from.q)) {
+        if (!checker_.is_valid(q) || !checker_.is_motion_valid(from.q, q, false)) continue;
+        out.push_back({add_goal_state(q), std::max(time(from.q, q), 1e-6)});
       }
     }
   } else if (!escape_ && std::holds_alternative<sim::JointGoal>(goal_) &&
              time(from.q, joint_goal_) <= lattice_.snap_time &&
-             checker_.isMotionValid(from.q, joint_goal_,
-                                    false)) {  // goal validity checked before the search
+             checker_.is_motion_valid(from.q, joint_goal_,
+                                      false)) {  // goal validity checked before the search
     // The straight move costs exactly the heuristic, a lower bound on any
     // path from here: no other successor can lead to a cheaper path.
-    out.push_back({addGoalState(joint_goal_), std::max(time(from.q, joint_goal_), 1e-6)});
+    out.push_back({add_goal_state(joint_goal_), std::max(time(from.q, joint_goal_), 1e-6)});
     return;
   }
 
   const std::size_t dims = lattice_.joints.size();
   for (const auto& prim : lattice_.primitives) {
     Key key = from.key;
-    Config q = from.q;
+    JointVector q = from.q;
     bool inside = true;
     for (std::size_t d = 0; d < dims && inside; ++d) {
       if (prim[d] == 0) continue;
@@ -141,9 +141,9 @@ void JointLattice::successors(StateId s, std::vector<search::Successor>& out) {
       inside = q[j] >= robot_.limits(j).lower && q[j] <= robot_.limits(j).upper;
     }
     if (!inside) continue;
-    const StateId id = intern(from.off_lattice ? offLatticeKey(q) : key, q);
+    const StateId id = intern(from.off_lattice ? off_lattice_key(q) : key, q);
     if (!escape_) {
-      if (!valid(id) || !checker_.isMotionValid(from.q, q, false)) continue;
+      if (!valid(id) || !checker_.is_motion_valid(from.q, q, false)) continue;
     }
     out.push_back({id, std::max(time(from.q, q), 1e-6)});
   }
@@ -152,21 +152,21 @@ void JointLattice::successors(StateId s, std::vector<search::Successor>& out) {
   // plate steps through the IK reach that in one move where single joint
   // steps would need combinations.
   if (escape_ && lattice_.plate_step > 0.0) {
-    const sim::PlateTarget here = robot_.plateTarget(from.q);
+    const sim::PlateTarget here = robot_.plate_target(from.q);
     for (int axis = 0; axis < 3; ++axis) {
       for (double sign : {1.0, -1.0}) {
         sim::PlateTarget t = here;
         t.position[axis] += sign * lattice_.plate_step;
-        const auto sols = robot_.armIk(t, from.q);
+        const auto sols = robot_.arm_ik(t, from.q);
         if (sols.empty() || (sols.front() - from.q).cwiseAbs().maxCoeff() > 0.1) continue;
-        const Config& q = sols.front();
-        out.push_back({intern(offLatticeKey(q), q, true), std::max(time(from.q, q), 1e-6)});
+        const JointVector& q = sols.front();
+        out.push_back({intern(off_lattice_key(q), q, true), std::max(time(from.q, q), 1e-6)});
       }
     }
   }
 }
 
-JointLattice::Key JointLattice::offLatticeKey(const Config& q) const {
+JointLattice::Key JointLattice::off_lattice_key(const JointVector& q) const {
   // Off-lattice states are told apart by their configuration at 1e-5.
   Key key{};
   for (std::size_t d = 0; d < lattice_.joints.size(); ++d) {
@@ -179,9 +179,9 @@ JointLattice::Key JointLattice::offLatticeKey(const Config& q) const {
 // ---- LineLattice --------------------------------------------------------
 
 LineLattice::LineLattice(const ModeLattice& lattice, const sim::CollisionChecker& checker,
-                         const Config& start, const sim::PoseGoal& goal)
+                         const JointVector& start, const sim::PoseGoal& goal)
     : lattice_(lattice), checker_(checker), robot_(checker.robot()) {
-  from_ = robot_.plateTarget(start);
+  from_ = robot_.plate_target(start);
   to_ = goal.target;
   // Yaw turns the shorter way round.
   to_.yaw = from_.yaw + std::remainder(to_.yaw - from_.yaw, 2.0 * M_PI);
@@ -192,7 +192,7 @@ LineLattice::LineLattice(const ModeLattice& lattice, const sim::CollisionChecker
   valid_.assign(static_cast<std::size_t>(count_), -1);
 }
 
-sim::PlateTarget LineLattice::targetAt(int i) const {
+sim::PlateTarget LineLattice::target_at(int i) const {
   const double s = static_cast<double>(i) / (count_ - 1);
   return {from_.position + s * (to_.position - from_.position),
           from_.yaw + s * (to_.yaw - from_.yaw)};
@@ -202,8 +202,8 @@ bool LineLattice::ensure(int i) {
   while (static_cast<int>(configs_.size()) <= i) {
     if (broken_at_ >= 0) return false;
     const int k = static_cast<int>(configs_.size());
-    const Config& prev = configs_.back();
-    const auto sols = robot_.armIk(targetAt(k), prev);
+    const JointVector& prev = configs_.back();
+    const auto sols = robot_.arm_ik(target_at(k), prev);
     // Nearest solution; a large jump means the IK changed branch.
     if (sols.empty() || (sols.front() - prev).cwiseAbs().maxCoeff() > 0.25) {
       broken_at_ = k;
@@ -214,12 +214,12 @@ bool LineLattice::ensure(int i) {
   return true;
 }
 
-bool LineLattice::staysOnLine(int i, int j) const {
-  const Config& a = configs_[static_cast<std::size_t>(i)];
-  const Config& b = configs_[static_cast<std::size_t>(j)];
+bool LineLattice::stays_on_line(int i, int j) const {
+  const JointVector& a = configs_[static_cast<std::size_t>(i)];
+  const JointVector& b = configs_[static_cast<std::size_t>(j)];
   const Eigen::Vector3d p0 = from_.position, dir = (to_.position - from_.position).normalized();
   for (double f : {0.25, 0.5, 0.75}) {
-    const Eigen::Vector3d p = robot_.platePose(a + f * (b - a)).translation();
+    const Eigen::Vector3d p = robot_.plate_pose(a + f * (b - a)).translation();
     const Eigen::Vector3d off = p - p0;
     if ((off - off.dot(dir) * dir).norm() > lattice_.line_tolerance) return false;
   }
@@ -245,13 +245,13 @@ void LineLattice::successors(StateId s, std::vector<search::Successor>& out) {
     const int j = std::min(i + step, count_ - 1);
     if (j == tried || !ensure(j)) continue;
     tried = j;
-    if (!staysOnLine(i, j)) continue;
+    if (!stays_on_line(i, j)) continue;
     std::int8_t& v = valid_[static_cast<std::size_t>(j)];
-    if (v < 0) v = checker_.isValid(configs_[static_cast<std::size_t>(j)]) ? 1 : 0;
+    if (v < 0) v = checker_.is_valid(configs_[static_cast<std::size_t>(j)]) ? 1 : 0;
     if (v == 0) continue;
-    const Config& a = configs_[static_cast<std::size_t>(i)];
-    const Config& b = configs_[static_cast<std::size_t>(j)];
-    if (!checker_.isMotionValid(a, b, false)) continue;
+    const JointVector& a = configs_[static_cast<std::size_t>(i)];
+    const JointVector& b = configs_[static_cast<std::size_t>(j)];
+    if (!checker_.is_motion_valid(a, b, false)) continue;
     double t = 0.0;
     for (int q : lattice_.joints)
       t = std::max(t, std::abs(b[q] - a[q]) / robot_.limits(q).velocity);

@@ -33,14 +33,14 @@ using Goal = std::variant<std::monostate, sim::JointGoal, sim::PoseGoal>;
 class JointLattice final : public search::Graph {
  public:
   JointLattice(const ModeLattice& lattice, const sim::CollisionChecker& checker,
-               const sim::Config& start, const Goal& goal, bool escape);
+               const sim::JointVector& start, const Goal& goal, bool escape);
 
   search::StateId start() const { return 0; }
-  const sim::Config& config(search::StateId s) const {
+  const sim::JointVector& config(search::StateId s) const {
     return states_[static_cast<std::size_t>(s)].q;
   }
   void successors(search::StateId s, std::vector<search::Successor>& out) override;
-  bool isGoal(search::StateId s) override;
+  bool is_goal(search::StateId s) override;
 
   // Execution-time lower bound to the goal (the heuristic).
   double heuristic(search::StateId s) const;
@@ -55,7 +55,7 @@ class JointLattice final : public search::Graph {
     }
   };
   struct State {
-    sim::Config q;
+    sim::JointVector q;
     Key key{};
     Eigen::Vector3d plate = Eigen::Vector3d::Zero();
     double yaw = 0.0;
@@ -65,21 +65,21 @@ class JointLattice final : public search::Graph {
     bool off_lattice = false;  // reached by a Cartesian step (M6)
   };
 
-  search::StateId intern(const Key& key, const sim::Config& q, bool off_lattice = false);
-  Key offLatticeKey(const sim::Config& q) const;
-  search::StateId addGoalState(const sim::Config& q);
+  search::StateId intern(const Key& key, const sim::JointVector& q, bool off_lattice = false);
+  Key off_lattice_key(const sim::JointVector& q) const;
+  search::StateId add_goal_state(const sim::JointVector& q);
   bool valid(search::StateId s);
-  bool withinGoal(const State& st) const;
-  double time(const sim::Config& a, const sim::Config& b) const;
-  void fillPlate(State& st) const;
+  bool within_goal(const State& st) const;
+  double time(const sim::JointVector& a, const sim::JointVector& b) const;
+  void fill_plate(State& st) const;
 
   const ModeLattice& lattice_;
   const sim::CollisionChecker& checker_;
   const sim::RobotModel& robot_;
   Goal goal_;
   bool escape_;
-  sim::Config start_;
-  sim::Config joint_goal_ = sim::Config::Zero();  // full config, for joint goals
+  sim::JointVector start_;
+  sim::JointVector joint_goal_ = sim::JointVector::Zero();  // full config, for joint goals
   std::vector<State> states_;
   std::unordered_map<Key, search::StateId, KeyHash> index_;
   std::vector<search::StateId> snapped_;
@@ -88,29 +88,29 @@ class JointLattice final : public search::Graph {
 class LineLattice final : public search::Graph {
  public:
   LineLattice(const ModeLattice& lattice, const sim::CollisionChecker& checker,
-              const sim::Config& start, const sim::PoseGoal& goal);
+              const sim::JointVector& start, const sim::PoseGoal& goal);
 
   search::StateId start() const { return 0; }
-  const sim::Config& config(search::StateId s) const {
+  const sim::JointVector& config(search::StateId s) const {
     return configs_[static_cast<std::size_t>(s)];
   }
   void successors(search::StateId s, std::vector<search::Successor>& out) override;
-  bool isGoal(search::StateId s) override { return s == count_ - 1; }
+  bool is_goal(search::StateId s) override { return s == count_ - 1; }
   double heuristic(search::StateId s) const;
   // IK failed or jumped between branches at this progress index (or -1).
-  int brokenAt() const { return broken_at_; }
+  int broken_at() const { return broken_at_; }
 
  private:
-  sim::PlateTarget targetAt(int i) const;
+  sim::PlateTarget target_at(int i) const;
   bool ensure(int i);  // IK configurations up to index i
-  bool staysOnLine(int i, int j) const;
+  bool stays_on_line(int i, int j) const;
 
   const ModeLattice& lattice_;
   const sim::CollisionChecker& checker_;
   const sim::RobotModel& robot_;
   sim::PlateTarget from_, to_;
   int count_ = 2;
-  std::vector<sim::Config> configs_;
+  std::vector<sim::JointVector> configs_;
   std::vector<std::int8_t> valid_;
   int broken_at_ = -1;
 };

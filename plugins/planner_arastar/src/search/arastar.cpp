@@ -8,7 +8,7 @@
 namespace plr::search {
 namespace {
 
-double threadCpuSeconds() {
+double thread_cpu_seconds() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
@@ -33,13 +33,13 @@ AraStar::Record& AraStar::record(StateId s) {
   return r;
 }
 
-AraStar::Stop AraStar::improvePath(Graph& graph, Clock::time_point deadline,
-                                   std::size_t max_expansions, SearchResult& result) {
+AraStar::Stop AraStar::improve_path(Graph& graph, Clock::time_point deadline,
+                                    std::size_t max_expansions, SearchResult& result) {
   std::size_t since_clock = 0;
   while (!open_.empty()) {
     const double goal_g = best_goal_ == kNoState ? std::numeric_limits<double>::infinity()
                                                  : records_[static_cast<std::size_t>(best_goal_)].g;
-    if (open_.topKey() >= goal_g) break;
+    if (open_.top_key() >= goal_g) break;
     if (max_expansions != 0 && result.expansions >= max_expansions) return Stop::kBudget;
     if (++since_clock == 8) {
       since_clock = 0;
@@ -58,16 +58,16 @@ AraStar::Stop AraStar::improvePath(Graph& graph, Clock::time_point deadline,
       if (ng >= n.g) continue;
       n.g = ng;
       n.parent = id;
-      if (graph.isGoal(succ.id)) {
+      if (graph.is_goal(succ.id)) {
         // Goals need no expansion: they end the path.
         if (best_goal_ == kNoState || ng < records_[static_cast<std::size_t>(best_goal_)].g)
           best_goal_ = succ.id;
         continue;
       }
       if (n.closed_iteration != iteration_) {
-        n.key = keyOf(n);
+        n.key = key_of(n);
         n.tie = n.h;
-        open_.pushOrUpdate(&n);
+        open_.push_or_update(&n);
       } else if (!n.incons) {
         n.incons = true;
         incons_.push_back(succ.id);
@@ -77,7 +77,7 @@ AraStar::Stop AraStar::improvePath(Graph& graph, Clock::time_point deadline,
   return Stop::kDone;
 }
 
-double AraStar::minUnexpandedF() const {
+double AraStar::min_unexpanded_f() const {
   double f = std::numeric_limits<double>::infinity();
   for (const Record* r : open_.items()) f = std::min(f, r->g + r->h);
   for (StateId s : incons_) {
@@ -87,7 +87,7 @@ double AraStar::minUnexpandedF() const {
   return f;
 }
 
-void AraStar::extractPath(SearchResult& result) const {
+void AraStar::extract_path(SearchResult& result) const {
   result.path.clear();
   for (StateId s = best_goal_; s != kNoState; s = records_[static_cast<std::size_t>(s)].parent) {
     result.path.push_back(s);
@@ -105,7 +105,7 @@ SearchResult AraStar::search(Graph& graph, Heuristic& heuristic, StateId start,
                                  std::chrono::duration<double>(options.time_limit_s));
   auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
 
-  const double cpu0 = threadCpuSeconds();
+  const double cpu0 = thread_cpu_seconds();
   heuristic_ = &heuristic;
   ++search_stamp_;
   iteration_ = 1;
@@ -118,16 +118,16 @@ SearchResult AraStar::search(Graph& graph, Heuristic& heuristic, StateId start,
   SearchResult result;
   Record& s0 = record(start);
   s0.g = 0.0;
-  if (graph.isGoal(start)) {
+  if (graph.is_goal(start)) {
     best_goal_ = start;
   } else {
-    s0.key = keyOf(s0);
+    s0.key = key_of(s0);
     s0.tie = s0.h;
     open_.push(&s0);
   }
 
   for (;;) {
-    const Stop stop = improvePath(graph, deadline, options.max_expansions, result);
+    const Stop stop = improve_path(graph, deadline, options.max_expansions, result);
     if (stop != Stop::kDone) {
       result.budget_exhausted = stop == Stop::kBudget;
       result.time_limit_hit = stop == Stop::kTime;
@@ -136,15 +136,15 @@ SearchResult AraStar::search(Graph& graph, Heuristic& heuristic, StateId start,
     ++result.iterations;
     if (best_goal_ == kNoState) break;  // OPEN exhausted: no path at any ε
     const bool first = result.path.empty();
-    extractPath(result);
+    extract_path(result);
     result.final_eps = eps_;
     // ARA*'s bound: cost / min over unexpanded states of g + h.
-    const double lower = minUnexpandedF();
+    const double lower = min_unexpanded_f();
     result.suboptimality_bound =
         std::min(eps_, std::isinf(lower) ? 1.0 : std::max(1.0, result.cost / lower));
     if (first) {
       result.first_solution_time_s = elapsed();
-      result.first_solution_cpu_s = threadCpuSeconds() - cpu0;
+      result.first_solution_cpu_s = thread_cpu_seconds() - cpu0;
       result.first_solution_expansions = result.expansions;
       if (std::isfinite(options.improve_time_s) && options.max_expansions == 0) {
         deadline = std::min(
@@ -164,7 +164,7 @@ SearchResult AraStar::search(Graph& graph, Heuristic& heuristic, StateId start,
       if (!open_.contains(&r)) open_.push(&r);
     }
     incons_.clear();
-    for (Record* r : open_.items()) r->key = keyOf(*r);
+    for (Record* r : open_.items()) r->key = key_of(*r);
     open_.rebuild();
   }
 

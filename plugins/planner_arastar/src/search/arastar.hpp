@@ -70,13 +70,13 @@ class AraStar {
   using Clock = std::chrono::steady_clock;
 
   Record& record(StateId s);
-  double keyOf(const Record& r) const { return r.g + eps_ * r.h; }
+  double key_of(const Record& r) const { return r.g + eps_ * r.h; }
   enum class Stop { kDone, kTime, kBudget };
   // kDone when the iteration completed (solution proven at ε or OPEN empty).
-  Stop improvePath(Graph& graph, Clock::time_point deadline, std::size_t max_expansions,
-                   SearchResult& result);
-  void extractPath(SearchResult& result) const;
-  double minUnexpandedF() const;
+  Stop improve_path(Graph& graph, Clock::time_point deadline, std::size_t max_expansions,
+                    SearchResult& result);
+  void extract_path(SearchResult& result) const;
+  double min_unexpanded_f() const;
 
   std::deque<Record> records_;  // by StateId; a deque keeps addresses stable
   IntrusiveHeap<Record> open_;

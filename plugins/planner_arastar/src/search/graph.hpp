@@ -24,7 +24,7 @@ class Graph {
   virtual ~Graph() = default;
   // Appends the successors of `s` to `out` (the caller clears it).
   virtual void successors(StateId s, std::vector<Successor>& out) = 0;
-  virtual bool isGoal(StateId s) = 0;
+  virtual bool is_goal(StateId s) = 0;
 };
 
 class Heuristic {

@@ -18,7 +18,7 @@ constexpr double kSqrt2 = 1.4142135623730951;
 
 }  // namespace
 
-GridMap loadGridMap(const std::string& path) {
+GridMap load_grid_map(const std::string& path) {
   std::ifstream in(path);
   if (!in) fail(path, "cannot open file");
   GridMap map;
@@ -54,7 +54,7 @@ GridMap loadGridMap(const std::string& path) {
   return map;
 }
 
-std::vector<GridQuery> loadScenario(const std::string& path) {
+std::vector<GridQuery> load_scenario(const std::string& path) {
   std::ifstream in(path);
   if (!in) fail(path, "cannot open file");
   std::vector<GridQuery> out;

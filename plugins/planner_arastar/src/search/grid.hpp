@@ -26,16 +26,16 @@ struct GridQuery {
 };
 
 // Throw std::runtime_error "<file>: <cause>" on unreadable or malformed input.
-GridMap loadGridMap(const std::string& path);
-std::vector<GridQuery> loadScenario(const std::string& path);
+GridMap load_grid_map(const std::string& path);
+std::vector<GridQuery> load_scenario(const std::string& path);
 
 class GridGraph final : public Graph {
  public:
   explicit GridGraph(const GridMap& map) : map_(map) {}
-  void setGoal(int x, int y) { goal_ = id(x, y); }
+  void set_goal(int x, int y) { goal_ = id(x, y); }
   StateId id(int x, int y) const { return y * map_.width + x; }
   void successors(StateId s, std::vector<Successor>& out) override;
-  bool isGoal(StateId s) override { return s == goal_; }
+  bool is_goal(StateId s) override { return s == goal_; }
 
  private:
   const GridMap& map_;
@@ -45,7 +45,7 @@ class GridGraph final : public Graph {
 class OctileHeuristic final : public Heuristic {
  public:
   explicit OctileHeuristic(const GridMap& map) : width_(map.width) {}
-  void setGoal(int x, int y) { gx_ = x, gy_ = y; }
+  void set_goal(int x, int y) { gx_ = x, gy_ = y; }
   double estimate(StateId s) override;
 
  private:

@@ -22,7 +22,7 @@ class IntrusiveHeap {
   std::size_t size() const { return items_.size(); }
   bool contains(const T* e) const { return e->heap_slot != 0; }
   T* top() const { return items_.front(); }
-  double topKey() const { return items_.front()->key; }
+  double top_key() const { return items_.front()->key; }
 
   void push(T* e) {
     items_.push_back(e);
@@ -35,7 +35,7 @@ class IntrusiveHeap {
     up(i);
     down(e->heap_slot - 1);
   }
-  void pushOrUpdate(T* e) {
+  void push_or_update(T* e) {
     if (contains(e)) {
       update(e);
     } else {
@@ -44,7 +44,7 @@ class IntrusiveHeap {
   }
   T* pop() {
     T* e = items_.front();
-    swapAt(0, items_.size() - 1);
+    swap_at(0, items_.size() - 1);
     items_.pop_back();
     e->heap_slot = 0;
     if (!items_.empty()) down(0);
@@ -65,7 +65,7 @@ class IntrusiveHeap {
   static bool less(const T* a, const T* b) {
     return a->key < b->key || (a->key == b->key && a->tie < b->tie);
   }
-  void swapAt(std::size_t i, std::size_t j) {
+  void swap_at(std::size_t i, std::size_t j) {
     std::swap(items_[i], items_[j]);
     items_[i]->heap_slot = i + 1;
     items_[j]->heap_slot = j + 1;
@@ -74,7 +74,7 @@ class IntrusiveHeap {
     while (i > 0) {
       const std::size_t p = (i - 1) / 2;
       if (!less(items_[i], items_[p])) break;
-      swapAt(i, p);
+      swap_at(i, p);
       i = p;
     }
   }
@@ -85,7 +85,7 @@ class IntrusiveHeap {
       if (l < items_.size() && less(items_[l], items_[m])) m = l;
       if (r < items_.size() && less(items_[r], items_[m])) m = r;
       if (m == i) return;
-      swapAt(i, m);
+      swap_at(i, m);
       i = m;
     }
   }

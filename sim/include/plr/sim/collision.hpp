@@ -2,7 +2,7 @@
 //
 // World: the trailer shell as an octree (octomap::OcTree -> fcl::OcTree) plus
 // every perceived box as an FCL box. Self-collision: every pair of links
-// except the URDF-adjacent ones and those allowed with allowCollision().
+// except the URDF-adjacent ones and those allowed with allow_collision().
 // Boxes held by the suction plate are attached to the plate link, so they
 // collide with the world and with the rest of the robot like part of the arm.
 //
@@ -40,7 +40,7 @@ struct CollisionOptions {
   double octree_resolution = 0.05;
   // Largest link travel (m) between two checked states of a motion.
   double motion_resolution = 0.02;
-  // Joint-limit tolerance of isValid().
+  // Joint-limit tolerance of is_valid().
   double limit_tolerance = 1e-9;
 };
 
@@ -52,7 +52,7 @@ struct CollisionStats {
 // Builds the occupancy octree of a trailer shell: floor (extended 5 m behind
 // the open rear, where the robot drives in), ceiling, side walls and front
 // wall, one voxel thick. For callers that have no perceived octree.
-std::shared_ptr<octomap::OcTree> makeTrailerOctree(const Trailer& trailer, double resolution);
+std::shared_ptr<octomap::OcTree> make_trailer_octree(const Trailer& trailer, double resolution);
 
 class CollisionChecker {
  public:
@@ -69,28 +69,29 @@ class CollisionChecker {
   const CollisionOptions& options() const;
 
   // Links `a` and `b` may touch. Throws std::invalid_argument on an unknown name.
-  void allowCollision(const std::string& a, const std::string& b);
+  void allow_collision(const std::string& a, const std::string& b);
   // World boxes left out of the checks (e.g. the box about to be grasped).
-  void ignoreBox(std::uint32_t id);
-  void clearIgnoredBoxes();
+  void ignore_box(std::uint32_t id);
+  void clear_ignored_boxes();
   // Rigidly attaches `box` to the plate at its current world pose, taken with
   // the robot at `q`; the same box is then ignored as a world obstacle. Its
   // shape is 3 mm smaller on every side: a box just gripped still touches
   // the floor or its neighbours, which the move away from them must not count.
-  void attachBox(const Box& box, const Config& q);
-  void detachAll();
+  void attach_box(const Box& box, const JointVector& q);
+  void detach_all();
 
   // Within joint limits and free of world and self collision.
-  bool isValid(const Config& q) const;
+  bool is_valid(const JointVector& q) const;
   // Both ends and the straight joint-space segment between them are valid.
   // With check_endpoints false the caller vouches for both ends.
-  bool isMotionValid(const Config& a, const Config& b, bool check_endpoints = true) const;
+  bool is_motion_valid(const JointVector& a, const JointVector& b,
+                       bool check_endpoints = true) const;
   // What collides at q, e.g. "arm_fore - box 12", "plate - trailer",
   // "arm_1 beyond limits"; empty if q is valid.
-  std::string describeCollision(const Config& q) const;
+  std::string describe_collision(const JointVector& q) const;
 
   const CollisionStats& stats() const;
-  void resetStats();
+  void reset_stats();
 
  private:
   struct Impl;

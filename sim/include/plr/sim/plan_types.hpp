@@ -34,16 +34,16 @@ enum class PlanMode : int {
 };
 
 // "M1 arm", ... ; "unknown" for values outside the enum.
-const char* toString(PlanMode mode);
+const char* to_string(PlanMode mode);
 
 // Joints a mode plans (configuration indices). M4 moves the arm joints but
 // plans one progress variable; M6 alone plans base and arm (+ nose lift).
-std::vector<int> plannedJoints(PlanMode mode);
+std::vector<int> planned_joints(PlanMode mode);
 
 // Reach these values of the mode's planned joints (others are ignored and
 // stay at their start values).
 struct JointGoal {
-  Config q = Config::Zero();
+  JointVector q = JointVector::Zero();
   double tolerance = 1e-3;  // per joint, rad or m
 };
 
@@ -56,7 +56,7 @@ struct PoseGoal {
 
 struct PlanQuery {
   PlanMode mode = PlanMode::kArm;
-  Config start = Config::Zero();
+  JointVector start = JointVector::Zero();
   // M3 and M5 take joint goals, M4 pose goals, M1 and M2 either; M6 none.
   std::variant<std::monostate, JointGoal, PoseGoal> goal;
 
@@ -90,7 +90,7 @@ enum class PlanStatus {
   kInvalidRequest,  // malformed query; message says what
 };
 
-const char* toString(PlanStatus status);
+const char* to_string(PlanStatus status);
 
 struct PlanStats {
   std::size_t expansions = 0;
@@ -112,16 +112,16 @@ struct PlanStats {
 
 struct PlanResult {
   PlanStatus status = PlanStatus::kNoPath;
-  std::string message;       // why, when not solved
-  std::vector<Config> path;  // waypoints, start .. goal (full configurations)
-  Trajectory trajectory;     // path timed within velocity/acceleration limits
+  std::string message;            // why, when not solved
+  std::vector<JointVector> path;  // waypoints, start .. goal (full configurations)
+  Trajectory trajectory;          // path timed within velocity/acceleration limits
   PlanStats stats;
 };
 
 // Empty if the query is well formed for this robot, else what is wrong
 // (e.g. "M3 nose needs a joint goal"). Checks types, finite values, limits
 // and time budgets; not collisions.
-std::string validateQuery(const PlanQuery& query, const RobotModel& robot);
+std::string validate_query(const PlanQuery& query, const RobotModel& robot);
 
 // Applies a query's held and ignored boxes to a checker for the lifetime of
 // the scope, then removes them again.
@@ -146,17 +146,18 @@ struct DecodedPlanRequest {
 
 // Throws std::invalid_argument naming the bad field, e.g.
 // "PlanRequest.start: needs 8 joint values, got 7".
-DecodedPlanRequest decodePlanRequest(const plr::msg::PlanRequest& request);
+DecodedPlanRequest decode_plan_request(const plr::msg::PlanRequest& request);
 // Finishes `out` with a PlanResponse; the trajectory is sampled every
 // `sample_dt` seconds (plus its end).
-void encodePlanResponse(const PlanResult& result, const std::string& planner, double sample_dt,
-                        flatbuffers::FlatBufferBuilder& out);
+void encode_plan_response(const PlanResult& result, const std::string& planner, double sample_dt,
+                          flatbuffers::FlatBufferBuilder& out);
 
 // CPU time consumed by the calling thread (s).
-double threadCpuSeconds();
+double thread_cpu_seconds();
 
 // Greedy deterministic shortcut: from each kept waypoint, jump to the
 // farthest later waypoint reachable by a valid straight motion.
-std::vector<Config> shortcutPath(const std::vector<Config>& path, const CollisionChecker& checker);
+std::vector<JointVector> shortcut_path(const std::vector<JointVector>& path,
+                                       const CollisionChecker& checker);
 
 }  // namespace plr::sim

@@ -18,14 +18,14 @@ namespace plr::sim {
 // scoop's belt, telescoping out of the conveyor). When the scoop's leading
 // edge is near the floor, a thin lip continues it down to the floor (after
 // the feeder's shape): what lets the scoop get under boxes.
-std::vector<LinkGeometry> robot_link_geometry(const RobotModel& model, const Config& q,
+std::vector<LinkGeometry> robot_link_geometry(const RobotModel& model, const JointVector& q,
                                               double belt_speed = 0.0,
                                               const std::string& conveyor_link = "nose_conveyor",
                                               const std::string& feeder_link = "nose_scoop");
 
 // The suction plate at q: the model's plate frame has its normal along +x,
 // the physics' along +z. Cup layout and forces come from `cups`.
-SuctionPlate suction_plate_at(const RobotModel& model, const Config& q,
+SuctionPlate suction_plate_at(const RobotModel& model, const JointVector& q,
                               const SuctionPlate& cups = {});
 
 }  // namespace plr::sim

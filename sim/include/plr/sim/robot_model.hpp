@@ -19,7 +19,7 @@
 namespace plr::sim {
 
 inline constexpr int kNumJoints = 8;
-using Config = Eigen::Matrix<double, kNumJoints, 1>;
+using JointVector = Eigen::Matrix<double, kNumJoints, 1>;
 
 enum JointIndex : int {
   kBaseX = 0,
@@ -80,30 +80,31 @@ struct PlateTarget {
 class RobotModel {
  public:
   // Throws std::runtime_error with a one-line message "<file>: <cause>".
-  static RobotModel fromUrdfFile(const std::string& path);
+  static RobotModel from_urdf_file(const std::string& path);
   // `source` names the text in error messages.
-  static RobotModel fromUrdfString(const std::string& xml, const std::string& source = "<string>");
+  static RobotModel from_urdf_string(const std::string& xml,
+                                     const std::string& source = "<string>");
 
   const std::vector<Link>& links() const { return links_; }
-  int linkIndex(const std::string& name) const;  // -1 if absent
-  int plateLink() const { return plate_link_; }
+  int link_index(const std::string& name) const;  // -1 if absent
+  int plate_link() const { return plate_link_; }
 
   // Link pairs allowed to touch besides parent/child (<allow_collision>).
-  const std::vector<std::pair<int, int>>& allowedCollisions() const { return allowed_; }
+  const std::vector<std::pair<int, int>>& allowed_collisions() const { return allowed_; }
 
   const JointLimits& limits(int joint) const { return limits_[joint]; }
-  const std::array<JointLimits, kNumJoints>& allLimits() const { return limits_; }
-  bool withinLimits(const Config& q, double tol = 1e-9) const;
+  const std::array<JointLimits, kNumJoints>& all_limits() const { return limits_; }
+  bool within_limits(const JointVector& q, double tol = 1e-9) const;
 
   // World pose of every link, indexed like links(). `poses` is resized.
-  void forwardKinematics(const Config& q, std::vector<Eigen::Isometry3d>& poses) const;
-  Eigen::Isometry3d platePose(const Config& q) const;
-  PlateTarget plateTarget(const Config& q) const;
+  void forward_kinematics(const JointVector& q, std::vector<Eigen::Isometry3d>& poses) const;
+  Eigen::Isometry3d plate_pose(const JointVector& q) const;
+  PlateTarget plate_target(const JointVector& q) const;
 
   // Closed-form IK of the arm for a plate target. base_x and the nose joints
   // are copied from `seed`. Returns every solution within joint limits,
   // nearest to the seed (in joint distance) first.
-  std::vector<Config> armIk(const PlateTarget& target, const Config& seed) const;
+  std::vector<JointVector> arm_ik(const PlateTarget& target, const JointVector& seed) const;
 
   // Arm dimensions read from the URDF (for reach checks and heuristics).
   struct ArmGeometry {

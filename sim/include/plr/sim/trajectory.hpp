@@ -17,25 +17,25 @@ namespace plr::sim {
 using Limits = std::array<JointLimits, kNumJoints>;
 
 // Rest-to-rest duration of the straight segment a -> b (s).
-double segmentDuration(const Config& a, const Config& b, const Limits& limits);
+double segment_duration(const JointVector& a, const JointVector& b, const Limits& limits);
 
 struct TrajectorySample {
-  Config position = Config::Zero();
-  Config velocity = Config::Zero();
-  Config acceleration = Config::Zero();
+  JointVector position = JointVector::Zero();
+  JointVector velocity = JointVector::Zero();
+  JointVector acceleration = JointVector::Zero();
 };
 
 class Trajectory {
  public:
   Trajectory() = default;
   // Throws std::invalid_argument if `waypoints` is empty.
-  static Trajectory fromWaypoints(const std::vector<Config>& waypoints, const Limits& limits);
+  static Trajectory from_waypoints(const std::vector<JointVector>& waypoints, const Limits& limits);
 
   bool empty() const { return waypoints_.empty(); }
   double duration() const { return start_times_.empty() ? 0.0 : start_times_.back(); }
-  const std::vector<Config>& waypoints() const { return waypoints_; }
+  const std::vector<JointVector>& waypoints() const { return waypoints_; }
   // Time at which waypoint i is reached.
-  double waypointTime(std::size_t i) const { return start_times_[i]; }
+  double waypoint_time(std::size_t i) const { return start_times_[i]; }
   // State at time t, clamped to [0, duration()].
   TrajectorySample sample(double t) const;
   // Samples every dt from 0, plus the final state.
@@ -48,7 +48,7 @@ class Trajectory {
     double peak_speed = 0.0;  // ds/dt
     double accel = 0.0;       // d2s/dt2
   };
-  std::vector<Config> waypoints_;
+  std::vector<JointVector> waypoints_;
   std::vector<Profile> profiles_;    // one per segment
   std::vector<double> start_times_;  // one per waypoint
 };
