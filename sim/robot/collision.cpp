@@ -1,5 +1,7 @@
 #include "plr/sim/collision.hpp"
 
+#include "plr/sim/octree.hpp"
+
 #include <fcl/fcl.h>
 #include <fcl/geometry/octree/octree.h>
 #include <octomap/octomap.h>
@@ -9,34 +11,6 @@
 #include <unordered_set>
 
 namespace plr::sim {
-
-std::shared_ptr<octomap::OcTree> make_trailer_octree(const Trailer& trailer, double resolution) {
-  auto tree = std::make_shared<octomap::OcTree>(resolution);
-  const double r = resolution;
-  const double x0 = -5.0, x1 = trailer.depth + r;
-  const double hw = trailer.width / 2.0;
-  auto mark = [&](double x, double y, double z) {
-    tree->updateNode(octomap::point3d(x, y, z), true, true);
-  };
-  // Voxel centres one voxel outside the free interior.
-  for (double x = x0 + r / 2; x < x1; x += r) {
-    for (double y = -hw - r / 2; y < hw + r; y += r) {
-      mark(x, y, -r / 2);
-      if (x >= 0.0) mark(x, y, trailer.height + r / 2);
-    }
-  }
-  for (double x = r / 2; x < x1; x += r) {
-    for (double z = r / 2; z < trailer.height + r; z += r) {
-      mark(x, -hw - r / 2, z);
-      mark(x, hw + r / 2, z);
-    }
-  }
-  for (double y = -hw - r / 2; y < hw + r; y += r) {
-    for (double z = r / 2; z < trailer.height + r; z += r) mark(trailer.depth + r / 2, y, z);
-  }
-  tree->updateInnerOccupancy();
-  return tree;
-}
 
 namespace {
 
@@ -503,8 +477,10 @@ CollisionChecker::CollisionChecker(const RobotModel& robot, const World& world,
   Impl& m = *impl_;
   m.robot = &robot;
   m.options = options;
-  m.octree =
-      octree ? std::move(octree) : make_trailer_octree(world.trailer, options.octree_resolution);
+  m.octree = octree ? std::move(octree)
+                    : std::shared_ptr<const octomap::OcTree>(build_trailer_octree(
+                          world.trailer, {.resolution = options.octree_resolution,
+                                          .wall_thickness = options.octree_resolution}));
   m.octree_obj = std::make_unique<fcl::CollisionObjectd>(std::make_shared<fcl::OcTreed>(m.octree));
   m.octree_obj->computeAABB();
   m.grid = std::make_unique<OccupancyGrid>(*m.octree);

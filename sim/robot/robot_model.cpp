@@ -1,5 +1,7 @@
 #include "plr/sim/robot_model.hpp"
 
+#include "plr/sim/shipped_files.hpp"
+
 #include <console_bridge/console.h>
 #include <tinyxml.h>
 
@@ -9,13 +11,17 @@
 #include <fstream>
 #include <map>
 #include <sstream>
-#include <stdexcept>
 
 namespace plr::sim {
 namespace {
 
+// The reader stops at the first error; the public functions return it.
+struct Failure {
+  std::string what;
+};
+
 [[noreturn]] void fail(const std::string& source, const std::string& cause) {
-  throw std::runtime_error(source + ": " + cause);
+  throw Failure{source + ": " + cause};
 }
 
 // urdfdom reports why it rejected a model only through console_bridge; keep
@@ -71,15 +77,31 @@ double wrap_near(double a, double lo, double hi) {
 
 }  // namespace
 
-RobotModel RobotModel::from_urdf_file(const std::string& path) {
+plr::Expected<RobotModel> RobotModel::from_urdf_file(const std::string& path) {
   std::ifstream in(path);
-  if (!in) fail(path, "cannot open file");
+  if (!in) return plr::make_error(PLR_ERR_INVALID, path + ": cannot open file");
   std::stringstream ss;
   ss << in.rdbuf();
   return from_urdf_string(ss.str(), path);
 }
 
-RobotModel RobotModel::from_urdf_string(const std::string& xml, const std::string& source) {
+plr::Expected<RobotModel> load_robot(const std::string& urdf) {
+  if (!urdf.empty()) return RobotModel::from_urdf_file(urdf);
+  const auto shipped = shipped_file("robots/unloader.urdf");
+  if (!shipped) return shipped.error();
+  return RobotModel::from_urdf_file(shipped->string());
+}
+
+plr::Expected<RobotModel> RobotModel::from_urdf_string(const std::string& xml,
+                                                       const std::string& source) {
+  try {
+    return parse_urdf(xml, source);
+  } catch (const Failure& f) {
+    return plr::make_error(PLR_ERR_INVALID, f.what);
+  }
+}
+
+RobotModel RobotModel::parse_urdf(const std::string& xml, const std::string& source) {
   TiXmlDocument doc;
   doc.Parse(xml.c_str());
   if (doc.Error()) {

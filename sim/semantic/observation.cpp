@@ -27,16 +27,18 @@ Height classify_height(double top, double mid, double high) {
 
 }  // namespace
 
-std::string ObservationParams::check() const {
+plr::Status ObservationParams::check() const {
   auto positive = [](double v) { return std::isfinite(v) && v > 0; };
-  if (!positive(h_pile)) return "h_pile: must be > 0";
-  if (!positive(wall_depth)) return "wall_depth: must be > 0";
-  if (!std::isfinite(min_pile_depth) || min_pile_depth < 0) return "min_pile_depth: must be >= 0";
+  auto bad = [](const char* what) { return plr::make_error(PLR_ERR_INVALID, what); };
+  if (!positive(h_pile)) return bad("param 'h_pile': must be > 0");
+  if (!positive(wall_depth)) return bad("param 'wall_depth': must be > 0");
+  if (!std::isfinite(min_pile_depth) || min_pile_depth < 0)
+    return bad("param 'min_pile_depth': must be >= 0");
   if (!positive(pile_mid) || !(pile_high > pile_mid))
-    return "pile_mid/pile_high: need 0 < mid < high";
+    return bad("params 'pile_mid'/'pile_high': need 0 < mid < high");
   if (!positive(wall_mid) || !(wall_high > wall_mid))
-    return "wall_mid/wall_high: need 0 < mid < high";
-  if (!(side_band > 0 && side_band < 1)) return "side_band: must be in (0, 1)";
+    return bad("params 'wall_mid'/'wall_high': need 0 < mid < high");
+  if (!(side_band > 0 && side_band < 1)) return bad("param 'side_band': must be in (0, 1)");
   return {};
 }
 

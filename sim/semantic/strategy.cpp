@@ -161,35 +161,37 @@ Strategy single_action(Action action, std::string name) {
   return s;
 }
 
-std::string validate(const Strategy& s) {
-  if (s.nodes.empty()) return "strategy has no nodes";
+plr::Status validate(const Strategy& s) {
+  auto bad = [](std::string why) { return plr::make_error(PLR_ERR_INVALID, std::move(why)); };
+  if (s.nodes.empty()) return bad("strategy has no nodes");
   if (s.root >= s.nodes.size())
-    return "root " + std::to_string(s.root) + " out of range (" + std::to_string(s.nodes.size()) +
-           " nodes)";
+    return bad("root " + std::to_string(s.root) + " out of range (" +
+               std::to_string(s.nodes.size()) + " nodes)");
   std::vector<int> parents(s.nodes.size(), 0);
   for (std::size_t i = 0; i < s.nodes.size(); ++i) {
     const auto& n = s.nodes[i];
     if (!valid_action(n.action))
-      return "node " + std::to_string(i) + ": invalid action " +
-             std::to_string(static_cast<int>(n.action));
+      return bad("node " + std::to_string(i) + ": invalid action " +
+                 std::to_string(static_cast<int>(n.action)));
     std::array<bool, kNumObservations> seen{};
     for (const auto& [o, child] : n.children) {
       if (!valid_observation(o))
-        return "node " + std::to_string(i) + ": invalid observation " +
-               std::to_string(static_cast<int>(o));
+        return bad("node " + std::to_string(i) + ": invalid observation " +
+                   std::to_string(static_cast<int>(o)));
       if (seen[static_cast<int>(o)])
-        return "node " + std::to_string(i) + ": two edges for " + to_string(o);
+        return bad("node " + std::to_string(i) + ": two edges for " + to_string(o));
       seen[static_cast<int>(o)] = true;
       if (child >= s.nodes.size())
-        return "node " + std::to_string(i) + ": child " + std::to_string(child) + " out of range";
+        return bad("node " + std::to_string(i) + ": child " + std::to_string(child) +
+                   " out of range");
       ++parents[child];
     }
   }
-  if (parents[s.root] != 0) return "root " + std::to_string(s.root) + " has a parent";
+  if (parents[s.root] != 0) return bad("root " + std::to_string(s.root) + " has a parent");
   for (std::size_t i = 0; i < s.nodes.size(); ++i) {
     if (i != s.root && parents[i] != 1)
-      return "node " + std::to_string(i) + " has " + std::to_string(parents[i]) +
-             " parents (a tree needs exactly one)";
+      return bad("node " + std::to_string(i) + " has " + std::to_string(parents[i]) +
+                 " parents (a tree needs exactly one)");
   }
   // One parent each and a parentless root can still hide a cycle cut off from
   // the root; count what the root reaches.
@@ -202,8 +204,8 @@ std::string validate(const Strategy& s) {
     for (const auto& edge : s.nodes[n].children) stack.push_back(edge.second);
   }
   if (reached != s.nodes.size())
-    return std::to_string(s.nodes.size() - std::min(reached, s.nodes.size())) +
-           " nodes are not reachable from the root";
+    return bad(std::to_string(s.nodes.size() - std::min(reached, s.nodes.size())) +
+               " nodes are not reachable from the root");
   return {};
 }
 
@@ -234,7 +236,7 @@ Strategy from_message(const plr::msg::Strategy& m, const std::string& origin) {
       s.nodes.push_back(std::move(node));
     }
   }
-  if (const auto err = validate(s); !err.empty()) throw StrategyFileError(origin + ": " + err);
+  if (const auto ok = validate(s); !ok) throw StrategyFileError(origin + ": " + ok.error().message);
   return s;
 }
 
@@ -325,7 +327,7 @@ Strategy parse_yaml(const std::string& text, const std::string& origin) {
     }
     s.nodes.push_back(std::move(node));
   }
-  if (const auto err = validate(s); !err.empty()) throw StrategyFileError(origin + ": " + err);
+  if (const auto ok = validate(s); !ok) throw StrategyFileError(origin + ": " + ok.error().message);
   return s;
 }
 
@@ -337,8 +339,9 @@ bool is_yaml(const std::filesystem::path& file) {
 }  // namespace
 
 void save_strategy(const Strategy& s, const std::filesystem::path& file) {
-  if (const auto err = validate(s); !err.empty())
-    throw StrategyFileError(file.string() + ": refusing to write an invalid strategy: " + err);
+  if (const auto ok = validate(s); !ok)
+    throw StrategyFileError(file.string() +
+                            ": refusing to write an invalid strategy: " + ok.error().message);
   std::string content;
   if (is_yaml(file)) {
     content = format_yaml(s);

@@ -1,7 +1,8 @@
 #include "plr/sim/octree.hpp"
 
 #include <cmath>
-#include <stdexcept>
+#include <cstdio>
+#include <cstdlib>
 
 namespace plr::sim {
 namespace {
@@ -29,18 +30,23 @@ void fill_block(octomap::OcTree& tree, const Eigen::Vector3d& lo, const Eigen::V
 
 std::unique_ptr<octomap::OcTree> build_trailer_octree(const Trailer& t,
                                                       const OctreeOptions& options) {
-  if (!(options.resolution > 0.0) || !(options.wall_thickness > 0.0)) {
-    throw std::invalid_argument("build_trailer_octree: resolution and wall thickness must be > 0");
+  if (!(options.resolution > 0.0) || !(options.wall_thickness > 0.0) ||
+      !(options.floor_behind >= 0.0)) {
+    std::fprintf(stderr,
+                 "build_trailer_octree: resolution %g, wall thickness %g, floor behind %g\n",
+                 options.resolution, options.wall_thickness, options.floor_behind);
+    std::abort();  // a caller's bug: parameters are checked where they are read
   }
   auto tree = std::make_unique<octomap::OcTree>(options.resolution);
   const double th = std::max(options.wall_thickness, options.resolution);
   const double w = 0.5 * t.width;
-  // Side walls and floor/ceiling span the full depth; the front wall closes x = depth.
-  fill_block(*tree, {0.0, -w - th, -th}, {t.depth + th, w + th, 0.0});                 // floor
-  fill_block(*tree, {0.0, -w - th, t.height}, {t.depth + th, w + th, t.height + th});  // ceiling
-  fill_block(*tree, {0.0, -w - th, 0.0}, {t.depth + th, -w, t.height});                // left
-  fill_block(*tree, {0.0, w, 0.0}, {t.depth + th, w + th, t.height});                  // right
-  fill_block(*tree, {t.depth, -w, 0.0}, {t.depth + th, w, t.height});                  // front
+  // Side walls and ceiling span the full depth; the front wall closes
+  // x = depth; the floor goes on behind the open rear, where the robot drives.
+  fill_block(*tree, {-options.floor_behind, -w - th, -th}, {t.depth + th, w + th, 0.0});  // floor
+  fill_block(*tree, {0.0, -w - th, t.height}, {t.depth + th, w + th, t.height + th});     // ceiling
+  fill_block(*tree, {0.0, -w - th, 0.0}, {t.depth + th, -w, t.height});                   // left
+  fill_block(*tree, {0.0, w, 0.0}, {t.depth + th, w + th, t.height});                     // right
+  fill_block(*tree, {t.depth, -w, 0.0}, {t.depth + th, w, t.height});                     // front
   tree->updateInnerOccupancy();
   return tree;
 }

@@ -77,7 +77,7 @@ std::string render_svg(const World& world, View view, const RenderOptions& o) {
     svg += fmt::format(
         "<text x=\"{:.0f}\" y=\"16\" font-family=\"sans-serif\" "
         "font-size=\"14\">{}</text>\n",
-        margin, o.title);
+        margin, xml_escape(o.title));
   }
   const Eigen::Vector2d c0 = px({0.0, v_max}), c1 = px({t.depth, v_min});
   svg += fmt::format(
@@ -131,6 +131,30 @@ std::string render_svg(const World& world, View view, const RenderOptions& o) {
 void write_svg(const std::filesystem::path& file, const World& world, View view,
                const RenderOptions& options) {
   write_file_atomically(file, render_svg(world, view, options));
+}
+
+std::string xml_escape(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  for (char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
 }
 
 }  // namespace plr::sim

@@ -1,42 +1,41 @@
-// Plug-in: the ARA* lattice planner behind the "plan" service
-// (PlanRequest -> PlanResponse, sdk/schemas/plan.fbs).
+// Plug-in: the ARA* lattice planner (plr/planning/lattice_planner.hpp)
+// behind the `plan` service. Parameter `lattice`: a lattice file (the
+// shipped robots/unloader_lattice.yaml by default).
 #include <plr/plugin.hpp>
 
-#include <memory>
-
-#include "arastar_planner.hpp"
-#include "planner_node.hpp"
+#include "plr/planning/lattice_planner.hpp"
+#include "plr/planning/planner_node.hpp"
+#include "plr/sim/shipped_files.hpp"
 
 namespace {
 
-class PlannerArastarNode : public plr::sim::PlannerNode {
+using plr::planning::LatticeConfig;
+using plr::planning::Planner;
+
+class PlannerArastarNode final : public plr::planning::PlannerNode {
  public:
   using PlannerNode::PlannerNode;
 
  protected:
-  plr::Status on_configure() override {
-    params().allow_only({"urdf", "primitives", "sample_dt"});
-    // Throws "<file>: <cause>", which configure reports as invalid.
-    planner_ = std::make_unique<plr::arastar::Planner>(plr::arastar::LatticeConfig::from_file(
-        params().get<std::string>("primitives", PLR_ARASTAR_PRIMITIVES)));
-    return provide_service("arastar");
-  }
+  std::vector<std::string> planner_params() const override { return {"lattice"}; }
 
-  plr::Status on_cleanup() override {
-    planner_.reset();
-    return PlannerNode::on_cleanup();
+  plr::Expected<std::unique_ptr<Planner>> make_planner() override {
+    std::string file = params().get<std::string>("lattice", "");
+    if (file.empty()) {
+      const auto shipped = plr::sim::shipped_file("robots/unloader_lattice.yaml");
+      if (!shipped)
+        return plr::make_error(PLR_ERR_INVALID, "param 'lattice': " + shipped.error().message);
+      file = shipped->string();
+    }
+    auto config = LatticeConfig::from_file(file);
+    if (!config)
+      return plr::make_error(PLR_ERR_INVALID, "param 'lattice': " + config.error().message);
+    return std::unique_ptr<Planner>(
+        std::make_unique<plr::planning::LatticePlanner>(std::move(*config)));
   }
-
-  plr::sim::PlanResult plan(const plr::sim::PlanQuery& query,
-                            plr::sim::CollisionChecker& checker) override {
-    return planner_->plan(query, checker);
-  }
-
- private:
-  std::unique_ptr<plr::arastar::Planner> planner_;
 };
 
 }  // namespace
 
-PLR_PLUGIN(PlannerArastarNode, "planner_arastar", "0.1.0", PLR_KIND_PLANNER,
+PLR_PLUGIN(PlannerArastarNode, "planner_arastar", "0.2.0", PLR_KIND_PLANNER,
            "ARA* lattice motion planner (modes M1-M6) serving `plan`")

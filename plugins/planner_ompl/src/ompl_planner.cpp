@@ -1,5 +1,7 @@
 #include "ompl_planner.hpp"
 
+#include "plr/planning/shortcut.hpp"
+
 #include <ompl/base/DiscreteMotionValidator.h>
 #include <ompl/base/MotionValidator.h>
 #include <ompl/base/ProblemDefinition.h>
@@ -20,10 +22,10 @@ namespace plr::ompl_planner {
 
 namespace ob = ompl::base;
 namespace og = ompl::geometric;
+using planning::PlanMode;
+using planning::PlanResult;
+using planning::PlanStatus;
 using sim::JointVector;
-using sim::PlanMode;
-using sim::PlanResult;
-using sim::PlanStatus;
 
 namespace {
 
@@ -158,16 +160,16 @@ class QueryHash {
   std::uint64_t h_ = 1469598103934665603ull;
 };
 
-std::uint32_t query_seed(const sim::PlanQuery& q, std::uint32_t seed) {
+std::uint32_t query_seed(const planning::PlanQuery& q, std::uint32_t seed) {
   QueryHash h;
   h.add(seed);
   h.add(static_cast<int>(q.mode));
   h.add(q.start);
   h.add(q.goal.index());
-  if (const auto* jg = std::get_if<sim::JointGoal>(&q.goal)) {
+  if (const auto* jg = std::get_if<planning::JointGoal>(&q.goal)) {
     h.add(jg->q);
     h.add(jg->tolerance);
-  } else if (const auto* pg = std::get_if<sim::PoseGoal>(&q.goal)) {
+  } else if (const auto* pg = std::get_if<planning::PoseGoal>(&q.goal)) {
     for (int i = 0; i < 3; ++i) h.add(pg->target.position[i]);
     h.add(pg->target.yaw);
   }
@@ -227,36 +229,17 @@ std::vector<JointVector> random_shortcut(std::vector<JointVector> path,
 
 }  // namespace
 
-Planner::Planner(const Options& options) : options_(options) {
+OmplPlanner::OmplPlanner(const Options& options) : options_(options) {
   static std::once_flag once;
   std::call_once(once, [] { ompl::msg::setLogLevel(ompl::msg::LOG_WARN); });
 }
 
-PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& checker) {
+PlanResult OmplPlanner::do_plan(const planning::PlanQuery& query, sim::CollisionChecker& checker) {
   const auto t0 = std::chrono::steady_clock::now();
-  const double cpu0 = sim::thread_cpu_seconds();
+  const double cpu0 = thread_cpu_seconds();
   const sim::RobotModel& robot = checker.robot();
-  if (const std::string err = sim::validate_query(query, robot); !err.empty()) {
-    return fail(PlanStatus::kInvalidRequest, err);
-  }
-  if (query.mode == PlanMode::kEscape) {
-    return fail(PlanStatus::kInvalidRequest,
-                "M6 escape is a Dijkstra search: use the ARA* planner");
-  }
-  const sim::QueryScope scope(checker, query);
-  checker.reset_stats();
-  auto finish = [&](PlanResult r) {
-    r.stats.planning_time_s = seconds_since(t0);
-    r.stats.collision_checks = checker.stats().state_checks + checker.stats().sweep_checks;
-    return r;
-  };
-  if (!checker.is_valid(query.start)) {
-    return finish(
-        fail(PlanStatus::kStartInvalid, "start: " + checker.describe_collision(query.start)));
-  }
-
   const bool line = query.mode == PlanMode::kArmCartesian;
-  const std::vector<int> joints = sim::planned_joints(query.mode);
+  const std::vector<int> joints = planning::planned_joints(query.mode);
   const unsigned dims = line ? 1u : static_cast<unsigned>(joints.size());
   auto space = std::make_shared<ob::RealVectorStateSpace>(dims);
   ob::RealVectorBounds bounds(dims);
@@ -264,7 +247,7 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
   if (line) {
     bounds.setLow(0.0);
     bounds.setHigh(1.0);
-    const auto& pg = std::get<sim::PoseGoal>(query.goal);
+    const auto& pg = std::get<planning::PoseGoal>(query.goal);
     mapping = std::make_unique<LineMapping>(robot, query.start, pg.target);
   } else {
     for (unsigned i = 0; i < dims; ++i) {
@@ -305,18 +288,18 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
     ob::ScopedState<> g(space);
     g[0] = 1.0;
     if (!si->isValid(g.get()))
-      return finish(fail(PlanStatus::kGoalInvalid, "goal: no valid IK at the line's end"));
+      return (fail(PlanStatus::kGoalInvalid, "goal: no valid IK at the line's end"));
     goals->addState(g);
-  } else if (const auto* jg = std::get_if<sim::JointGoal>(&query.goal)) {
+  } else if (const auto* jg = std::get_if<planning::JointGoal>(&query.goal)) {
     JointVector q = query.start;
     for (int j : joints) q[j] = jg->q[j];
     if (!checker.is_valid(q))
-      return finish(fail(PlanStatus::kGoalInvalid, "goal: " + checker.describe_collision(q)));
+      return (fail(PlanStatus::kGoalInvalid, "goal: " + checker.describe_collision(q)));
     ob::ScopedState<> g(space);
     to_state(q, g);
     goals->addState(g);
   } else {
-    const auto& pg = std::get<sim::PoseGoal>(query.goal);
+    const auto& pg = std::get<planning::PoseGoal>(query.goal);
     std::vector<double> bases{query.start[sim::kBaseX]};
     if (query.mode == PlanMode::kArmBase) {
       // Base positions from which the plate target is within the arm's reach.
@@ -339,7 +322,7 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
       if (goals->getStateCount() >= 8) break;
     }
     if (goals->getStateCount() == 0) {
-      return finish(fail(PlanStatus::kGoalInvalid, "goal: no collision-free arm IK solution"));
+      return (fail(PlanStatus::kGoalInvalid, "goal: no collision-free arm IK solution"));
     }
   }
   pdef->setGoal(goals);
@@ -371,10 +354,10 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
     result.message = budget_hit ? "no solution within the expansion budget of " +
                                       std::to_string(query.max_expansions)
                                 : "no solution within the time limit";
-    return finish(result);
+    return result;
   }
   result.stats.first_solution_s = seconds_since(t0);
-  result.stats.first_solution_cpu_s = sim::thread_cpu_seconds() - cpu0;
+  result.stats.first_solution_cpu_s = thread_cpu_seconds() - cpu0;
   auto& path = *pdef->getSolutionPath()->as<og::PathGeometric>();
   std::vector<JointVector> configs;
   if (line) {
@@ -385,16 +368,15 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
   for (std::size_t i = 0; i < path.getStateCount(); ++i) {
     JointVector q;
     if (!mapping->to_joint_vector(path.getState(i), q))
-      return finish(fail(PlanStatus::kNoPath, "lost IK on the line"));
+      return (fail(PlanStatus::kNoPath, "lost IK on the line"));
     configs.push_back(q);
   }
   if (!line) {
     std::mt19937 rng(seed);
-    configs = sim::shortcut_path(random_shortcut(configs, checker, rng), checker);
+    configs = planning::shortcut_path(random_shortcut(configs, checker, rng), checker);
   }
   result.status = PlanStatus::kSolved;
   result.path = configs;
-  result.trajectory = sim::Trajectory::from_waypoints(configs, robot.all_limits());
   double cost = 0.0;
   for (std::size_t i = 1; i < configs.size(); ++i) {
     double t = 0.0;
@@ -404,7 +386,7 @@ PlanResult Planner::plan(const sim::PlanQuery& query, sim::CollisionChecker& che
     cost += t;
   }
   result.stats.cost = cost;
-  return finish(result);
+  return result;
 }
 
 }  // namespace plr::ompl_planner

@@ -1,12 +1,10 @@
-// RRTConnect (OMPL) with shortcutting on the same collision checker and the
-// same query/result types as the ARA* lattice planner, for comparison and as
-// an alternative plug-in.
+// RRTConnect (OMPL) with shortcutting behind the planner contract
+// (plr/planning/planner.hpp), for comparison and as an alternative plug-in.
 //
 // Joint modes (M1, M2, M3, M5) plan in the mode's joint space; pose goals
 // become goal states from the arm IK (M2: at several base positions). M4
 // plans the plate's progress along its line (states map to configurations
-// through the IK). M6 is not a sampling problem: starts in collision are
-// reported as kStartInvalid and M6 queries as kInvalidRequest.
+// through the IK). M6 and starts in collision are the contract's escape.
 //
 // Reproducible per query: OMPL's RNG::setSeed only seeds the process-wide
 // sequence from which every RNG instance draws its seed, so results would
@@ -18,7 +16,7 @@
 
 #include <cstdint>
 
-#include "plr/sim/plan_types.hpp"
+#include "plr/planning/planner.hpp"
 
 namespace plr::ompl_planner {
 
@@ -30,10 +28,14 @@ struct Options {
   std::uint32_t seed = 1;
 };
 
-class Planner {
+class OmplPlanner final : public planning::Planner {
  public:
-  explicit Planner(const Options& options = {});
-  sim::PlanResult plan(const sim::PlanQuery& query, sim::CollisionChecker& checker);
+  explicit OmplPlanner(const Options& options = {});
+  std::string name() const override { return "rrtconnect"; }
+
+ protected:
+  planning::PlanResult do_plan(const planning::PlanQuery& query,
+                               sim::CollisionChecker& checker) override;
 
  private:
   Options options_;

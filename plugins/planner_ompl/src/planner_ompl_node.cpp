@@ -1,32 +1,23 @@
-// Plug-in: RRTConnect (OMPL) with shortcutting behind the "plan" service
-// (PlanRequest -> PlanResponse, sdk/schemas/plan.fbs).
+// Plug-in: RRTConnect (OMPL) with shortcutting behind the `plan` service.
 #include <plr/plugin.hpp>
 
 #include "ompl_planner.hpp"
-#include "planner_node.hpp"
+#include "plr/planning/planner_node.hpp"
 
 namespace {
 
-class PlannerOmplNode : public plr::sim::PlannerNode {
+class PlannerOmplNode final : public plr::planning::PlannerNode {
  public:
   using PlannerNode::PlannerNode;
 
  protected:
-  plr::Status on_configure() override {
-    params().allow_only({"urdf", "sample_dt"});
-    return provide_service("rrtconnect");
+  plr::Expected<std::unique_ptr<plr::planning::Planner>> make_planner() override {
+    return std::unique_ptr<plr::planning::Planner>(
+        std::make_unique<plr::ompl_planner::OmplPlanner>());
   }
-
-  plr::sim::PlanResult plan(const plr::sim::PlanQuery& query,
-                            plr::sim::CollisionChecker& checker) override {
-    return planner_.plan(query, checker);
-  }
-
- private:
-  plr::ompl_planner::Planner planner_;
 };
 
 }  // namespace
 
-PLR_PLUGIN(PlannerOmplNode, "planner_ompl", "0.1.0", PLR_KIND_PLANNER,
-           "RRTConnect motion planner (modes M1-M5) serving `plan`")
+PLR_PLUGIN(PlannerOmplNode, "planner_ompl", "0.2.0", PLR_KIND_PLANNER,
+           "RRTConnect motion planner (modes M1-M5; M6 escape) serving `plan`")

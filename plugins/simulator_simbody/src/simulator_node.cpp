@@ -52,8 +52,9 @@ class SimulatorNode : public Node {
   Status on_configure() override {
     params().allow_only({"urdf", "octree_resolution", "control_period_s", "belt_speed",
                          "checkpoint_dir", "max_settle_s", "carry_max_s"});
-    model_.emplace(
-        sim::RobotModel::from_urdf_file(params().get<std::string>("urdf", PLR_UNLOADER_URDF)));
+    auto robot = sim::load_robot(params().get<std::string>("urdf", ""));
+    if (!robot) return make_error(PLR_ERR_INVALID, "param 'urdf': " + robot.error().message);
+    model_.emplace(std::move(*robot));
     resolution_ = params().get<double>("octree_resolution", 0.05);
     period_ = params().get<double>("control_period_s", 0.01);
     belt_speed_ = params().get<double>("belt_speed", 0.8);

@@ -23,8 +23,8 @@
 #include <unordered_set>
 
 #include "instantiate.hpp"
+#include "plr/planning/plan_query.hpp"
 #include "plr/sim/observation.hpp"
-#include "plr/sim/plan_types.hpp"
 #include "plr/sim/render.hpp"
 #include "plr/sim/robot_model.hpp"
 #include "plr/sim/strategy.hpp"
@@ -37,7 +37,7 @@ namespace {
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 using msg::Suction;
-using sim::PlanMode;
+using planning::PlanMode;
 
 // Unwinds the worker when the node is deactivated.
 struct Stopped {};
@@ -157,9 +157,7 @@ class ExecutorNode : public plr::Node {
     obs_.pile_high = params().get<double>("pile_high", obs_.pile_high);
     obs_.wall_mid = params().get<double>("wall_mid", obs_.wall_mid);
     obs_.wall_high = params().get<double>("wall_high", obs_.wall_high);
-    if (const auto err = obs_.check(); !err.empty())
-      return make_error(PLR_ERR_INVALID,
-                        "param '" + err.substr(0, err.find(':')) + "'" + err.substr(err.find(':')));
+    if (auto ok = obs_.check(); !ok) return ok;
     plan_timeout_s_ = params().get<double>("plan_timeout_s", 5.0);
     plan_expansions_ = params().get<std::uint64_t>("plan_expansions", plan_expansions_);
     plan_epsilons_ = params().get<std::vector<double>>("plan_epsilons", plan_epsilons_);
@@ -197,12 +195,9 @@ class ExecutorNode : public plr::Node {
       return make_error(PLR_ERR_INVALID, "param 'pick_candidates': must be >= 1");
     if (grip_attempts_ == 0)
       return make_error(PLR_ERR_INVALID, "param 'grip_attempts': must be >= 1");
-    try {
-      robot_ =
-          sim::RobotModel::from_urdf_file(params().get<std::string>("urdf", PLR_UNLOADER_URDF));
-    } catch (const std::exception& e) {
-      return make_error(PLR_ERR_INVALID, std::string("param 'urdf': ") + e.what());
-    }
+    auto robot = sim::load_robot(params().get<std::string>("urdf", ""));
+    if (!robot) return make_error(PLR_ERR_INVALID, "param 'urdf': " + robot.error().message);
+    robot_ = std::move(*robot);
     auto status = ctx().advertise<msg::Statistics>("executor/status");
     if (!status) return status.error();
     status_ = *status;

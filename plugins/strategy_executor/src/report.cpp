@@ -1,5 +1,7 @@
 #include "report.hpp"
 
+#include <plr/sim/render.hpp>
+
 #include <plr/sim/atomic_file.hpp>
 
 #include <fcntl.h>
@@ -96,7 +98,7 @@ std::string curve_svg(const std::vector<CurvePoint>& curve, std::uint32_t total,
       "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" "
       "font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" "
       "fill=\"white\"/>\n<text x=\"{}\" y=\"24\" font-size=\"14\">{}</text>\n",
-      kW, kH, kL, title);
+      kW, kH, kL, sim::xml_escape(title));
   // Axes with five ticks each.
   svg += fmt::format(
       "<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"black\"/>\n"

@@ -31,9 +31,7 @@ class HardcodedStrategy : public plr::Node {
     obs_.wall_high = params().get<double>("wall_high", obs_.wall_high);
     h_min_ = params().get<double>("h_min", 0.5);
     d_min_ = params().get<double>("d_min", 0.5);
-    if (const auto err = obs_.check(); !err.empty())
-      return plr::make_error(PLR_ERR_INVALID, "param '" + err.substr(0, err.find(':')) + "'" +
-                                                  err.substr(err.find(':')));
+    if (auto ok = obs_.check(); !ok) return ok;
     if (!(h_min_ >= 0)) return plr::make_error(PLR_ERR_INVALID, "param 'h_min': must be >= 0");
     if (!(d_min_ >= 0)) return plr::make_error(PLR_ERR_INVALID, "param 'd_min': must be >= 0");
     return ctx().provide<plr::msg::NextStrategyRequest, plr::msg::NextStrategyReply>(

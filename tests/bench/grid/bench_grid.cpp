@@ -10,8 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "search/arastar.hpp"
-#include "search/grid.hpp"
+#include "plr/planning/search/arastar.hpp"
+#include "plr/planning/search/grid.hpp"
 
 int main(int argc, char** argv) {
   std::string map_path, scen_path;

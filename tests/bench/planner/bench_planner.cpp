@@ -18,14 +18,15 @@
 
 #include <nlohmann/json.hpp>
 
-#include "arastar_planner.hpp"
 #include "ompl_planner.hpp"
+#include "plr/planning/lattice_planner.hpp"
 #include "plr/sim/collision.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/octree.hpp"
-#include "plr/sim/plan_types.hpp"
+#include "plr/sim/shipped_files.hpp"
 
 using namespace plr::sim;
+using namespace plr::planning;
 
 namespace {
 
@@ -233,7 +234,7 @@ int main(int argc, char** argv) {
   bool quick = false, json = false, verbose = false;
   int only_mode = 0;
   std::uint64_t seed = 1, budget = 0;
-  std::string primitives = PLR_ARASTAR_PRIMITIVES;
+  std::string primitives = shipped_file("robots/unloader_lattice.yaml").value().string();
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--quick") == 0) {
       quick = true;
@@ -256,9 +257,14 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  const RobotModel robot = RobotModel::from_urdf_file(PLR_UNLOADER_URDF);
-  plr::arastar::Planner arastar(plr::arastar::LatticeConfig::from_file(primitives));
-  plr::ompl_planner::Planner rrt({0.0, static_cast<std::uint32_t>(seed)});
+  const RobotModel robot = load_robot().value();
+  auto lattice = LatticeConfig::from_file(primitives);
+  if (!lattice) {
+    std::fprintf(stderr, "bench_planner: %s\n", lattice.error().message.c_str());
+    return 2;
+  }
+  LatticePlanner arastar(std::move(*lattice));
+  plr::ompl_planner::OmplPlanner rrt({0.0, static_cast<std::uint32_t>(seed)});
 
   std::mt19937_64 rng(seed);
   std::vector<Scene> scenes;

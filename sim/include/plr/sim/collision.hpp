@@ -36,7 +36,8 @@ class OcTree;
 namespace plr::sim {
 
 struct CollisionOptions {
-  // Voxel size of the trailer octree built when none is given.
+  // Voxel size (and wall thickness) of the trailer octree built when none is
+  // given (plr/sim/octree.hpp).
   double octree_resolution = 0.05;
   // Largest link travel (m) between two checked states of a motion.
   double motion_resolution = 0.02;
@@ -48,11 +49,6 @@ struct CollisionStats {
   std::uint64_t state_checks = 0;
   std::uint64_t sweep_checks = 0;
 };
-
-// Builds the occupancy octree of a trailer shell: floor (extended 5 m behind
-// the open rear, where the robot drives in), ceiling, side walls and front
-// wall, one voxel thick. For callers that have no perceived octree.
-std::shared_ptr<octomap::OcTree> make_trailer_octree(const Trailer& trailer, double resolution);
 
 class CollisionChecker {
  public:

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <plr/msg/world_generated.h>
+#include <plr/expected.hpp>
 
 #include <cstdint>
 #include <optional>
@@ -31,8 +32,8 @@ struct ObservationParams {
   double wall_high = 1.9;       // m; ... high
   double side_band = 1.0 / 3;   // centre band as a fraction of the trailer width
 
-  // Empty if consistent, else one line naming the offending parameter.
-  std::string check() const;
+  // Whether the values are consistent; the error names the parameter.
+  plr::Status check() const;
 };
 
 // World-frame axis-aligned bounds of a (possibly rotated) box.

@@ -10,6 +10,8 @@
 // the normal, which is what makes the closed-form IK possible.
 #pragma once
 
+#include <plr/expected.hpp>
+
 #include <Eigen/Geometry>
 #include <array>
 #include <string>
@@ -79,11 +81,11 @@ struct PlateTarget {
 
 class RobotModel {
  public:
-  // Throws std::runtime_error with a one-line message "<file>: <cause>".
-  static RobotModel from_urdf_file(const std::string& path);
+  // Errors are one line, "<file>: <cause>".
+  static plr::Expected<RobotModel> from_urdf_file(const std::string& path);
   // `source` names the text in error messages.
-  static RobotModel from_urdf_string(const std::string& xml,
-                                     const std::string& source = "<string>");
+  static plr::Expected<RobotModel> from_urdf_string(const std::string& xml,
+                                                    const std::string& source = "<string>");
 
   const std::vector<Link>& links() const { return links_; }
   int link_index(const std::string& name) const;  // -1 if absent
@@ -115,11 +117,17 @@ class RobotModel {
   const ArmGeometry& arm() const { return arm_; }
 
  private:
+  static RobotModel parse_urdf(const std::string& xml, const std::string& source);
+
   std::vector<Link> links_;  // parents before children
   std::vector<std::pair<int, int>> allowed_;
   std::array<JointLimits, kNumJoints> limits_{};
   int plate_link_ = -1;
   ArmGeometry arm_{};
 };
+
+// The robot in the URDF file `urdf`, or the shipped unloader
+// (robots/unloader.urdf, see shipped_files.hpp) when it is empty.
+plr::Expected<RobotModel> load_robot(const std::string& urdf = {});
 
 }  // namespace plr::sim

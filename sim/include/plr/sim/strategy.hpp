@@ -18,6 +18,7 @@
 #pragma once
 
 #include <plr/msg/strategy_generated.h>
+#include <plr/expected.hpp>
 
 #include <cstdint>
 #include <filesystem>
@@ -81,11 +82,11 @@ struct Strategy {
 // A strategy of one action (what the hardcoded strategy hands out).
 Strategy single_action(Action action, std::string name);
 
-// Empty when the strategy is a well-formed tree: nodes exist, the root and
+// Whether the strategy is a well-formed tree: nodes exist, the root and
 // every child index are in range, enums are valid, no node has two edges for
-// one observation, and every node is reached from the root exactly once.
-// Otherwise one line saying what is wrong.
-std::string validate(const Strategy& strategy);
+// one observation, and every node is reached from the root exactly once. The
+// error is one line saying what is wrong.
+plr::Status validate(const Strategy& strategy);
 
 // FlatBuffers conversion (plr.msg.Strategy).
 flatbuffers::Offset<plr::msg::Strategy> build(flatbuffers::FlatBufferBuilder& fbb,

@@ -1,0 +1,41 @@
+// Per-mode state lattices: the lattice planner's, and the M6 escape's that
+// every planner runs. Read from YAML (sim/robots/unloader_lattice.yaml
+// documents the format).
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <plr/expected.hpp>
+
+#include "plr/planning/plan_query.hpp"
+
+namespace plr::planning {
+
+struct ModeLattice {
+  std::vector<int> joints;                   // configuration indices (M4: the arm's)
+  std::vector<double> resolution;            // per planned variable
+  std::vector<std::vector<int>> primitives;  // lattice steps per variable
+  double snap_distance = 0.0;                // m, pose goals
+  double snap_time = 0.0;                    // s, joint goals
+  double ee_speed = 1.0;                     // m/s, arm heuristic
+  double line_tolerance = 0.005;             // m, M4 deviation from the line
+  double plate_step = 0.0;                   // m, M6 Cartesian plate steps (0: none)
+};
+
+struct LatticeConfig {
+  std::map<PlanMode, ModeLattice> modes;
+
+  // Errors are one line, "<source>: <cause>". A file without M6 gets
+  // default_escape_lattice().
+  static plr::Expected<LatticeConfig> from_file(const std::string& path);
+  static plr::Expected<LatticeConfig> from_string(const std::string& yaml,
+                                                  const std::string& source = "<string>");
+};
+
+// The M6 escape's lattice unless a planner brings its own: unit steps of base,
+// arm and nose lift, plus Cartesian plate steps.
+ModeLattice default_escape_lattice();
+
+}  // namespace plr::planning

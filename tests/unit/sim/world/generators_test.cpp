@@ -1,0 +1,138 @@
+#include <gtest/gtest.h>
+
+#include <numeric>
+
+#include "plr/sim/generators.hpp"
+
+namespace plr::sim {
+namespace {
+
+const std::array<EnvFamily, 4> kFamilies{EnvFamily::kA1, EnvFamily::kA2, EnvFamily::kB1,
+                                         EnvFamily::kB2};
+
+double mean_mass(const World& w) {
+  double s = 0.0;
+  for (const Box& b : w.boxes) s += b.mass;
+  return s / static_cast<double>(w.boxes.size());
+}
+
+TEST(Generators, A1HasAtLeast150Boxes) {
+  for (std::uint64_t seed = 0; seed < 30; ++seed) {
+    EXPECT_GE(generate_world(EnvFamily::kA1, seed).boxes.size(), 150u) << seed;
+  }
+}
+
+TEST(Generators, SameSeedSameWorldOtherSeedOtherWorld) {
+  for (EnvFamily f : kFamilies) {
+    const World a = generate_world(f, 9), b = generate_world(f, 9), c = generate_world(f, 10);
+    ASSERT_EQ(a.boxes.size(), b.boxes.size());
+    for (std::size_t i = 0; i < a.boxes.size(); ++i) {
+      EXPECT_EQ(a.boxes[i].pose.matrix(), b.boxes[i].pose.matrix());
+      EXPECT_EQ(a.boxes[i].mass, b.boxes[i].mass);
+    }
+    EXPECT_NE(mean_mass(a), mean_mass(c)) << to_string(f);
+  }
+}
+
+TEST(Generators, BoxesFillFromTheFrontAndLeaveTheRearFree) {
+  for (EnvFamily f : kFamilies) {
+    for (std::uint64_t seed = 0; seed < 10; ++seed) {
+      const World w = generate_world(f, seed);
+      double max_x = 0.0, min_x = 1e9;
+      for (const Box& b : w.boxes) {
+        max_x = std::max(max_x, b.pose.translation().x());
+        min_x = std::min(min_x, b.pose.translation().x());
+        EXPECT_GT(b.mass, 0.0);
+      }
+      EXPECT_GT(max_x, w.trailer.depth - 0.5) << to_string(f);
+      EXPECT_GT(min_x, 0.5 * w.trailer.depth) << to_string(f);
+    }
+  }
+}
+
+TEST(Generators, NoInterpenetration) {
+  for (EnvFamily f : kFamilies) {
+    for (std::uint64_t seed = 0; seed < 20; ++seed) {
+      EXPECT_TRUE(find_interpenetrations(generate_world(f, seed), 1e-6).empty())
+          << to_string(f) << " seed " << seed;
+    }
+  }
+}
+
+TEST(Generators, FamiliesDifferInSizesAndMasses) {
+  double a1 = 0, a2 = 0, sizes1 = 0, sizes2 = 0;
+  for (std::uint64_t seed = 0; seed < 10; ++seed) {
+    const World w1 = generate_world(EnvFamily::kA1, seed),
+                w2 = generate_world(EnvFamily::kA2, seed);
+    a1 += mean_mass(w1);
+    a2 += mean_mass(w2);
+    sizes1 += static_cast<double>(w1.boxes.size());
+    sizes2 += static_cast<double>(w2.boxes.size());
+  }
+  EXPECT_GT(a2, 1.2 * a1);          // A2 is heavier
+  EXPECT_LT(sizes2, 0.9 * sizes1);  // with fewer, larger boxes
+}
+
+Box upright(std::uint32_t id, const Eigen::Vector3d& size, const Eigen::Vector3d& centre,
+            double mass) {
+  Box b;
+  b.id = id;
+  b.size = size;
+  b.pose = Eigen::Isometry3d::Identity();
+  b.pose.translation() = centre;
+  b.mass = mass;
+  return b;
+}
+
+// Each box of a leaning column rests on the one below with its centre over
+// that box's top, but the top two together lean out too far over the middle
+// one: the middle one (and what it carries) tips.
+TEST(Generators, StaticsFindsAColumnLeaningOverAsAWhole) {
+  World w;
+  const Eigen::Vector3d size(0.4, 0.4, 0.3);
+  w.boxes.push_back(upright(1, size, {10.0, 0.0, 0.15}, 5.0));
+  w.boxes.push_back(upright(2, size, {10.1, 0.0, 0.45}, 5.0));
+  EXPECT_TRUE(toppling_boxes(w).empty());
+  w.boxes.push_back(upright(3, size, {10.2, 0.0, 0.75}, 5.0));
+  EXPECT_EQ(toppling_boxes(w), std::vector<std::uint32_t>{2});
+  // A heavy box on top of the light leaning one makes it worse, a light one
+  // matters less: loads count, not box counts.
+  w.boxes[2].pose.translation().x() = 10.14;
+  w.boxes[2].mass = 1.0;
+  EXPECT_TRUE(toppling_boxes(w).empty());
+  w.boxes[2].mass = 30.0;
+  EXPECT_EQ(toppling_boxes(w), std::vector<std::uint32_t>{2});
+}
+
+// A box bridging two supports stands, its load shared by the lever rule;
+// off-centre loads on a bridge move its load towards one support.
+TEST(Generators, StaticsSharesABridgedLoad) {
+  World w;
+  w.boxes.push_back(upright(1, {0.3, 0.3, 0.3}, {10.0, 0.0, 0.15}, 5.0));
+  w.boxes.push_back(upright(2, {0.3, 0.3, 0.3}, {10.4, 0.0, 0.15}, 5.0));
+  w.boxes.push_back(upright(3, {0.6, 0.3, 0.2}, {10.2, 0.0, 0.4}, 20.0));
+  EXPECT_TRUE(toppling_boxes(w).empty());
+  // Shifted so that it hangs mostly over box 2: box 1 holds little and box
+  // 2's load passes near its outer edge, but both still stand.
+  w.boxes[2].pose.translation().x() = 10.3;
+  EXPECT_TRUE(toppling_boxes(w).empty());
+}
+
+TEST(Generators, PilesStand) {
+  for (EnvFamily f : {EnvFamily::kB1, EnvFamily::kB2}) {
+    for (std::uint64_t seed = 0; seed < 20; ++seed) {
+      EXPECT_TRUE(toppling_boxes(generate_world(f, seed)).empty())
+          << to_string(f) << " seed " << seed;
+    }
+  }
+}
+
+TEST(Generators, FamilyNames) {
+  EXPECT_EQ(parse_env_family("b2"), EnvFamily::kB2);
+  EXPECT_EQ(parse_env_family("A1"), EnvFamily::kA1);
+  EXPECT_FALSE(parse_env_family("C1").has_value());
+  EXPECT_FALSE(parse_env_family("A").has_value());
+}
+
+}  // namespace
+}  // namespace plr::sim
