@@ -5,44 +5,25 @@
 #include "checkpoint.hpp"
 #include "world_message.hpp"
 
+#include <plr/actions/motion_messages.hpp>
+#include <plr/actions/unloader_simulation.hpp>
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
 #include <plr/sim/generators.hpp>
 #include <plr/sim/physics.hpp>
-#include <plr/sim/robot_links.hpp>
 #include <plr/sim/robot_model.hpp>
 #include <plr/sim/world_io.hpp>
 
-#include <algorithm>
 #include <chrono>
 #include <map>
 #include <memory>
 #include <optional>
-#include <set>
 
 namespace plr::simulator {
 namespace {
 
-using msg::Suction;
-
-// How far (rad or m, any joint) a trajectory may start from the robot's
-// configuration: planners start from the observed one, exactly.
-constexpr double kStartTolerance = 1e-4;
-
-// Where the robot starts: base front edge at the trailer's open rear, arm
-// folded, nose raised (see docs/notes-planner.md).
-sim::JointVector home_configuration() {
-  sim::JointVector q;
-  q << 0.0, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
-  return q;
-}
-
-struct Saved {
-  sim::Snapshot snapshot;
-  RobotState robot;
-  std::uint32_t boxes_unloaded = 0;
-};
+using actions::home_configuration;
 
 class SimulatorNode : public Node {
  public:
@@ -125,18 +106,20 @@ class SimulatorNode : public Node {
 
   void start(const sim::World& world, const RobotState& robot, std::uint32_t total,
              std::uint32_t unloaded) {
-    sim_ = std::make_unique<sim::Simulation>(world);
-    robot_ = robot;
+    actions::UnloaderOptions options;
+    options.control_period_s = period_;
+    options.belt_speed = belt_speed_;
+    options.carry_max_s = carry_max_;
+    sim_ = std::make_unique<actions::UnloaderSimulation>(*model_, world, robot.q, options);
     boxes_total_ = total;
     unloaded_before_ = unloaded;
     octree_ = trailer_octree_bytes(world.trailer, resolution_);
     saved_.clear();
-    move_robot(robot_.q, false);
   }
 
-  std::uint32_t boxes_unloaded() const {
-    return unloaded_before_ + static_cast<std::uint32_t>(sim_->unloaded().size());
-  }
+  std::uint32_t boxes_unloaded() const { return unloaded_before_ + sim_->boxes_unloaded(); }
+
+  RobotState robot_state() const { return {sim_->q(), sim_->held()}; }
 
   Status reset(const msg::ResetRequest& r, flatbuffers::FlatBufferBuilder& out) {
     sim::World world;
@@ -168,170 +151,39 @@ class SimulatorNode : public Node {
                         true_state, 0);
       return {};
     }
-    robot_.held = sim_->held_boxes();
-    build_world_state(out, sim_->world(), robot_, octree_, resolution_, boxes_unloaded(),
+    build_world_state(out, sim_->truth(), robot_state(), octree_, resolution_, boxes_unloaded(),
                       true_state, static_cast<std::int64_t>(sim_->time() * 1e9));
     return {};
   }
 
-  // Robot links and plate follow q; the belt runs while the conveyor is on.
-  void move_robot(const sim::JointVector& q, bool conveyor) {
-    sim_->set_robot_links(sim::robot_link_geometry(*model_, q, conveyor ? belt_speed_ : 0.0));
-    sim_->set_suction_plate(sim::suction_plate_at(*model_, q));
-  }
-
-  // Robot shapes beyond the side walls, the ceiling or the front wall (the
-  // floor is where the scoop works, so touching it is not counted).
-  bool touches_trailer() const {
-    const auto& t = sim_->trailer();
-    for (const auto& link : sim_->robot_links()) {
-      Eigen::Vector3d half = link.size / 2;
-      if (link.shape == sim::LinkGeometry::Shape::kCylinder)
-        half = Eigen::Vector3d(link.size.x(), link.size.x(), link.size.z() / 2);
-      for (int c = 0; c < 8; ++c) {
-        const Eigen::Vector3d local((c & 1 ? 1 : -1) * half.x(), (c & 2 ? 1 : -1) * half.y(),
-                                    (c & 4 ? 1 : -1) * half.z());
-        const Eigen::Vector3d p = link.pose * local;
-        if (p.x() < 0) continue;  // outside the trailer, behind its open rear
-        if (std::abs(p.y()) > t.width / 2 || p.z() > t.height || p.x() > t.depth) return true;
-      }
-    }
-    return false;
-  }
-
-  // A box not held whose centre is over a running belt, at most a box
-  // height above its surface.
-  bool belt_loaded() const {
-    const auto held = sim_->held_boxes();
-    for (const auto& box : sim_->world().boxes) {
-      if (std::find(held.begin(), held.end(), box.id) != held.end()) continue;
-      for (const auto& link : sim_->robot_links()) {
-        if (link.belt_speed <= 0.0) continue;
-        const Eigen::Vector3d local = link.pose.inverse() * box.pose.translation();
-        if (std::abs(local.x()) < link.size.x() / 2 && std::abs(local.y()) < link.size.y() / 2 &&
-            local.z() > 0.0 && local.z() < link.size.z() / 2 + box.size.maxCoeff())
-          return true;
-      }
-    }
-    return false;
-  }
-
-  void apply_suction(Suction s, std::set<std::uint32_t>& gripped) {
-    if (s == Suction::On) {
-      for (auto id : sim_->suction_on()) gripped.insert(id);
-    } else if (s == Suction::Off) {
-      sim_->suction_off();
-    }
-  }
-
   Status execute(const msg::ExecuteRequest& r, flatbuffers::FlatBufferBuilder& out) {
     if (!sim_) return make_error(PLR_ERR_STATE, "no world yet: call sim/reset first");
-    std::vector<std::pair<double, sim::JointVector>> points;
-    if (const auto* traj = r.trajectory(); traj && traj->points()) {
-      for (const auto* p : *traj->points()) {
-        if (!p->positions() || p->positions()->size() != sim::kNumJoints)
-          return make_error(PLR_ERR_INVALID,
-                            "sim/execute: every trajectory point needs 8 positions");
-        sim::JointVector q;
-        for (int i = 0; i < sim::kNumJoints; ++i) q[i] = p->positions()->Get(i);
-        if (!points.empty() && p->time_s() < points.back().first)
-          return make_error(PLR_ERR_INVALID, "sim/execute: trajectory times must not decrease");
-        points.emplace_back(p->time_s(), q);
-      }
-    }
-    // A trajectory planned from another state would make the robot jump: a
-    // robot controller refuses it, and so does the simulator.
-    if (!points.empty()) {
-      const double off = (points.front().second - robot_.q).cwiseAbs().maxCoeff();
-      if (off > kStartTolerance)
-        return make_error(PLR_ERR_STATE,
-                          fmt::format("sim/execute: the trajectory starts {:.4f} (rad or m) away "
-                                      "from the robot's configuration",
-                                      off));
-    }
-    const auto before = sim_->world();
-    const auto events_before = sim_->unloaded().size();
-    const double start_time = sim_->time();
-    const auto suction_before = sim_->suction_events().size();
+    auto motion = actions::decode_execute_request(r);
+    if (!motion) return make_error(PLR_ERR_INVALID, "sim/execute: " + motion.error().message);
     const auto wall_start = std::chrono::steady_clock::now();
-    std::set<std::uint32_t> gripped;
-    std::uint32_t contacts = 0;
-    bool touching = false;
-    auto advance = [&](double dt, const sim::JointVector& q) {
-      move_robot(q, r.conveyor());
-      sim_->step(dt);
-      const bool now = touches_trailer();
-      if (now && !touching) ++contacts;
-      touching = now;
-    };
-
-    apply_suction(r.suction_before(), gripped);
-    for (std::size_t i = 1; i < points.size(); ++i) {
-      const auto& [t0, q0] = points[i - 1];
-      const auto& [t1, q1] = points[i];
-      const double span = t1 - t0;
-      const int steps = std::max(1, static_cast<int>(std::ceil(span / period_)));
-      for (int k = 1; k <= steps; ++k) {
-        const double a = static_cast<double>(k) / steps;
-        advance(span / steps, q0 + a * (q1 - q0));
-      }
-    }
-    if (!points.empty()) robot_.q = points.back().second;
-    apply_suction(r.suction_after(), gripped);
-    for (double t = 0; t < r.settle_s(); t += period_) advance(period_, robot_.q);
-    // The belt keeps running until nothing lies on it (a real conveyor does
-    // not stop between actions), bounded by carry_max_s.
-    if (r.conveyor()) {
-      for (double t = 0; t < carry_max_ && belt_loaded(); t += period_) advance(period_, robot_.q);
-    }
-    robot_.held = sim_->held_boxes();
-
-    std::vector<std::uint32_t> moved, unloaded;
-    std::vector<double> unloaded_after;
-    const auto after = sim_->world();
-    std::map<std::uint32_t, Eigen::Vector3d> end;
-    for (const auto& b : after.boxes) end[b.id] = b.pose.translation();
-    for (const auto& b : before.boxes) {
-      auto it = end.find(b.id);
-      if (it == end.end() || (it->second - b.pose.translation()).norm() > 0.01)
-        moved.push_back(b.id);
-    }
-    const auto& events = sim_->unloaded();
-    for (auto i = events_before; i < events.size(); ++i) {
-      unloaded.push_back(events[i].box_id);
-      unloaded_after.push_back(events[i].time - start_time);
-    }
-    const auto& suction = sim_->suction_events();
-    for (auto i = suction_before; i < suction.size(); ++i) {
-      const auto& e = suction[i];
-      if (e.kind == sim::SuctionEvent::Kind::kDropped ||
-          e.kind == sim::SuctionEvent::Kind::kRefused)
-        log().info("box {} {} at t={:.2f} s: the cups had to hold {:.0f} N, can hold {:.0f} N",
-                   e.box_id,
-                   e.kind == sim::SuctionEvent::Kind::kDropped ? "dropped" : "not gripped", e.time,
-                   e.load, e.capacity);
-    }
+    auto done = sim_->execute(*motion);
+    if (!done) return make_error(done.error().code, "sim/execute: " + done.error().message);
+    for (const auto& e : done->suction)
+      log().info("box {} {} at t={:.2f} s: the cups had to hold {:.0f} N, can hold {:.0f} N",
+                 e.box_id, e.kind == sim::SuctionEvent::Kind::kDropped ? "dropped" : "not gripped",
+                 e.time, e.load, e.capacity);
     log().debug(
-        "execute: {} points, {:.2f} s simulated in {:.2f} s, {} unloaded", points.size(),
-        points.empty() ? 0.0 : points.back().first - points.front().first,
+        "execute: {} points, {:.2f} s simulated in {:.2f} s, {} unloaded", motion->points.size(),
+        motion->points.empty() ? 0.0 : motion->points.back().time_s,
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count(),
-        unloaded.size());
-
-    out.Finish(msg::CreateExecuteOutcomeDirect(
-        out, true, "", sim_->time(), &moved, &unloaded, &robot_.held, contacts,
-        static_cast<std::uint32_t>(after.boxes.size()), &unloaded_after));
+        done->unloaded.size());
+    encode_execute_outcome(*done, static_cast<std::uint32_t>(sim_->truth().boxes.size()), out);
     publish_state();
     return {};
   }
 
   Status snapshot(const std::string& name, flatbuffers::FlatBufferBuilder& out) {
     if (!sim_) return make_error(PLR_ERR_STATE, "no world yet: call sim/reset first");
-    robot_.held = sim_->held_boxes();
-    saved_.insert_or_assign(name, Saved{sim_->snapshot(), robot_, boxes_unloaded()});
+    saved_.insert_or_assign(name, sim_->save());
     if (name == "checkpoint" && !checkpoint_dir_.empty()) {
       try {
-        save_checkpoint(checkpoint_dir_,
-                        {sim_->world(), robot_, sim_->time(), boxes_total_, boxes_unloaded()});
+        save_checkpoint(checkpoint_dir_, {sim_->truth(), robot_state(), sim_->time(), boxes_total_,
+                                          boxes_unloaded()});
       } catch (const std::exception& e) {
         return make_error(PLR_ERR_INTERNAL, std::string("sim/snapshot: ") + e.what());
       }
@@ -342,12 +194,7 @@ class SimulatorNode : public Node {
 
   Status restore(const std::string& name, flatbuffers::FlatBufferBuilder& out) {
     if (auto it = saved_.find(name); it != saved_.end() && sim_) {
-      sim_->restore(it->second.snapshot);
-      robot_ = it->second.robot;
-      // The restored physics carries its own unload events; count from there.
-      unloaded_before_ =
-          it->second.boxes_unloaded - static_cast<std::uint32_t>(sim_->unloaded().size());
-      move_robot(robot_.q, false);
+      sim_->restore(*it->second);
     } else if (name == "checkpoint" && !checkpoint_dir_.empty()) {
       auto c = load_checkpoint(checkpoint_dir_);
       if (!c)
@@ -379,12 +226,11 @@ class SimulatorNode : public Node {
   double max_settle_ = 6.0;
   double carry_max_ = 4.0;
   std::string checkpoint_dir_;
-  std::unique_ptr<sim::Simulation> sim_;
-  RobotState robot_;
+  std::unique_ptr<actions::UnloaderSimulation> sim_;
   std::string octree_;
   std::uint32_t boxes_total_ = 0;
   std::uint32_t unloaded_before_ = 0;
-  std::map<std::string, Saved> saved_;
+  std::map<std::string, std::shared_ptr<const actions::UnloaderSimulation::Saved>> saved_;
   Publisher<msg::WorldState> world_pub_;
   Publisher<msg::Progress> progress_pub_;
   Publisher<msg::Clock> clock_pub_;

@@ -117,10 +117,10 @@ TEST_F(SimulatorService, BadTrajectoriesAreRefusedWithTheReason) {
   ASSERT_TRUE(reset("", SMALL_WORLD));
   const auto short_point = execute({home(), {0.0, 0.0, -1.0}}, {0.0, 0.1});
   ASSERT_FALSE(short_point);
-  EXPECT_EQ(short_point.error().message, "sim/execute: every trajectory point needs 8 positions");
+  EXPECT_EQ(short_point.error().message, "sim/execute: ExecuteRequest.trajectory: every point needs 8 positions");
   const auto backwards = execute({home(), home()}, {0.5, 0.1});
   ASSERT_FALSE(backwards);
-  EXPECT_EQ(backwards.error().message, "sim/execute: trajectory times must not decrease");
+  EXPECT_EQ(backwards.error().message, "sim/execute: ExecuteRequest.trajectory: times must not decrease");
   // Planned from another state: the robot would jump to its first point.
   auto elsewhere = home();
   elsewhere[0] += 0.5;

@@ -71,6 +71,7 @@ nlohmann::json to_json(const RunStats& s) {
            s.boxes_total ? static_cast<double>(s.boxes_unloaded) / s.boxes_total : 0.0},
           {"sim_time_s", s.sim_time_s},
           {"robot_time_s", s.robot_time_s},
+          {"plan_wall_s", s.plan_wall_s},
           {"wall_time_s", s.wall_time_s},
           {"boxes_per_robot_s", s.robot_time_s > 0 ? s.boxes_unloaded / s.robot_time_s : 0.0},
           {"robot_trailer_collisions", s.robot_trailer_collisions},

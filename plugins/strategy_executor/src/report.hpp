@@ -32,12 +32,12 @@ struct ModeStats {
 struct ActionStats {
   std::uint64_t executions = 0;
   std::uint64_t boxes = 0;
-  Accumulator plan_s;  // per execution: planning time the robot waited for
+  Accumulator plan_s;  // per execution: planning time the robot waited for (modelled)
   Accumulator exec_s;  // per execution: simulated execution time
 };
 
 struct CurvePoint {
-  double robot_time_s = 0;  // execution + planning the robot waited for
+  double robot_time_s = 0;  // execution + modelled planning (deterministic)
   std::uint32_t boxes = 0;
 };
 
@@ -53,7 +53,8 @@ struct RunStats {
   std::uint32_t boxes_total = 0;
   std::uint32_t boxes_unloaded = 0;
   double sim_time_s = 0;
-  double robot_time_s = 0;
+  double robot_time_s = 0;  // execution + modelled planning (deterministic)
+  double plan_wall_s = 0;   // what planning took on this machine
   double wall_time_s = 0;
   std::uint64_t robot_trailer_collisions = 0;
   std::uint64_t failed_grasps = 0;

@@ -536,7 +536,7 @@ TEST_F(Executor, RefusesBadParams) {
   ASSERT_TRUE(n);
   auto s = n->configure();
   ASSERT_FALSE(s);
-  EXPECT_EQ(s.error().message, "param 'nose_home': expected 3 nose joint values");
+  EXPECT_EQ(s.error().message, "param 'nose_home': expected 3 joint values");
   auto m =
       kernel_.load_node(STRATEGY_EXECUTOR_SO,
                         NodeOptions().with_name("e2").with_params(R"({"urdf": "/no/such.urdf"})"));

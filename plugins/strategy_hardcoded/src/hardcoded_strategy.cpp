@@ -10,6 +10,7 @@
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
 
+#include "plr/sim/hardcoded_strategy.hpp"
 #include "plr/sim/observation.hpp"
 #include "plr/sim/strategy.hpp"
 
@@ -29,11 +30,10 @@ class HardcodedStrategy : public plr::Node {
     obs_.pile_high = params().get<double>("pile_high", obs_.pile_high);
     obs_.wall_mid = params().get<double>("wall_mid", obs_.wall_mid);
     obs_.wall_high = params().get<double>("wall_high", obs_.wall_high);
-    h_min_ = params().get<double>("h_min", 0.5);
-    d_min_ = params().get<double>("d_min", 0.5);
+    h_.h_min = params().get<double>("h_min", h_.h_min);
+    h_.d_min = params().get<double>("d_min", h_.d_min);
     if (auto ok = obs_.check(); !ok) return ok;
-    if (!(h_min_ >= 0)) return plr::make_error(PLR_ERR_INVALID, "param 'h_min': must be >= 0");
-    if (!(d_min_ >= 0)) return plr::make_error(PLR_ERR_INVALID, "param 'd_min': must be >= 0");
+    if (auto ok = h_.check(); !ok) return ok;
     return ctx().provide<plr::msg::NextStrategyRequest, plr::msg::NextStrategyReply>(
         "strategy/next",
         [this](const plr::Message<plr::msg::NextStrategyRequest>& request,
@@ -54,7 +54,7 @@ class HardcodedStrategy : public plr::Node {
     const auto scene = plr::sim::analyse(world, obs_);
     if (!scene.observation)
       return plr::make_error(PLR_ERR_INVALID, "strategy/next: the trailer is empty");
-    const auto action = decide(scene);
+    const auto action = plr::sim::hardcoded_action(scene, h_);
     log().debug("{}: d_pile {:.2f} m, h_W {:.2f} m -> {}", plr::sim::to_string(*scene.observation),
                 scene.pile_depth, scene.wall_height, plr::sim::to_string(action));
     const auto strategy = plr::sim::single_action(action, "H");
@@ -63,22 +63,8 @@ class HardcodedStrategy : public plr::Node {
     return {};
   }
 
-  plr::sim::Action decide(const plr::sim::SceneAnalysis& scene) const {
-    using plr::sim::make_pick;
-    using plr::sim::make_sweep;
-    if (!scene.front_pile.empty() && scene.pile_depth > d_min_) return make_sweep(scene.pile_class);
-    if (!scene.first_wall.empty() && scene.wall_height > h_min_)
-      return make_pick(scene.wall_class, scene.wall_side);
-    // Only low things are left: a pile too shallow to be worth a sweep, or a
-    // wall no higher than h_min. The paper leaves this case open; taking the
-    // top box of what is in front always makes progress.
-    if (!scene.front_pile.empty()) return make_pick(scene.pile_class, scene.pile_side);
-    return make_pick(scene.wall_class, scene.wall_side);
-  }
-
   plr::sim::ObservationParams obs_;
-  double h_min_ = 0.5;
-  double d_min_ = 0.5;
+  plr::sim::HardcodedParams h_;
 };
 
 }  // namespace

@@ -1,4 +1,4 @@
-#include "instantiate.hpp"
+#include "plr/actions/instantiate.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <optional>
 #include <unordered_set>
 
-namespace plr::executor {
+namespace plr::actions {
 
 namespace {
 
@@ -334,4 +334,4 @@ std::optional<SweepPlan> sweep_plan(const sim::SceneAnalysis& scene, sim::Action
   return p;
 }
 
-}  // namespace plr::executor
+}  // namespace plr::actions

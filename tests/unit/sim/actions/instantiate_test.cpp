@@ -1,7 +1,7 @@
 // Pick points, drop-off places and straight-line checks of the strategy
 // executor (plugins/strategy_executor/src/instantiate.cpp), on built and
 // generated worlds with the shipped robot.
-#include "instantiate.hpp"
+#include "plr/actions/instantiate.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 #include "plr/sim/generators.hpp"
 #include "plr/sim/testing/worlds.hpp"
 
-namespace plr::executor {
+namespace plr::actions {
 namespace {
 
 const sim::RobotModel& robot() {
@@ -177,4 +177,4 @@ TEST(FollowsLines, SeesALineLeaveTheArmsReach) {
 }
 
 }  // namespace
-}  // namespace plr::executor
+}  // namespace plr::actions

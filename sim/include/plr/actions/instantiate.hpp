@@ -14,7 +14,7 @@
 #include "plr/sim/strategy.hpp"
 #include "plr/sim/suction_plate.hpp"
 
-namespace plr::executor {
+namespace plr::actions {
 
 // Robot dimensions the instantiation relies on (docs/notes-planner.md).
 struct Geometry {
@@ -95,4 +95,4 @@ std::optional<SweepPlan> sweep_plan(const sim::SceneAnalysis& scene, sim::Action
                                     const Geometry& g, double scoop_extension,
                                     const sim::JointVector& current, double trailer_depth);
 
-}  // namespace plr::executor
+}  // namespace plr::actions

@@ -1,0 +1,80 @@
+#include "bus_backend.hpp"
+
+#include <plr/actions/motion_messages.hpp>
+#include <plr/planning/plan_messages.hpp>
+#include <plr/sim/observation.hpp>
+
+#include <fmt/format.h>
+
+namespace plr::executor {
+
+BusBackend::BusBackend(Context& ctx, BusOptions options,
+                       std::function<bool(std::chrono::nanoseconds)> pause)
+    : ctx_(ctx), options_(options), pause_(std::move(pause)) {}
+
+plr::Status BusBackend::check_clock(double sim_time_s, const char* service) {
+  // A simulator host restarted between two calls resumes from its
+  // checkpoint, with its clock set back: the same as a call it failed.
+  if (sim_time_s + 1e-9 < sim_clock_s_) {
+    const double seen = sim_clock_s_;
+    sim_clock_s_ = -1.0;
+    return plr::make_error(
+        PLR_ERR_UNAVAILABLE,
+        fmt::format("{}: the simulator's clock went back from {:.2f} s to {:.2f} s", service, seen,
+                    sim_time_s));
+  }
+  sim_clock_s_ = sim_time_s;
+  return {};
+}
+
+plr::Expected<actions::Perceived> BusBackend::observe() {
+  flatbuffers::FlatBufferBuilder fbb;
+  fbb.Finish(msg::CreateObserveRequest(fbb, false));
+  auto r = call_once<msg::ObserveRequest, msg::WorldState>("sim/observe", fbb, 30.0);
+  if (!r) {
+    if (r.error().code == PLR_ERR_UNAVAILABLE || r.error().code == PLR_ERR_TIMEOUT ||
+        r.error().code == PLR_ERR_CANCELLED)
+      return plr::make_error(r.error().code, "sim/observe: " + r.error().message);
+    return plr::make_error(PLR_ERR_INTERNAL, "sim/observe: " + r.error().message);
+  }
+  const msg::WorldState& m = *r.value();
+  if (auto ok = check_clock(static_cast<double>(m.stamp_ns()) * 1e-9, "sim/observe"); !ok)
+    return ok.error();
+  actions::Perceived p;
+  p.world = sim::world_from_message(m);
+  if (m.robot() && m.robot()->positions() && m.robot()->positions()->size() == sim::kNumJoints)
+    for (int j = 0; j < sim::kNumJoints; ++j) p.q[j] = m.robot()->positions()->Get(j);
+  if (m.held_box_ids()) p.held.assign(m.held_box_ids()->begin(), m.held_box_ids()->end());
+  p.unloaded = m.boxes_unloaded();
+  p.sim_time_s = static_cast<double>(m.stamp_ns()) * 1e-9;
+  last_world_ = std::move(r.value());
+  return p;
+}
+
+plr::Expected<planning::DecodedPlanResponse> BusBackend::plan(const planning::PlanQuery& query,
+                                                              const sim::World& world) {
+  flatbuffers::FlatBufferBuilder fbb;
+  planning::encode_plan_request(query, world, fbb);
+  auto r =
+      call_retry<msg::PlanRequest, msg::PlanResponse>("plan", fbb, options_.plan_timeout_s + 10.0);
+  if (!r) return plr::make_error(r.error().code, "plan: " + r.error().message);
+  return planning::decode_plan_response(*r.value());
+}
+
+plr::Expected<actions::Executed> BusBackend::execute(const actions::Motion& motion) {
+  flatbuffers::FlatBufferBuilder fbb;
+  actions::encode_execute_request(motion, fbb);
+  auto r = call_once<msg::ExecuteRequest, msg::ExecuteOutcome>("sim/execute", fbb,
+                                                               options_.execute_timeout_s);
+  if (!r) {
+    // Refused (a trajectory from elsewhere, a world not reset): the action
+    // goes on without this motion. Gone: the action ends.
+    const bool gone = r.error().code == PLR_ERR_UNAVAILABLE || r.error().code == PLR_ERR_CANCELLED;
+    return plr::make_error(gone ? r.error().code : PLR_ERR_STATE,
+                           "sim/execute: " + r.error().message);
+  }
+  if (auto ok = check_clock(r.value()->sim_time_s(), "sim/execute"); !ok) return ok.error();
+  return actions::decode_execute_outcome(*r.value());
+}
+
+}  // namespace plr::executor

@@ -1,0 +1,95 @@
+// The action model's backend over the bus: `sim/observe` and `sim/execute`
+// of the simulator (or a robot driver serving the same services) and the
+// `plan` service of whichever planner is loaded.
+#pragma once
+
+#include <plr/actions/backend.hpp>
+#include <plr/context.hpp>
+#include <plr/messages.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <functional>
+#include <optional>
+
+namespace plr::executor {
+
+struct BusOptions {
+  double service_wait_s = 60.0;  // how long a provider may be unavailable (starting, swapped)
+  std::chrono::milliseconds retry{50};
+  double execute_timeout_s = 300.0;
+  double plan_timeout_s = 5.0;  // the planner's own limit; the call waits 10 s more
+};
+
+class BusBackend final : public actions::Backend {
+ public:
+  // `pause` sleeps for a while and returns false when the node is stopping.
+  BusBackend(Context& ctx, BusOptions options, std::function<bool(std::chrono::nanoseconds)> pause);
+
+  plr::Expected<actions::Perceived> observe() override;
+  plr::Expected<planning::DecodedPlanResponse> plan(const planning::PlanQuery& query,
+                                                    const sim::World& world) override;
+  plr::Expected<actions::Executed> execute(const actions::Motion& motion) override;
+
+  // The last world observed, as the simulator sent it (strategy/next takes it).
+  const std::optional<Message<msg::WorldState>>& last_world() const { return last_world_; }
+  // A simulator that restarted (or was restored) sets its clock back: forget
+  // the clock seen so far, so the next call does not count as a restart.
+  void forget_clock() { sim_clock_s_ = -1.0; }
+
+  // Calls `service`, retrying while its provider is unavailable (not started
+  // yet, or being swapped): a swap is atomic in the kernel, and this makes a
+  // call survive even a gap, so none is lost.
+  template <class Req, class Rep>
+  plr::Expected<Message<Rep>> call_retry(const std::string& service,
+                                         const flatbuffers::FlatBufferBuilder& fbb,
+                                         double timeout_s);
+
+ private:
+  template <class Req, class Rep>
+  plr::Expected<Message<Rep>> call_once(const std::string& service,
+                                        const flatbuffers::FlatBufferBuilder& fbb,
+                                        double timeout_s);
+  plr::Status check_clock(double sim_time_s, const char* service);
+
+  Context& ctx_;
+  BusOptions options_;
+  std::function<bool(std::chrono::nanoseconds)> pause_;
+  std::optional<Message<msg::WorldState>> last_world_;
+  double sim_clock_s_ = -1.0;  // the simulator's clock when last heard, s
+};
+
+template <class Req, class Rep>
+plr::Expected<Message<Rep>> BusBackend::call_once(const std::string& service,
+                                                  const flatbuffers::FlatBufferBuilder& fbb,
+                                                  double timeout_s) {
+  using namespace std::chrono_literals;
+  auto f = ctx_.call<Req, Rep>(service, fbb,
+                               std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                   std::chrono::duration<double>(timeout_s)));
+  while (!f.wait_for(20ms)) {
+    if (!pause_(0ns)) {
+      f.cancel();
+      (void)f.get();
+      return plr::make_error(PLR_ERR_CANCELLED, service + ": stopping");
+    }
+  }
+  return f.get();
+}
+
+template <class Req, class Rep>
+plr::Expected<Message<Rep>> BusBackend::call_retry(const std::string& service,
+                                                   const flatbuffers::FlatBufferBuilder& fbb,
+                                                   double timeout_s) {
+  const auto t0 = std::chrono::steady_clock::now();
+  for (;;) {
+    auto r = call_once<Req, Rep>(service, fbb, timeout_s);
+    if (r || r.error().code != PLR_ERR_UNAVAILABLE ||
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >
+            options_.service_wait_s)
+      return r;
+    if (!pause_(options_.retry)) return plr::make_error(PLR_ERR_CANCELLED, service + ": stopping");
+  }
+}
+
+}  // namespace plr::executor

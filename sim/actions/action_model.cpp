@@ -1,0 +1,570 @@
+#include "plr/actions/action_model.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <optional>
+#include <unordered_set>
+
+namespace plr::actions {
+
+using planning::PlanMode;
+using planning::PlanStatus;
+using sim::JointVector;
+
+double PlanTimeModel::seconds(PlanMode mode, std::uint64_t expansions) const {
+  const auto m = static_cast<std::size_t>(mode);
+  if (m >= per_query_s.size()) return 0.0;
+  return per_query_s[m] + per_expansion_s[m] * static_cast<double>(expansions);
+}
+
+plr::Status ActionOptions::check() const {
+  if (auto ok = observation.check(); !ok) return ok;
+  auto bad = [](const char* what) { return plr::make_error(PLR_ERR_INVALID, what); };
+  if (!(plan_timeout_s > 0)) return bad("param 'plan_timeout_s': must be > 0");
+  for (double e : plan_epsilons)
+    if (!(e >= 1.0)) return bad("param 'plan_epsilons': each must be >= 1");
+  if (plan_epsilons.empty()) return bad("param 'plan_epsilons': needs at least one value");
+  if (pick_candidates == 0) return bad("param 'pick_candidates': must be >= 1");
+  if (grip_attempts < 1) return bad("param 'grip_attempts': must be >= 1");
+  if (!(settle_s >= 0)) return bad("param 'settle_s': must be >= 0");
+  if (!(retreat_m >= 0) || !(dropoff_backoff_m >= 0))
+    return bad("params 'retreat_m', 'dropoff_backoff_m': must be >= 0");
+  return {};
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Unwinds an action when its backend fails in a way that ends it; run()
+// turns it back into the error.
+struct Aborted {
+  plr::Error error;
+};
+
+bool ends_the_action(const plr::Error& e) {
+  return e.code == PLR_ERR_UNAVAILABLE || e.code == PLR_ERR_TIMEOUT || e.code == PLR_ERR_CANCELLED;
+}
+
+// A goal for a step: joint values for the mode's joints, or a plate pose.
+// `then`: the straight plate moves that follow a pose goal; its IK solutions
+// must carry the arm through them on one branch.
+struct Goal {
+  std::vector<std::pair<int, double>> joints;
+  std::optional<sim::PlateTarget> pose;
+  std::vector<sim::PlateTarget> then;
+};
+
+struct Planned {
+  bool ok = false;
+  std::string message;
+  PlanStatus status = PlanStatus::kSolved;
+  std::vector<planning::TimedPoint> points;
+};
+
+// Sets a value for a scope, then puts the old one back (the trajectories'
+// time scale while a box is carried).
+class Slowed {
+ public:
+  Slowed(double& value, double scale) : value_(value), old_(value) { value_ = scale; }
+  ~Slowed() { value_ = old_; }
+  Slowed(const Slowed&) = delete;
+  Slowed& operator=(const Slowed&) = delete;
+
+ private:
+  double& value_;
+  const double old_;
+};
+
+enum class Delivery { kDelivered, kNoPlace, kLost };
+
+// One action being run: its backend, memory and what it has cost so far.
+class Run {
+ public:
+  Run(const sim::RobotModel& robot, const ActionOptions& o, Backend& backend, Memory& memory,
+      const Reporter& reporter, sim::Action action)
+      : robot_(robot),
+        o_(o),
+        g_(o.geometry),
+        backend_(backend),
+        memory_(memory),
+        reporter_(reporter),
+        action_(action) {}
+
+  Outcome go() {
+    const Perceived w0 = observe();
+    unloaded_at_start_ = w0.unloaded;
+    if (sim::kind(action_) == sim::ActionKind::kPick)
+      pick(w0);
+    else
+      sweep(w0);
+    const Perceived end = observe();
+    out_.boxes = end.unloaded - unloaded_at_start_;
+    if (end.sim_time_s > 0) out_.sim_time_s = end.sim_time_s;
+    out_.robot_time_s = out_.exec_s + out_.plan_model_s;
+    if (out_.boxes > 0) memory_.ungripped.clear();  // the world changed: worth another try
+    return std::move(out_);
+  }
+
+ private:
+  void note(const std::string& line) const {
+    if (reporter_.note) reporter_.note(line);
+  }
+
+  Perceived observe() {
+    auto w = backend_.observe();
+    if (!w) throw Aborted{w.error()};
+    return std::move(*w);
+  }
+
+  // ---- Planning and execution ---------------------------------------------
+
+  Planned plan_once(PlanMode mode, const Perceived& w, const Goal& goal,
+                    const std::vector<std::uint32_t>& leave_out) {
+    planning::PlanQuery q;
+    q.mode = mode;
+    q.start = w.q;
+    if (goal.pose) {
+      q.goal = planning::PoseGoal{*goal.pose};
+    } else if (mode != PlanMode::kEscape) {
+      JointVector g = w.q;
+      for (auto [j, v] : goal.joints) g[j] = v;
+      q.goal = planning::JointGoal{g};
+    }
+    q.time_limit_s = o_.plan_timeout_s;
+    q.max_expansions = o_.plan_expansions;
+    q.eps_initial = o_.plan_epsilons.front();
+    q.eps_final = o_.plan_epsilons.back();
+    q.eps_decrement = o_.plan_epsilons.size() > 1
+                          ? std::max(1e-3, (q.eps_initial - q.eps_final) /
+                                               static_cast<double>(o_.plan_epsilons.size() - 1))
+                          : 1.0;
+    q.ignored_boxes = leave_out;
+    for (const sim::Box& b : w.world.boxes)
+      if (std::find(w.held.begin(), w.held.end(), b.id) != w.held.end()) q.held_boxes.push_back(b);
+    const auto t0 = Clock::now();
+    auto r = backend_.plan(q, w.world);
+    out_.plan_wall_s += std::chrono::duration<double>(Clock::now() - t0).count();
+    QueryRecord rec;
+    rec.mode = mode;
+    Planned p;
+    if (!r) {
+      if (ends_the_action(r.error()) && r.error().code == PLR_ERR_CANCELLED)
+        throw Aborted{r.error()};
+      out_.queries.push_back(rec);
+      p.message = "plan: " + r.error().message;
+      p.status = PlanStatus::kTimeout;
+      return p;
+    }
+    rec.answered = true;
+    rec.status = r->status;
+    rec.planner = r->planner;
+    rec.expansions = r->stats.expansions;
+    rec.planning_ms = 1e3 * r->stats.planning_time_s;
+    rec.escaped = r->stats.escaped;
+    rec.escape_ms = 1e3 * r->stats.escape_time_s;
+    out_.queries.push_back(rec);
+    out_.plan_model_s += o_.plan_time.seconds(mode, r->stats.expansions);
+    p.status = r->status;
+    if (r->status != PlanStatus::kSolved || r->points.empty()) {
+      p.message = std::string(planning::to_string(r->status)) +
+                  (r->message.empty() ? "" : ": " + r->message);
+      return p;
+    }
+    p.ok = true;
+    p.points = std::move(r->points);
+    return p;
+  }
+
+  // Free-space arm moves (M1, M2) go to joint goals from the arm's closed-form
+  // IK, nearest solution first: the lattice reaches a joint goal far sooner
+  // than it snaps onto a pose. A goal in collision tries the next solution.
+  Planned plan_goal(PlanMode mode, const Perceived& w, const Goal& goal,
+                    const std::vector<std::uint32_t>& leave_out) {
+    if (!goal.pose || (mode != PlanMode::kArm && mode != PlanMode::kArmBase))
+      return plan_once(mode, w, goal, leave_out);
+    auto solutions = robot_.arm_ik(*goal.pose, w.q);
+    std::erase_if(solutions,
+                  [&](const JointVector& q) { return !follows_lines(robot_, q, goal.then); });
+    Planned p;
+    p.message = goal.then.empty() ? "no arm IK solution for the goal pose"
+                                  : "no arm IK solution for the goal pose from which the "
+                                    "straight moves after it stay on one IK branch";
+    p.status = PlanStatus::kGoalInvalid;
+    for (std::size_t i = 0; i < solutions.size() && i < 3; ++i) {
+      Goal g;
+      for (int j : {sim::kArm1, sim::kArm2, sim::kArm3, sim::kArm4})
+        g.joints.emplace_back(j, solutions[i][j]);
+      p = plan_once(mode, w, g, leave_out);
+      if (p.ok || p.status != PlanStatus::kGoalInvalid) break;
+    }
+    return p;
+  }
+
+  // Runs a trajectory; the outcome, or nullopt when the robot refused it.
+  std::optional<Executed> execute(std::vector<planning::TimedPoint> points, Suction before,
+                                  Suction after) {
+    // A robot goes straight on to its next move; only a grip or a release
+    // waits for what it moved to come to rest.
+    Motion m;
+    m.settle_s = before != Suction::kKeep || after != Suction::kKeep ? o_.settle_s : 0.0;
+    // A uniform time scaling: the same path, accelerations divided by its square.
+    for (auto& p : points) {
+      p.time_s *= time_scale_;
+      p.velocity /= time_scale_;
+    }
+    m.points = std::move(points);
+    m.before = before;
+    m.after = after;
+    auto r = backend_.execute(m);
+    if (!r) {
+      if (ends_the_action(r.error())) throw Aborted{r.error()};
+      note("execute: " + r.error().message);
+      return std::nullopt;
+    }
+    const double duration = (m.points.empty() ? 0.0 : m.points.back().time_s) + m.settle_s;
+    // A box the belt carries out after the robot stopped is counted by the
+    // time the robot goes on.
+    for (double t : r->unloaded_after_s)
+      out_.unloaded_at_s.push_back(out_.exec_s + out_.plan_model_s + std::clamp(t, 0.0, duration));
+    out_.exec_s += duration;
+    out_.robot_trailer_contacts += r->robot_trailer_contacts;
+    if (r->sim_time_s > 0) out_.sim_time_s = r->sim_time_s;
+    for (const auto& e : r->suction) {
+      note(fmt::format("box {} {}: the cups had to hold {:.0f} N, can hold {:.0f} N", e.box_id,
+                       e.kind == sim::SuctionEvent::Kind::kDropped ? "dropped" : "not gripped",
+                       e.load, e.capacity));
+    }
+    return std::move(*r);
+  }
+
+  // One step: observe, plan (asking for M6 when the planner reports a start
+  // in collision it did not leave), execute. False when it could not be done.
+  bool step(const std::string& what, PlanMode mode, const Goal& goal, Suction before, Suction after,
+            const std::vector<std::uint32_t>& leave_out = {}) {
+    if (reporter_.progress) reporter_.progress(what);
+    Perceived w = observe();
+    if (!goal.pose && !goal.joints.empty()) {
+      bool there = true;
+      for (auto [j, v] : goal.joints) there = there && std::abs(w.q[j] - v) < 0.01;
+      if (there && before == Suction::kKeep && after == Suction::kKeep) return true;
+    }
+    // Boxes lying on the nose ride along with nose and base moves (or are
+    // carried off by the belt): they are not obstacles to them.
+    std::vector<std::uint32_t> ignored = leave_out;
+    if (mode == PlanMode::kNose || mode == PlanMode::kBaseLine) {
+      for (auto id : boxes_on_nose(w))
+        if (std::find(ignored.begin(), ignored.end(), id) == ignored.end()) ignored.push_back(id);
+    }
+    Planned p = plan_goal(mode, w, goal, ignored);
+    if (!p.ok && p.status == PlanStatus::kStartInvalid) {
+      Planned escape = plan_once(PlanMode::kEscape, w, {}, {});
+      if (escape.ok && execute(std::move(escape.points), Suction::kKeep, Suction::kKeep)) {
+        w = observe();
+        p = plan_goal(mode, w, goal, ignored);
+      }
+    }
+    if (!p.ok) {
+      note(fmt::format("{} not planned: {}", what, p.message));
+      step_failure_ = what + " not planned: " + p.message;
+      return false;
+    }
+    auto done = execute(std::move(p.points), before, after);
+    if (!done) {
+      step_failure_ = what + " not executed";
+      return false;
+    }
+    last_held_ = done->held;
+    return true;
+  }
+
+  // Boxes touching the conveyor or the scoop (within 2 cm of their shapes' bounds).
+  std::vector<std::uint32_t> boxes_on_nose(const Perceived& w) const {
+    constexpr double kTouch = 0.02;
+    std::vector<Eigen::Isometry3d> poses;
+    robot_.forward_kinematics(w.q, poses);
+    std::vector<sim::Bounds> nose;
+    for (const char* name : {"nose_conveyor", "nose_scoop"}) {
+      const int l = robot_.link_index(name);
+      if (l < 0) continue;
+      for (const auto& shape : robot_.links()[static_cast<std::size_t>(l)].shapes) {
+        if (shape.type != sim::CollisionShape::Type::kBox) continue;
+        const Eigen::Isometry3d pose = poses[static_cast<std::size_t>(l)] * shape.origin;
+        const Eigen::Vector3d e = pose.linear().cwiseAbs() * (shape.size / 2);
+        const Eigen::Vector3d lo = pose.translation() - e, hi = pose.translation() + e;
+        nose.push_back({lo.x(), hi.x(), lo.y(), hi.y(), lo.z(), hi.z()});
+      }
+    }
+    std::vector<std::uint32_t> out;
+    for (const auto& box : w.world.boxes) {
+      const auto b = sim::bounds(box);
+      for (const auto& n : nose) {
+        if (b.x0 < n.x1 + kTouch && n.x0 < b.x1 + kTouch && b.y0 < n.y1 + kTouch &&
+            n.y0 < b.y1 + kTouch && b.z0 < n.z1 + kTouch && n.z0 < b.z1 + kTouch) {
+          out.push_back(box.id);
+          break;
+        }
+      }
+    }
+    return out;
+  }
+
+  static Goal joints(std::initializer_list<std::pair<int, double>> j) {
+    return Goal{j, std::nullopt, {}};
+  }
+  static Goal nose(const std::array<double, 3>& n, double lift = 0.0) {
+    return Goal{
+        {{sim::kNose1, n[0] + lift}, {sim::kNose2, n[1]}, {sim::kNose3, n[2]}}, std::nullopt, {}};
+  }
+  Goal arm_clear() const {
+    const auto& a = o_.arm_clear;
+    return joints({{sim::kArm1, a[0]}, {sim::kArm2, a[1]}, {sim::kArm3, a[2]}, {sim::kArm4, a[3]}});
+  }
+  static Goal pose(const sim::PlateTarget& t, std::vector<sim::PlateTarget> then = {}) {
+    return Goal{{}, t, std::move(then)};
+  }
+
+  // ---- Pick ----------------------------------------------------------------
+
+  void pick(const Perceived& w0) {
+    const auto scene = sim::analyse(w0.world, o_.observation);
+    std::unordered_set<std::uint32_t> failed;
+    std::size_t given_up = 0;
+    for (const auto& [id, h] : memory_.grips) {
+      failed.insert(id);
+      given_up += h.given_up ? 1 : 0;
+    }
+    // Boxes given up still come out of pick_candidates: ask for as many more.
+    std::vector<PickCandidate> candidates;
+    for (auto& c : pick_candidates(w0.world, scene, action_, o_.observation, robot_, g_, w0.q,
+                                   o_.pick_candidates + given_up, failed))
+      if (candidates.size() < o_.pick_candidates && worth_another_grip(c))
+        candidates.push_back(std::move(c));
+    // A box the cups did not hold is tried again only after the others.
+    std::stable_partition(candidates.begin(), candidates.end(),
+                          [&](const PickCandidate& c) { return !memory_.ungripped.count(c.box); });
+    if (candidates.empty()) {
+      note("no reachable pick point");
+      return;
+    }
+    const PickCandidate* chosen = nullptr;
+    bool delivered = false;
+    for (const auto& c : candidates) {
+      // Nose down before anything else in reach of the boxes moves; a pile in
+      // front may leave only a lifted nose possible.
+      if (!step("base to pick point", PlanMode::kBaseLine, joints({{sim::kBaseX, c.base_x}}),
+                Suction::kKeep, Suction::kKeep)) {
+        memory_.unreached[c.box] = step_failure_;
+        continue;
+      }
+      if (!step("nose down", PlanMode::kNose, nose(o_.nose_down), Suction::kKeep, Suction::kKeep) &&
+          !step("nose down (lifted)", PlanMode::kNose, nose(o_.nose_down, 0.15), Suction::kKeep,
+                Suction::kKeep)) {
+        memory_.unreached[c.box] = step_failure_;
+        continue;
+      }
+      if (!step("pre-grasp", PlanMode::kArmBase, pose(c.pregrasp, {c.grasp, c.lift, c.retract}),
+                Suction::kKeep, Suction::kOn)) {
+        memory_.unreached[c.box] = step_failure_;
+        continue;
+      }
+      // The plate ends touching the box (a settled box may lean a little).
+      if (!step("approach", PlanMode::kArmCartesian, pose(c.grasp), Suction::kKeep, Suction::kOn,
+                {c.box})) {
+        memory_.unreached[c.box] = step_failure_;
+        continue;
+      }
+      chosen = &c;
+      break;
+    }
+    if (chosen != nullptr) {
+      const bool gripped = !last_held_.empty();
+      if (!gripped) {
+        out_.failed_grasp = true;
+        memory_.ungripped.insert(chosen->box);
+        note(fmt::format("grasp of box {} failed (nothing held)", chosen->box));
+      }
+      // A box dropped before is carried slower: half the speed, a quarter of
+      // the acceleration, for each drop.
+      const auto history = memory_.grips.find(chosen->box);
+      const int drops = history == memory_.grips.end() ? 0 : history->second.drops;
+      const double scale = std::pow(2.0, drops);
+      if (history != memory_.grips.end())
+        note(
+            fmt::format("box {} again (attempt {} of {}): {} cups{}", chosen->box,
+                        history->second.failures + 1, o_.grip_attempts, chosen->cups,
+                        drops > 0 ? fmt::format(", carried at 1/{:.0f} of the speed", scale) : ""));
+      const Slowed slowed(time_scale_, scale);
+      step("lift", PlanMode::kArmCartesian, pose(chosen->lift), Suction::kKeep, Suction::kKeep);
+      const bool out = step("retract", PlanMode::kArmCartesian, pose(chosen->retract),
+                            Suction::kKeep, Suction::kKeep);
+      if (!out) {
+        // Still in the wall: no drop-off can be planned from here. Set the
+        // box down where it was and withdraw; it is tried after the others.
+        step("put back", PlanMode::kArmCartesian, pose(chosen->grasp), Suction::kKeep,
+             Suction::kOff, {chosen->box});
+        step("withdraw", PlanMode::kArmCartesian, pose(chosen->pregrasp), Suction::kKeep,
+             Suction::kKeep, {chosen->box});
+        memory_.ungripped.insert(chosen->box);
+      }
+      const Perceived w = observe();
+      if (!w.held.empty() && last_held_.empty()) out_.failed_grasp = false;
+      if (!gripped && w.held.empty()) grip_failed(*chosen, false, "not held after the approach");
+      if (out && w.held.empty() && gripped) {
+        out_.failed_grasp = true;
+        ++out_.drops;
+        note(fmt::format("box {} dropped while retracting", chosen->box));
+        grip_failed(*chosen, true, "dropped while lifted or retracted");
+      }
+      if (!w.held.empty()) {
+        const Delivery d = drop_off(w);
+        delivered = d == Delivery::kDelivered;
+        if (d == Delivery::kLost) {
+          out_.failed_grasp = true;
+          ++out_.drops;
+          grip_failed(*chosen, true, "dropped while carried to the nose");
+        }
+      }
+    }
+    // After a delivered box the robot stays as it is, nose down and the arm
+    // over the belt: the next pick starts from there (its nose-down step is
+    // then already done). Otherwise it stows and backs away, so that the next
+    // action starts from a known, clear pose.
+    if (delivered) return;
+    stow();
+    const Perceived w = observe();
+    step("base back", PlanMode::kBaseLine, joints({{sim::kBaseX, w.q[sim::kBaseX] - o_.retreat_m}}),
+         Suction::kKeep, Suction::kKeep);
+  }
+
+  // A grip that failed: the next attempt at that box must change what failed
+  // (more cups on its face; after a drop, a slower carry too).
+  void grip_failed(const PickCandidate& c, bool dropped, const char* what) {
+    auto& h = memory_.grips[c.box];
+    h.last =
+        fmt::format("{} ({} cups{})", what, c.cups,
+                    h.drops > 0 ? fmt::format(", 1/{:.0f} speed", std::pow(2.0, h.drops)) : "");
+    ++h.failures;
+    h.drops += dropped ? 1 : 0;
+    h.cups = c.cups;
+  }
+
+  // Whether a box whose grip failed before is worth another attempt from
+  // this candidate; gives it up when not: after grip_attempts failures, or
+  // when the cups refused its weight and no plate pose covers more of them.
+  bool worth_another_grip(const PickCandidate& c) {
+    const auto it = memory_.grips.find(c.box);
+    if (it == memory_.grips.end()) return true;
+    GripHistory& h = it->second;
+    if (h.given_up) return false;
+    if (h.failures >= o_.grip_attempts)
+      h.why = fmt::format("{} grips failed, the last {}", h.failures, h.last);
+    else if (h.drops == 0 && c.cups <= h.cups)
+      h.why = fmt::format("{}, and no plate pose covers more cups", h.last);
+    else
+      return true;
+    h.given_up = true;
+    note(fmt::format("box {} given up: {}", c.box, h.why));
+    return false;
+  }
+
+  // The folded arm leaves the belt free, and the nose room to rise.
+  void stow() {
+    step("arm clear", PlanMode::kArm, arm_clear(), Suction::kKeep, Suction::kKeep);
+    step("nose home", PlanMode::kNose, nose(o_.nose_home), Suction::kKeep, Suction::kKeep);
+  }
+
+  // Releases what the plate holds over the nose's conveyor: kNoPlace when no
+  // drop-off place could be reached, kLost when the load fell on the way.
+  Delivery drop_off(const Perceived& w) {
+    // Room for the arm to swing the box down to the nose: back away from
+    // the structure first.
+    step("back off", PlanMode::kBaseLine,
+         joints({{sim::kBaseX, w.q[sim::kBaseX] - o_.dropoff_backoff_m}}), Suction::kKeep,
+         Suction::kKeep);
+    // From a high pick the elbow is up near the ceiling, and folding the arm
+    // straight towards the nose would raise it further: lower the load
+    // first, on a straight line.
+    {
+      const Perceived now = observe();
+      const sim::PlateTarget p = robot_.plate_target(now.q);
+      if (p.position.z() > o_.carry_height_m)
+        step("lower", PlanMode::kArmCartesian,
+             pose({{p.position.x(), p.position.y(), o_.carry_height_m}, p.yaw}), Suction::kKeep,
+             Suction::kKeep);
+    }
+    // A place the arm reaches may still fold it into itself: try the next.
+    const Perceived at = observe();
+    if (at.held.empty()) {
+      note("the load fell while carried to the nose");
+      return Delivery::kLost;
+    }
+    for (const auto& drop :
+         dropoff_targets(at.world, at.held, robot_, g_, at.q, o_.pick_candidates)) {
+      if (step("drop-off", PlanMode::kArm, pose(drop), Suction::kKeep, Suction::kOff))
+        return Delivery::kDelivered;
+    }
+    note("no drop-off pose could be planned");
+    return Delivery::kNoPlace;
+  }
+
+  // ---- Sweep ---------------------------------------------------------------
+
+  void sweep(const Perceived& w0) {
+    const auto scene = sim::analyse(w0.world, o_.observation);
+    const auto plan =
+        sweep_plan(scene, action_, g_, o_.nose_sweep[2], w0.q, w0.world.trailer.depth);
+    if (!plan) {
+      note("no pile in front to sweep");
+      return;
+    }
+    // A pick may have left the arm over the belt: fold it before the scoop
+    // brings boxes up.
+    step("arm clear", PlanMode::kArm, arm_clear(), Suction::kKeep, Suction::kKeep);
+    if (step("back up", PlanMode::kBaseLine, joints({{sim::kBaseX, plan->start_base_x}}),
+             Suction::kKeep, Suction::kKeep) &&
+        step("nose down", PlanMode::kNose, nose(o_.nose_sweep, plan->lift), Suction::kKeep,
+             Suction::kKeep)) {
+      // The scoop goes under the pile: the planner must not treat it as an obstacle.
+      step("sweep forward", PlanMode::kBaseLine, joints({{sim::kBaseX, plan->end_base_x}}),
+           Suction::kKeep, Suction::kKeep, plan->swept);
+      // What was scooped may still lie on the scoop: it rides along.
+      step("back up", PlanMode::kBaseLine, joints({{sim::kBaseX, plan->start_base_x}}),
+           Suction::kKeep, Suction::kKeep, plan->swept);
+    }
+    step("nose home", PlanMode::kNose, nose(o_.nose_home), Suction::kKeep, Suction::kKeep,
+         plan->swept);
+  }
+
+  const sim::RobotModel& robot_;
+  const ActionOptions& o_;
+  const Geometry& g_;
+  Backend& backend_;
+  Memory& memory_;
+  const Reporter& reporter_;
+  const sim::Action action_;
+  Outcome out_;
+  std::uint32_t unloaded_at_start_ = 0;
+  std::vector<std::uint32_t> last_held_;
+  std::string step_failure_;  // why the last step that failed did
+  double time_scale_ = 1.0;   // of the trajectories executed: > 1 carries a dropped box slower
+};
+
+}  // namespace
+
+ActionModel::ActionModel(const sim::RobotModel& robot, ActionOptions options)
+    : robot_(&robot), options_(std::move(options)) {}
+
+plr::Expected<Outcome> ActionModel::run(sim::Action action, Backend& backend, Memory& memory,
+                                        const Reporter& reporter) const {
+  try {
+    return Run(*robot_, options_, backend, memory, reporter, action).go();
+  } catch (const Aborted& a) {
+    return a.error;
+  }
+}
+
+}  // namespace plr::actions

@@ -1,0 +1,86 @@
+// The trailer with the robot in it, simulated: the box physics (Simbody,
+// plr/sim/physics.hpp) with the robot's links, suction plate and conveyor
+// moved along timed trajectories. What the simulator plug-in serves over the
+// bus and what the in-process action model runs on, one implementation.
+#pragma once
+
+#include <plr/expected.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "plr/planning/plan_messages.hpp"
+#include "plr/sim/physics.hpp"
+#include "plr/sim/robot_model.hpp"
+
+namespace plr::actions {
+
+enum class Suction { kKeep, kOn, kOff };
+
+// One move of the robot: a trajectory (times from 0), what the suction does
+// before and after it, whether the conveyor runs, and how long to let what
+// moved come to rest afterwards.
+struct Motion {
+  std::vector<planning::TimedPoint> points;
+  Suction before = Suction::kKeep;
+  Suction after = Suction::kKeep;
+  bool conveyor = true;
+  double settle_s = 0.0;
+};
+
+struct Executed {
+  std::vector<std::uint32_t> unloaded;   // boxes that left the trailer
+  std::vector<double> unloaded_after_s;  // when, in s after the motion's start
+  std::vector<std::uint32_t> held;       // what the plate holds at the end
+  std::vector<std::uint32_t> moved;      // boxes displaced by more than 1 cm
+  std::uint32_t robot_trailer_contacts = 0;
+  std::vector<sim::SuctionEvent> suction;  // grips refused and loads dropped
+  double sim_time_s = 0.0;                 // the simulated clock afterwards
+};
+
+struct UnloaderOptions {
+  double control_period_s = 0.01;  // the robot's pose is updated this often
+  double belt_speed = 0.8;         // m/s of the nose conveyor
+  double carry_max_s = 4.0;        // the belt keeps running this long at most after a motion
+  sim::PhysicsOptions physics;
+};
+
+// Where the robot starts: base front edge at the trailer's open rear, arm
+// folded, nose raised.
+sim::JointVector home_configuration();
+
+class UnloaderSimulation {
+ public:
+  // `truth` with masses (W^t). The robot model must outlive the simulation.
+  UnloaderSimulation(const sim::RobotModel& robot, const sim::World& truth,
+                     const sim::JointVector& q = home_configuration(),
+                     const UnloaderOptions& options = {});
+  ~UnloaderSimulation();
+  UnloaderSimulation(UnloaderSimulation&&) noexcept;
+  UnloaderSimulation& operator=(UnloaderSimulation&&) noexcept;
+
+  // Runs a motion. Refused (with the reason) when its first point is not
+  // where the robot is, or its times decrease: a controller would refuse it.
+  plr::Expected<Executed> execute(const Motion& motion);
+
+  const sim::RobotModel& robot() const;
+  sim::World truth() const;      // boxes still in the trailer, with masses
+  sim::World perceived() const;  // the same without masses (W)
+  const sim::JointVector& q() const;
+  std::vector<std::uint32_t> held() const;
+  std::uint32_t boxes_unloaded() const;
+  double time() const;
+  const sim::Simulation& physics() const;
+
+  // In-memory checkpoints; a restored simulation repeats bit for bit.
+  struct Saved;
+  std::shared_ptr<const Saved> save() const;
+  void restore(const Saved& saved);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace plr::actions

@@ -1,0 +1,26 @@
+// Strategy H, the paper's hardcoded strategy: boxes below h_pile are pile,
+// above it wall (ObservationParams). A pile deeper than d_min is swept to its
+// depth; else, if the first wall is higher than h_min, a box is picked from
+// it, near the robot and high up first. The strategy_hardcoded plug-in serves
+// it over the bus; offline tools call it directly.
+#pragma once
+
+#include <plr/expected.hpp>
+
+#include "plr/sim/observation.hpp"
+#include "plr/sim/strategy.hpp"
+
+namespace plr::sim {
+
+struct HardcodedParams {
+  double h_min = 0.5;  // m; a lower first wall is not picked from (unless nothing else is left)
+  double d_min = 0.5;  // m; a shallower pile is not swept
+
+  // Whether the values are usable; the error names the parameter.
+  plr::Status check() const;
+};
+
+// H's action for the scene in front of the robot (which must not be empty).
+Action hardcoded_action(const SceneAnalysis& scene, const HardcodedParams& params);
+
+}  // namespace plr::sim

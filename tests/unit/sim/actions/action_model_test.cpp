@@ -1,0 +1,104 @@
+// The action model in-process (sim/actions/action_model.cpp, in_process.cpp):
+// real physics, the real lattice planner, hand-made worlds.
+#include <gtest/gtest.h>
+
+#include "plr/actions/action_model.hpp"
+#include "plr/actions/in_process.hpp"
+#include "plr/planning/lattice_planner.hpp"
+#include "plr/sim/physics.hpp"
+#include "plr/sim/shipped_files.hpp"
+
+namespace plr::actions {
+namespace {
+
+using sim::Height;
+using sim::Side;
+
+const sim::RobotModel& robot() {
+  static const sim::RobotModel m = sim::load_robot().value();
+  return m;
+}
+
+planning::LatticePlanner& planner() {
+  static planning::LatticePlanner p(
+      planning::LatticeConfig::from_file(sim::shipped_file("robots/unloader_lattice.yaml").value())
+          .value());
+  return p;
+}
+
+sim::Box box(std::uint32_t id, double x, double y, double z0, double mass = 5.0) {
+  sim::Box b;
+  b.id = id;
+  b.size = {0.4, 0.4, 0.4};
+  b.mass = mass;
+  b.pose.translation() = Eigen::Vector3d(x + 0.2, y, z0 + 0.2);
+  return b;
+}
+
+// A wall of `cols` x `rows` 0.4 m boxes, front face at x, in an 8 m trailer.
+sim::World wall(double x, int cols, int rows, double mass = 5.0) {
+  sim::World w;
+  w.trailer.depth = 8.0;
+  std::uint32_t id = 1;
+  for (int c = 0; c < cols; ++c)
+    for (int r = 0; r < rows; ++r)
+      w.boxes.push_back(box(id++, x, (c - (cols - 1) / 2.0) * 0.41, r * 0.4, mass));
+  return w;
+}
+
+struct Fixture {
+  explicit Fixture(const sim::World& truth)
+      : simulation(robot(), truth), backend(simulation, planner()) {}
+  UnloaderSimulation simulation;
+  InProcessBackend backend;
+  Memory memory;
+};
+
+TEST(ActionModel, APickTakesABoxOutOfAWall) {
+  Fixture f(wall(5.0, 3, 2));
+  const ActionModel model(robot(), {});
+  const auto out = model.run(sim::make_pick(Height::kLow, Side::kCenter), f.backend, f.memory);
+  ASSERT_TRUE(out) << out.error().message;
+  EXPECT_GE(out->boxes, 1u);
+  EXPECT_EQ(f.simulation.boxes_unloaded(), out->boxes);
+  EXPECT_EQ(out->unloaded_at_s.size(), out->boxes);
+  EXPECT_GT(out->exec_s, 5.0);
+  EXPECT_GT(out->plan_model_s, 0.0);
+  EXPECT_DOUBLE_EQ(out->robot_time_s, out->exec_s + out->plan_model_s);
+  EXPECT_FALSE(out->queries.empty());
+  for (const auto& q : out->queries) EXPECT_TRUE(q.answered);
+}
+
+// Robot time is the trajectories and a model of planning work: the same
+// world and action give the same figures, whatever the machine's load.
+TEST(ActionModel, TheSameActionTwiceCostsTheSame) {
+  const sim::World w = wall(5.0, 3, 2);
+  const ActionModel model(robot(), {});
+  Fixture a(w), b(w);
+  const auto one = model.run(sim::make_pick(Height::kLow, Side::kLeft), a.backend, a.memory);
+  const auto two = model.run(sim::make_pick(Height::kLow, Side::kLeft), b.backend, b.memory);
+  ASSERT_TRUE(one && two);
+  EXPECT_EQ(one->boxes, two->boxes);
+  EXPECT_EQ(one->robot_time_s, two->robot_time_s);
+  EXPECT_EQ(one->unloaded_at_s, two->unloaded_at_s);
+  ASSERT_EQ(one->queries.size(), two->queries.size());
+  for (std::size_t i = 0; i < one->queries.size(); ++i)
+    EXPECT_EQ(one->queries[i].expansions, two->queries[i].expansions);
+}
+
+TEST(ActionModel, ASweepCarriesALowPileOut) {
+  sim::World w;
+  w.trailer.depth = 8.0;
+  // Two rows of loose boxes on the floor, 1.5 m deep.
+  std::uint32_t id = 1;
+  for (double x : {4.0, 4.45, 4.9})
+    for (double y : {-0.6, 0.0, 0.6}) w.boxes.push_back(box(id++, x, y, 0.0, 3.0));
+  Fixture f(w);
+  const ActionModel model(robot(), {});
+  const auto out = model.run(sim::make_sweep(Height::kLow), f.backend, f.memory);
+  ASSERT_TRUE(out) << out.error().message;
+  EXPECT_GE(out->boxes, 3u);
+}
+
+}  // namespace
+}  // namespace plr::actions
