@@ -1,0 +1,69 @@
+// POMCP (Silver and Veness, NIPS 2010): Monte-Carlo tree search over
+// action-observation histories with UCB1 at belief nodes and uniformly random
+// rollouts below the tree. Here the root's states are drawn from the belief
+// the caller keeps (exact for tabular models), so it never runs out of
+// particles; the subtree of the taken branch is kept between steps.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "pomdp/model.hpp"
+#include "pomdp/planner.hpp"
+
+namespace plr::pomdp {
+
+struct PomcpOptions {
+  // UCB1 exploration constant; 0 takes max_reward - min_reward (scaled for
+  // the discount), as Silver and Veness did.
+  double exploration = 0.0;
+  // Simulation depth; 0 derives it from the discount (gamma^depth < 0.01),
+  // 100 for goal-directed models.
+  int max_depth = 0;
+  std::size_t max_nodes = 4'000'000;
+  std::uint64_t seed = 1;
+};
+
+class Pomcp final : public OnlinePlanner {
+ public:
+  Pomcp(const GenerativeModel& model, PomcpOptions options = {});
+
+  std::string name() const override { return "POMCP"; }
+  void reset(const Belief& belief) override;
+  ActionId plan(const Budget& budget) override;
+  void advance(ActionId action, ObsId observation, const Belief& next) override;
+  const PlanStats& last_stats() const override { return stats_; }
+
+  std::size_t num_nodes() const { return nodes_.size(); }
+  // Visit count and mean return of a root action (for tests).
+  std::uint32_t root_visits(ActionId a) const;
+  double root_value(ActionId a) const;
+
+ private:
+  struct ActionStats {
+    std::uint32_t visits = 0;
+    double value = 0.0;
+    std::vector<std::pair<ObsId, std::uint32_t>> children;  // observation -> node
+  };
+  struct Node {
+    std::uint32_t visits = 0;
+    std::vector<ActionStats> actions;  // empty until the node is first simulated through
+  };
+
+  double simulate(StateId s, std::uint32_t node, int depth);
+  double rollout(StateId s, int depth);
+  std::uint32_t child(std::uint32_t node, ActionId a, ObsId o);
+  void keep_subtree(std::uint32_t new_root);
+
+  const GenerativeModel& model_;
+  PomcpOptions options_;
+  Rng rng_;
+  double gamma_, c_;
+  int max_depth_;
+  Belief belief_;
+  std::vector<Node> nodes_;
+  std::uint32_t root_ = 0;
+  PlanStats stats_;
+};
+
+}  // namespace plr::pomdp

@@ -1,0 +1,121 @@
+// POMHDP: forward-search dynamic programming over an AND-OR graph of beliefs
+// (belief nodes choose an action; action nodes branch on observations), with
+// an admissible anchor heuristic and inadmissible ones scheduled as in MHA*.
+// See docs/pomdp.md for what was reconstructed and why.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <unordered_map>
+#include <vector>
+
+#include "pomdp/heuristics.hpp"
+#include "pomdp/model.hpp"
+#include "pomdp/planner.hpp"
+#include "pomdp/policy_tree.hpp"
+
+namespace plr::pomdp {
+
+struct PomhdpOptions {
+  // Inflation of the inadmissible heuristics (cost-to-go scaled by epsilon1).
+  double epsilon1 = 10.0;
+  // A search may take an inadmissible heuristic's action only while its
+  // anchor cost is within epsilon2 times the anchor's best.
+  double epsilon2 = 10.0;
+  // Both factors move halfway to 1 every this many trials (anytime).
+  int epsilon_period = 64;
+  // Stop when the root's upper and lower bounds are this close.
+  double target_gap = 1e-3;
+  // Trial depth limit; 0 derives it from the discount and the value range
+  // (100 for goal-directed models).
+  int max_depth = 0;
+  // Beliefs equal after rounding their weights to this share one node.
+  double belief_resolution = 1e-9;
+  std::size_t max_nodes = 2'000'000;
+  std::uint64_t seed = 1;
+};
+
+class Pomhdp final : public OnlinePlanner {
+ public:
+  // `upper` must be admissible (never below the optimal value) and `lower` a
+  // lower bound (or an estimate of one for simulated models). The heuristics
+  // must outlive the solver.
+  Pomhdp(const GenerativeModel& model, const Heuristic& upper, const Heuristic& lower,
+         std::vector<const Heuristic*> inadmissible, PomhdpOptions options = {});
+
+  std::string name() const override { return "POMHDP"; }
+  void reset(const Belief& belief) override;
+  // Runs trials until the budget ends or the bounds meet, then returns the
+  // root action with the best lower bound.
+  ActionId plan(const Budget& budget) override;
+  // Re-roots on the child and frees what it cannot reach; starts afresh from
+  // `next` if the child was never generated.
+  void advance(ActionId action, ObsId observation, const Belief& next) override;
+  const PlanStats& last_stats() const override { return stats_; }
+
+  // Runs trials (as plan(), without choosing an action).
+  PlanStats solve(const Budget& budget);
+  double lower() const { return nodes_[root_].lower; }
+  double upper() const { return nodes_[root_].upper; }
+  ActionId best_action();
+  // The policy from the root up to `horizon` actions deep: the best-lower-bound
+  // action at each belief, a child per possible observation. Expands beliefs
+  // the trials did not reach.
+  PolicyTree policy_tree(int horizon);
+
+  std::size_t num_nodes() const { return nodes_.size(); }
+  std::uint64_t total_trials() const { return total_trials_; }
+  double epsilon1() const { return epsilon1_; }
+  double epsilon2() const { return epsilon2_; }
+
+ private:
+  struct Edge {
+    double reward = 0.0;
+    std::vector<ObsId> observations;
+    std::vector<double> probabilities;
+    std::vector<std::uint32_t> children;
+  };
+  struct Node {
+    Belief belief;
+    std::uint64_t signature = 0;
+    bool terminal = false;
+    bool expanded = false;
+    double upper = 0.0, lower = 0.0;
+    // One value per inadmissible heuristic: the raw estimate at a leaf, the
+    // backed-up (inflated) value once expanded.
+    std::vector<double> h;
+    std::vector<Edge> edges;  // by action, once expanded
+  };
+
+  std::uint32_t node_for(Belief belief);
+  void expand(std::uint32_t id);
+  void backup(std::uint32_t id);
+  double q_upper(const Edge& e) const;
+  double q_lower(const Edge& e) const;
+  double q_h(const Edge& e, std::size_t i) const;
+  double leaf_h(const Node& n, std::size_t i) const;
+  ActionId choose_action(const Node& n, std::size_t heuristic) const;
+  void trial(std::size_t heuristic);
+  void compact(std::uint32_t new_root);
+  std::size_t memory_bytes() const;
+
+  const GenerativeModel& model_;
+  const Heuristic& upper_;
+  const Heuristic& lower_;
+  std::vector<const Heuristic*> inadmissible_;
+  PomhdpOptions options_;
+  Rng rng_;
+  double gamma_, v_max_;
+  int max_depth_;
+  std::vector<Node> nodes_;
+  std::unordered_multimap<std::uint64_t, std::uint32_t> index_;
+  std::uint32_t root_ = 0;
+  double epsilon1_, epsilon2_;
+  std::uint64_t total_trials_ = 0;
+  std::size_t next_heuristic_ = 0;
+  std::vector<std::uint32_t> path_;
+  PlanStats stats_;
+};
+
+}  // namespace plr::pomdp
