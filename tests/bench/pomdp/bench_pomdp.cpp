@@ -94,8 +94,9 @@ int main(int argc, char** argv) {
   std::string file;
   double budget = 1.0, pomcp_budget = -1.0, offline = -1.0, time_limit = -1.0;
   int episodes = -1;
-  std::uint64_t seed = 1;
-  bool json = false, quick = false;
+  std::uint64_t seed = 1, pomcp_sims = std::numeric_limits<std::uint64_t>::max();
+  bool json = false, quick = false, anchor_only = false;
+  PomhdpOptions options;
   app.add_option("model", file, "model file (.pomdp or .pomdpx)")->required();
   app.add_option("--budget", budget, "POMHDP seconds per step online (default 1)");
   app.add_option("--pomcp-budget", pomcp_budget, "POMCP seconds per step (default: --budget)");
@@ -103,6 +104,10 @@ int main(int argc, char** argv) {
   app.add_option("--episodes", episodes, "episodes per solver at most (default 2000, quick 100)");
   app.add_option("--time-limit", time_limit,
                  "no new episode after this many seconds per solver (default 360, quick 20)");
+  app.add_option("--pomcp-sims", pomcp_sims, "POMCP simulations per step at most");
+  app.add_option("--epsilon1", options.epsilon1, "POMHDP inflation of inadmissible heuristics");
+  app.add_option("--epsilon2", options.epsilon2, "POMHDP bound of searches by the anchor");
+  app.add_flag("--anchor-only", anchor_only, "POMHDP without inadmissible heuristics");
   app.add_option("--seed", seed, "random seed");
   app.add_flag("--json", json, "print one JSON object");
   app.add_flag("--quick", quick, "a run of under a minute");
@@ -127,9 +132,9 @@ int main(int argc, char** argv) {
   const auto published = published_value(stem);
 
   // Offline: bounds at the initial belief.
-  PomhdpOptions options;
   options.seed = seed;
-  Pomhdp offline_solver(model, *h.upper, *h.lower, h.inadmissible(), options);
+  const auto inadmissible = anchor_only ? std::vector<const Heuristic*>{} : h.inadmissible();
+  Pomhdp offline_solver(model, *h.upper, *h.lower, inadmissible, options);
   const PlanStats off = offline_solver.solve({offline, std::numeric_limits<std::uint64_t>::max()});
 
   EvaluationOptions eval;
@@ -139,13 +144,13 @@ int main(int argc, char** argv) {
   const bool tty = isatty(STDERR_FILENO) != 0;
 
   eval.per_step = {budget, std::numeric_limits<std::uint64_t>::max()};
-  Pomhdp online(model, *h.upper, *h.lower, h.inadmissible(), options);
+  Pomhdp online(model, *h.upper, *h.lower, inadmissible, options);
   Progress p1("POMHDP online");
   if (tty || !json) eval.progress = [&p1](int d, int t) { p1(d, t); };
   const Evaluation pomhdp = evaluate(model, online, eval);
   if (eval.progress) p1.finish();
 
-  eval.per_step = {pomcp_budget, std::numeric_limits<std::uint64_t>::max()};
+  eval.per_step = {pomcp_budget, pomcp_sims};
   PomcpOptions pomcp_options;
   pomcp_options.seed = seed;
   Pomcp pomcp_solver(model, pomcp_options);
@@ -183,14 +188,14 @@ int main(int argc, char** argv) {
               offline, off.lower, off.upper, off.upper - off.lower, off.seconds,
               static_cast<unsigned long long>(off.iterations), off.nodes, off.memory_bytes / 1e6);
   std::printf("\nonline, a fresh search per episode (value = mean discounted return, 95%% CI):\n");
-  std::printf("%-7s %9s %8s %18s %9s %9s %10s %10s %12s %10s %9s\n", "solver", "budget_s", "episodes",
+  std::printf("%-7s %9s %8s %18s %9s %9s %10s %10s %12s %10s %9s %8s\n", "solver", "budget_s", "episodes",
               "value +- ci95", "lower_0", "upper_0", "med_step_s", "max_step_s", "iter/step", "max_nodes",
-              "max_MB");
+              "max_MB", "total_s");
   for (const auto& [name, e, b] : {std::tuple{"POMHDP", &pomhdp, budget}, std::tuple{"POMCP", &pomcp, pomcp_budget}}) {
-    std::printf("%-7s %9.3g %8zu %10.3f +- %5.3f %9.3f %9.3f %10.4f %10.4f %12.1f %10zu %9.1f\n", name, b,
+    std::printf("%-7s %9.3g %8zu %10.3f +- %5.3f %9.3f %9.3f %10.4f %10.4f %12.1f %10zu %9.1f %8.1f\n", name, b,
                 e->returns.size(), e->mean, e->ci95, e->first_step.lower, e->first_step.upper,
                 e->median_step_seconds, e->max_step_seconds, e->mean_iterations_per_step, e->max_nodes,
-                e->max_memory_bytes / 1e6);
+                e->max_memory_bytes / 1e6, e->seconds);
   }
   std::printf("(lower_0/upper_0: root bounds after the first step's search; POMCP's are its value estimate)\n");
   if (pomhdp.lost_beliefs + pomcp.lost_beliefs > 0) {

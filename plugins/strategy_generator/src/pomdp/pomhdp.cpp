@@ -26,6 +26,10 @@ Pomhdp::Pomhdp(const GenerativeModel& model, const Heuristic& upper, const Heuri
       gamma_(model.discount()),
       epsilon1_(options.epsilon1),
       epsilon2_(options.epsilon2) {
+  // Growing these by reallocation would stall a search for tens of
+  // milliseconds at a time; untouched reserved pages cost nothing.
+  nodes_.reserve(options.max_nodes);
+  index_.reserve(options.max_nodes);
   // Costs are measured down from the best value any belief can have, so the
   // MHA*-style factors scale non-negative numbers (for goal-directed models
   // rewards are costs already and the best value is 0).
@@ -45,6 +49,8 @@ Pomhdp::Pomhdp(const GenerativeModel& model, const Heuristic& upper, const Heuri
 void Pomhdp::reset(const Belief& belief) {
   nodes_.clear();
   index_.clear();
+  bytes_ = 0;
+  compact_at_ = 1 << 16;
   epsilon1_ = options_.epsilon1;
   epsilon2_ = options_.epsilon2;
   total_trials_ = 0;
@@ -53,9 +59,8 @@ void Pomhdp::reset(const Belief& belief) {
 }
 
 std::uint32_t Pomhdp::node_for(Belief belief) {
-  const std::uint64_t sig = belief.signature(options_.belief_resolution);
-  const auto [first, last] = index_.equal_range(sig);
-  for (auto it = first; it != last; ++it) {
+  std::uint64_t sig = belief.signature(options_.belief_resolution);
+  for (auto it = index_.find(sig); it != index_.end(); it = index_.find(++sig)) {
     if (nodes_[it->second].belief.approx_equal(belief, options_.belief_resolution)) return it->second;
   }
   Node n;
@@ -69,6 +74,7 @@ std::uint32_t Pomhdp::node_for(Belief belief) {
   }
   n.belief = std::move(belief);
   const auto id = static_cast<std::uint32_t>(nodes_.size());
+  bytes_ += node_bytes(n);
   nodes_.push_back(std::move(n));
   index_.emplace(sig, id);
   return id;
@@ -81,38 +87,40 @@ void Pomhdp::expand(std::uint32_t id) {
     Expansion e = model_.expand(nodes_[id].belief, a, rng_);
     Edge& edge = edges[static_cast<std::size_t>(a)];
     edge.reward = e.reward;
+    edge.branches.reserve(e.outcomes.size());
     for (Outcome& o : e.outcomes) {
-      edge.observations.push_back(o.observation);
-      edge.probabilities.push_back(o.probability);
-      edge.children.push_back(node_for(std::move(o.next)));
+      edge.branches.push_back({o.observation, o.probability, node_for(std::move(o.next))});
     }
   }
+  bytes_ -= node_bytes(nodes_[id]);
   nodes_[id].edges = std::move(edges);
   nodes_[id].expanded = true;
+  bytes_ += node_bytes(nodes_[id]);
 }
 
 double Pomhdp::q_upper(const Edge& e) const {
   double v = 0.0;
-  for (std::size_t k = 0; k < e.children.size(); ++k) v += e.probabilities[k] * nodes_[e.children[k]].upper;
+  for (const Branch& b : e.branches) v += b.probability * nodes_[b.child].upper;
   return e.reward + gamma_ * v;
 }
 
 double Pomhdp::q_lower(const Edge& e) const {
   double v = 0.0;
-  for (std::size_t k = 0; k < e.children.size(); ++k) v += e.probabilities[k] * nodes_[e.children[k]].lower;
+  for (const Branch& b : e.branches) v += b.probability * nodes_[b.child].lower;
   return e.reward + gamma_ * v;
 }
 
 double Pomhdp::leaf_h(const Node& n, std::size_t i) const {
-  if (n.terminal) return 0.0;
-  if (n.expanded) return n.h[i];
-  // Weighted-A*-style inflation of the cost-to-go v_max - h.
-  return v_max_ - epsilon1_ * (v_max_ - n.h[i]);
+  if (n.expanded && !n.terminal) return n.h[i];
+  // Weighted-A*-style inflation of the cost-to-go v_max - h; a terminal
+  // belief's value is 0, so its cost-to-go is v_max (0 for goal-directed
+  // models: goals stay free, as in MHA*).
+  return v_max_ - epsilon1_ * (v_max_ - (n.terminal ? 0.0 : n.h[i]));
 }
 
 double Pomhdp::q_h(const Edge& e, std::size_t i) const {
   double v = 0.0;
-  for (std::size_t k = 0; k < e.children.size(); ++k) v += e.probabilities[k] * leaf_h(nodes_[e.children[k]], i);
+  for (const Branch& b : e.branches) v += b.probability * leaf_h(nodes_[b.child], i);
   return e.reward + gamma_ * v;
 }
 
@@ -163,7 +171,7 @@ ActionId Pomhdp::choose_action(const Node& n, std::size_t heuristic) const {
   return pick_cost <= epsilon2_ * anchor_cost + 1e-12 ? pick : anchor;
 }
 
-void Pomhdp::trial(std::size_t heuristic) {
+void Pomhdp::trial(std::size_t heuristic, Clock::time_point deadline) {
   path_.clear();
   std::uint32_t id = root_;
   double threshold = options_.target_gap;
@@ -176,16 +184,18 @@ void Pomhdp::trial(std::size_t heuristic) {
       backup(id);
     }
     if (depth >= max_depth_ || nodes_.size() >= options_.max_nodes) break;
+    // Out of time: stop descending, still back up what was found.
+    if ((depth & 7) == 7 && Clock::now() >= deadline) break;
     const Edge& e = nodes_[id].edges[static_cast<std::size_t>(choose_action(nodes_[id], heuristic))];
     // The outcome whose gap weighs most.
     double best = 0.0;
     std::uint32_t next = id;
-    for (std::size_t k = 0; k < e.children.size(); ++k) {
-      const Node& c = nodes_[e.children[k]];
-      const double w = e.probabilities[k] * (c.upper - c.lower);
+    for (const Branch& b : e.branches) {
+      const Node& c = nodes_[b.child];
+      const double w = b.probability * (c.upper - c.lower);
       if (w > best) {
         best = w;
-        next = e.children[k];
+        next = b.child;
       }
     }
     if (next == id && best == 0.0) break;
@@ -197,16 +207,41 @@ void Pomhdp::trial(std::size_t heuristic) {
   for (auto it = path_.rbegin(); it != path_.rend(); ++it) backup(*it);
 }
 
-PlanStats Pomhdp::solve(const Budget& budget) {
+bool Pomhdp::settled() const {
+  const Node& n = nodes_[root_];
+  if (!n.expanded) return false;
+  double best_lower = -std::numeric_limits<double>::infinity();
+  std::size_t best = 0;
+  for (std::size_t a = 0; a < n.edges.size(); ++a) {
+    const double l = q_lower(n.edges[a]);
+    if (l > best_lower) {
+      best_lower = l;
+      best = a;
+    }
+  }
+  for (std::size_t a = 0; a < n.edges.size(); ++a) {
+    if (a != best && q_upper(n.edges[a]) > best_lower + options_.settle_tolerance) return false;
+  }
+  return true;
+}
+
+PlanStats Pomhdp::solve(const Budget& budget) { return run(budget, false); }
+
+PlanStats Pomhdp::run(const Budget& budget, bool until_settled) {
   const auto t0 = Clock::now();
+  const auto deadline =
+      std::isfinite(budget.seconds)
+          ? t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(budget.seconds))
+          : Clock::time_point::max();
   std::uint64_t trials = 0;
   while (trials < budget.iterations && !nodes_[root_].terminal &&
          nodes_[root_].upper - nodes_[root_].lower > options_.target_gap &&
-         nodes_.size() < options_.max_nodes && seconds_since(t0) < budget.seconds) {
+         !(until_settled && settled()) && nodes_.size() < options_.max_nodes &&
+         Clock::now() < deadline) {
     // Round robin over the inadmissible heuristics (each falls back to the
     // anchor where it strays too far); the anchor alone when there are none.
     const std::size_t h = inadmissible_.empty() ? 0 : 1 + next_heuristic_++ % inadmissible_.size();
-    trial(h);
+    trial(h, deadline);
     ++trials;
     ++total_trials_;
     if (options_.epsilon_period > 0 && total_trials_ % static_cast<std::uint64_t>(options_.epsilon_period) == 0) {
@@ -216,7 +251,7 @@ PlanStats Pomhdp::solve(const Budget& budget) {
   }
   stats_.iterations = trials;
   stats_.nodes = nodes_.size();
-  stats_.memory_bytes = memory_bytes();
+  stats_.memory_bytes = bytes_;
   stats_.seconds = seconds_since(t0);
   stats_.lower = nodes_[root_].lower;
   stats_.upper = nodes_[root_].upper;
@@ -241,9 +276,10 @@ ActionId Pomhdp::best_action() {
 }
 
 ActionId Pomhdp::plan(const Budget& budget) {
-  solve(budget);
+  run(budget, options_.settle_tolerance >= 0.0);
   const ActionId a = best_action();
   stats_.nodes = nodes_.size();
+  stats_.memory_bytes = bytes_;
   stats_.lower = nodes_[root_].lower;
   stats_.upper = nodes_[root_].upper;
   return a;
@@ -252,7 +288,8 @@ ActionId Pomhdp::plan(const Budget& budget) {
 void Pomhdp::advance(ActionId /*action*/, ObsId /*observation*/, const Belief& next) {
   // The child of (action, observation) has this belief when the model is
   // exact; node_for() finds it by its signature, or starts a new root.
-  compact(node_for(next));
+  root_ = node_for(next);
+  if (nodes_.size() >= compact_at_) compact(root_);
 }
 
 void Pomhdp::compact(std::uint32_t new_root) {
@@ -261,26 +298,29 @@ void Pomhdp::compact(std::uint32_t new_root) {
   remap[new_root] = 0;
   for (std::size_t k = 0; k < order.size(); ++k) {
     for (const Edge& e : nodes_[order[k]].edges) {
-      for (std::uint32_t c : e.children) {
-        if (remap[c] == std::numeric_limits<std::uint32_t>::max()) {
-          remap[c] = static_cast<std::uint32_t>(order.size());
-          order.push_back(c);
+      for (const Branch& b : e.branches) {
+        if (remap[b.child] == std::numeric_limits<std::uint32_t>::max()) {
+          remap[b.child] = static_cast<std::uint32_t>(order.size());
+          order.push_back(b.child);
         }
       }
     }
   }
   std::vector<Node> kept;
-  kept.reserve(order.size());
+  kept.reserve(std::max(order.size(), options_.max_nodes));
   for (std::uint32_t old : order) {
     kept.push_back(std::move(nodes_[old]));
     for (Edge& e : kept.back().edges) {
-      for (std::uint32_t& c : e.children) c = remap[c];
+      for (Branch& b : e.branches) b.child = remap[b.child];
     }
   }
   nodes_ = std::move(kept);
+  bytes_ = 0;
+  for (const Node& n : nodes_) bytes_ += node_bytes(n);
   index_.clear();
   for (std::uint32_t i = 0; i < nodes_.size(); ++i) index_.emplace(nodes_[i].signature, i);
   root_ = 0;
+  compact_at_ = std::max<std::size_t>(1 << 16, 2 * nodes_.size());
 }
 
 PolicyTree Pomhdp::policy_tree(int horizon) {
@@ -304,10 +344,10 @@ PolicyTree Pomhdp::policy_tree(int horizon) {
     if (item.depth >= horizon || nodes_[item.graph].terminal) continue;
     const Edge& e = nodes_[item.graph].edges[static_cast<std::size_t>(a)];
     std::vector<std::pair<ObsId, std::uint32_t>> children;
-    for (std::size_t c = 0; c < e.children.size(); ++c) {
-      if (nodes_[e.children[c]].terminal) continue;
-      children.emplace_back(e.observations[c], static_cast<std::uint32_t>(queue.size()));
-      queue.push_back({e.children[c], item.depth + 1});
+    for (const Branch& b : e.branches) {
+      if (nodes_[b.child].terminal) continue;
+      children.emplace_back(b.observation, static_cast<std::uint32_t>(queue.size()));
+      queue.push_back({b.child, item.depth + 1});
       tree.nodes.emplace_back();
     }
     std::sort(children.begin(), children.end());
@@ -317,15 +357,11 @@ PolicyTree Pomhdp::policy_tree(int horizon) {
   return tree;
 }
 
-std::size_t Pomhdp::memory_bytes() const {
-  std::size_t bytes = nodes_.capacity() * sizeof(Node) + index_.size() * 32;
-  for (const Node& n : nodes_) {
-    bytes += n.belief.particles().capacity() * sizeof(Particle) + n.h.capacity() * sizeof(double) +
-             n.edges.capacity() * sizeof(Edge);
-    for (const Edge& e : n.edges) {
-      bytes += e.children.capacity() * (sizeof(ObsId) + sizeof(double) + sizeof(std::uint32_t));
-    }
-  }
+std::size_t Pomhdp::node_bytes(const Node& n) const {
+  // The node, its particles, heuristic values and edges, and its index entry.
+  std::size_t bytes = sizeof(Node) + 32 + n.belief.particles().capacity() * sizeof(Particle) +
+                      n.h.capacity() * sizeof(double) + n.edges.capacity() * sizeof(Edge);
+  for (const Edge& e : n.edges) bytes += e.branches.capacity() * sizeof(Branch);
   return bytes;
 }
 

@@ -32,6 +32,10 @@ struct PomhdpOptions {
   int max_depth = 0;
   // Beliefs equal after rounding their weights to this share one node.
   double belief_resolution = 1e-9;
+  // Online (plan()): also stop once the best action is settled, its lower
+  // bound at most settle_tolerance below every other action's upper bound
+  // (so it loses at most that much against the optimum); negative: never.
+  double settle_tolerance = 1e-2;
   std::size_t max_nodes = 2'000'000;
   std::uint64_t seed = 1;
 };
@@ -54,7 +58,7 @@ class Pomhdp final : public OnlinePlanner {
   void advance(ActionId action, ObsId observation, const Belief& next) override;
   const PlanStats& last_stats() const override { return stats_; }
 
-  // Runs trials (as plan(), without choosing an action).
+  // Runs trials until the budget ends or the bounds meet (offline use).
   PlanStats solve(const Budget& budget);
   double lower() const { return nodes_[root_].lower; }
   double upper() const { return nodes_[root_].upper; }
@@ -70,11 +74,14 @@ class Pomhdp final : public OnlinePlanner {
   double epsilon2() const { return epsilon2_; }
 
  private:
+  struct Branch {
+    ObsId observation = 0;
+    double probability = 0.0;
+    std::uint32_t child = 0;
+  };
   struct Edge {
     double reward = 0.0;
-    std::vector<ObsId> observations;
-    std::vector<double> probabilities;
-    std::vector<std::uint32_t> children;
+    std::vector<Branch> branches;
   };
   struct Node {
     Belief belief;
@@ -96,9 +103,11 @@ class Pomhdp final : public OnlinePlanner {
   double q_h(const Edge& e, std::size_t i) const;
   double leaf_h(const Node& n, std::size_t i) const;
   ActionId choose_action(const Node& n, std::size_t heuristic) const;
-  void trial(std::size_t heuristic);
+  void trial(std::size_t heuristic, std::chrono::steady_clock::time_point deadline);
+  PlanStats run(const Budget& budget, bool until_settled);
+  bool settled() const;
   void compact(std::uint32_t new_root);
-  std::size_t memory_bytes() const;
+  std::size_t node_bytes(const Node& n) const;
 
   const GenerativeModel& model_;
   const Heuristic& upper_;
@@ -109,7 +118,13 @@ class Pomhdp final : public OnlinePlanner {
   double gamma_, v_max_;
   int max_depth_;
   std::vector<Node> nodes_;
-  std::unordered_multimap<std::uint64_t, std::uint32_t> index_;
+  // Belief signature -> node; a (rare) collision of different beliefs moves
+  // to the next free key, and the node remembers the key it got.
+  std::unordered_map<std::uint64_t, std::uint32_t> index_;
+  // Unreachable nodes are dropped only when the graph has doubled since the
+  // last compaction: copying it at every step would cost more than the search.
+  std::size_t compact_at_ = 0;
+  std::size_t bytes_ = 0;  // held by nodes_ and index_, kept as they grow
   std::uint32_t root_ = 0;
   double epsilon1_, epsilon2_;
   std::uint64_t total_trials_ = 0;
