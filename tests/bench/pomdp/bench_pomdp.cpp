@@ -61,8 +61,6 @@ class Progress {
     if (done == total) std::fprintf(stderr, "\n");
     std::fflush(stderr);
   }
-  void finish() { std::fprintf(stderr, "\n"); }
-
  private:
   std::string label_;
   Clock::time_point start_ = Clock::now(), last_ = Clock::time_point{};
@@ -148,7 +146,6 @@ int main(int argc, char** argv) {
   Progress p1("POMHDP online");
   if (tty || !json) eval.progress = [&p1](int d, int t) { p1(d, t); };
   const Evaluation pomhdp = evaluate(model, online, eval);
-  if (eval.progress) p1.finish();
 
   eval.per_step = {pomcp_budget, pomcp_sims};
   PomcpOptions pomcp_options;
@@ -157,7 +154,6 @@ int main(int argc, char** argv) {
   Progress p2("POMCP online");
   if (tty || !json) eval.progress = [&p2](int d, int t) { p2(d, t); };
   const Evaluation pomcp = evaluate(model, pomcp_solver, eval);
-  if (eval.progress) p2.finish();
 
   if (json) {
     nlohmann::json out = {
