@@ -163,6 +163,42 @@ TEST(Pomhdp, TigerBoundsAndValue) {
   EXPECT_GE(e.mean + e.ci95, 19.371);
 }
 
+// A model known only through step(): beliefs come from simulated particles
+// (the default expand()), bounds from constants, as a simulator-backed model
+// such as the truck's would have them.
+class SimulatedOnly final : public GenerativeModel {
+ public:
+  explicit SimulatedOnly(const TabularModel& m) : m_(m) { samples_per_particle = 4; }
+  int num_actions() const override { return m_.num_actions(); }
+  int num_observations() const override { return m_.num_observations(); }
+  double discount() const override { return m_.discount(); }
+  double min_reward() const override { return m_.min_reward(); }
+  double max_reward() const override { return m_.max_reward(); }
+  Belief initial_belief() const override { return m_.initial_belief(); }
+  bool is_terminal(StateId s) const override { return m_.is_terminal(s); }
+  Step step(StateId s, ActionId a, Rng& rng) const override { return m_.step(s, a, rng); }
+
+ private:
+  const TabularModel& m_;
+};
+
+TEST(Pomhdp, ParticleBeliefsOfASimulatedModel) {
+  const TabularModel exact = parse_or_die(kSense, "sense");
+  const SimulatedOnly m(exact);
+  // Trivial bounds: +-1 a step forever, 2 and -2 with g = 0.5.
+  const ConstantValue upper("max", 2.0), lower("min", -2.0);
+  const RolloutValue rollout(m, 8, 10, 3);
+  PomhdpOptions o;
+  o.max_depth = 12;
+  Pomhdp solver(m, upper, lower, {&rollout}, o);
+  const ActionId a = solver.plan(trials(3000));
+  EXPECT_EQ(a, 0);  // sense
+  // Sensing is exact, so the sensed beliefs are single particles and the
+  // bounds close on V* = 1 as they would on the exact model.
+  EXPECT_NEAR(solver.lower(), 1.0, 0.05);
+  EXPECT_LE(solver.lower(), solver.upper());
+}
+
 // POMCP on the sense model learns to sense first; its value estimate of
 // sensing approaches V* = 1.
 TEST(Pomcp, SenseFirst) {
