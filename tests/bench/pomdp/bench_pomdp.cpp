@@ -90,18 +90,22 @@ nlohmann::json to_json(const Evaluation& e, double budget) {
 int main(int argc, char** argv) {
   CLI::App app{"POMHDP and POMCP side by side on one POMDP model"};
   std::string file;
-  double budget = 1.0, pomcp_budget = -1.0, offline = -1.0, time_limit = -1.0;
+  double budget = -1.0, pomcp_budget = -1.0, offline = -1.0, time_limit = -1.0,
+         pomcp_time_limit = -1.0;
   int episodes = -1;
   std::uint64_t seed = 1, pomcp_sims = std::numeric_limits<std::uint64_t>::max();
   bool json = false, quick = false, anchor_only = false;
   PomhdpOptions options;
   app.add_option("model", file, "model file (.pomdp or .pomdpx)")->required();
-  app.add_option("--budget", budget, "POMHDP seconds per step online (default 1)");
-  app.add_option("--pomcp-budget", pomcp_budget, "POMCP seconds per step (default: --budget)");
+  app.add_option("--budget", budget, "POMHDP seconds per step online (default 1, quick 0.1)");
+  app.add_option("--pomcp-budget", pomcp_budget,
+                 "POMCP seconds per step (default: --budget, quick 0.02)");
   app.add_option("--offline", offline, "POMHDP offline solve seconds (default 60, quick 5)");
   app.add_option("--episodes", episodes, "episodes per solver at most (default 2000, quick 100)");
   app.add_option("--time-limit", time_limit,
-                 "no new episode after this many seconds per solver (default 360, quick 20)");
+                 "POMHDP: no new episode after this many seconds (default 480, quick 15)");
+  app.add_option("--pomcp-time-limit", pomcp_time_limit,
+                 "POMCP: no new episode after this many seconds (default 240, quick 10)");
   app.add_option("--pomcp-sims", pomcp_sims, "POMCP simulations per step at most");
   app.add_option("--epsilon1", options.epsilon1, "POMHDP inflation of inadmissible heuristics");
   app.add_option("--epsilon2", options.epsilon2, "POMHDP bound of searches by the anchor");
@@ -110,10 +114,12 @@ int main(int argc, char** argv) {
   app.add_flag("--json", json, "print one JSON object");
   app.add_flag("--quick", quick, "a run of under a minute");
   CLI11_PARSE(app, argc, argv);
-  if (pomcp_budget < 0) pomcp_budget = budget;
+  if (budget < 0) budget = quick ? 0.1 : 1.0;
+  if (pomcp_budget < 0) pomcp_budget = quick ? 0.02 : budget;
   if (offline < 0) offline = quick ? 5.0 : 60.0;
   if (episodes < 0) episodes = quick ? 100 : 2000;
-  if (time_limit < 0) time_limit = quick ? 20.0 : 360.0;
+  if (time_limit < 0) time_limit = quick ? 15.0 : 480.0;
+  if (pomcp_time_limit < 0) pomcp_time_limit = quick ? 10.0 : 240.0;
 
   auto t0 = Clock::now();
   auto loaded = load_model(file);
@@ -148,6 +154,7 @@ int main(int argc, char** argv) {
   const Evaluation pomhdp = evaluate(model, online, eval);
 
   eval.per_step = {pomcp_budget, pomcp_sims};
+  eval.max_seconds = pomcp_time_limit;
   PomcpOptions pomcp_options;
   pomcp_options.seed = seed;
   Pomcp pomcp_solver(model, pomcp_options);
@@ -165,6 +172,7 @@ int main(int argc, char** argv) {
         {"load_s", load_s},
         {"bounds_s", bounds_s},
         {"quick", quick},
+        {"time_limit_s", {{"pomhdp", time_limit}, {"pomcp", pomcp_time_limit}}},
         {"published_value", published ? nlohmann::json(*published) : nlohmann::json()},
         {"pomhdp", to_json(pomhdp, budget)},
         {"pomcp", to_json(pomcp, pomcp_budget)}};
