@@ -12,8 +12,8 @@ constexpr std::uint32_t kNoNode = std::numeric_limits<std::uint32_t>::max();
 
 Pomcp::Pomcp(const GenerativeModel& model, PomcpOptions options)
     : model_(model), options_(options), rng_(options.seed), gamma_(model.discount()) {
-  const double range = model.max_reward() - model.min_reward();
-  c_ = options.exploration > 0.0 ? options.exploration : std::max(1e-6, range);
+  c_ = options.exploration > 0.0 ? options.exploration
+                                  : std::max(1e-6, model.max_reward() - model.min_reward());
   if (options.max_depth > 0) {
     max_depth_ = options.max_depth;
   } else if (gamma_ < 1.0) {
@@ -28,6 +28,7 @@ void Pomcp::reset(const Belief& belief) {
   belief_ = belief;
   nodes_.assign(1, Node{});
   root_ = 0;
+  have_returns_ = false;
 }
 
 std::uint32_t Pomcp::child(std::uint32_t node, ActionId a, ObsId o) {
@@ -98,8 +99,14 @@ ActionId Pomcp::plan(const Budget& budget) {
   const auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
   if (!belief_.empty() && !is_terminal(model_, belief_)) {
     while (sims < budget.iterations && (sims % 64 != 0 || elapsed() < budget.seconds)) {
-      simulate(sample_state(belief_, rng_), root_, 0);
+      const double ret = simulate(sample_state(belief_, rng_), root_, 0);
       ++sims;
+      if (options_.exploration <= 0.0) {
+        return_lo_ = have_returns_ ? std::min(return_lo_, ret) : ret;
+        return_hi_ = have_returns_ ? std::max(return_hi_, ret) : ret;
+        have_returns_ = true;
+        if (return_hi_ > return_lo_) c_ = return_hi_ - return_lo_;
+      }
     }
   }
   ActionId best = 0;

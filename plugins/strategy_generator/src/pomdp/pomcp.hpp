@@ -14,8 +14,8 @@
 namespace plr::pomdp {
 
 struct PomcpOptions {
-  // UCB1 exploration constant; 0 takes max_reward - min_reward (scaled for
-  // the discount), as Silver and Veness did.
+  // UCB1 exploration constant; 0: the spread of the returns simulated so far
+  // (highest minus lowest), as Silver and Veness set it.
   double exploration = 0.0;
   // Simulation depth; 0 derives it from the discount (gamma^depth < 0.01),
   // 100 for goal-directed models.
@@ -59,6 +59,8 @@ class Pomcp final : public OnlinePlanner {
   PomcpOptions options_;
   Rng rng_;
   double gamma_, c_;
+  double return_lo_ = 0.0, return_hi_ = 0.0;  // returns simulated since reset()
+  bool have_returns_ = false;
   int max_depth_;
   Belief belief_;
   std::vector<Node> nodes_;
