@@ -72,9 +72,7 @@ class Coin final : public GenerativeModel {
   double max_reward() const override { return 1.0; }
   Belief initial_belief() const override { return Belief({{0, 0.25}, {1, 0.75}}); }
   bool is_terminal(StateId) const override { return false; }
-  Step step(StateId s, ActionId, Rng&) const override {
-    return {s, s, s == 1 ? 1.0 : 0.0, false};
-  }
+  Step step(StateId s, ActionId, Rng&) const override { return {s, s, s == 1 ? 1.0 : 0.0, false}; }
 };
 
 TEST(Belief, ParticleExpansionGroupsByObservation) {

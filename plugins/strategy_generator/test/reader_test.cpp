@@ -108,24 +108,29 @@ R: a : 2 : 0 : x 10
 }
 
 TEST(CassandraReader, LocatedErrors) {
-  EXPECT_EQ(cassandra_error("discount: 0.9\nstates: a b\nactions: x\nobservations: o\nT: x : a : c 1\n"),
-            "m.pomdp:5:12: unknown state 'c'");
-  EXPECT_EQ(cassandra_error("discount: 0.9\nstates: a b\nactions: x\nobservations: o\nT: x : a : b 1.5\n"),
+  EXPECT_EQ(
+      cassandra_error("discount: 0.9\nstates: a b\nactions: x\nobservations: o\nT: x : a : c 1\n"),
+      "m.pomdp:5:12: unknown state 'c'");
+  EXPECT_EQ(cassandra_error(
+                "discount: 0.9\nstates: a b\nactions: x\nobservations: o\nT: x : a : b 1.5\n"),
             "m.pomdp:5:14: probability 1.5 is not in [0, 1]");
   EXPECT_EQ(cassandra_error("discount: 0.9\nstates: a b\nactions: x\nobservations: o\n"
                             "T: x : a : b 0.5\nT: x : b : b 1\nO: x : * : o 1\n"),
             "m.pomdp:5:1: T probabilities for action 'x' in state 'a' sum to 0.5, not 1");
-  EXPECT_EQ(cassandra_error("discount: 0.9\nstates: a b\nactions: x\nobservations: o\nT: x identity\n"),
-            "m.pomdp:5:6: O has no entries for action 'x' in state 'a'");
+  EXPECT_EQ(
+      cassandra_error("discount: 0.9\nstates: a b\nactions: x\nobservations: o\nT: x identity\n"),
+      "m.pomdp:5:6: O has no entries for action 'x' in state 'a'");
   EXPECT_EQ(cassandra_error("discount: 1.5\n"), "m.pomdp:1:11: the discount must be in [0, 1]");
   EXPECT_EQ(cassandra_error("discount: 0.9\nstates: a\nT: x : a : a 1\n"),
             "m.pomdp:3:1: states, actions and observations must be declared before this line");
-  EXPECT_EQ(cassandra_error("discount: 0.9\nstates: a a\n"), "m.pomdp:2:11: state 'a' declared twice");
+  EXPECT_EQ(cassandra_error("discount: 0.9\nstates: a a\n"),
+            "m.pomdp:2:11: state 'a' declared twice");
   EXPECT_EQ(cassandra_error("discount: 0.9\nbogus line\n"),
             "m.pomdp:2:1: expected a statement (discount:, values:, states:, actions:, "
             "observations:, start:, T:, O:, R:), found 'bogus'");
-  EXPECT_EQ(cassandra_error("discount: 0.9\nstates: a b\nactions: x\nobservations: o\nT: x\n1 0\n0"),
-            "m.pomdp:7:1: unexpected end of file, expected a probability");
+  EXPECT_EQ(
+      cassandra_error("discount: 0.9\nstates: a b\nactions: x\nobservations: o\nT: x\n1 0\n0"),
+      "m.pomdp:7:1: unexpected end of file, expected a probability");
   EXPECT_EQ(cassandra_error(""), "m.pomdp:1:1: no discount: line");
 }
 
@@ -233,13 +238,17 @@ TEST(PomdpxReader, LocatedErrors) {
   EXPECT_EQ(pomdpx_error("<pomdp/>"), "m.pomdpx:1: root element is <pomdp>, not <pomdpx>");
   std::string bad = kTigerX;
   bad.replace(bad.find("0.85 0.15 0.15"), 14, "0.85 0.15 0.25");
-  EXPECT_EQ(pomdpx_error(bad), "m.pomdpx:27: ObsFunction P(hear | act=listen, tiger_1=right) sums "
-                               "to 1.1, not 1");
+  EXPECT_EQ(pomdpx_error(bad),
+            "m.pomdpx:27: ObsFunction P(hear | act=listen, tiger_1=right) sums "
+            "to 1.1, not 1");
   bad = kTigerX;
   bad.replace(bad.find("open-left * -</Instance><ProbTable>0.5"), 9, "open-down");
   EXPECT_EQ(pomdpx_error(bad), "m.pomdpx:21: 'open-down' is not a value of 'act'");
   bad = kTigerX;
-  bad.replace(bad.find("act tiger_0</Parent>\n    <Parameter type=\"TBL\">\n      <Entry><Instance>listen - -"), 3, "axe");
+  bad.replace(
+      bad.find(
+          "act tiger_0</Parent>\n    <Parameter type=\"TBL\">\n      <Entry><Instance>listen - -"),
+      3, "axe");
   EXPECT_EQ(pomdpx_error(bad), "m.pomdpx:18: unknown variable 'axe'");
 }
 
@@ -254,7 +263,8 @@ TEST(PolicyTree, RoundTripAndErrors) {
   EXPECT_FALSE(back->next(0, 1).has_value());
   EXPECT_DOUBLE_EQ(back->nodes[0].lower, -1.5);
   EXPECT_EQ(back->depth(), 2u);
-  auto bad = parse_policy_tree("plr-policy-tree 1\nnodes 2 root 0\n0 1 0 0 0:1\n1 0 0 0 0:1\n", "t");
+  auto bad =
+      parse_policy_tree("plr-policy-tree 1\nnodes 2 root 0\n0 1 0 0 0:1\n1 0 0 0 0:1\n", "t");
   ASSERT_FALSE(bad);
   EXPECT_EQ(bad.error().message, "t:4: node 1 has more than one parent");
   bad = parse_policy_tree("plr-policy-tree 1\nnodes 2 root 0\n0 x 0 0\n", "t");

@@ -18,7 +18,9 @@ using test::parse_or_die;
 
 const Budget kTrials1{std::numeric_limits<double>::infinity(), 1};
 
-Budget trials(std::uint64_t n) { return {std::numeric_limits<double>::infinity(), n}; }
+Budget trials(std::uint64_t n) {
+  return {std::numeric_limits<double>::infinity(), n};
+}
 
 // Bandit at the uniform belief, g = 0.5: the blind bound is exact (always go:
 // 1 / (1 - g) = 2) and FIB gives max over actions of

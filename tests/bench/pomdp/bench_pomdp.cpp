@@ -14,8 +14,8 @@
 #include <optional>
 #include <string>
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include "pomdp/evaluate.hpp"
@@ -61,6 +61,7 @@ class Progress {
     if (done == total) std::fprintf(stderr, "\n");
     std::fflush(stderr);
   }
+
  private:
   std::string label_;
   Clock::time_point start_ = Clock::now(), last_ = Clock::time_point{};
@@ -176,32 +177,38 @@ int main(int argc, char** argv) {
         {"published_value", published ? nlohmann::json(*published) : nlohmann::json()},
         {"pomhdp", to_json(pomhdp, budget)},
         {"pomcp", to_json(pomcp, pomcp_budget)}};
-    out["pomhdp"]["offline"] = {{"lower", off.lower},       {"upper", off.upper},
+    out["pomhdp"]["offline"] = {{"lower", off.lower},           {"upper", off.upper},
                                 {"gap", off.upper - off.lower}, {"seconds", off.seconds},
-                                {"budget_s", offline},      {"trials", off.iterations},
-                                {"nodes", off.nodes},       {"memory_bytes", off.memory_bytes}};
+                                {"budget_s", offline},          {"trials", off.iterations},
+                                {"nodes", off.nodes},           {"memory_bytes", off.memory_bytes}};
     std::printf("%s\n", out.dump().c_str());
     return 0;
   }
-  std::printf("%s: %d states, %d actions, %d observations, discount %g (read in %.2f s, bounds %.2f s)\n",
-              file.c_str(), model.num_states(), model.num_actions(), model.num_observations(),
-              model.discount(), load_s, bounds_s);
+  std::printf(
+      "%s: %d states, %d actions, %d observations, discount %g (read in %.2f s, bounds %.2f s)\n",
+      file.c_str(), model.num_states(), model.num_actions(), model.num_observations(),
+      model.discount(), load_s, bounds_s);
   if (published) std::printf("published optimum at the initial belief: %.2f\n", *published);
-  std::printf("\nPOMHDP offline from the initial belief (budget %.0f s): lower %.4f, upper %.4f, gap %.4f\n"
-              "  %.2f s, %llu trials, %zu belief nodes, %.1f MB\n",
-              offline, off.lower, off.upper, off.upper - off.lower, off.seconds,
-              static_cast<unsigned long long>(off.iterations), off.nodes, off.memory_bytes / 1e6);
+  std::printf(
+      "\nPOMHDP offline from the initial belief (budget %.0f s): lower %.4f, upper %.4f, gap %.4f\n"
+      "  %.2f s, %llu trials, %zu belief nodes, %.1f MB\n",
+      offline, off.lower, off.upper, off.upper - off.lower, off.seconds,
+      static_cast<unsigned long long>(off.iterations), off.nodes, off.memory_bytes / 1e6);
   std::printf("\nonline, a fresh search per episode (value = mean discounted return, 95%% CI):\n");
-  std::printf("%-7s %9s %8s %18s %9s %9s %10s %10s %12s %10s %9s %8s\n", "solver", "budget_s", "episodes",
-              "value +- ci95", "lower_0", "upper_0", "med_step_s", "max_step_s", "iter/step", "max_nodes",
-              "max_MB", "total_s");
-  for (const auto& [name, e, b] : {std::tuple{"POMHDP", &pomhdp, budget}, std::tuple{"POMCP", &pomcp, pomcp_budget}}) {
-    std::printf("%-7s %9.3g %8zu %10.3f +- %5.3f %9.3f %9.3f %10.4f %10.4f %12.1f %10zu %9.1f %8.1f\n", name, b,
-                e->returns.size(), e->mean, e->ci95, e->first_step.lower, e->first_step.upper,
-                e->median_step_seconds, e->max_step_seconds, e->mean_iterations_per_step, e->max_nodes,
-                e->max_memory_bytes / 1e6, e->seconds);
+  std::printf("%-7s %9s %8s %18s %9s %9s %10s %10s %12s %10s %9s %8s\n", "solver", "budget_s",
+              "episodes", "value +- ci95", "lower_0", "upper_0", "med_step_s", "max_step_s",
+              "iter/step", "max_nodes", "max_MB", "total_s");
+  for (const auto& [name, e, b] :
+       {std::tuple{"POMHDP", &pomhdp, budget}, std::tuple{"POMCP", &pomcp, pomcp_budget}}) {
+    std::printf(
+        "%-7s %9.3g %8zu %10.3f +- %5.3f %9.3f %9.3f %10.4f %10.4f %12.1f %10zu %9.1f %8.1f\n",
+        name, b, e->returns.size(), e->mean, e->ci95, e->first_step.lower, e->first_step.upper,
+        e->median_step_seconds, e->max_step_seconds, e->mean_iterations_per_step, e->max_nodes,
+        e->max_memory_bytes / 1e6, e->seconds);
   }
-  std::printf("(lower_0/upper_0: root bounds after the first step's search; POMCP's are its value estimate)\n");
+  std::printf(
+      "(lower_0/upper_0: root bounds after the first step's search; POMCP's are its value "
+      "estimate)\n");
   if (pomhdp.lost_beliefs + pomcp.lost_beliefs > 0) {
     std::printf("episodes cut by an observation the belief ruled out: POMHDP %d, POMCP %d\n",
                 pomhdp.lost_beliefs, pomcp.lost_beliefs);

@@ -7,7 +7,9 @@ namespace plr::pomdp {
 
 Belief::Belief(std::vector<Particle> particles) : particles_(std::move(particles)) {}
 
-void Belief::add(StateId state, double weight) { particles_.push_back({state, weight}); }
+void Belief::add(StateId state, double weight) {
+  particles_.push_back({state, weight});
+}
 
 double Belief::normalize() {
   std::sort(particles_.begin(), particles_.end(),

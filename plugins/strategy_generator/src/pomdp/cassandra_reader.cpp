@@ -3,9 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <optional>
-#include <stdexcept>
 #include <unordered_map>
 
 #include <fmt/format.h>
@@ -230,8 +228,8 @@ int Parser::ref(const Names& names) {
   }
   if (const auto n = to_index(t.text)) {
     if (*n < names.size()) return static_cast<int>(*n);
-    fail(t, fmt::format("{} index {} out of range (there are {})", names.kind, t.text,
-                        names.size()));
+    fail(t,
+         fmt::format("{} index {} out of range (there are {})", names.kind, t.text, names.size()));
   }
   fail(t, fmt::format("unknown {} '{}'", names.kind, t.text));
 }
@@ -451,11 +449,11 @@ void Parser::parse_observation(const Token& keyword) {
       auto& r = m.mutable_observations(act, to);
       r.clear();
       for (int obs = 0; obs < no; ++obs) {
-        const double p = identity  ? (obs == to ? 1.0 : 0.0)
-                         : uniform ? 1.0 / no
-                                   : matrix[static_cast<std::size_t>(to) *
-                                                static_cast<std::size_t>(no) +
-                                            static_cast<std::size_t>(obs)];
+        const double p = identity ? (obs == to ? 1.0 : 0.0)
+                         : uniform
+                             ? 1.0 / no
+                             : matrix[static_cast<std::size_t>(to) * static_cast<std::size_t>(no) +
+                                      static_cast<std::size_t>(obs)];
         if (p > 0.0) r.push_back({obs, p});
       }
       touch(act, to);
@@ -512,8 +510,8 @@ void Parser::finish_rows() {
   };
   for (int a = 0; a < actions_.size(); ++a) {
     for (int s = 0; s < n; ++s) {
-      const std::size_t r = static_cast<std::size_t>(a) * static_cast<std::size_t>(n) +
-                            static_cast<std::size_t>(s);
+      const std::size_t r =
+          static_cast<std::size_t>(a) * static_cast<std::size_t>(n) + static_cast<std::size_t>(s);
       check(m.mutable_transitions(a, s), t_where_[r], "T", a, s);
       check(m.mutable_observations(a, s), o_where_[r], "O", a, s);
     }
@@ -635,8 +633,8 @@ TabularModel Parser::parse() {
 plr::Expected<TabularModel> parse_cassandra(std::string_view text, const std::string& origin,
                                             const ReadLimits& limits) {
   if (text.size() > limits.max_file_bytes) {
-    return plr::make_error(PLR_ERR_INVALID, fmt::format("{}:1:1: file larger than {} bytes",
-                                                        origin, limits.max_file_bytes));
+    return plr::make_error(PLR_ERR_INVALID, fmt::format("{}:1:1: file larger than {} bytes", origin,
+                                                        limits.max_file_bytes));
   }
   try {
     Parser parser(text, limits);

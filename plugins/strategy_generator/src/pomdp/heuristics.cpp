@@ -66,11 +66,11 @@ std::vector<double> mdp_values(const TabularModel& m, const BoundOptions& option
   return v;
 }
 
-AlphaVectors fib_upper_bound(const TabularModel& m, const BoundOptions& options) {
+AlphaVectors fib_upper_bound(const TabularModel& m, const std::vector<double>& v,
+                             const BoundOptions& options) {
   const int S = m.num_states(), A = m.num_actions(), O = m.num_observations();
   const double g = m.discount();
-  // Start from the QMDP vectors, themselves an upper bound; FIB tightens them.
-  const std::vector<double> v = mdp_values(m, options);
+  // The QMDP vectors are an upper bound themselves; FIB tightens them.
   std::vector<std::vector<double>> alpha(static_cast<std::size_t>(A),
                                          std::vector<double>(static_cast<std::size_t>(S)));
   for (int a = 0; a < A; ++a) {
@@ -94,7 +94,8 @@ AlphaVectors fib_upper_bound(const TabularModel& m, const BoundOptions& options)
         for (const Transition& t : m.transitions(a, s)) {
           r += t.probability * t.reward;
           for (const ObsProb& o : m.observations(a, t.next)) {
-            double* row = &per_obs[static_cast<std::size_t>(o.observation) * static_cast<std::size_t>(A)];
+            double* row =
+                &per_obs[static_cast<std::size_t>(o.observation) * static_cast<std::size_t>(A)];
             if (std::find(touched.begin(), touched.end(), o.observation) == touched.end()) {
               touched.push_back(o.observation);
               std::fill(row, row + A, 0.0);
@@ -150,9 +151,10 @@ double RolloutValue::value(const Belief& belief) const {
 
 TabularHeuristics make_tabular_heuristics(const TabularModel& model, const BoundOptions& options) {
   TabularHeuristics h;
-  h.upper = std::make_unique<AlphaVectors>(fib_upper_bound(model, options));
+  std::vector<double> mdp = mdp_values(model, options);
+  h.upper = std::make_unique<AlphaVectors>(fib_upper_bound(model, mdp, options));
   h.lower = std::make_unique<AlphaVectors>(blind_lower_bound(model, options));
-  h.most_likely = std::make_unique<MostLikelyStateValue>(mdp_values(model, options));
+  h.most_likely = std::make_unique<MostLikelyStateValue>(std::move(mdp));
   return h;
 }
 

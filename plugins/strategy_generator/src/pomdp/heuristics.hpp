@@ -44,9 +44,11 @@ struct BoundOptions {
 
 // Needs a discount below 1.
 AlphaVectors blind_lower_bound(const TabularModel& model, const BoundOptions& options = {});
-AlphaVectors fib_upper_bound(const TabularModel& model, const BoundOptions& options = {});
 // The fully observable optimum V_MDP(s).
 std::vector<double> mdp_values(const TabularModel& model, const BoundOptions& options = {});
+// Starts from the QMDP vectors built on `mdp` (mdp_values()) and tightens them.
+AlphaVectors fib_upper_bound(const TabularModel& model, const std::vector<double>& mdp,
+                             const BoundOptions& options = {});
 
 // V_MDP of the most likely state: optimistic about what is not known yet,
 // neither an upper nor a lower bound.

@@ -27,8 +27,8 @@ plr::Expected<std::string> read_text_file(const std::filesystem::path& file,
   std::ifstream in(file, std::ios::binary);
   std::string text(static_cast<std::size_t>(size), '\0');
   if (!in.read(text.data(), static_cast<std::streamsize>(size))) {
-    return plr::make_error(PLR_ERR_INVALID,
-                           fmt::format("{}:1:1: cannot read: {}", file.string(), std::strerror(errno)));
+    return plr::make_error(PLR_ERR_INVALID, fmt::format("{}:1:1: cannot read: {}", file.string(),
+                                                        std::strerror(errno)));
   }
   return text;
 }

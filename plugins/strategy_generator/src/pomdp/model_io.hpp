@@ -14,8 +14,7 @@ namespace plr::pomdp {
 
 // The whole file, or "file:1:1: cause" when it cannot be read or is larger
 // than `max_bytes`.
-plr::Expected<std::string> read_text_file(const std::filesystem::path& file,
-                                          std::size_t max_bytes);
+plr::Expected<std::string> read_text_file(const std::filesystem::path& file, std::size_t max_bytes);
 
 plr::Expected<TabularModel> load_model(const std::filesystem::path& file,
                                        const ReadLimits& limits = {});

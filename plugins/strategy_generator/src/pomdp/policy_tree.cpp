@@ -30,7 +30,8 @@ std::size_t PolicyTree::depth() const {
 }
 
 std::string format_policy_tree(const PolicyTree& tree) {
-  std::string out = fmt::format("plr-policy-tree 1\nnodes {} root {}\n", tree.nodes.size(), tree.root);
+  std::string out =
+      fmt::format("plr-policy-tree 1\nnodes {} root {}\n", tree.nodes.size(), tree.root);
   for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
     const PolicyNode& n = tree.nodes[i];
     out += fmt::format("{} {} {:.17g} {:.17g}", i, n.action, n.lower, n.upper);
@@ -79,11 +80,12 @@ plr::Expected<PolicyTree> parse_policy_tree(std::string_view text, const std::st
   const auto head = lines.size() > 1 ? split(lines[1]) : std::vector<std::string_view>{};
   PolicyTree tree;
   std::size_t count = 0;
-  if (head.size() != 4 || head[0] != "nodes" || head[2] != "root" || !parse_number(head[1], count) ||
-      !parse_number(head[3], tree.root)) {
+  if (head.size() != 4 || head[0] != "nodes" || head[2] != "root" ||
+      !parse_number(head[1], count) || !parse_number(head[3], tree.root)) {
     return error(2, "expected 'nodes <count> root <index>'");
   }
-  if (count + 2 > lines.size()) return error(2, fmt::format("{} nodes announced, fewer lines follow", count));
+  if (count + 2 > lines.size())
+    return error(2, fmt::format("{} nodes announced, fewer lines follow", count));
   if (count == 0 || tree.root >= count) return error(2, "the root is not a node");
   tree.nodes.resize(count);
   std::vector<int> parents(count, 0);

@@ -13,7 +13,7 @@ constexpr std::uint32_t kNoNode = std::numeric_limits<std::uint32_t>::max();
 Pomcp::Pomcp(const GenerativeModel& model, PomcpOptions options)
     : model_(model), options_(options), rng_(options.seed), gamma_(model.discount()) {
   c_ = options.exploration > 0.0 ? options.exploration
-                                  : std::max(1e-6, model.max_reward() - model.min_reward());
+                                 : std::max(1e-6, model.max_reward() - model.min_reward());
   if (options.max_depth > 0) {
     max_depth_ = options.max_depth;
   } else if (gamma_ < 1.0) {
@@ -81,8 +81,8 @@ double Pomcp::simulate(StateId s, std::uint32_t node, int depth) {
   if (!step.terminal) {
     // Past the node limit the tree stops growing and rollouts take over.
     const std::uint32_t next = child(node, best, step.observation);
-    ret += gamma_ * (next == kNoNode ? rollout(step.next, depth + 1)
-                                     : simulate(step.next, next, depth + 1));
+    ret += gamma_ *
+           (next == kNoNode ? rollout(step.next, depth + 1) : simulate(step.next, next, depth + 1));
   }
   Node& m = nodes_[node];
   ActionStats& st = m.actions[static_cast<std::size_t>(best)];

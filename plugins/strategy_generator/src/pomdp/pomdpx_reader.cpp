@@ -4,11 +4,10 @@
 
 #include <algorithm>
 #include <charconv>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <optional>
-#include <sstream>
 #include <unordered_map>
 
 #include <fmt/format.h>
@@ -23,7 +22,9 @@ struct ParseFailure {
   std::string what;
 };
 
-[[noreturn]] void fail(int line, std::string what) { throw ParseFailure{line, std::move(what)}; }
+[[noreturn]] void fail(int line, std::string what) {
+  throw ParseFailure{line, std::move(what)};
+}
 
 // A small element tree built from expat's callbacks.
 struct Element {
@@ -86,7 +87,9 @@ struct TreeBuilder {
     }
     b.stack.push_back(raw);
   }
-  static void on_end(void* self, const XML_Char*) { static_cast<TreeBuilder*>(self)->stack.pop_back(); }
+  static void on_end(void* self, const XML_Char*) {
+    static_cast<TreeBuilder*>(self)->stack.pop_back();
+  }
   static void on_text(void* self, const XML_Char* s, int len) {
     auto& b = *static_cast<TreeBuilder*>(self);
     if (!b.stack.empty()) b.stack.back()->text.append(s, static_cast<std::size_t>(len));
@@ -271,13 +274,16 @@ Table Reader::read_table(const Element& e, bool conditional) {
   std::size_t cells = 1;
   for (int v : t.vars) {
     const int n = vars_[static_cast<std::size_t>(v)].size();
-    if (n == 0) fail(e.line, fmt::format("'{}' cannot be a parent", vars_[static_cast<std::size_t>(v)].name));
+    if (n == 0)
+      fail(e.line, fmt::format("'{}' cannot be a parent", vars_[static_cast<std::size_t>(v)].name));
     t.sizes.push_back(n);
     cells *= static_cast<std::size_t>(n);
-    if (cells > limits_.max_entries) fail(e.line, fmt::format("table larger than {} cells", limits_.max_entries));
+    if (cells > limits_.max_entries)
+      fail(e.line, fmt::format("table larger than {} cells", limits_.max_entries));
   }
   entries_ += cells;
-  if (entries_ > limits_.max_entries) fail(e.line, fmt::format("tables larger than {} cells", limits_.max_entries));
+  if (entries_ > limits_.max_entries)
+    fail(e.line, fmt::format("tables larger than {} cells", limits_.max_entries));
   t.data.assign(cells, 0.0);
   const Element& param = e.required("Parameter");
   if (const std::string* type = param.attribute("type"); type && *type != "TBL") {
@@ -289,7 +295,8 @@ Table Reader::read_table(const Element& e, bool conditional) {
     const Element& tab = entry->required(table_tag);
     const auto tokens = words(inst.text);
     if (tokens.size() != t.vars.size()) {
-      fail(inst.line, fmt::format("instance has {} values, expected {}", tokens.size(), t.vars.size()));
+      fail(inst.line,
+           fmt::format("instance has {} values, expected {}", tokens.size(), t.vars.size()));
     }
     // Fixed values, `*` (every value, same numbers) or `-` (numbers listed).
     std::vector<int> fixed(t.vars.size(), 0);
@@ -383,7 +390,8 @@ void Reader::check_conditional(const Table& t, const char* what) const {
 }
 
 TabularModel Reader::read(const Element& root) {
-  if (root.name != "pomdpx") fail(root.line, fmt::format("root element is <{}>, not <pomdpx>", root.name));
+  if (root.name != "pomdpx")
+    fail(root.line, fmt::format("root element is <{}>, not <pomdpx>", root.name));
   const Element& disc = root.required("Discount");
   const auto d = to_number(words(disc.text).empty() ? "" : words(disc.text)[0]);
   if (!d || *d < 0.0 || *d > 1.0) fail(disc.line, "<Discount> must be a number in [0, 1]");
@@ -400,13 +408,15 @@ TabularModel Reader::read(const Element& root) {
   for (int v : obs_) {
     num_obs *= static_cast<std::size_t>(vars_[static_cast<std::size_t>(v)].size());
     if (num_obs > static_cast<std::size_t>(limits_.max_observations)) {
-      fail(root.required("Variable").line, fmt::format("more than {} observations", limits_.max_observations));
+      fail(root.required("Variable").line,
+           fmt::format("more than {} observations", limits_.max_observations));
     }
   }
   const Variable& action = vars_[static_cast<std::size_t>(action_)];
   if (action.size() > limits_.max_actions) fail(root.required("Variable").line, "too many actions");
   if (num_states * static_cast<std::size_t>(action.size()) > limits_.max_state_actions) {
-    fail(root.required("Variable").line, fmt::format("states x actions exceeds {} rows", limits_.max_state_actions));
+    fail(root.required("Variable").line,
+         fmt::format("states x actions exceeds {} rows", limits_.max_state_actions));
   }
   const int S = static_cast<int>(num_states), A = action.size(), O = static_cast<int>(num_obs);
 
@@ -430,7 +440,8 @@ TabularModel Reader::read(const Element& root) {
     }
     return out;
   };
-  const auto one_per = [&](std::vector<Table>& ts, const std::vector<int>& vars, const char* section) {
+  const auto one_per = [&](std::vector<Table>& ts, const std::vector<int>& vars,
+                           const char* section) {
     std::vector<const Table*> by_var(vars.size(), nullptr);
     for (const Table& t : ts) {
       const auto it = std::find(vars.begin(), vars.end(), t.vars.back());
@@ -439,13 +450,16 @@ TabularModel Reader::read(const Element& root) {
                                  vars_[static_cast<std::size_t>(t.vars.back())].name, section));
       }
       auto& slot = by_var[static_cast<std::size_t>(it - vars.begin())];
-      if (slot) fail(t.line, fmt::format("'{}' has two tables", vars_[static_cast<std::size_t>(t.vars.back())].name));
+      if (slot)
+        fail(t.line, fmt::format("'{}' has two tables",
+                                 vars_[static_cast<std::size_t>(t.vars.back())].name));
       slot = &t;
     }
     for (std::size_t i = 0; i < vars.size(); ++i) {
       if (!by_var[i]) {
         fail(root.required(section).line,
-             fmt::format("no table for '{}' in <{}>", vars_[static_cast<std::size_t>(vars[i])].name, section));
+             fmt::format("no table for '{}' in <{}>", vars_[static_cast<std::size_t>(vars[i])].name,
+                         section));
       }
     }
     return by_var;
@@ -482,7 +496,8 @@ TabularModel Reader::read(const Element& root) {
   std::vector<int> value(vars_.size(), 0);
   const auto lookup = [&](const Table& t, std::vector<int>& scratch) {
     scratch.resize(t.vars.size());
-    for (std::size_t i = 0; i < t.vars.size(); ++i) scratch[i] = value[static_cast<std::size_t>(t.vars[i])];
+    for (std::size_t i = 0; i < t.vars.size(); ++i)
+      scratch[i] = value[static_cast<std::size_t>(t.vars[i])];
     return t.offset(scratch);
   };
 
@@ -512,10 +527,12 @@ TabularModel Reader::read(const Element& root) {
         row.swap(grown);
       }
       entries_ += row.size();
-      if (entries_ > limits_.max_entries) fail(root.required("StateTransitionFunction").line, "too many transitions");
+      if (entries_ > limits_.max_entries)
+        fail(root.required("StateTransitionFunction").line, "too many transitions");
       auto& out = m.mutable_transitions(a, s);
       for (const auto& [next, p] : row) out.push_back({next, p, 0.0});
-      std::sort(out.begin(), out.end(), [](const Transition& x, const Transition& y) { return x.next < y.next; });
+      std::sort(out.begin(), out.end(),
+                [](const Transition& x, const Transition& y) { return x.next < y.next; });
     }
   }
   // Observations: the product over observation variables, given the next state.
@@ -540,10 +557,12 @@ TabularModel Reader::read(const Element& root) {
         row.swap(grown);
       }
       entries_ += row.size();
-      if (entries_ > limits_.max_entries) fail(root.required("ObsFunction").line, "too many observation entries");
+      if (entries_ > limits_.max_entries)
+        fail(root.required("ObsFunction").line, "too many observation entries");
       auto& out = m.mutable_observations(a, s);
       for (const auto& [o, p] : row) out.push_back({o, p});
-      std::sort(out.begin(), out.end(), [](const ObsProb& x, const ObsProb& y) { return x.observation < y.observation; });
+      std::sort(out.begin(), out.end(),
+                [](const ObsProb& x, const ObsProb& y) { return x.observation < y.observation; });
     }
   }
   // Rewards: the sum of every reward table, per transition.
@@ -569,7 +588,8 @@ TabularModel Reader::read(const Element& root) {
     grown.clear();
     for (const auto& [partial, p] : row) {
       for (int x = 0; x < n; ++x) {
-        if (t.data[static_cast<std::size_t>(x)] > 0.0) grown.emplace_back(partial * n + x, p * t.data[static_cast<std::size_t>(x)]);
+        if (t.data[static_cast<std::size_t>(x)] > 0.0)
+          grown.emplace_back(partial * n + x, p * t.data[static_cast<std::size_t>(x)]);
       }
     }
     row.swap(grown);
@@ -585,7 +605,8 @@ TabularModel Reader::read(const Element& root) {
     std::string name;
     for (std::size_t i = 0; i < k; ++i) {
       if (i) name += ',';
-      name += vars_[static_cast<std::size_t>(state_prev_[i])].values[static_cast<std::size_t>(sv[i])];
+      name +=
+          vars_[static_cast<std::size_t>(state_prev_[i])].values[static_cast<std::size_t>(sv[i])];
     }
     m.state_names.push_back(std::move(name));
   }

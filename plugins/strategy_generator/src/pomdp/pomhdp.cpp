@@ -37,7 +37,8 @@ Pomhdp::Pomhdp(const GenerativeModel& model, const Heuristic& upper, const Heuri
   if (options.max_depth > 0) {
     max_depth_ = options.max_depth;
   } else if (gamma_ < 1.0) {
-    const double range = std::max(1e-12, (model.max_reward() - model.min_reward()) / (1.0 - gamma_));
+    const double range =
+        std::max(1e-12, (model.max_reward() - model.min_reward()) / (1.0 - gamma_));
     const double d = std::log(std::max(1e-12, options.target_gap) / range) / std::log(gamma_);
     max_depth_ = static_cast<int>(std::clamp(std::ceil(d), 1.0, 1000.0));
   } else {
@@ -61,7 +62,8 @@ void Pomhdp::reset(const Belief& belief) {
 std::uint32_t Pomhdp::node_for(Belief belief) {
   std::uint64_t sig = belief.signature(options_.belief_resolution);
   for (auto it = index_.find(sig); it != index_.end(); it = index_.find(++sig)) {
-    if (nodes_[it->second].belief.approx_equal(belief, options_.belief_resolution)) return it->second;
+    if (nodes_[it->second].belief.approx_equal(belief, options_.belief_resolution))
+      return it->second;
   }
   Node n;
   n.signature = sig;
@@ -186,7 +188,8 @@ void Pomhdp::trial(std::size_t heuristic, Clock::time_point deadline) {
     if (depth >= max_depth_ || nodes_.size() >= options_.max_nodes) break;
     // Out of time: stop descending, still back up what was found.
     if ((depth & 7) == 7 && Clock::now() >= deadline) break;
-    const Edge& e = nodes_[id].edges[static_cast<std::size_t>(choose_action(nodes_[id], heuristic))];
+    const Edge& e =
+        nodes_[id].edges[static_cast<std::size_t>(choose_action(nodes_[id], heuristic))];
     // The outcome whose gap weighs most.
     double best = 0.0;
     std::uint32_t next = id;
@@ -225,14 +228,16 @@ bool Pomhdp::settled() const {
   return true;
 }
 
-PlanStats Pomhdp::solve(const Budget& budget) { return run(budget, false); }
+PlanStats Pomhdp::solve(const Budget& budget) {
+  return run(budget, false);
+}
 
 PlanStats Pomhdp::run(const Budget& budget, bool until_settled) {
   const auto t0 = Clock::now();
-  const auto deadline =
-      std::isfinite(budget.seconds)
-          ? t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(budget.seconds))
-          : Clock::time_point::max();
+  const auto deadline = std::isfinite(budget.seconds)
+                            ? t0 + std::chrono::duration_cast<Clock::duration>(
+                                       std::chrono::duration<double>(budget.seconds))
+                            : Clock::time_point::max();
   std::uint64_t trials = 0;
   while (trials < budget.iterations && !nodes_[root_].terminal &&
          nodes_[root_].upper - nodes_[root_].lower > options_.target_gap &&
@@ -244,7 +249,8 @@ PlanStats Pomhdp::run(const Budget& budget, bool until_settled) {
     trial(h, deadline);
     ++trials;
     ++total_trials_;
-    if (options_.epsilon_period > 0 && total_trials_ % static_cast<std::uint64_t>(options_.epsilon_period) == 0) {
+    if (options_.epsilon_period > 0 &&
+        total_trials_ % static_cast<std::uint64_t>(options_.epsilon_period) == 0) {
       epsilon1_ = 1.0 + (epsilon1_ - 1.0) / 2.0;
       epsilon2_ = 1.0 + (epsilon2_ - 1.0) / 2.0;
     }
@@ -268,7 +274,9 @@ ActionId Pomhdp::best_action() {
   ActionId best = 0;
   for (std::size_t a = 1; a < n.edges.size(); ++a) {
     const double l = q_lower(n.edges[a]), lb = q_lower(n.edges[static_cast<std::size_t>(best)]);
-    if (l > lb + 1e-12 || (l > lb - 1e-12 && q_upper(n.edges[a]) > q_upper(n.edges[static_cast<std::size_t>(best)]))) {
+    if (l > lb + 1e-12 ||
+        (l > lb - 1e-12 &&
+         q_upper(n.edges[a]) > q_upper(n.edges[static_cast<std::size_t>(best)]))) {
       best = static_cast<ActionId>(a);
     }
   }

@@ -33,13 +33,6 @@ void TabularModel::finish() {
   if (num_actions_ == 0 || num_states_ == 0) min_reward_ = max_reward_ = 0.0;
 }
 
-std::size_t TabularModel::nonzeros() const {
-  std::size_t n = 0;
-  for (const auto& r : transitions_) n += r.size();
-  for (const auto& r : observations_) n += r.size();
-  return n;
-}
-
 Step TabularModel::step(StateId state, ActionId action, Rng& rng) const {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   Step out;

@@ -64,8 +64,6 @@ class TabularModel final : public GenerativeModel {
   // Computes expected rewards, reward range and terminal states: a state is
   // terminal when every action keeps it where it is and earns nothing.
   void finish();
-  // Non-zero entries of the transition and observation tables.
-  std::size_t nonzeros() const;
 
  private:
   std::size_t row(int a, int s) const {
