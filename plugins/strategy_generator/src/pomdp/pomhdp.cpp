@@ -297,7 +297,9 @@ void Pomhdp::advance(ActionId /*action*/, ObsId /*observation*/, const Belief& n
   // The child of (action, observation) has this belief when the model is
   // exact; node_for() finds it by its signature, or starts a new root.
   root_ = node_for(next);
-  if (nodes_.size() >= compact_at_) compact(root_);
+  // Also at half the node limit, or a search that reached the limit could
+  // never free room again.
+  if (nodes_.size() >= std::min(compact_at_, options_.max_nodes / 2)) compact(root_);
 }
 
 void Pomhdp::compact(std::uint32_t new_root) {
