@@ -165,6 +165,32 @@ TEST(Pomhdp, TigerBoundsAndValue) {
   EXPECT_GE(e.mean + e.ci95, 19.371);
 }
 
+// Goal-directed (discount 1, costs): each try reaches the goal with
+// probability 1/2 and costs 1, and the robot sees whether it got there, so
+// V(start) = -1 + V(start) / 2, V = -2.
+TEST(Pomhdp, GoalDirectedByHand) {
+  const TabularModel m = parse_or_die(R"(discount: 1
+states: start goal
+actions: try
+observations: not-yet there
+T: try : start : start 0.5
+T: try : start : goal 0.5
+T: try : goal : goal 1
+O: try : start : not-yet 1
+O: try : goal : there 1
+R: try : start : * : * -1
+start: start
+)",
+                                      "goal");
+  ASSERT_TRUE(m.is_terminal(1));
+  const ConstantValue upper("zero", 0.0), lower("ten-steps", -10.0);
+  Pomhdp solver(m, upper, lower, {});
+  solver.solve(trials(50));
+  EXPECT_NEAR(solver.upper(), -2.0, 1e-3);
+  EXPECT_NEAR(solver.lower(), -2.0, 1e-3);
+  EXPECT_EQ(solver.num_nodes(), 2u);  // start loops on itself; goal ends
+}
+
 // A model known only through step(): beliefs come from simulated particles
 // (the default expand()), bounds from constants, as a simulator-backed model
 // such as the truck's would have them.
