@@ -9,6 +9,8 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+constexpr std::size_t kSmallGraph = 1 << 16;
+
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
@@ -26,10 +28,6 @@ Pomhdp::Pomhdp(const GenerativeModel& model, const Heuristic& upper, const Heuri
       gamma_(model.discount()),
       epsilon1_(options.epsilon1),
       epsilon2_(options.epsilon2) {
-  // Growing these by reallocation would stall a search for tens of
-  // milliseconds at a time; untouched reserved pages cost nothing.
-  nodes_.reserve(options.max_nodes);
-  index_.reserve(options.max_nodes);
   // Costs are measured down from the best value any belief can have, so the
   // MHA*-style factors scale non-negative numbers (for goal-directed models
   // rewards are costs already and the best value is 0).
@@ -51,7 +49,7 @@ void Pomhdp::reset(const Belief& belief) {
   nodes_.clear();
   index_.clear();
   bytes_ = 0;
-  compact_at_ = 1 << 16;
+  compact_at_ = kSmallGraph;
   epsilon1_ = options_.epsilon1;
   epsilon2_ = options_.epsilon2;
   total_trials_ = 0;
@@ -75,6 +73,13 @@ std::uint32_t Pomhdp::node_for(Belief belief) {
     for (std::size_t i = 0; i < inadmissible_.size(); ++i) n.h[i] = inadmissible_[i]->value(belief);
   }
   n.belief = std::move(belief);
+  // Past a small graph, room for the node limit at once: growing by
+  // reallocation would stall a search for tens of milliseconds at a time,
+  // and reserved pages cost nothing until used.
+  if (nodes_.size() == kSmallGraph) {
+    nodes_.reserve(options_.max_nodes);
+    index_.reserve(options_.max_nodes);
+  }
   const auto id = static_cast<std::uint32_t>(nodes_.size());
   bytes_ += node_bytes(n);
   nodes_.push_back(std::move(n));
@@ -317,7 +322,7 @@ void Pomhdp::compact(std::uint32_t new_root) {
     }
   }
   std::vector<Node> kept;
-  kept.reserve(std::max(order.size(), options_.max_nodes));
+  kept.reserve(std::max(order.size(), nodes_.capacity()));
   for (std::uint32_t old : order) {
     kept.push_back(std::move(nodes_[old]));
     for (Edge& e : kept.back().edges) {
@@ -330,7 +335,7 @@ void Pomhdp::compact(std::uint32_t new_root) {
   index_.clear();
   for (std::uint32_t i = 0; i < nodes_.size(); ++i) index_.emplace(nodes_[i].signature, i);
   root_ = 0;
-  compact_at_ = std::max<std::size_t>(1 << 16, 2 * nodes_.size());
+  compact_at_ = std::max(kSmallGraph, 2 * nodes_.size());
 }
 
 PolicyTree Pomhdp::policy_tree(int horizon) {
