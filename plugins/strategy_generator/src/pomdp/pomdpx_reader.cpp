@@ -504,65 +504,40 @@ TabularModel Reader::read(const Element& root) {
   TabularModel m(S, A, O);
   m.set_discount(*d);
   std::vector<int> sv, scratch;
-  // Transitions: the product of one distribution per state variable.
+  // The joint distribution of independent variables given the values set in
+  // `value`: one table per variable, the first variable slowest, so the
+  // result comes out sorted by flat index.
   std::vector<std::pair<int, double>> row, grown;
-  for (int a = 0; a < A; ++a) {
-    value[static_cast<std::size_t>(action_)] = a;
-    for (int s = 0; s < S; ++s) {
-      decode(s, sv);
-      for (std::size_t i = 0; i < k; ++i) value[static_cast<std::size_t>(state_prev_[i])] = sv[i];
-      row.assign(1, {0, 1.0});
-      for (std::size_t i = 0; i < k; ++i) {
-        const Table& t = *trans_by[i];
-        const int n = t.sizes.back();
-        value[static_cast<std::size_t>(t.vars.back())] = 0;
-        const std::size_t base = lookup(t, scratch);
-        grown.clear();
-        for (const auto& [partial, p] : row) {
-          for (int x = 0; x < n; ++x) {
-            const double q = t.data[base + static_cast<std::size_t>(x)];
-            if (q > 0.0) grown.emplace_back(partial * n + x, p * q);
-          }
+  const auto product = [&](const std::vector<const Table*>& tables, int line) {
+    row.assign(1, {0, 1.0});
+    for (const Table* t : tables) {
+      const int n = t->sizes.back();
+      value[static_cast<std::size_t>(t->vars.back())] = 0;
+      const std::size_t base = lookup(*t, scratch);
+      grown.clear();
+      for (const auto& [partial, p] : row) {
+        for (int x = 0; x < n; ++x) {
+          const double q = t->data[base + static_cast<std::size_t>(x)];
+          if (q > 0.0) grown.emplace_back(partial * n + x, p * q);
         }
-        row.swap(grown);
       }
-      entries_ += row.size();
-      if (entries_ > limits_.max_entries)
-        fail(root.required("StateTransitionFunction").line, "too many transitions");
-      auto& out = m.mutable_transitions(a, s);
-      for (const auto& [next, p] : row) out.push_back({next, p, 0.0});
-      std::sort(out.begin(), out.end(),
-                [](const Transition& x, const Transition& y) { return x.next < y.next; });
+      row.swap(grown);
     }
-  }
-  // Observations: the product over observation variables, given the next state.
+    entries_ += row.size();
+    if (entries_ > limits_.max_entries) fail(line, "too many table entries");
+  };
   for (int a = 0; a < A; ++a) {
     value[static_cast<std::size_t>(action_)] = a;
     for (int s = 0; s < S; ++s) {
       decode(s, sv);
+      // Transitions from s, then observations on arriving in s (set after:
+      // the transition tables use the current-state slots as scratch).
+      for (std::size_t i = 0; i < k; ++i) value[static_cast<std::size_t>(state_prev_[i])] = sv[i];
+      product(trans_by, root.required("StateTransitionFunction").line);
+      for (const auto& [next, p] : row) m.mutable_transitions(a, s).push_back({next, p, 0.0});
       for (std::size_t i = 0; i < k; ++i) value[static_cast<std::size_t>(state_curr_[i])] = sv[i];
-      row.assign(1, {0, 1.0});
-      for (std::size_t i = 0; i < obs_.size(); ++i) {
-        const Table& t = *obs_by[i];
-        const int n = t.sizes.back();
-        value[static_cast<std::size_t>(t.vars.back())] = 0;
-        const std::size_t base = lookup(t, scratch);
-        grown.clear();
-        for (const auto& [partial, p] : row) {
-          for (int x = 0; x < n; ++x) {
-            const double q = t.data[base + static_cast<std::size_t>(x)];
-            if (q > 0.0) grown.emplace_back(partial * n + x, p * q);
-          }
-        }
-        row.swap(grown);
-      }
-      entries_ += row.size();
-      if (entries_ > limits_.max_entries)
-        fail(root.required("ObsFunction").line, "too many observation entries");
-      auto& out = m.mutable_observations(a, s);
-      for (const auto& [o, p] : row) out.push_back({o, p});
-      std::sort(out.begin(), out.end(),
-                [](const ObsProb& x, const ObsProb& y) { return x.observation < y.observation; });
+      product(obs_by, root.required("ObsFunction").line);
+      for (const auto& [o, p] : row) m.mutable_observations(a, s).push_back({o, p});
     }
   }
   // Rewards: the sum of every reward table, per transition.
@@ -581,19 +556,7 @@ TabularModel Reader::read(const Element& root) {
     }
   }
   // Initial belief: the product of the per-variable distributions.
-  row.assign(1, {0, 1.0});
-  for (std::size_t i = 0; i < k; ++i) {
-    const Table& t = *init_by[i];
-    const int n = t.sizes.back();
-    grown.clear();
-    for (const auto& [partial, p] : row) {
-      for (int x = 0; x < n; ++x) {
-        if (t.data[static_cast<std::size_t>(x)] > 0.0)
-          grown.emplace_back(partial * n + x, p * t.data[static_cast<std::size_t>(x)]);
-      }
-    }
-    row.swap(grown);
-  }
+  product(init_by, root.required("InitialStateBelief").line);
   Belief b;
   for (const auto& [s, p] : row) b.add(s, p);
   b.normalize();
