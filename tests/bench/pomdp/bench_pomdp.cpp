@@ -111,6 +111,9 @@ int main(int argc, char** argv) {
   app.add_option("--epsilon1", options.epsilon1, "POMHDP inflation of inadmissible heuristics");
   app.add_option("--epsilon2", options.epsilon2, "POMHDP bound of searches by the anchor");
   app.add_flag("--anchor-only", anchor_only, "POMHDP without inadmissible heuristics");
+  double memory_mb = 1024.0;
+  app.add_option("--memory-mb", memory_mb,
+                 "POMHDP graph memory limit in MB (older nodes are given back beyond it)");
   app.add_option("--seed", seed, "random seed");
   app.add_flag("--json", json, "print one JSON object");
   app.add_flag("--quick", quick, "a run of under a minute");
@@ -138,6 +141,7 @@ int main(int argc, char** argv) {
 
   // Offline: bounds at the initial belief.
   options.seed = seed;
+  options.max_memory_bytes = static_cast<std::size_t>(memory_mb * 1e6);
   const auto inadmissible = anchor_only ? std::vector<const Heuristic*>{} : h.inadmissible();
   Pomhdp offline_solver(model, *h.upper, *h.lower, inadmissible, options);
   const PlanStats off = offline_solver.solve({offline, std::numeric_limits<std::uint64_t>::max()});
@@ -177,10 +181,15 @@ int main(int argc, char** argv) {
         {"published_value", published ? nlohmann::json(*published) : nlohmann::json()},
         {"pomhdp", to_json(pomhdp, budget)},
         {"pomcp", to_json(pomcp, pomcp_budget)}};
-    out["pomhdp"]["offline"] = {{"lower", off.lower},           {"upper", off.upper},
-                                {"gap", off.upper - off.lower}, {"seconds", off.seconds},
-                                {"budget_s", offline},          {"trials", off.iterations},
-                                {"nodes", off.nodes},           {"memory_bytes", off.memory_bytes}};
+    out["pomhdp"]["offline"] = {{"lower", off.lower},
+                                {"upper", off.upper},
+                                {"gap", off.upper - off.lower},
+                                {"seconds", off.seconds},
+                                {"budget_s", offline},
+                                {"trials", off.iterations},
+                                {"nodes", off.nodes},
+                                {"memory_bytes", off.memory_bytes},
+                                {"reclaims", offline_solver.reclaims()}};
     std::printf("%s\n", out.dump().c_str());
     return 0;
   }
@@ -191,9 +200,10 @@ int main(int argc, char** argv) {
   if (published) std::printf("published optimum at the initial belief: %.2f\n", *published);
   std::printf(
       "\nPOMHDP offline from the initial belief (budget %.0f s): lower %.4f, upper %.4f, gap %.4f\n"
-      "  %.2f s, %llu trials, %zu belief nodes, %.1f MB\n",
+      "  %.2f s, %llu trials, %zu belief nodes, %.1f MB (limit %.0f MB, reached %llu times)\n",
       offline, off.lower, off.upper, off.upper - off.lower, off.seconds,
-      static_cast<unsigned long long>(off.iterations), off.nodes, off.memory_bytes / 1e6);
+      static_cast<unsigned long long>(off.iterations), off.nodes, off.memory_bytes / 1e6, memory_mb,
+      static_cast<unsigned long long>(offline_solver.reclaims()));
   std::printf("\nonline, a fresh search per episode (value = mean discounted return, 95%% CI):\n");
   std::printf("%-7s %9s %8s %18s %9s %9s %10s %10s %12s %10s %9s %8s\n", "solver", "budget_s",
               "episodes", "value +- ci95", "lower_0", "upper_0", "med_step_s", "max_step_s",

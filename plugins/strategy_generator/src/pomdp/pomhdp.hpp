@@ -36,7 +36,21 @@ struct PomhdpOptions {
   // bound at most settle_tolerance below every other action's upper bound
   // (so it loses at most that much against the optimum); negative: never.
   double settle_tolerance = 1e-2;
-  std::size_t max_nodes = 2'000'000;
+  // Drop an action at a belief once its upper bound is below the belief's
+  // lower bound (it cannot be optimal). Needs true bounds: turn it off when
+  // the lower heuristic is only an estimate.
+  bool prune_actions = true;
+  // Limits of the graph. At either, the older half of the nodes (by the
+  // last trial through them) become unvisited branches again, their bounds
+  // kept, and the search goes on; with `reclaim` off it stops there.
+  std::size_t max_nodes = 4'000'000;
+  std::size_t max_memory_bytes = std::size_t{1} << 30;
+  bool reclaim = true;
+  // reset() to a belief the graph holds keeps the graph and starts from that
+  // node (online episodes from the same initial belief start warm); the
+  // graph then keeps what the episode's first belief reaches, within the
+  // limits above. Off: reset() starts an empty graph.
+  bool warm_start = false;
   std::uint64_t seed = 1;
 };
 
@@ -49,6 +63,8 @@ class Pomhdp final : public OnlinePlanner {
          std::vector<const Heuristic*> inadmissible, PomhdpOptions options = {});
 
   std::string name() const override { return "POMHDP"; }
+  // Starts from `belief`: an empty graph, or with warm_start the node the
+  // graph has for it.
   void reset(const Belief& belief) override;
   // Runs trials until the budget ends or the bounds meet, then returns the
   // root action with the best lower bound.
@@ -68,24 +84,38 @@ class Pomhdp final : public OnlinePlanner {
   // the trials did not reach.
   PolicyTree policy_tree(int horizon);
 
+  // Belief nodes (visited beliefs); unvisited children are not nodes.
   std::size_t num_nodes() const { return nodes_.size(); }
+  std::size_t memory_bytes() const { return bytes_; }
+  // How many times the graph hit a limit and gave back its older half.
+  std::uint64_t reclaims() const { return reclaims_; }
   std::uint64_t total_trials() const { return total_trials_; }
   double epsilon1() const { return epsilon1_; }
   double epsilon2() const { return epsilon2_; }
 
  private:
+  // An observation branch of an action. Until a trial first enters it, the
+  // child is not a node: the branch keeps its bounds (and the raw
+  // inadmissible estimates, in Node::branch_h) and no belief; the belief is
+  // made again from the parent when a trial goes there.
+  static constexpr std::uint32_t kUnvisited = 0xffffffffu;
+  static constexpr std::uint32_t kTerminal = 0xfffffffeu;  // value 0, never a node
   struct Branch {
-    ObsId observation = 0;
     double probability = 0.0;
-    std::uint32_t child = 0;
+    double upper = 0.0, lower = 0.0;  // the child's bounds while unvisited
+    ObsId observation = 0;
+    std::uint32_t child = kUnvisited;  // a node id, kUnvisited or kTerminal
   };
   struct Edge {
     double reward = 0.0;
-    std::vector<Branch> branches;
+    std::uint32_t first = 0;  // its branches are Node::branches[first, first + count)
+    std::uint32_t count = 0;
+    bool pruned = false;  // its upper bound fell below the belief's lower bound
   };
   struct Node {
     Belief belief;
     std::uint64_t signature = 0;
+    std::uint64_t stamp = 0;  // the last trial through this node
     bool terminal = false;
     bool expanded = false;
     double upper = 0.0, lower = 0.0;
@@ -93,20 +123,43 @@ class Pomhdp final : public OnlinePlanner {
     // backed-up (inflated) value once expanded.
     std::vector<double> h;
     std::vector<Edge> edges;  // by action, once expanded
+    std::vector<Branch> branches;
+    std::vector<double> branch_h;  // [branch * h.size() + i], for unvisited branches
   };
 
-  std::uint32_t node_for(Belief belief);
+  // The node of a belief if there is one, else kUnvisited; `key` gets the
+  // index key the belief has or would get.
+  std::uint32_t find(const Belief& belief, std::uint64_t& key) const;
+  // The node of a belief, made if needed; `bounds` (upper, lower, then the
+  // inadmissible estimates) saves evaluating the heuristics again.
+  std::uint32_t node_for(Belief belief, const double* bounds = nullptr);
   void expand(std::uint32_t id);
+  // Makes the child of branch `k` (of action `a`) a node and returns it.
+  std::uint32_t visit(std::uint32_t id, ActionId a, std::size_t k);
+  Rng expansion_rng(std::uint64_t signature, ActionId a) const;
   void backup(std::uint32_t id);
-  double q_upper(const Edge& e) const;
-  double q_lower(const Edge& e) const;
-  double q_h(const Edge& e, std::size_t i) const;
+  double branch_upper(const Branch& b) const {
+    return b.child < kTerminal ? nodes_[b.child].upper : b.upper;
+  }
+  double branch_lower(const Branch& b) const {
+    return b.child < kTerminal ? nodes_[b.child].lower : b.lower;
+  }
+  double q_upper(const Node& n, const Edge& e) const;
+  double q_lower(const Node& n, const Edge& e) const;
+  double q_h(const Node& n, const Edge& e, std::size_t i) const;
   double leaf_h(const Node& n, std::size_t i) const;
+  double inflate(double h) const { return v_max_ - epsilon1_ * (v_max_ - h); }
   ActionId choose_action(const Node& n, std::size_t heuristic) const;
   void trial(std::size_t heuristic, std::chrono::steady_clock::time_point deadline);
   PlanStats run(const Budget& budget, bool until_settled);
   bool settled() const;
-  void compact(std::uint32_t new_root);
+  bool room_left() const {
+    return nodes_.size() < options_.max_nodes && bytes_ < options_.max_memory_bytes;
+  }
+  // Drops what neither the root nor the home node reaches.
+  void compact();
+  // Turns the older half of the nodes back into unvisited branches.
+  void reclaim();
   std::size_t node_bytes(const Node& n) const;
 
   const GenerativeModel& model_;
@@ -114,7 +167,6 @@ class Pomhdp final : public OnlinePlanner {
   const Heuristic& lower_;
   std::vector<const Heuristic*> inadmissible_;
   PomhdpOptions options_;
-  Rng rng_;
   double gamma_, v_max_;
   int max_depth_;
   std::vector<Node> nodes_;
@@ -126,6 +178,10 @@ class Pomhdp final : public OnlinePlanner {
   std::size_t compact_at_ = 0;
   std::size_t bytes_ = 0;  // held by nodes_ and index_, kept as they grow
   std::uint32_t root_ = 0;
+  // The node of the belief reset() last started from (kept by compaction for
+  // warm starts); kUnvisited without warm_start.
+  std::uint32_t home_ = kUnvisited;
+  std::uint64_t reclaims_ = 0;
   double epsilon1_, epsilon2_;
   std::uint64_t total_trials_ = 0;
   std::size_t next_heuristic_ = 0;
