@@ -1,7 +1,6 @@
 #include "pomdp/cassandra_reader.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <optional>
 #include <unordered_map>
@@ -9,74 +8,20 @@
 #include <fmt/format.h>
 
 #include "pomdp/model_io.hpp"
+#include "pomdp/text.hpp"
 
 namespace plr::pomdp {
 namespace {
 
-struct Token {
-  std::string_view text;
-  int line = 1;
-  int column = 1;
-};
+using text::to_index;
+using text::to_number;
+using text::Token;
 
 // Thrown inside the parser only; the public functions turn it into an Error.
 struct ParseFailure {
   int line, column;
   std::string what;
 };
-
-std::vector<Token> tokenize(std::string_view text) {
-  std::vector<Token> out;
-  int line = 1, column = 1;
-  std::size_t i = 0;
-  const auto advance = [&](std::size_t n) {
-    for (std::size_t k = 0; k < n; ++k, ++i) {
-      if (text[i] == '\n') {
-        ++line;
-        column = 1;
-      } else {
-        ++column;
-      }
-    }
-  };
-  while (i < text.size()) {
-    const char c = text[i];
-    if (c == '#') {
-      while (i < text.size() && text[i] != '\n') advance(1);
-    } else if (c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v') {
-      advance(1);
-    } else if (c == ':') {
-      out.push_back({text.substr(i, 1), line, column});
-      advance(1);
-    } else {
-      std::size_t j = i;
-      while (j < text.size() && text[j] != ':' && text[j] != '#' && text[j] != ' ' &&
-             text[j] != '\t' && text[j] != '\r' && text[j] != '\n' && text[j] != '\f' &&
-             text[j] != '\v') {
-        ++j;
-      }
-      out.push_back({text.substr(i, j - i), line, column});
-      advance(j - i);
-    }
-  }
-  return out;
-}
-
-std::optional<double> to_number(std::string_view s) {
-  double v = 0.0;
-  const char* first = s.data();
-  if (!s.empty() && s[0] == '+') ++first;
-  const auto [ptr, ec] = std::from_chars(first, s.data() + s.size(), v);
-  if (ec != std::errc() || ptr != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
-  return v;
-}
-
-std::optional<long> to_index(std::string_view s) {
-  long v = 0;
-  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (ec != std::errc() || ptr != s.data() + s.size() || v < 0) return std::nullopt;
-  return v;
-}
 
 constexpr int kAll = -1;  // a `*` wildcard
 
@@ -96,7 +41,7 @@ struct RewardRule {
 class Parser {
  public:
   Parser(std::string_view text, const ReadLimits& limits)
-      : tokens_(tokenize(text)), limits_(limits) {}
+      : tokens_(text::tokenize(text, {.colon_tokens = true, .comments = true})), limits_(limits) {}
 
   TabularModel parse();
 
@@ -150,8 +95,7 @@ class Parser {
   }
   void make_model(const Token& t);
   void parse_start(const Token& keyword);
-  void parse_transition(const Token& keyword);
-  void parse_observation(const Token& keyword);
+  void parse_table(const Token& keyword, bool transitions);
   void parse_reward(const Token& keyword);
   void count_entries(std::size_t n, const Token& t) {
     entries_ += n;
@@ -317,146 +261,92 @@ void Parser::parse_start(const Token& keyword) {
   start_ = std::move(b);
 }
 
-void Parser::parse_transition(const Token& keyword) {
+// T and O lines have one shape: rows of a table per action and state (the
+// state before for T, the state reached for O), columns the next states (T)
+// or the observations (O).
+//   X: a : s : column p   one entry
+//   X: a : s  p ... | uniform   one row
+//   X: a  p ... | identity | uniform   the whole matrix
+void Parser::parse_table(const Token& keyword, bool transitions) {
   make_model(keyword);
   const int n = states_.size();
+  const Names& columns = transitions ? states_ : observations_;
+  const int nc = columns.size();
   const int a = ref(actions_);
   TabularModel& m = *model_;
+  std::vector<Token>& where = transitions ? t_where_ : o_where_;
   const auto touch = [&](int act, int s) {
-    t_where_[static_cast<std::size_t>(act) * static_cast<std::size_t>(n) +
-             static_cast<std::size_t>(s)] = keyword;
+    where[static_cast<std::size_t>(act) * static_cast<std::size_t>(n) +
+          static_cast<std::size_t>(s)] = keyword;
+  };
+  // Sets one entry (later lines override earlier ones).
+  const auto put = [&](int act, int s, int column, double p) {
+    if (transitions) {
+      set(m.mutable_transitions(act, s), column, p, keyword);
+    } else {
+      set(m.mutable_observations(act, s), column, p, keyword);
+    }
   };
   if (peek_is(":")) {
     ++pos_;
     const int s = ref(states_);
+    std::vector<std::pair<int, double>> entries;  // column, probability
     if (peek_is(":")) {
       ++pos_;
-      const int s2 = ref(states_);
+      const int column = ref(columns);
       const double p = probability();
-      for (int act : expand(actions_, a)) {
-        for (int from : expand(states_, s)) {
-          for (int to : expand(states_, s2)) set(m.mutable_transitions(act, from), to, p, keyword);
-          touch(act, from);
-        }
-      }
-      return;
-    }
-    // A row over next states.
-    std::vector<double> row(static_cast<std::size_t>(n), 0.0);
-    if (peek_is("uniform")) {
+      for (int c : expand(columns, column)) entries.emplace_back(c, p);
+    } else if (peek_is("uniform")) {
       ++pos_;
-      std::fill(row.begin(), row.end(), 1.0 / n);
+      for (int c = 0; c < nc; ++c) entries.emplace_back(c, 1.0 / nc);
     } else {
-      for (double& p : row) p = probability();
+      for (int c = 0; c < nc; ++c) entries.emplace_back(c, probability());
     }
     for (int act : expand(actions_, a)) {
       for (int from : expand(states_, s)) {
-        for (int to = 0; to < n; ++to) {
-          set(m.mutable_transitions(act, from), to, row[static_cast<std::size_t>(to)], keyword);
-        }
+        for (const auto& [c, p] : entries) put(act, from, c, p);
         touch(act, from);
       }
     }
     return;
   }
-  // A whole matrix.
+  // The whole matrix: each row is replaced.
   const bool identity = peek_is("identity"), uniform = peek_is("uniform");
-  if (identity || uniform) {
-    ++pos_;
-    if (uniform) count_entries(static_cast<std::size_t>(n) * static_cast<std::size_t>(n), keyword);
-  }
-  std::vector<double> matrix;
-  if (!identity && !uniform) {
-    count_entries(static_cast<std::size_t>(n) * static_cast<std::size_t>(n), keyword);
-    matrix.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
-    for (double& p : matrix) p = probability();
-  }
-  for (int act : expand(actions_, a)) {
-    for (int from = 0; from < n; ++from) {
-      auto& r = m.mutable_transitions(act, from);
-      r.clear();
-      for (int to = 0; to < n; ++to) {
-        const double p = identity ? (to == from ? 1.0 : 0.0)
-                         : uniform
-                             ? 1.0 / n
-                             : matrix[static_cast<std::size_t>(from) * static_cast<std::size_t>(n) +
-                                      static_cast<std::size_t>(to)];
-        if (p > 0.0) r.push_back({to, p, 0.0});
-      }
-      touch(act, from);
-    }
-  }
-}
-
-void Parser::parse_observation(const Token& keyword) {
-  make_model(keyword);
-  const int n = states_.size(), no = observations_.size();
-  const int a = ref(actions_);
-  TabularModel& m = *model_;
-  const auto touch = [&](int act, int s) {
-    o_where_[static_cast<std::size_t>(act) * static_cast<std::size_t>(n) +
-             static_cast<std::size_t>(s)] = keyword;
-  };
-  if (peek_is(":")) {
-    ++pos_;
-    const int s = ref(states_);
-    if (peek_is(":")) {
-      ++pos_;
-      const int o = ref(observations_);
-      const double p = probability();
-      for (int act : expand(actions_, a)) {
-        for (int to : expand(states_, s)) {
-          for (int obs : expand(observations_, o)) {
-            set(m.mutable_observations(act, to), obs, p, keyword);
-          }
-          touch(act, to);
-        }
-      }
-      return;
-    }
-    std::vector<double> row(static_cast<std::size_t>(no), 0.0);
-    if (peek_is("uniform")) {
-      ++pos_;
-      std::fill(row.begin(), row.end(), 1.0 / no);
-    } else {
-      for (double& p : row) p = probability();
-    }
-    for (int act : expand(actions_, a)) {
-      for (int to : expand(states_, s)) {
-        for (int obs = 0; obs < no; ++obs) {
-          set(m.mutable_observations(act, to), obs, row[static_cast<std::size_t>(obs)], keyword);
-        }
-        touch(act, to);
-      }
-    }
-    return;
-  }
-  const bool identity = peek_is("identity"), uniform = peek_is("uniform");
-  if (identity && no != n) {
+  if (identity && nc != n) {
     fail(peek(), "an identity observation matrix needs as many observations as states");
   }
+  count_entries(expand(actions_, a).size() * static_cast<std::size_t>(n) *
+                    static_cast<std::size_t>(identity ? 1 : nc),
+                keyword);
   std::vector<double> matrix;
   if (identity || uniform) {
     ++pos_;
   } else {
-    count_entries(static_cast<std::size_t>(n) * static_cast<std::size_t>(no), keyword);
-    matrix.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(no));
+    matrix.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(nc));
     for (double& p : matrix) p = probability();
   }
-  if (uniform) count_entries(static_cast<std::size_t>(n) * static_cast<std::size_t>(no), keyword);
   for (int act : expand(actions_, a)) {
-    for (int to = 0; to < n; ++to) {
-      auto& r = m.mutable_observations(act, to);
-      r.clear();
-      for (int obs = 0; obs < no; ++obs) {
-        const double p = identity ? (obs == to ? 1.0 : 0.0)
-                         : uniform
-                             ? 1.0 / no
-                             : matrix[static_cast<std::size_t>(to) * static_cast<std::size_t>(no) +
-                                      static_cast<std::size_t>(obs)];
-        if (p > 0.0) r.push_back({obs, p});
+    for (int from = 0; from < n; ++from) {
+      const auto value = [&](int c) {
+        if (identity) return c == from ? 1.0 : 0.0;
+        if (uniform) return 1.0 / nc;
+        return matrix[static_cast<std::size_t>(from) * static_cast<std::size_t>(nc) +
+                      static_cast<std::size_t>(c)];
+      };
+      if (transitions) {
+        auto& r = m.mutable_transitions(act, from);
+        r.clear();
+        for (int c = 0; c < nc; ++c) {
+          if (value(c) > 0.0) r.push_back({c, value(c), 0.0});
+        }
+      } else {
+        auto& r = m.mutable_observations(act, from);
+        r.clear();
+        for (int c = 0; c < nc; ++c) {
+          if (value(c) > 0.0) r.push_back({c, value(c)});
+        }
       }
-      touch(act, to);
+      touch(act, from);
     }
   }
 }
@@ -600,10 +490,8 @@ TabularModel Parser::parse() {
     } else if (k == "observations") {
       if (model_) fail(keyword, "observations declared after the tables");
       declare(observations_, limits_.max_observations);
-    } else if (k == "T") {
-      parse_transition(keyword);
-    } else if (k == "O") {
-      parse_observation(keyword);
+    } else if (k == "T" || k == "O") {
+      parse_table(keyword, k == "T");
     } else {
       parse_reward(keyword);
     }

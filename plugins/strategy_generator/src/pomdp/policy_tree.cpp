@@ -1,10 +1,11 @@
 #include "pomdp/policy_tree.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <sstream>
 
 #include <fmt/format.h>
+
+#include "pomdp/text.hpp"
 
 namespace plr::pomdp {
 
@@ -45,21 +46,14 @@ namespace {
 
 template <class T>
 bool parse_number(std::string_view s, T& out) {
-  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
-  return ec == std::errc() && ptr == s.data() + s.size();
-}
-
-std::vector<std::string_view> split(std::string_view line) {
-  std::vector<std::string_view> out;
-  std::size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
-    std::size_t j = i;
-    while (j < line.size() && line[j] != ' ' && line[j] != '\t' && line[j] != '\r') ++j;
-    if (j > i) out.push_back(line.substr(i, j - i));
-    i = j;
+  std::optional<T> v;
+  if constexpr (std::is_floating_point_v<T>) {
+    v = text::to_number(s);
+  } else {
+    v = text::to_integer<T>(s);
   }
-  return out;
+  if (v) out = *v;
+  return v.has_value();
 }
 
 }  // namespace
@@ -74,10 +68,11 @@ plr::Expected<PolicyTree> parse_policy_tree(std::string_view text, const std::st
     lines.push_back(text.substr(start, end - start));
     start = end + 1;
   }
-  if (lines.empty() || split(lines[0]) != std::vector<std::string_view>{"plr-policy-tree", "1"}) {
+  if (lines.empty() ||
+      text::words(lines[0]) != std::vector<std::string_view>{"plr-policy-tree", "1"}) {
     return error(1, "expected 'plr-policy-tree 1'");
   }
-  const auto head = lines.size() > 1 ? split(lines[1]) : std::vector<std::string_view>{};
+  const auto head = lines.size() > 1 ? text::words(lines[1]) : std::vector<std::string_view>{};
   PolicyTree tree;
   std::size_t count = 0;
   if (head.size() != 4 || head[0] != "nodes" || head[2] != "root" ||
@@ -91,7 +86,7 @@ plr::Expected<PolicyTree> parse_policy_tree(std::string_view text, const std::st
   std::vector<int> parents(count, 0);
   for (std::size_t i = 0; i < count; ++i) {
     const int line = static_cast<int>(i) + 3;
-    const auto f = split(lines[i + 2]);
+    const auto f = text::words(lines[i + 2]);
     std::size_t index = 0;
     PolicyNode& n = tree.nodes[i];
     if (f.size() < 4 || !parse_number(f[0], index) || index != i || !parse_number(f[1], n.action) ||
@@ -128,7 +123,8 @@ plr::Expected<PolicyTree> parse_policy_tree(std::string_view text, const std::st
     if (!reached[i]) return error(static_cast<int>(i) + 3, "node not reached from the root");
   }
   for (std::size_t i = count + 2; i < lines.size(); ++i) {
-    if (!split(lines[i]).empty()) return error(static_cast<int>(i) + 1, "text after the last node");
+    if (!text::words(lines[i]).empty())
+      return error(static_cast<int>(i) + 1, "text after the last node");
   }
   return tree;
 }

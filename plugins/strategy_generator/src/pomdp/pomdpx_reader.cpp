@@ -3,7 +3,6 @@
 #include <expat.h>
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -13,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "pomdp/model_io.hpp"
+#include "pomdp/text.hpp"
 
 namespace plr::pomdp {
 namespace {
@@ -113,27 +113,8 @@ std::unique_ptr<Element> parse_xml(std::string_view text) {
   return std::move(b.root);
 }
 
-std::vector<std::string> words(std::string_view text) {
-  std::vector<std::string> out;
-  std::size_t i = 0;
-  while (i < text.size()) {
-    while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i]))) ++i;
-    std::size_t j = i;
-    while (j < text.size() && !std::isspace(static_cast<unsigned char>(text[j]))) ++j;
-    if (j > i) out.emplace_back(text.substr(i, j - i));
-    i = j;
-  }
-  return out;
-}
-
-std::optional<double> to_number(std::string_view s) {
-  double v = 0.0;
-  const char* first = s.data();
-  if (!s.empty() && s[0] == '+') ++first;
-  const auto [ptr, ec] = std::from_chars(first, s.data() + s.size(), v);
-  if (ec != std::errc() || ptr != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
-  return v;
-}
+using text::to_number;
+using text::words;
 
 enum class Kind { kStatePrev, kStateCurr, kObservation, kAction, kReward };
 
@@ -168,7 +149,7 @@ class Reader {
 
  private:
   void read_variables(const Element& e);
-  int value_index(const Variable& v, const std::string& token, int line) const;
+  int value_index(const Variable& v, std::string_view token, int line) const;
   // Reads a CondProb (probabilities, `var` last) or a Func (values over parents).
   Table read_table(const Element& e, bool conditional);
   void check_conditional(const Table& t, const char* what) const;
@@ -193,7 +174,7 @@ void Reader::read_variables(const Element& e) {
   const auto values = [this](const Element& v) {
     std::vector<std::string> out;
     if (const Element* en = v.first("ValueEnum")) {
-      out = words(en->text);
+      for (const std::string_view w : words(en->text)) out.emplace_back(w);
       std::vector<std::string> sorted = out;
       std::sort(sorted.begin(), sorted.end());
       if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) {
@@ -239,13 +220,11 @@ void Reader::read_variables(const Element& e) {
   if (action_ < 0) fail(e.line, "no <ActionVar>");
 }
 
-int Reader::value_index(const Variable& v, const std::string& token, int line) const {
+int Reader::value_index(const Variable& v, std::string_view token, int line) const {
   for (int i = 0; i < v.size(); ++i) {
     if (v.values[static_cast<std::size_t>(i)] == token) return i;
   }
-  int k = -1;
-  const auto [ptr, ec] = std::from_chars(token.data(), token.data() + token.size(), k);
-  if (ec == std::errc() && ptr == token.data() + token.size() && k >= 0 && k < v.size()) return k;
+  if (const auto k = text::to_index(token); k && *k < v.size()) return static_cast<int>(*k);
   fail(line, fmt::format("'{}' is not a value of '{}'", token, v.name));
 }
 
@@ -256,12 +235,12 @@ Table Reader::read_table(const Element& e, bool conditional) {
   const auto var_names = words(var.text);
   if (var_names.size() != 1) fail(var.line, "<Var> must name one variable");
   const auto parents = words(e.required("Parent").text);
-  const auto id = [this](const std::string& name, int line) {
-    const auto it = by_name_.find(name);
+  const auto id = [this](std::string_view name, int line) {
+    const auto it = by_name_.find(std::string(name));
     if (it == by_name_.end()) fail(line, fmt::format("unknown variable '{}'", name));
     return it->second;
   };
-  for (const std::string& p : parents) {
+  for (const std::string_view p : parents) {
     if (p == "null" && parents.size() == 1) break;
     t.vars.push_back(id(p, e.line));
   }
@@ -334,7 +313,7 @@ Table Reader::read_table(const Element& e, bool conditional) {
       if (numbers.size() != listed) {
         fail(tab.line, fmt::format("{} numbers, expected {}", numbers.size(), listed));
       }
-      for (const std::string& w : numbers) {
+      for (const std::string_view w : numbers) {
         const auto x = to_number(w);
         if (!x) fail(tab.line, fmt::format("'{}' is not a number", w));
         if (conditional && (*x < 0.0 || *x > 1.0)) {
