@@ -3,8 +3,12 @@
 //   bench_pomdp MODEL [--budget S] [--pomcp-budget S] [--offline S]
 //               [--episodes N] [--time-limit S] [--seed N] [--json] [--quick]
 // POMHDP first solves offline from the initial belief (root bounds), then
-// both solvers are evaluated online: a fresh search each episode, replanning
-// from the exact belief at every step within the per-step budget.
+// both solvers are evaluated online, replanning from the exact belief at every
+// step within the per-step budget. Each keeps its search between steps and,
+// unless --cold, between episodes (every episode starts from the same
+// initial belief, so later episodes start warm); --cold starts every episode
+// from an empty search. POMCP's rollouts take the MDP's greedy action on the
+// sampled state (--pomcp-random-rollouts: uniformly random actions).
 #include <unistd.h>
 
 #include <chrono>
@@ -95,7 +99,7 @@ int main(int argc, char** argv) {
          pomcp_time_limit = -1.0;
   int episodes = -1;
   std::uint64_t seed = 1, pomcp_sims = std::numeric_limits<std::uint64_t>::max();
-  bool json = false, quick = false, anchor_only = false;
+  bool json = false, quick = false, anchor_only = false, cold = false, random_rollouts = false;
   PomhdpOptions options;
   app.add_option("model", file, "model file (.pomdp or .pomdpx)")->required();
   app.add_option("--budget", budget, "POMHDP seconds per step online (default 1, quick 0.1)");
@@ -110,10 +114,15 @@ int main(int argc, char** argv) {
   app.add_option("--pomcp-sims", pomcp_sims, "POMCP simulations per step at most");
   app.add_option("--epsilon1", options.epsilon1, "POMHDP inflation of inadmissible heuristics");
   app.add_option("--epsilon2", options.epsilon2, "POMHDP bound of searches by the anchor");
+  app.add_option("--trial-gap-fraction", options.trial_gap_fraction,
+                 "POMHDP trial stop: this fraction of the root's gap (HSVI's rule)");
   app.add_flag("--anchor-only", anchor_only, "POMHDP without inadmissible heuristics");
   double memory_mb = 1024.0;
   app.add_option("--memory-mb", memory_mb,
                  "POMHDP graph memory limit in MB (older nodes are given back beyond it)");
+  app.add_flag("--cold", cold, "an empty search at the start of every episode (both solvers)");
+  app.add_flag("--pomcp-random-rollouts", random_rollouts,
+               "POMCP rollouts with uniformly random actions (default: the MDP's greedy action)");
   app.add_option("--seed", seed, "random seed");
   app.add_flag("--json", json, "print one JSON object");
   app.add_flag("--quick", quick, "a run of under a minute");
@@ -153,7 +162,9 @@ int main(int argc, char** argv) {
   const bool tty = isatty(STDERR_FILENO) != 0;
 
   eval.per_step = {budget, std::numeric_limits<std::uint64_t>::max()};
-  Pomhdp online(model, *h.upper, *h.lower, inadmissible, options);
+  PomhdpOptions online_options = options;
+  online_options.warm_start = !cold;
+  Pomhdp online(model, *h.upper, *h.lower, inadmissible, online_options);
   Progress p1("POMHDP online");
   if (tty || !json) eval.progress = [&p1](int d, int t) { p1(d, t); };
   const Evaluation pomhdp = evaluate(model, online, eval);
@@ -162,6 +173,8 @@ int main(int argc, char** argv) {
   eval.max_seconds = pomcp_time_limit;
   PomcpOptions pomcp_options;
   pomcp_options.seed = seed;
+  pomcp_options.warm_start = !cold;
+  if (!random_rollouts) pomcp_options.rollout_policy = rollout_policy_from(h.mdp_greedy);
   Pomcp pomcp_solver(model, pomcp_options);
   Progress p2("POMCP online");
   if (tty || !json) eval.progress = [&p2](int d, int t) { p2(d, t); };
@@ -177,6 +190,9 @@ int main(int argc, char** argv) {
         {"load_s", load_s},
         {"bounds_s", bounds_s},
         {"quick", quick},
+        {"warm_start", !cold},
+        {"pomcp_rollouts", random_rollouts ? "random" : "mdp-greedy"},
+        {"memory_limit_mb", memory_mb},
         {"time_limit_s", {{"pomhdp", time_limit}, {"pomcp", pomcp_time_limit}}},
         {"published_value", published ? nlohmann::json(*published) : nlohmann::json()},
         {"pomhdp", to_json(pomhdp, budget)},
@@ -204,7 +220,9 @@ int main(int argc, char** argv) {
       offline, off.lower, off.upper, off.upper - off.lower, off.seconds,
       static_cast<unsigned long long>(off.iterations), off.nodes, off.memory_bytes / 1e6, memory_mb,
       static_cast<unsigned long long>(offline_solver.reclaims()));
-  std::printf("\nonline, a fresh search per episode (value = mean discounted return, 95%% CI):\n");
+  std::printf("\nonline, %s (value = mean discounted return, 95%% CI):\n",
+              cold ? "an empty search at the start of every episode"
+                   : "searches kept between episodes (warm starts)");
   std::printf("%-7s %9s %8s %18s %9s %9s %10s %10s %12s %10s %9s %8s\n", "solver", "budget_s",
               "episodes", "value +- ci95", "lower_0", "upper_0", "med_step_s", "max_step_s",
               "iter/step", "max_nodes", "max_MB", "total_s");

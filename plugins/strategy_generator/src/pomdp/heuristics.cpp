@@ -66,6 +66,24 @@ std::vector<double> mdp_values(const TabularModel& m, const BoundOptions& option
   return v;
 }
 
+std::vector<ActionId> mdp_greedy_actions(const TabularModel& m, const std::vector<double>& v) {
+  std::vector<ActionId> greedy(static_cast<std::size_t>(m.num_states()), 0);
+  for (int s = 0; s < m.num_states(); ++s) {
+    double best = -std::numeric_limits<double>::infinity();
+    for (int a = 0; a < m.num_actions(); ++a) {
+      double x = 0.0;
+      for (const Transition& t : m.transitions(a, s)) {
+        x += t.probability * (t.reward + m.discount() * v[static_cast<std::size_t>(t.next)]);
+      }
+      if (x > best) {
+        best = x;
+        greedy[static_cast<std::size_t>(s)] = a;
+      }
+    }
+  }
+  return greedy;
+}
+
 AlphaVectors fib_upper_bound(const TabularModel& m, const std::vector<double>& v,
                              const BoundOptions& options) {
   const int S = m.num_states(), A = m.num_actions(), O = m.num_observations();
@@ -154,6 +172,7 @@ TabularHeuristics make_tabular_heuristics(const TabularModel& model, const Bound
   std::vector<double> mdp = mdp_values(model, options);
   h.upper = std::make_unique<AlphaVectors>(fib_upper_bound(model, mdp, options));
   h.lower = std::make_unique<AlphaVectors>(blind_lower_bound(model, options));
+  h.mdp_greedy = mdp_greedy_actions(model, mdp);
   h.most_likely = std::make_unique<MostLikelyStateValue>(std::move(mdp));
   return h;
 }

@@ -46,6 +46,9 @@ struct BoundOptions {
 AlphaVectors blind_lower_bound(const TabularModel& model, const BoundOptions& options = {});
 // The fully observable optimum V_MDP(s).
 std::vector<double> mdp_values(const TabularModel& model, const BoundOptions& options = {});
+// The greedy action of every state in the fully observable MDP whose values
+// are `mdp` (mdp_values()): argmax_a R(s, a) + g * sum_s' T(s' | s, a) V(s').
+std::vector<ActionId> mdp_greedy_actions(const TabularModel& model, const std::vector<double>& mdp);
 // Starts from the QMDP vectors built on `mdp` (mdp_values()) and tightens them.
 AlphaVectors fib_upper_bound(const TabularModel& model, const std::vector<double>& mdp,
                              const BoundOptions& options = {});
@@ -94,6 +97,7 @@ class RolloutValue final : public Heuristic {
 struct TabularHeuristics {
   std::unique_ptr<AlphaVectors> upper, lower;
   std::unique_ptr<MostLikelyStateValue> most_likely;
+  std::vector<ActionId> mdp_greedy;  // the MDP's greedy action per state (rollouts)
   std::vector<const Heuristic*> inadmissible() const { return {most_likely.get(), lower.get()}; }
 };
 TabularHeuristics make_tabular_heuristics(const TabularModel& model,

@@ -26,9 +26,21 @@ Pomcp::Pomcp(const GenerativeModel& model, PomcpOptions options)
 
 void Pomcp::reset(const Belief& belief) {
   belief_ = belief;
+  if (options_.warm_start && at_home_tree_ && belief.approx_equal(home_belief_, 1e-9)) {
+    root_ = home_;
+    return;
+  }
   nodes_.assign(1, Node{});
-  root_ = 0;
+  bytes_ = sizeof(Node);
+  root_ = home_ = 0;
+  home_belief_ = belief;
+  at_home_tree_ = options_.warm_start;
   have_returns_ = false;
+}
+
+std::function<ActionId(StateId, Rng&)> rollout_policy_from(std::vector<ActionId> greedy) {
+  return
+      [greedy = std::move(greedy)](StateId s, Rng&) { return greedy[static_cast<std::size_t>(s)]; };
 }
 
 std::uint32_t Pomcp::child(std::uint32_t node, ActionId a, ObsId o) {
@@ -39,7 +51,10 @@ std::uint32_t Pomcp::child(std::uint32_t node, ActionId a, ObsId o) {
   if (nodes_.size() >= options_.max_nodes) return kNoNode;
   const auto id = static_cast<std::uint32_t>(nodes_.size());
   nodes_.emplace_back();
-  nodes_[node].actions[static_cast<std::size_t>(a)].children.emplace_back(o, id);
+  auto& children = nodes_[node].actions[static_cast<std::size_t>(a)].children;
+  bytes_ -= children.capacity() * sizeof(children[0]);
+  children.emplace_back(o, id);
+  bytes_ += sizeof(Node) + children.capacity() * sizeof(children[0]);
   return id;
 }
 
@@ -47,7 +62,8 @@ double Pomcp::rollout(StateId s, int depth) {
   std::uniform_int_distribution<ActionId> act(0, model_.num_actions() - 1);
   double ret = 0.0, g = 1.0;
   for (; depth < max_depth_ && !model_.is_terminal(s); ++depth) {
-    const Step st = model_.step(s, act(rng_), rng_);
+    const ActionId a = options_.rollout_policy ? options_.rollout_policy(s, rng_) : act(rng_);
+    const Step st = model_.step(s, a, rng_);
     ret += g * st.reward;
     g *= gamma_;
     s = st.next;
@@ -59,6 +75,7 @@ double Pomcp::simulate(StateId s, std::uint32_t node, int depth) {
   if (depth >= max_depth_ || model_.is_terminal(s)) return 0.0;
   if (nodes_[node].actions.empty()) {
     nodes_[node].actions.resize(static_cast<std::size_t>(model_.num_actions()));
+    bytes_ += nodes_[node].actions.capacity() * sizeof(ActionStats);
     ++nodes_[node].visits;
     return rollout(s, depth);
   }
@@ -120,11 +137,7 @@ ActionId Pomcp::plan(const Budget& budget) {
   }
   stats_.iterations = sims;
   stats_.nodes = nodes_.size();
-  stats_.memory_bytes = nodes_.capacity() * sizeof(Node);
-  for (const Node& n : nodes_) {
-    stats_.memory_bytes += n.actions.capacity() * sizeof(ActionStats);
-    for (const ActionStats& st : n.actions) stats_.memory_bytes += st.children.capacity() * 8;
-  }
+  stats_.memory_bytes = bytes_;
   stats_.seconds = elapsed();
   stats_.lower = stats_.upper = std::isfinite(best_value) ? best_value : 0.0;
   return best;
@@ -132,17 +145,30 @@ ActionId Pomcp::plan(const Budget& budget) {
 
 void Pomcp::advance(ActionId action, ObsId observation, const Belief& next) {
   belief_ = next;
+  // Warm: move down and keep the home tree while it has room.
+  if (at_home_tree_ && nodes_.size() >= options_.max_nodes / 2) at_home_tree_ = false;
   const Node& r = nodes_[root_];
   if (static_cast<std::size_t>(action) < r.actions.size()) {
     for (const auto& [o, id] : r.actions[static_cast<std::size_t>(action)].children) {
       if (o == observation) {
-        keep_subtree(id);
+        if (at_home_tree_) {
+          root_ = id;
+        } else {
+          keep_subtree(id);
+        }
         return;
       }
     }
   }
+  if (at_home_tree_ && !nodes_[root_].actions.empty() && nodes_.size() < options_.max_nodes) {
+    // A branch the search never took: a new leaf of the home tree.
+    root_ = child(root_, action, observation);
+    return;
+  }
   nodes_.assign(1, Node{});
+  bytes_ = sizeof(Node);
   root_ = 0;
+  at_home_tree_ = false;
 }
 
 void Pomcp::keep_subtree(std::uint32_t new_root) {
@@ -165,6 +191,16 @@ void Pomcp::keep_subtree(std::uint32_t new_root) {
   }
   nodes_ = std::move(kept);
   root_ = 0;
+  count_bytes();
+}
+
+void Pomcp::count_bytes() {
+  bytes_ = nodes_.size() * sizeof(Node);
+  for (const Node& n : nodes_) {
+    bytes_ += n.actions.capacity() * sizeof(ActionStats);
+    for (const ActionStats& st : n.actions)
+      bytes_ += st.children.capacity() * sizeof(st.children[0]);
+  }
 }
 
 std::uint32_t Pomcp::root_visits(ActionId a) const {

@@ -300,7 +300,8 @@ ActionId Pomhdp::choose_action(const Node& n, std::size_t heuristic) const {
 void Pomhdp::trial(std::size_t heuristic, Clock::time_point deadline) {
   path_.clear();
   std::uint32_t id = root_;
-  double threshold = options_.target_gap;
+  double threshold = std::max(options_.target_gap, options_.trial_gap_fraction *
+                                                       (nodes_[root_].upper - nodes_[root_].lower));
   for (int depth = 0;; ++depth) {
     nodes_[id].stamp = total_trials_;
     if (nodes_[id].terminal) break;

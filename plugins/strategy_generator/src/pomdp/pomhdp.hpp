@@ -27,6 +27,11 @@ struct PomhdpOptions {
   int epsilon_period = 64;
   // Stop when the root's upper and lower bounds are this close.
   double target_gap = 1e-3;
+  // A trial ends where a belief's gap is below its share of the root's
+  // target, gamma^-depth * max(target_gap, trial_gap_fraction * root gap)
+  // (HSVI's rule; a fraction of the root's current gap rather than the final
+  // target keeps early trials from going ever deeper). 0: the target alone.
+  double trial_gap_fraction = 0.0;
   // Trial depth limit; 0 derives it from the discount and the value range
   // (100 for goal-directed models).
   int max_depth = 0;
