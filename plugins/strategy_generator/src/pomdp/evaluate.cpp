@@ -1,0 +1,134 @@
+#include "pomdp/evaluate.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace plr::pomdp {
+namespace {
+
+double t_quantile_975(std::size_t dof) {
+  // Two-sided 95 % quantiles of Student's t; 1.96 beyond the table.
+  static const double table[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306,
+                                 2.262,  2.228, 2.201, 2.179, 2.160, 2.145, 2.131, 2.120,
+                                 2.110,  2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064,
+                                 2.060,  2.056, 2.052, 2.048, 2.045, 2.042};
+  if (dof == 0) return 0.0;
+  if (dof <= 30) return table[dof - 1];
+  if (dof <= 60) return 2.000;
+  if (dof <= 120) return 1.980;
+  return 1.960;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const std::size_t mid = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid), v.end());
+  const double hi = v[mid];
+  if (v.size() % 2 == 1) return hi;
+  return (hi + *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid))) / 2.0;
+}
+
+}  // namespace
+
+void summarize(Evaluation& e) {
+  const auto n = e.returns.size();
+  if (n == 0) return;
+  double sum = 0.0;
+  for (double r : e.returns) sum += r;
+  e.mean = sum / static_cast<double>(n);
+  double ss = 0.0;
+  for (double r : e.returns) ss += (r - e.mean) * (r - e.mean);
+  e.stddev = n > 1 ? std::sqrt(ss / static_cast<double>(n - 1)) : 0.0;
+  e.ci95 = t_quantile_975(n - 1) * e.stddev / std::sqrt(static_cast<double>(n));
+}
+
+int default_max_steps(const GenerativeModel& model) {
+  const double g = model.discount();
+  if (g >= 1.0) return 200;
+  if (g <= 0.0) return 1;
+  const double scale = std::max({1e-9, std::abs(model.max_reward()), std::abs(model.min_reward())});
+  const double steps = std::log(1e-3 * (1.0 - g) / scale) / std::log(g);
+  return static_cast<int>(std::clamp(std::ceil(steps), 1.0, 100000.0));
+}
+
+Evaluation evaluate(const GenerativeModel& model, OnlinePlanner& planner,
+                    const EvaluationOptions& options) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  Evaluation out;
+  Rng rng(options.seed);
+  const int max_steps = options.max_steps > 0 ? options.max_steps : default_max_steps(model);
+  std::vector<double> step_seconds;
+  double iterations = 0.0, steps = 0.0;
+  for (int ep = 0; ep < options.episodes; ++ep) {
+    if (ep > 0 && std::chrono::duration<double>(Clock::now() - t0).count() > options.max_seconds) {
+      break;
+    }
+    Belief belief = model.initial_belief();
+    StateId s = sample_state(belief, rng);
+    planner.reset(belief);
+    double ret = 0.0, g = 1.0;
+    for (int t = 0; t < max_steps && !model.is_terminal(s); ++t) {
+      const ActionId a = planner.plan(options.per_step);
+      const PlanStats& st = planner.last_stats();
+      if (ep == 0 && t == 0) out.first_step = st;
+      step_seconds.push_back(st.seconds);
+      iterations += static_cast<double>(st.iterations);
+      out.max_nodes = std::max(out.max_nodes, st.nodes);
+      out.max_memory_bytes = std::max(out.max_memory_bytes, st.memory_bytes);
+      const Step step = model.step(s, a, rng);
+      ret += g * step.reward;
+      g *= model.discount();
+      s = step.next;
+      steps += 1.0;
+      if (step.terminal) break;
+      Belief next = update_belief(model, belief, a, step.observation, rng);
+      if (next.empty()) {
+        ++out.lost_beliefs;
+        break;
+      }
+      belief = std::move(next);
+      planner.advance(a, step.observation, belief);
+    }
+    out.returns.push_back(ret);
+    if (options.progress) options.progress(ep + 1, options.episodes);
+  }
+  summarize(out);
+  out.mean_steps = out.returns.empty() ? 0.0 : steps / static_cast<double>(out.returns.size());
+  out.median_step_seconds = median(step_seconds);
+  out.max_step_seconds =
+      step_seconds.empty() ? 0.0 : *std::max_element(step_seconds.begin(), step_seconds.end());
+  out.mean_iterations_per_step = steps > 0 ? iterations / steps : 0.0;
+  out.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  return out;
+}
+
+Evaluation evaluate_tree(const GenerativeModel& model, const PolicyTree& tree,
+                         const EvaluationOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Evaluation out;
+  Rng rng(options.seed);
+  double steps = 0.0;
+  for (int ep = 0; ep < options.episodes && !tree.nodes.empty(); ++ep) {
+    StateId s = sample_state(model.initial_belief(), rng);
+    std::optional<std::uint32_t> node = tree.root;
+    double ret = 0.0, g = 1.0;
+    while (node && !model.is_terminal(s)) {
+      const Step step = model.step(s, tree.nodes[*node].action, rng);
+      ret += g * step.reward;
+      g *= model.discount();
+      s = step.next;
+      steps += 1.0;
+      node = tree.next(*node, step.observation);
+    }
+    out.returns.push_back(ret);
+    if (options.progress) options.progress(ep + 1, options.episodes);
+  }
+  summarize(out);
+  out.mean_steps = options.episodes > 0 ? steps / options.episodes : 0.0;
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+}  // namespace plr::pomdp

@@ -1,0 +1,60 @@
+// Policy evaluation by simulation: episodes from states drawn from the
+// initial belief, the planner replanning from the exact (or particle) belief
+// at every step; mean discounted return with a 95 % confidence interval.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <vector>
+
+#include "pomdp/model.hpp"
+#include "pomdp/planner.hpp"
+#include "pomdp/policy_tree.hpp"
+
+namespace plr::pomdp {
+
+struct EvaluationOptions {
+  int episodes = 100;
+  // Steps per episode; 0: until gamma^t times the largest reward is below 1e-3
+  // (200 for goal-directed models). Terminal states end an episode earlier.
+  int max_steps = 0;
+  Budget per_step;
+  std::uint64_t seed = 1;
+  // No episode starts after this many seconds (at least one runs).
+  double max_seconds = std::numeric_limits<double>::infinity();
+  // Called after every episode with (done, total).
+  std::function<void(int, int)> progress;
+};
+
+struct Evaluation {
+  std::vector<double> returns;  // discounted return per episode
+  double mean = 0.0;
+  double ci95 = 0.0;  // half-width of the 95 % confidence interval of the mean
+  double stddev = 0.0;
+  double mean_steps = 0.0;
+  // Over all plan() calls.
+  double median_step_seconds = 0.0;
+  double max_step_seconds = 0.0;
+  double mean_iterations_per_step = 0.0;
+  std::size_t max_nodes = 0;
+  std::size_t max_memory_bytes = 0;
+  // The first plan() call of the first episode: the root's bounds and effort.
+  PlanStats first_step;
+  int lost_beliefs = 0;  // episodes cut short: an observation the belief ruled out
+  double seconds = 0.0;
+};
+
+// Mean and 95 % half-width (Student's t for small samples).
+void summarize(Evaluation& e);
+int default_max_steps(const GenerativeModel& model);
+
+Evaluation evaluate(const GenerativeModel& model, OnlinePlanner& planner,
+                    const EvaluationOptions& options);
+
+// Follows a fixed tree; an episode stops earning where the tree ends
+// (a finite-horizon value).
+Evaluation evaluate_tree(const GenerativeModel& model, const PolicyTree& tree,
+                         const EvaluationOptions& options);
+
+}  // namespace plr::pomdp

@@ -1,0 +1,245 @@
+// POMDP solver benchmark: POMHDP and POMCP side by side on one model file
+// (.pomdp or .pomdpx).
+//   bench_pomdp MODEL [--budget S] [--pomcp-budget S] [--offline S]
+//               [--episodes N] [--time-limit S] [--seed N] [--json] [--quick]
+// POMHDP first solves offline from the initial belief (root bounds), then
+// both solvers are evaluated online, replanning from the exact belief at every
+// step within the per-step budget. Each keeps its search between steps and,
+// unless --cold, between episodes (every episode starts from the same
+// initial belief, so later episodes start warm); --cold starts every episode
+// from an empty search. POMCP's rollouts take the MDP's greedy action on the
+// sampled state (--pomcp-random-rollouts: uniformly random actions).
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "pomdp/evaluate.hpp"
+#include "pomdp/heuristics.hpp"
+#include "pomdp/model_io.hpp"
+#include "pomdp/pomcp.hpp"
+#include "pomdp/pomhdp.hpp"
+
+using namespace plr::pomdp;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Values at the initial belief published for the standard problems
+// (SARSOP's, see docs/pomdp.md), by file name.
+std::optional<double> published_value(const std::string& stem) {
+  if (stem.starts_with("Tiger")) return 19.37;
+  if (stem.starts_with("RockSample_4_4")) return 17.92;
+  if (stem.starts_with("RockSample_5_7")) return 24.24;
+  if (stem.starts_with("RockSample_7_8")) return 21.27;
+  if (stem.starts_with("Tag")) return -6.13;
+  return std::nullopt;
+}
+
+// A progress bar on stderr, redrawn at most ten times a second.
+class Progress {
+ public:
+  explicit Progress(std::string label) : label_(std::move(label)) {}
+  void operator()(int done, int total) {
+    if (done < total && since(last_) < 0.1) return;
+    last_ = Clock::now();
+    constexpr int kWidth = 30;
+    const int filled = total > 0 ? done * kWidth / total : kWidth;
+    std::fprintf(stderr, "\r%-22s [%s%s] %d/%d episodes, %.0f s", label_.c_str(),
+                 std::string(static_cast<std::size_t>(filled), '#').c_str(),
+                 std::string(static_cast<std::size_t>(kWidth - filled), '.').c_str(), done, total,
+                 since(start_));
+    if (done == total) std::fprintf(stderr, "\n");
+    std::fflush(stderr);
+  }
+
+ private:
+  std::string label_;
+  Clock::time_point start_ = Clock::now(), last_ = Clock::time_point{};
+};
+
+nlohmann::json to_json(const Evaluation& e, double budget) {
+  return {{"value", e.mean},
+          {"ci95", e.ci95},
+          {"stddev", e.stddev},
+          {"episodes", e.returns.size()},
+          {"mean_steps", e.mean_steps},
+          {"budget_per_step_s", budget},
+          {"median_step_s", e.median_step_seconds},
+          {"max_step_s", e.max_step_seconds},
+          {"iterations_per_step", e.mean_iterations_per_step},
+          {"first_step_lower", e.first_step.lower},
+          {"first_step_upper", e.first_step.upper},
+          {"first_step_iterations", e.first_step.iterations},
+          {"max_nodes", e.max_nodes},
+          {"max_memory_bytes", e.max_memory_bytes},
+          {"lost_beliefs", e.lost_beliefs},
+          {"seconds", e.seconds}};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"POMHDP and POMCP side by side on one POMDP model"};
+  std::string file;
+  double budget = -1.0, pomcp_budget = -1.0, offline = -1.0, time_limit = -1.0,
+         pomcp_time_limit = -1.0;
+  int episodes = -1;
+  std::uint64_t seed = 1, pomcp_sims = std::numeric_limits<std::uint64_t>::max();
+  bool json = false, quick = false, anchor_only = false, cold = false, random_rollouts = false;
+  PomhdpOptions options;
+  app.add_option("model", file, "model file (.pomdp or .pomdpx)")->required();
+  app.add_option("--budget", budget, "POMHDP seconds per step online (default 1, quick 0.1)");
+  app.add_option("--pomcp-budget", pomcp_budget,
+                 "POMCP seconds per step (default: --budget, quick 0.02)");
+  app.add_option("--offline", offline, "POMHDP offline solve seconds (default 60, quick 5)");
+  app.add_option("--episodes", episodes, "episodes per solver at most (default 2000, quick 100)");
+  app.add_option("--time-limit", time_limit,
+                 "POMHDP: no new episode after this many seconds (default 480, quick 15)");
+  app.add_option("--pomcp-time-limit", pomcp_time_limit,
+                 "POMCP: no new episode after this many seconds (default 240, quick 10)");
+  app.add_option("--pomcp-sims", pomcp_sims, "POMCP simulations per step at most");
+  app.add_option("--epsilon1", options.epsilon1, "POMHDP inflation of inadmissible heuristics");
+  app.add_option("--epsilon2", options.epsilon2, "POMHDP bound of searches by the anchor");
+  app.add_option("--trial-gap-fraction", options.trial_gap_fraction,
+                 "POMHDP trial stop: this fraction of the root's gap (HSVI's rule)");
+  app.add_flag("--anchor-only", anchor_only, "POMHDP without inadmissible heuristics");
+  double memory_mb = 1024.0;
+  app.add_option("--memory-mb", memory_mb,
+                 "POMHDP graph memory limit in MB (older nodes are given back beyond it)");
+  app.add_flag("--cold", cold, "an empty search at the start of every episode (both solvers)");
+  app.add_flag("--pomcp-random-rollouts", random_rollouts,
+               "POMCP rollouts with uniformly random actions (default: the MDP's greedy action)");
+  app.add_option("--seed", seed, "random seed");
+  app.add_flag("--json", json, "print one JSON object");
+  app.add_flag("--quick", quick, "a run of under a minute");
+  CLI11_PARSE(app, argc, argv);
+  if (budget < 0) budget = quick ? 0.1 : 1.0;
+  if (pomcp_budget < 0) pomcp_budget = quick ? 0.02 : budget;
+  if (offline < 0) offline = quick ? 5.0 : 60.0;
+  if (episodes < 0) episodes = quick ? 100 : 2000;
+  if (time_limit < 0) time_limit = quick ? 15.0 : 480.0;
+  if (pomcp_time_limit < 0) pomcp_time_limit = quick ? 10.0 : 240.0;
+
+  auto t0 = Clock::now();
+  auto loaded = load_model(file);
+  if (!loaded) {
+    std::fprintf(stderr, "%s\n", loaded.error().message.c_str());
+    return 1;
+  }
+  const TabularModel& model = *loaded;
+  const double load_s = since(t0);
+  t0 = Clock::now();
+  const TabularHeuristics h = make_tabular_heuristics(model);
+  const double bounds_s = since(t0);
+  const std::string stem = std::filesystem::path(file).stem().string();
+  const auto published = published_value(stem);
+
+  // Offline: bounds at the initial belief.
+  options.seed = seed;
+  options.max_memory_bytes = static_cast<std::size_t>(memory_mb * 1e6);
+  const auto inadmissible = anchor_only ? std::vector<const Heuristic*>{} : h.inadmissible();
+  Pomhdp offline_solver(model, *h.upper, *h.lower, inadmissible, options);
+  const PlanStats off = offline_solver.solve({offline, std::numeric_limits<std::uint64_t>::max()});
+
+  EvaluationOptions eval;
+  eval.episodes = episodes;
+  eval.seed = seed;
+  eval.max_seconds = time_limit;
+  const bool tty = isatty(STDERR_FILENO) != 0;
+
+  eval.per_step = {budget, std::numeric_limits<std::uint64_t>::max()};
+  PomhdpOptions online_options = options;
+  online_options.warm_start = !cold;
+  Pomhdp online(model, *h.upper, *h.lower, inadmissible, online_options);
+  Progress p1("POMHDP online");
+  if (tty || !json) eval.progress = [&p1](int d, int t) { p1(d, t); };
+  const Evaluation pomhdp = evaluate(model, online, eval);
+
+  eval.per_step = {pomcp_budget, pomcp_sims};
+  eval.max_seconds = pomcp_time_limit;
+  PomcpOptions pomcp_options;
+  pomcp_options.seed = seed;
+  pomcp_options.warm_start = !cold;
+  if (!random_rollouts) pomcp_options.rollout_policy = rollout_policy_from(h.mdp_greedy);
+  Pomcp pomcp_solver(model, pomcp_options);
+  Progress p2("POMCP online");
+  if (tty || !json) eval.progress = [&p2](int d, int t) { p2(d, t); };
+  const Evaluation pomcp = evaluate(model, pomcp_solver, eval);
+
+  if (json) {
+    nlohmann::json out = {
+        {"model", file},
+        {"states", model.num_states()},
+        {"actions", model.num_actions()},
+        {"observations", model.num_observations()},
+        {"discount", model.discount()},
+        {"load_s", load_s},
+        {"bounds_s", bounds_s},
+        {"quick", quick},
+        {"warm_start", !cold},
+        {"pomcp_rollouts", random_rollouts ? "random" : "mdp-greedy"},
+        {"memory_limit_mb", memory_mb},
+        {"time_limit_s", {{"pomhdp", time_limit}, {"pomcp", pomcp_time_limit}}},
+        {"published_value", published ? nlohmann::json(*published) : nlohmann::json()},
+        {"pomhdp", to_json(pomhdp, budget)},
+        {"pomcp", to_json(pomcp, pomcp_budget)}};
+    out["pomhdp"]["offline"] = {{"lower", off.lower},
+                                {"upper", off.upper},
+                                {"gap", off.upper - off.lower},
+                                {"seconds", off.seconds},
+                                {"budget_s", offline},
+                                {"trials", off.iterations},
+                                {"nodes", off.nodes},
+                                {"memory_bytes", off.memory_bytes},
+                                {"reclaims", offline_solver.reclaims()}};
+    std::printf("%s\n", out.dump().c_str());
+    return 0;
+  }
+  std::printf(
+      "%s: %d states, %d actions, %d observations, discount %g (read in %.2f s, bounds %.2f s)\n",
+      file.c_str(), model.num_states(), model.num_actions(), model.num_observations(),
+      model.discount(), load_s, bounds_s);
+  if (published) std::printf("published optimum at the initial belief: %.2f\n", *published);
+  std::printf(
+      "\nPOMHDP offline from the initial belief (budget %.0f s): lower %.4f, upper %.4f, gap %.4f\n"
+      "  %.2f s, %llu trials, %zu belief nodes, %.1f MB (limit %.0f MB, reached %llu times)\n",
+      offline, off.lower, off.upper, off.upper - off.lower, off.seconds,
+      static_cast<unsigned long long>(off.iterations), off.nodes, off.memory_bytes / 1e6, memory_mb,
+      static_cast<unsigned long long>(offline_solver.reclaims()));
+  std::printf("\nonline, %s (value = mean discounted return, 95%% CI):\n",
+              cold ? "an empty search at the start of every episode"
+                   : "searches kept between episodes (warm starts)");
+  std::printf("%-7s %9s %8s %18s %9s %9s %10s %10s %12s %10s %9s %8s\n", "solver", "budget_s",
+              "episodes", "value +- ci95", "lower_0", "upper_0", "med_step_s", "max_step_s",
+              "iter/step", "max_nodes", "max_MB", "total_s");
+  for (const auto& [name, e, b] :
+       {std::tuple{"POMHDP", &pomhdp, budget}, std::tuple{"POMCP", &pomcp, pomcp_budget}}) {
+    std::printf(
+        "%-7s %9.3g %8zu %10.3f +- %5.3f %9.3f %9.3f %10.4f %10.4f %12.1f %10zu %9.1f %8.1f\n",
+        name, b, e->returns.size(), e->mean, e->ci95, e->first_step.lower, e->first_step.upper,
+        e->median_step_seconds, e->max_step_seconds, e->mean_iterations_per_step, e->max_nodes,
+        e->max_memory_bytes / 1e6, e->seconds);
+  }
+  std::printf(
+      "(lower_0/upper_0: root bounds after the first step's search; POMCP's are its value "
+      "estimate)\n");
+  if (pomhdp.lost_beliefs + pomcp.lost_beliefs > 0) {
+    std::printf("episodes cut by an observation the belief ruled out: POMHDP %d, POMCP %d\n",
+                pomhdp.lost_beliefs, pomcp.lost_beliefs);
+  }
+  return 0;
+}
