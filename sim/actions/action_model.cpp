@@ -104,6 +104,7 @@ class Run {
     const Perceived end = observe();
     out_.boxes = end.unloaded - unloaded_at_start_;
     if (end.sim_time_s > 0) out_.sim_time_s = end.sim_time_s;
+    if (!out_.applicable) out_.exec_s = o_.not_applicable_s;
     out_.robot_time_s = out_.exec_s + out_.plan_model_s;
     if (out_.boxes > 0) memory_.ungripped.clear();  // the world changed: worth another try
     return std::move(out_);
@@ -112,6 +113,12 @@ class Run {
  private:
   void note(const std::string& line) const {
     if (reporter_.note) reporter_.note(line);
+  }
+
+  void not_applicable(std::string why) {
+    note("not applicable: " + why);
+    out_.applicable = false;
+    out_.why = std::move(why);
   }
 
   Perceived observe() {
@@ -347,7 +354,9 @@ class Run {
     std::stable_partition(candidates.begin(), candidates.end(),
                           [&](const PickCandidate& c) { return !memory_.ungripped.count(c.box); });
     if (candidates.empty()) {
-      note("no reachable pick point");
+      not_applicable(fmt::format("no box {} {} in front can be picked",
+                                 sim::to_string(sim::height(action_)),
+                                 sim::to_string(sim::side(action_))));
       return;
     }
     const PickCandidate* chosen = nullptr;
@@ -518,7 +527,7 @@ class Run {
     const auto plan =
         sweep_plan(scene, action_, g_, o_.nose_sweep[2], w0.q, w0.world.trailer.depth);
     if (!plan) {
-      note("no pile in front to sweep");
+      not_applicable("no pile in front to sweep");
       return;
     }
     // A pick may have left the arm over the belt: fold it before the scoop

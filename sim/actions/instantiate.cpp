@@ -69,7 +69,6 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
 
   struct Ranked {
     PickCandidate c;
-    int mismatches;
     double x_bin, top, centre_distance;
   };
   std::vector<Ranked> ranked;
@@ -79,8 +78,8 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     const double y = box.pose.translation().y();
     const auto cls = is_wall ? height_class(b[i].z1, obs.wall_mid, obs.wall_high)
                              : height_class(b[i].z1, obs.pile_mid, obs.pile_high);
-    const int mismatches =
-        (cls != sim::height(action)) + (side_of(y, world, obs) != sim::side(action));
+    // The action's region: its height class and third of the width.
+    if (cls != sim::height(action) || side_of(y, world, obs) != sim::side(action)) continue;
 
     // The front face: of the box's horizontal axes, the one nearest the
     // trailer's axis gives the face's normal and the plate's yaw (the wrist
@@ -219,7 +218,6 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     if (!at_face || !liftable || !extractable) continue;
     PickCandidate c;
     c.box = box.id;
-    c.matches = mismatches == 0;
     c.base_x = base_x;
     c.cups = cups_at(*at_face);
     c.grasp = {*at_face - (at_face->x() - stop_x) / n.x() * n, plate_yaw};
@@ -229,14 +227,13 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     c.lift = {c.grasp.position + Eigen::Vector3d(0, 0, lift), plate_yaw};
     c.retract = {c.lift.position - out_depth * n, plate_yaw};
     if (!reachable(robot, c.grasp, at) || !reachable(robot, c.pregrasp, at)) continue;
-    ranked.push_back({c, mismatches, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
+    ranked.push_back({c, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
   }
   // Nearest first: a box behind others is reached over them, which the arm
   // plans slowly and the held box may not clear; within reach of the front,
-  // the action's height and side, then high up.
+  // high up first.
   std::stable_sort(ranked.begin(), ranked.end(), [](const Ranked& a, const Ranked& b) {
     if (a.x_bin != b.x_bin) return a.x_bin < b.x_bin;
-    if (a.mismatches != b.mismatches) return a.mismatches < b.mismatches;
     if (std::abs(a.top - b.top) > 1e-3) return a.top > b.top;
     return a.centre_distance < b.centre_distance;
   });

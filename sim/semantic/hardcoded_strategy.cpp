@@ -1,5 +1,6 @@
 #include "plr/sim/hardcoded_strategy.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace plr::sim {
@@ -21,6 +22,29 @@ Action hardcoded_action(const SceneAnalysis& scene, const HardcodedParams& p) {
   // top box of what is in front always makes progress.
   if (!scene.front_pile.empty()) return make_pick(scene.pile_class, scene.pile_side);
   return make_pick(scene.wall_class, scene.wall_side);
+}
+
+std::vector<Action> hardcoded_ranking(const SceneAnalysis& scene, const HardcodedParams& p) {
+  const Action first = hardcoded_action(scene, p);
+  const bool sweeping = kind(first) == ActionKind::kSweep;
+  // The pick H would make, for the order of the picks.
+  const Action pick = sweeping ? make_pick(scene.pile_class, scene.pile_side) : first;
+  std::vector<Action> picks;
+  for (Height h : {height(pick), Height::kHigh, Height::kMid, Height::kLow})
+    for (Side s : {side(pick), Side::kCenter, Side::kLeft, Side::kRight}) {
+      const Action a = make_pick(h, s);
+      if (std::find(picks.begin(), picks.end(), a) == picks.end()) picks.push_back(a);
+    }
+  std::vector<Action> sweeps;
+  for (Height h : {sweeping ? height(first) : Height::kLow, Height::kLow, Height::kMid,
+                   Height::kHigh}) {
+    const Action a = make_sweep(h);
+    if (std::find(sweeps.begin(), sweeps.end(), a) == sweeps.end()) sweeps.push_back(a);
+  }
+  std::vector<Action> out = sweeping ? sweeps : picks;
+  const auto& rest = sweeping ? picks : sweeps;
+  out.insert(out.end(), rest.begin(), rest.end());
+  return out;
 }
 
 }  // namespace plr::sim

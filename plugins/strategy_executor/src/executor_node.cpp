@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <thread>
 
 #include "bus_backend.hpp"
@@ -162,6 +163,7 @@ class ExecutorNode : public plr::Node {
     stop_ = false;
     stats_ = {};
     memory_ = {};
+    excluded_.clear();
     backend_ = std::make_unique<BusBackend>(ctx(), bus_, [this](std::chrono::nanoseconds d) {
       std::unique_lock lock(m_);
       return !cv_.wait_for(lock, d, [this] { return stop_.load(); });
@@ -234,7 +236,10 @@ class ExecutorNode : public plr::Node {
     const auto view = world->view();
     flatbuffers::FlatBufferBuilder fbb;
     const auto nested = plr::create_nested(fbb, view.data, view.size);
-    fbb.Finish(msg::CreateNextStrategyRequest(fbb, nested, observation));
+    const std::vector<std::uint8_t> excluded(excluded_.begin(), excluded_.end());
+    fbb.Finish(msg::CreateNextStrategyRequest(
+        fbb, nested, observation,
+        fbb.CreateVector(reinterpret_cast<const msg::Action*>(excluded.data()), excluded.size())));
     auto r = backend_->call_retry<msg::NextStrategyRequest, msg::NextStrategyReply>("strategy/next",
                                                                                     fbb, 30.0);
     if (!r) {
@@ -257,6 +262,7 @@ class ExecutorNode : public plr::Node {
       log().warn("sim/snapshot 'checkpoint' failed: {}", why);
     checkpoint_stats_ = stats_;
     checkpoint_memory_ = memory_;
+    checkpoint_excluded_ = excluded_;
   }
 
   void recover(const std::string& why) {
@@ -272,6 +278,7 @@ class ExecutorNode : public plr::Node {
     stats_ = checkpoint_stats_;
     stats_.recoveries = recoveries;
     memory_ = checkpoint_memory_;
+    excluded_ = checkpoint_excluded_;
     log().info("simulator back; restored 'checkpoint', repeating the interrupted action");
   }
 
@@ -364,12 +371,20 @@ class ExecutorNode : public plr::Node {
         stats_.stop_reason = fmt::format("action limit ({})", max_actions_);
         break;
       }
+      if (excluded_.size() == sim::kNumActions) {
+        stats_.stop_reason = "no action moves a box: all 12 tried since the last progress";
+        break;
+      }
       sim::Action action{};
       if (repeating) {
         action = repeat;
       } else {
         const auto observation = *sim::classify(w.world, options_.observation);
-        if (const auto child = node ? strategy.next(*node, observation) : std::nullopt) {
+        // After an action that moved nothing, the strategy's next step is
+        // not followed blindly: its source is asked again, told what failed.
+        const auto child = node && excluded_.empty() ? strategy.next(*node, observation)
+                                                     : std::nullopt;
+        if (child) {
           node = child;
           ++stats_.strategy_steps;
         } else {
@@ -394,11 +409,19 @@ class ExecutorNode : public plr::Node {
       ++actions;
       const actions::Outcome& o = *outcome;
       tally(o.queries);
-      auto& as = sim::kind(action) == sim::ActionKind::kPick ? stats_.pick : stats_.sweep;
-      ++as.executions;
-      as.boxes += o.boxes;
-      as.plan_s.add(o.plan_model_s);
-      as.exec_s.add(o.exec_s);
+      if (o.boxes > 0)
+        excluded_.clear();
+      else
+        excluded_.insert(static_cast<std::uint8_t>(action));
+      if (!o.applicable) {
+        ++stats_.not_applicable;
+      } else {
+        auto& as = sim::kind(action) == sim::ActionKind::kPick ? stats_.pick : stats_.sweep;
+        ++as.executions;
+        as.boxes += o.boxes;
+        as.plan_s.add(o.plan_model_s);
+        as.exec_s.add(o.exec_s);
+      }
       const double action_start = stats_.robot_time_s;
       stats_.robot_time_s += o.robot_time_s;
       stats_.plan_wall_s += o.plan_wall_s;
@@ -549,7 +572,7 @@ class ExecutorNode : public plr::Node {
   std::uint64_t seed_ = 1;
   actions::ActionOptions options_;
   BusOptions bus_;
-  std::uint64_t max_idle_ = 6, max_actions_ = 0;
+  std::uint64_t max_idle_ = 24, max_actions_ = 0;
   bool show_progress_ = true, tty_ = false;
   std::unique_ptr<sim::RobotModel> robot_;
   std::unique_ptr<actions::ActionModel> model_;
@@ -566,6 +589,9 @@ class ExecutorNode : public plr::Node {
   std::unique_ptr<BusBackend> backend_;
   RunStats stats_, checkpoint_stats_;
   actions::Memory memory_, checkpoint_memory_;
+  // Actions tried since the last box left that moved nothing (as uint8_t
+  // values of sim::Action, as they travel in NextStrategyRequest).
+  std::set<std::uint8_t> excluded_, checkpoint_excluded_;
   std::uint32_t unloaded_at_start_ = 0;
   std::string action_name_;
   std::vector<std::uint32_t> left_;  // boxes in the trailer when last observed

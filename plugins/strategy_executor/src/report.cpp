@@ -76,6 +76,7 @@ nlohmann::json to_json(const RunStats& s) {
           {"boxes_per_robot_s", s.robot_time_s > 0 ? s.boxes_unloaded / s.robot_time_s : 0.0},
           {"robot_trailer_collisions", s.robot_trailer_collisions},
           {"failed_grasps", s.failed_grasps},
+          {"not_applicable", s.not_applicable},
           {"recoveries", s.recoveries},
           {"strategies_asked", s.strategies_asked},
           {"strategy_steps", s.strategy_steps},

@@ -58,6 +58,7 @@ struct RunStats {
   double wall_time_s = 0;
   std::uint64_t robot_trailer_collisions = 0;
   std::uint64_t failed_grasps = 0;
+  std::uint64_t not_applicable = 0;  // actions with nothing to do in their region
   std::uint64_t recoveries = 0;        // simulator restarts survived
   std::uint64_t strategies_asked = 0;  // strategy/next calls
   std::uint64_t strategy_steps = 0;    // actions taken by following a branch

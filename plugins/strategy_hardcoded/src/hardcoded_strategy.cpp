@@ -7,6 +7,8 @@
 // boxes near the robot and high up. Otherwise what is left is low: pick the
 // shallow pile's top box, or from the low wall.
 #include <plr/messages.hpp>
+
+#include <algorithm>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
 
@@ -54,7 +56,18 @@ class HardcodedStrategy : public plr::Node {
     const auto scene = plr::sim::analyse(world, obs_);
     if (!scene.observation)
       return plr::make_error(PLR_ERR_INVALID, "strategy/next: the trailer is empty");
-    const auto action = plr::sim::hardcoded_action(scene, h_);
+    // H's first choice, or its first fallback the executor has not tried
+    // here yet; when it has tried them all, H's first choice again.
+    const auto ranking = plr::sim::hardcoded_ranking(scene, h_);
+    auto action = ranking.front();
+    if (const auto* excluded = request.excluded()) {
+      for (const auto a : ranking) {
+        if (std::find(excluded->begin(), excluded->end(), a) == excluded->end()) {
+          action = a;
+          break;
+        }
+      }
+    }
     log().debug("{}: d_pile {:.2f} m, h_W {:.2f} m -> {}", plr::sim::to_string(*scene.observation),
                 scene.pile_depth, scene.wall_height, plr::sim::to_string(action));
     const auto strategy = plr::sim::single_action(action, "H");

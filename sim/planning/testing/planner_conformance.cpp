@@ -278,7 +278,9 @@ void nose_down(PlanClient& c) {
   const auto r = c.plan(q, w);
   PLR_SKIP_IF_UNSUPPORTED(r);
   expect_solved_cleanly(r, q, w);
-  if (!r.points.empty()) EXPECT_LT((r.points.back().position - down).cwiseAbs().maxCoeff(), 1e-3);
+  if (!r.points.empty()) {
+    EXPECT_LT((r.points.back().position - down).cwiseAbs().maxCoeff(), 1e-3);
+  }
 }
 
 void base_line(PlanClient& c) {
@@ -294,7 +296,9 @@ void base_line(PlanClient& c) {
     d[kBaseX] = 0.0;
     EXPECT_EQ(d.cwiseAbs().maxCoeff(), 0.0) << "only the base moves, t=" << p.time_s;
   }
-  if (!r.points.empty()) EXPECT_NEAR(r.points.back().position[kBaseX], 2.5, 1e-3);
+  if (!r.points.empty()) {
+    EXPECT_NEAR(r.points.back().position[kBaseX], 2.5, 1e-3);
+  }
 }
 
 void cartesian_line(PlanClient& c) {

@@ -64,6 +64,8 @@ struct ActionOptions {
   double retreat_m = 0.3;          // base backs off after an action that ends stowed
   double dropoff_backoff_m = 0.5;  // base backs off before swinging a load to the nose
   double carry_height_m = 1.4;     // plate height a load is lowered to before the drop-off
+  // What finding an action not applicable costs: looking and deciding.
+  double not_applicable_s = 0.5;
 
   // Whether the values are consistent; the error names the parameter.
   plr::Status check() const;
@@ -101,6 +103,11 @@ struct QueryRecord {
 };
 
 struct Outcome {
+  // Not applicable: nothing in the action's region could be instantiated
+  // (no box of that height and side to pick, no pile to sweep); the robot
+  // did not move and only not_applicable_s passed. `why` says what was missing.
+  bool applicable = true;
+  std::string why;
   std::uint32_t boxes = 0;  // boxes that left the trailer
   // When each left, in robot seconds after the action's start.
   std::vector<double> unloaded_at_s;

@@ -48,14 +48,15 @@ struct PickCandidate {
   // The box is first lifted straight up, off the one it rests on, before it
   // is pulled out: dragged out, it would press into that one.
   sim::PlateTarget lift;
-  bool matches = false;  // the box has the action's height class and side
   int cups = 0;          // cups the grasp pose covers on the face
 };
 
 // Pick points for Pick(height, side), best first: boxes of the structure in
-// front whose front face nothing hides, on which nothing rests and that come
-// out over what stands in front of them; near the robot first (0.2 m bins),
-// then those matching the action's height class and side, then high up.
+// front (first wall and front pile) in the action's region — their height
+// class (a box's top against the wall or pile thresholds) and third of the
+// width — whose front face nothing hides, on which nothing rests and that
+// come out over what stands in front of them; near the robot first (0.2 m
+// bins), then high up. Empty: the action is not applicable here.
 // Candidates whose plate poses the arm cannot reach from their base position
 // are left out. The plate is centred on the face, or as near as the corridor
 // allows; for the boxes in `most_cups` (a grip failed) it goes where it covers

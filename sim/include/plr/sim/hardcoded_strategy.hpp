@@ -7,6 +7,8 @@
 
 #include <plr/expected.hpp>
 
+#include <vector>
+
 #include "plr/sim/observation.hpp"
 #include "plr/sim/strategy.hpp"
 
@@ -22,5 +24,11 @@ struct HardcodedParams {
 
 // H's action for the scene in front of the robot (which must not be empty).
 Action hardcoded_action(const SceneAnalysis& scene, const HardcodedParams& params);
+
+// All 12 actions in H's order of preference: its action first, then what an
+// expert falls back to when that one is not applicable or moves nothing —
+// the other sides at the same height, other heights from the top down, and
+// sweeps (first, if H sweeps).
+std::vector<Action> hardcoded_ranking(const SceneAnalysis& scene, const HardcodedParams& params);
 
 }  // namespace plr::sim
