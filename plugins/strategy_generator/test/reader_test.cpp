@@ -6,6 +6,7 @@
 #include "pomdp/model_io.hpp"
 #include "pomdp/policy_tree.hpp"
 #include "pomdp/pomdpx_reader.hpp"
+#include "pomdp/text.hpp"
 #include "test_models.hpp"
 
 namespace plr::pomdp {
@@ -250,6 +251,30 @@ TEST(PomdpxReader, LocatedErrors) {
           "act tiger_0</Parent>\n    <Parameter type=\"TBL\">\n      <Entry><Instance>listen - -"),
       3, "axe");
   EXPECT_EQ(pomdpx_error(bad), "m.pomdpx:18: unknown variable 'axe'");
+}
+
+// The tokenizer and number parser both readers and the policy trees share.
+TEST(Text, TokensAndNumbers) {
+  const auto t =
+      text::tokenize("T: a:b # note\n  1e-3\t+2", {.colon_tokens = true, .comments = true});
+  ASSERT_EQ(t.size(), 7u);
+  EXPECT_EQ(t[1].text, ":");
+  EXPECT_EQ(t[3].text, ":");
+  EXPECT_EQ(t[4].text, "b");
+  EXPECT_EQ(t[5].text, "1e-3");
+  EXPECT_EQ(t[5].line, 2);
+  EXPECT_EQ(t[5].column, 3);
+  EXPECT_EQ(text::words("a:b  c\n"), (std::vector<std::string_view>{"a:b", "c"}));
+  EXPECT_EQ(text::to_number("+2"), 2.0);
+  EXPECT_EQ(text::to_number("-0.5"), -0.5);
+  EXPECT_FALSE(text::to_number("+-1"));
+  EXPECT_FALSE(text::to_number("1e999"));
+  EXPECT_FALSE(text::to_number("inf"));
+  EXPECT_FALSE(text::to_number("1.5x"));
+  EXPECT_FALSE(text::to_number(""));
+  EXPECT_EQ(text::to_index("12"), 12);
+  EXPECT_FALSE(text::to_index("-1"));
+  EXPECT_FALSE(text::to_index("1.0"));
 }
 
 TEST(PolicyTree, RoundTripAndErrors) {
