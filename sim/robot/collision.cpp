@@ -322,7 +322,7 @@ struct CollisionChecker::Impl {
   const RobotModel* robot = nullptr;
   CollisionOptions options;
   std::shared_ptr<const TrailerTables> trailer;
-  std::vector<WorldBox> boxes;  // sorted by AABB min x, then by order given
+  std::vector<WorldBox> boxes;  // sorted by AABB min x
   std::vector<double> box_min_x;
   double box_max_len_x = 0.0;
   std::unordered_set<std::uint32_t> ignored;

@@ -61,8 +61,9 @@ class CollisionChecker {
   // `octree` is the world's occupancy; null builds the trailer shell of
   // `world.trailer`. The trailer part is found by the octree's identity (the
   // shared_ptr's owner) or the shell's sizes, and computed again only when
-  // no checker holds it and it was not the last one computed. The robot
-  // model must outlive the checker.
+  // no checker holds it and it was not the last one computed; so an octree
+  // must not change once a checker is made on it (pass a changed one as a
+  // new shared_ptr). The robot model must outlive the checker.
   CollisionChecker(const RobotModel& robot, const World& world,
                    std::shared_ptr<const octomap::OcTree> octree = nullptr,
                    const CollisionOptions& options = {});
