@@ -3,6 +3,7 @@
 #include <plr/messages.hpp>
 
 #include <algorithm>
+#include <mutex>
 
 #include "plr/planning/plan_messages.hpp"
 
@@ -32,6 +33,7 @@ plr::Status PlannerNode::on_configure() {
 }
 
 plr::Status PlannerNode::on_cleanup() {
+  checker_.reset();  // it refers to robot_
   planner_.reset();
   robot_.reset();
   return {};
@@ -44,8 +46,22 @@ plr::Status PlannerNode::serve(const plr::msg::PlanRequest& request,
     result.status = PlanStatus::kInvalidRequest;
     result.message = decoded.error().message;
   } else {
-    sim::CollisionChecker checker(*robot_, decoded->world, decoded->octree);
-    result = planner_->plan(decoded->query, checker);
+    // The previous request's checker, given this request's world: its
+    // trailer part stays while the octree does (plan_messages keeps the
+    // parsed octree while the bytes are the same). Taken out under the lock,
+    // so a request served on another thread meanwhile makes its own.
+    std::unique_ptr<sim::CollisionChecker> checker;
+    {
+      const std::lock_guard lock(checker_mutex_);
+      checker = std::move(checker_);
+    }
+    if (checker)
+      checker->set_world(decoded->world, decoded->octree);
+    else
+      checker = std::make_unique<sim::CollisionChecker>(*robot_, decoded->world, decoded->octree);
+    result = planner_->plan(decoded->query, *checker);
+    const std::lock_guard lock(checker_mutex_);
+    checker_ = std::move(checker);
   }
   if (result.status != PlanStatus::kSolved)
     log().info("plan {}: {}", to_string(result.status), result.message);

@@ -7,7 +7,11 @@
 #include <octomap/octomap.h>
 
 #include <algorithm>
+#include <array>
+#include <atomic>
+#include <mutex>
 #include <stdexcept>
+#include <unordered_map>
 #include <unordered_set>
 
 namespace plr::sim {
@@ -52,6 +56,7 @@ RobotShape::Placement placement(const Eigen::Isometry3d& pose, const Eigen::Vect
 
 struct WorldBox {
   std::uint32_t id = 0;
+  std::shared_ptr<fcl::Boxd> shape;  // resized in place when the box is reused
   std::unique_ptr<fcl::CollisionObjectd> obj;
 };
 
@@ -183,6 +188,94 @@ class OccupancyGrid {
   std::vector<std::int32_t> sum_;  // (dims + 1)^3, zero border
 };
 
+// What a trailer is known by: its octree (the shared_ptr's owner and
+// pointee, so an octree freed and another allocated at the same address is a
+// different one: the cache's weak_ptr keeps the owner block alive), or, for a
+// shell the checker builds itself, the trailer's sizes and the resolution.
+struct TrailerKey {
+  std::weak_ptr<const octomap::OcTree> octree;
+  const octomap::OcTree* tree = nullptr;
+  std::array<double, 4> shell{};  // width, height, depth, resolution
+
+  bool matches(const std::shared_ptr<const octomap::OcTree>& o, const Trailer& t,
+               double resolution) const {
+    if (o) return tree == o.get() && !octree.owner_before(o) && !o.owner_before(octree);
+    return tree == nullptr &&
+           shell == std::array<double, 4>{t.width, t.height, t.depth, resolution};
+  }
+};
+
+// The part of a checker that is a function of the octree alone, shared by
+// every checker on it and only read once built (safe across threads: FCL's
+// octree collision keeps its traversal state on the stack).
+struct TrailerTables {
+  TrailerKey key;
+  std::shared_ptr<const octomap::OcTree> octree;
+  fcl::CollisionObjectd object;
+  OccupancyGrid grid;
+
+  explicit TrailerTables(std::shared_ptr<const octomap::OcTree> tree)
+      : octree(tree), object(std::make_shared<fcl::OcTreed>(tree)), grid(*tree) {
+    object.computeAABB();
+  }
+};
+
+std::atomic<std::uint64_t> g_trailer_builds{0};
+
+// Trailer tables by key. Entries live as long as a checker holds them, and
+// the last one built lives on without one: callers that make a checker per
+// query on the same trailer (one at a time) find it still there.
+class TrailerCache {
+ public:
+  std::shared_ptr<const TrailerTables> get(const std::shared_ptr<const octomap::OcTree>& octree,
+                                           const Trailer& trailer, double resolution) {
+    if (auto hit = find(octree, trailer, resolution)) return hit;
+    // Built outside the lock (tens of ms) so lookups of other trailers do not
+    // wait; two threads missing the same key at once both build, one keeps.
+    std::shared_ptr<const octomap::OcTree> tree =
+        octree ? octree
+               : std::shared_ptr<const octomap::OcTree>(build_trailer_octree(
+                     trailer, {.resolution = resolution, .wall_thickness = resolution}));
+    auto built = std::make_shared<TrailerTables>(tree);
+    built->key =
+        octree
+            ? TrailerKey{octree, octree.get(), {}}
+            : TrailerKey{{}, nullptr, {trailer.width, trailer.height, trailer.depth, resolution}};
+    g_trailer_builds.fetch_add(1, std::memory_order_relaxed);
+    std::lock_guard lock(mutex_);
+    if (auto hit = find_locked(octree, trailer, resolution)) return hit;
+    std::erase_if(entries_, [](const auto& e) { return e.expired(); });
+    entries_.push_back(built);
+    last_ = built;
+    return built;
+  }
+
+ private:
+  std::shared_ptr<const TrailerTables> find(const std::shared_ptr<const octomap::OcTree>& octree,
+                                            const Trailer& trailer, double resolution) {
+    std::lock_guard lock(mutex_);
+    return find_locked(octree, trailer, resolution);
+  }
+  std::shared_ptr<const TrailerTables> find_locked(
+      const std::shared_ptr<const octomap::OcTree>& octree, const Trailer& trailer,
+      double resolution) const {
+    for (const auto& e : entries_) {
+      auto t = e.lock();
+      if (t && t->key.matches(octree, trailer, resolution)) return t;
+    }
+    return nullptr;
+  }
+
+  std::mutex mutex_;
+  std::vector<std::weak_ptr<const TrailerTables>> entries_;
+  std::shared_ptr<const TrailerTables> last_;
+};
+
+TrailerCache& trailer_cache() {
+  static TrailerCache cache;
+  return cache;
+}
+
 // The box enclosing an object's shape as an FCL OBB: exact for a box,
 // conservative for a cylinder or a sphere, its AABB for anything else.
 fcl::OBBd enclosing_box(const fcl::CollisionObjectd& o) {
@@ -228,9 +321,7 @@ bool collide(const fcl::CollisionObjectd* a, const fcl::CollisionObjectd* b) {
 struct CollisionChecker::Impl {
   const RobotModel* robot = nullptr;
   CollisionOptions options;
-  std::shared_ptr<const octomap::OcTree> octree;
-  std::unique_ptr<fcl::CollisionObjectd> octree_obj;
-  std::unique_ptr<OccupancyGrid> grid;
+  std::shared_ptr<const TrailerTables> trailer;
   std::vector<WorldBox> boxes;  // sorted by AABB min x
   std::vector<double> box_min_x;
   double box_max_len_x = 0.0;
@@ -258,6 +349,12 @@ struct CollisionChecker::Impl {
     s.swept_box = std::make_shared<fcl::Boxd>(2.0 * half);
     s.swept = std::make_unique<fcl::CollisionObjectd>(s.swept_box);
     shapes.push_back(std::move(s));
+  }
+
+  // Forget the shapes' cached "free of the world" results (the world changed;
+  // self pairs do not depend on it).
+  void forget_world_free() {
+    for (auto& sh : shapes) sh.exact_world_free = sh.swept_world_free = false;
   }
 
   // Forget every cached "free" result (the world or the shapes changed).
@@ -297,11 +394,11 @@ struct CollisionChecker::Impl {
   }
 
   bool hits_octree(const fcl::CollisionObjectd* o) const {
-    if (!octree_obj || !grid->may_hit(enclosing_box(*o), o->getAABB())) return false;
+    if (!trailer->grid.may_hit(enclosing_box(*o), o->getAABB())) return false;
     // With voxel-sized cells that was the exact test for a box; other
     // shapes, only enclosed by their box, go on to FCL's octree test.
-    return (o->getNodeType() == fcl::GEOM_BOX && grid->voxel_sized()) ||
-           collide(o, octree_obj.get());
+    return (o->getNodeType() == fcl::GEOM_BOX && trailer->grid.voxel_sized()) ||
+           collide(o, &trailer->object);
   }
 
   // World box hit by `o` (not ignored), or -1.
@@ -477,29 +574,7 @@ CollisionChecker::CollisionChecker(const RobotModel& robot, const World& world,
   Impl& m = *impl_;
   m.robot = &robot;
   m.options = options;
-  m.octree = octree ? std::move(octree)
-                    : std::shared_ptr<const octomap::OcTree>(build_trailer_octree(
-                          world.trailer, {.resolution = options.octree_resolution,
-                                          .wall_thickness = options.octree_resolution}));
-  m.octree_obj = std::make_unique<fcl::CollisionObjectd>(std::make_shared<fcl::OcTreed>(m.octree));
-  m.octree_obj->computeAABB();
-  m.grid = std::make_unique<OccupancyGrid>(*m.octree);
-  for (const Box& b : world.boxes) {
-    WorldBox wb;
-    wb.id = b.id;
-    wb.obj = std::make_unique<fcl::CollisionObjectd>(std::make_shared<fcl::Boxd>(b.size),
-                                                     to_fcl(b.pose));
-    wb.obj->computeAABB();
-    m.boxes.push_back(std::move(wb));
-  }
-  std::sort(m.boxes.begin(), m.boxes.end(), [](const WorldBox& a, const WorldBox& b) {
-    return a.obj->getAABB().min_.x() < b.obj->getAABB().min_.x();
-  });
-  for (const WorldBox& b : m.boxes) {
-    const fcl::AABBd& a = b.obj->getAABB();
-    m.box_min_x.push_back(a.min_.x());
-    m.box_max_len_x = std::max(m.box_max_len_x, a.max_.x() - a.min_.x());
-  }
+  m.trailer = trailer_cache().get(octree, world.trailer, options.octree_resolution);
   const auto& links = robot.links();
   for (std::size_t l = 0; l < links.size(); ++l) {
     for (const CollisionShape& cs : links[l].shapes) {
@@ -531,6 +606,7 @@ CollisionChecker::CollisionChecker(const RobotModel& robot, const World& world,
   }
   for (const auto& [a, b] : robot.allowed_collisions()) m.allowed[a][b] = m.allowed[b][a] = true;
   m.rebuild_pairs();
+  set_boxes(world.boxes);
 }
 
 CollisionChecker::~CollisionChecker() = default;
@@ -542,6 +618,59 @@ const RobotModel& CollisionChecker::robot() const {
 }
 const CollisionOptions& CollisionChecker::options() const {
   return impl_->options;
+}
+
+void CollisionChecker::set_boxes(const std::vector<Box>& boxes) {
+  Impl& m = *impl_;
+  // Objects are reused by id (each at most once, so repeated ids get their
+  // own); a reused box takes the new size and pose, which leaves it as a
+  // fresh one would be.
+  std::unordered_map<std::uint32_t, std::size_t> old;
+  old.reserve(m.boxes.size());
+  for (std::size_t i = 0; i < m.boxes.size(); ++i) old.emplace(m.boxes[i].id, i);
+  std::vector<WorldBox> next;
+  next.reserve(boxes.size());
+  for (const Box& b : boxes) {
+    WorldBox wb;
+    if (const auto it = old.find(b.id); it != old.end() && m.boxes[it->second].obj) {
+      wb = std::move(m.boxes[it->second]);
+      wb.shape->side = b.size;
+      wb.shape->computeLocalAABB();
+      wb.obj->setTransform(to_fcl(b.pose));
+    } else {
+      wb.id = b.id;
+      wb.shape = std::make_shared<fcl::Boxd>(b.size);
+      wb.obj = std::make_unique<fcl::CollisionObjectd>(wb.shape, to_fcl(b.pose));
+    }
+    wb.obj->computeAABB();
+    next.push_back(std::move(wb));
+  }
+  // Sorted from the list as given, as in a fresh checker: boxes with equal
+  // min x end up in the same order, so describe_collision() names the same.
+  std::sort(next.begin(), next.end(), [](const WorldBox& a, const WorldBox& b) {
+    return a.obj->getAABB().min_.x() < b.obj->getAABB().min_.x();
+  });
+  m.boxes = std::move(next);
+  m.box_min_x.clear();
+  m.box_max_len_x = 0.0;
+  for (const WorldBox& b : m.boxes) {
+    const fcl::AABBd& a = b.obj->getAABB();
+    m.box_min_x.push_back(a.min_.x());
+    m.box_max_len_x = std::max(m.box_max_len_x, a.max_.x() - a.min_.x());
+  }
+  m.forget_world_free();
+}
+
+void CollisionChecker::set_world(const World& world,
+                                 std::shared_ptr<const octomap::OcTree> octree) {
+  Impl& m = *impl_;
+  if (!m.trailer->key.matches(octree, world.trailer, m.options.octree_resolution))
+    m.trailer = trailer_cache().get(octree, world.trailer, m.options.octree_resolution);
+  set_boxes(world.boxes);
+}
+
+std::uint64_t CollisionChecker::trailer_builds() {
+  return g_trailer_builds.load(std::memory_order_relaxed);
 }
 
 void CollisionChecker::allow_collision(const std::string& a, const std::string& b) {

@@ -5,9 +5,11 @@
 // planner node has — `urdf` (the robot; the shipped one by default) and
 // `sample_dt` (s between trajectory points in responses) — refuses unknown
 // ones, asks the plug-in for its planner, and answers each request with a
-// collision checker built on the request's world. Undecodable requests are
-// answered with InvalidRequest and the field at fault. A plug-in implements
-// make_planner() and, if it reads parameters of its own, planner_params().
+// collision checker on the request's world (the previous request's checker
+// given the new boxes, its trailer part kept while the octree is the same).
+// Undecodable requests are answered with InvalidRequest and the field at
+// fault. A plug-in implements make_planner() and, if it reads parameters of
+// its own, planner_params().
 //
 //   class MyNode : public plr::planning::PlannerNode {
 //     using PlannerNode::PlannerNode;
@@ -21,6 +23,7 @@
 #include <plr/node.hpp>
 
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -51,6 +54,8 @@ class PlannerNode : public plr::Node {
 
   std::unique_ptr<sim::RobotModel> robot_;
   std::unique_ptr<Planner> planner_;
+  std::mutex checker_mutex_;
+  std::unique_ptr<sim::CollisionChecker> checker_;  // kept between requests
   double sample_dt_ = 0.02;
 };
 

@@ -18,13 +18,19 @@
 // checked. Far from obstacles a whole segment costs one check; near them the
 // motion is checked at `motion_resolution` of link travel.
 //
+// A world's trailer part (the FCL octree object and the occupied-voxel
+// table) is a function of the octree alone: checkers on the same octree share
+// it, so a checker is cheap to make again on the same trailer, and cheaper to
+// keep and give the next world's boxes (set_boxes, set_world).
+//
 // Not thread-safe: a checker updates its FCL objects in place. Use one per
-// thread.
+// thread; checkers on several threads may share a trailer.
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "plr/sim/robot_model.hpp"
 #include "plr/sim/world.hpp"
@@ -53,7 +59,11 @@ struct CollisionStats {
 class CollisionChecker {
  public:
   // `octree` is the world's occupancy; null builds the trailer shell of
-  // `world.trailer`. The robot model must outlive the checker.
+  // `world.trailer`. The trailer part is found by the octree's identity (the
+  // shared_ptr's owner) or the shell's sizes, and computed again only when
+  // no checker holds it and it was not the last one computed; so an octree
+  // must not change once a checker is made on it (pass a changed one as a
+  // new shared_ptr). The robot model must outlive the checker.
   CollisionChecker(const RobotModel& robot, const World& world,
                    std::shared_ptr<const octomap::OcTree> octree = nullptr,
                    const CollisionOptions& options = {});
@@ -63,6 +73,18 @@ class CollisionChecker {
 
   const RobotModel& robot() const;
   const CollisionOptions& options() const;
+
+  // Replaces the world's boxes, answering from then on as a checker built on
+  // them would. FCL objects are reused by box id; the trailer and the robot's
+  // shapes are kept, and so are held boxes and ignored ids.
+  void set_boxes(const std::vector<Box>& boxes);
+  // Replaces the world: the trailer part too if `octree` (or, when null, the
+  // trailer shell) differs from the checker's, then set_boxes(world.boxes).
+  void set_world(const World& world, std::shared_ptr<const octomap::OcTree> octree = nullptr);
+
+  // Trailer tables computed in this process so far (for tests and benchmarks
+  // of the sharing).
+  static std::uint64_t trailer_builds();
 
   // Links `a` and `b` may touch. Throws std::invalid_argument on an unknown name.
   void allow_collision(const std::string& a, const std::string& b);
