@@ -35,6 +35,14 @@ struct LinkGeometry {
   // unloaded, unless that end feeds another belt (`feeds_belt`).
   double belt_speed = 0.0;
   bool feeds_belt = false;
+  // The motor behind the belt. Shapes with the same `belt_drive` are one
+  // belt: the tangential forces their surfaces exert on boxes add up, and
+  // when the sum exceeds `belt_max_force` (the first such shape's) the
+  // surface slows down, to a stall if need be; a lighter load lets it run
+  // up to belt_speed again. Default: a 0.37 kW gear motor section (see
+  // docs/notes-sim.md).
+  int belt_drive = 0;
+  double belt_max_force = 350.0;  // N
 };
 
 struct PhysicsOptions {
@@ -64,6 +72,10 @@ struct PhysicsOptions {
   double sleep_drift = 0.001;      // m
   double wake_speed = 0.05;        // m/s of a box touching a sleeping one that wakes it
   double wake_depth = 0.003;       // m of penetration by something slower that wakes a box
+  // Inertia of a belt drive reflected to the belt surface (rotor through the
+  // gearbox, drums, belt): how fast a belt over its force limit slows down
+  // and an unloaded one runs up again.
+  double belt_inertia = 100.0;  // kg
 };
 
 struct UnloadEvent {
@@ -80,12 +92,34 @@ struct SuctionEvent {
   double capacity = 0.0;  // N they could hold
 };
 
+// A belt drive (LinkGeometry::belt_drive) over the last step() call.
+struct BeltLoad {
+  int drive = 0;
+  double max_force = 0.0;       // N
+  double speed_fraction = 1.0;  // of belt_speed, at the end of the call
+  double min_speed_fraction = 1.0;
+  // Force the belt surfaces exerted on the boxes along their motion (the
+  // motor's load), N: mean and largest over the call's fixed steps.
+  double mean_force = 0.0;
+  double peak_force = 0.0;
+};
+
+// What the boxes pushed on one robot shape (normal and friction forces of
+// every contact), world frame, N, over the last step() call: the mean over
+// its fixed steps and the fixed step's force of largest norm. Sleeping boxes
+// push on nothing that stands still.
+struct RobotContactForce {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  Eigen::Vector3d peak = Eigen::Vector3d::Zero();
+};
+
 struct PhysicsStats {
-  std::int64_t steps = 0;          // fixed steps taken
-  std::int64_t dynamic_steps = 0;  // steps that ran Simbody (some box awake)
-  std::int64_t body_steps = 0;     // sum over steps of awake boxes
-  std::int64_t rebuilds = 0;       // Simbody systems built for a new awake set
-  double wall_seconds = 0.0;       // time spent in step()
+  std::int64_t steps = 0;               // fixed steps taken
+  std::int64_t dynamic_steps = 0;       // steps that ran Simbody (some box awake)
+  std::int64_t body_steps = 0;          // sum over steps of awake boxes
+  std::int64_t rebuilds = 0;            // Simbody systems built for a new awake set
+  std::int64_t belt_limited_steps = 0;  // steps with a running belt below its speed
+  double wall_seconds = 0.0;            // time spent in step()
   int awake = 0, asleep = 0, held = 0, removed = 0;
 };
 
@@ -135,6 +169,11 @@ class Simulation {
 
   // Takes a box out by hand (not counted as unloaded); what touched it wakes.
   void remove_box(std::uint32_t id);
+
+  // One per shape of the last step() call, in robot_links() order.
+  const std::vector<RobotContactForce>& robot_contact_forces() const;
+  // Belt drives met so far, by drive id.
+  const std::vector<BeltLoad>& belt_loads() const;
 
   const std::vector<UnloadEvent>& unloaded() const;
   const std::vector<SuctionEvent>& suction_events() const;
