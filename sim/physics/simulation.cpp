@@ -19,16 +19,28 @@ using detail::Mover;
 using detail::State;
 using detail::Wrench;
 
-struct Snapshot::Data {
-  State state;
-};
-
 Snapshot::Snapshot() = default;
 Snapshot::~Snapshot() = default;
 Snapshot::Snapshot(const Snapshot&) = default;
 Snapshot& Snapshot::operator=(const Snapshot&) = default;
+bool Snapshot::empty() const {
+  return !data_;
+}
 double Snapshot::time() const {
   return data_ ? data_->state.time : 0.0;
+}
+World Snapshot::world() const {
+  World w;
+  if (!data_) return w;
+  w.trailer = data_->trailer;
+  for (const Body& b : data_->state.bodies) {
+    if (b.mode != Mode::kGone) w.boxes.push_back(b.box);
+  }
+  return w;
+}
+const PhysicsOptions& Snapshot::options() const {
+  static const PhysicsOptions defaults;
+  return data_ ? data_->options : defaults;
 }
 
 namespace {
@@ -89,8 +101,9 @@ struct Simulation::Impl {
 
   Impl(const World& world, const PhysicsOptions& o)
       : options(o), trailer(world.trailer), contacts(o, world.trailer) {
-    if (!(o.step > 0.0) || !(o.contact_omega > 0.0)) {
-      throw std::invalid_argument("PhysicsOptions: step and contact_omega must be > 0");
+    if (!(o.step > 0.0) || !(o.contact_omega > 0.0) || !(o.belt_inertia > 0.0)) {
+      throw std::invalid_argument(
+          "PhysicsOptions: step, contact_omega and belt_inertia must be > 0");
     }
     for (const Box& b : world.boxes) {
       if (!(b.mass > 0.0)) {
@@ -103,6 +116,27 @@ struct Simulation::Impl {
       state.bodies.push_back(body);
     }
     contacts.set_boxes(state.bodies);
+  }
+
+  explicit Impl(const Snapshot::Data& saved)
+      : options(saved.options), trailer(saved.trailer), contacts(saved.options, saved.trailer) {
+    load(saved);
+  }
+
+  // Everything from the snapshot; Simbody's system is rebuilt lazily at the
+  // next step, from the exact coordinates.
+  void load(const Snapshot::Data& saved) {
+    options = saved.options;
+    trailer = saved.trailer;
+    state = saved.state;
+    state.slots.clear();
+    state.q.clear();
+    state.u.clear();
+    contacts = detail::Contacts(options, trailer);
+    contacts.set_boxes(state.bodies);
+    contacts.set_links(state.link_targets);
+    pending = Pending{saved.state.slots, saved.state.q, saved.state.u};
+    rebuild = saved.state.rebuild;
   }
 
   void wake_body(int i) {
@@ -404,6 +438,12 @@ struct Simulation::Impl {
 
 Simulation::Simulation(const World& world, const PhysicsOptions& options)
     : impl_(std::make_unique<Impl>(world, options)) {}
+Simulation::Simulation(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+plr::Expected<Simulation> Simulation::from_snapshot(const Snapshot& snapshot) {
+  if (!snapshot.data_) return plr::make_error(PLR_ERR_INVALID, "from_snapshot: empty snapshot");
+  return Simulation(std::make_unique<Impl>(*snapshot.data_));
+}
 Simulation::~Simulation() = default;
 Simulation::Simulation(Simulation&&) noexcept = default;
 Simulation& Simulation::operator=(Simulation&&) noexcept = default;
@@ -602,6 +642,8 @@ double Simulation::settle(double max_time) {
 Snapshot Simulation::snapshot() const {
   const Impl& m = *impl_;
   auto data = std::make_shared<Snapshot::Data>();
+  data->trailer = m.trailer;
+  data->options = m.options;
   data->state = m.state;
   State& s = data->state;
   s.rebuild = m.rebuild;
@@ -627,16 +669,7 @@ Snapshot Simulation::snapshot() const {
 
 void Simulation::restore(const Snapshot& snapshot) {
   if (!snapshot.data_) throw std::invalid_argument("restore: empty snapshot");
-  Impl& m = *impl_;
-  const State& saved = snapshot.data_->state;
-  m.state = saved;
-  m.state.slots.clear();
-  m.state.q.clear();
-  m.state.u.clear();
-  m.contacts.set_links(m.state.links);
-  // Simbody is rebuilt lazily at the next step, from the exact coordinates.
-  m.pending = Impl::Pending{saved.slots, saved.q, saved.u};
-  m.rebuild = saved.rebuild;
+  impl_->load(*snapshot.data_);
 }
 
 PhysicsStats Simulation::stats() const {

@@ -63,6 +63,20 @@ struct State {
   bool rebuild = true;
 };
 
+}  // namespace plr::sim::detail
+
+namespace plr::sim {
+
+struct Snapshot::Data {
+  Trailer trailer;
+  PhysicsOptions options;
+  detail::State state;
+};
+
+}  // namespace plr::sim
+
+namespace plr::sim::detail {
+
 // A robot shape or held box as it moves during one fixed step.
 struct Mover {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();

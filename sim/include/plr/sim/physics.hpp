@@ -12,10 +12,12 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <vector>
 
+#include "plr/expected.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/suction_plate.hpp"
 #include "plr/sim/world.hpp"
@@ -123,13 +125,31 @@ struct PhysicsStats {
   int awake = 0, asleep = 0, held = 0, removed = 0;
 };
 
+// A simulation's full state: the trailer, the options and everything that
+// moves, including Simbody's exact coordinates of the moving boxes. A copy
+// shares the (immutable) data.
 class Snapshot {
  public:
   Snapshot();
   ~Snapshot();
   Snapshot(const Snapshot&);
   Snapshot& operator=(const Snapshot&);
+  bool empty() const;
   double time() const;
+  // Boxes still in the trailer (as Simulation::world() at the snapshot).
+  World world() const;
+  const PhysicsOptions& options() const;
+
+  // FlatBuffers bytes of sdk/schemas/sim_state.fbs (SimulationState, file
+  // identifier "PSIM"); empty for an empty snapshot. The bytes restore the
+  // exact doubles, so a run continued from them in another process repeats
+  // the original bit for bit (same binary and machine).
+  std::vector<std::uint8_t> to_bytes() const;
+  // Untrusted bytes: verified, every count bounded, every number checked
+  // (finite, in range, rotations orthonormal, consistent counts); the first
+  // problem is a one-line error naming the field, e.g.
+  // "sim state: bodies[3].mass: must be finite and > 0".
+  static plr::Expected<Snapshot> from_bytes(const std::uint8_t* data, std::size_t size);
 
  private:
   friend class Simulation;
@@ -140,6 +160,10 @@ class Snapshot {
 class Simulation {
  public:
   explicit Simulation(const World& world, const PhysicsOptions& options = {});
+  // A simulation that continues the snapshot's (its world, options and
+  // state) exactly as the one it was taken from would; an empty snapshot is
+  // refused.
+  static plr::Expected<Simulation> from_snapshot(const Snapshot& snapshot);
   ~Simulation();
   Simulation(Simulation&&) noexcept;
   Simulation& operator=(Simulation&&) noexcept;
@@ -185,8 +209,10 @@ class Simulation {
   double settle(double max_time);
 
   // A snapshot is a copy of the plain state plus Simbody's coordinates of
-  // the moving boxes; restore copies it back and rebuilds Simbody's system
-  // lazily at the next step. Restored runs repeat bit for bit.
+  // the moving boxes; restore copies it back (trailer and options too, so
+  // any snapshot will do) and rebuilds Simbody's system lazily at the next
+  // step. Restored runs repeat bit for bit. Work counters (stats()) are not
+  // part of the state.
   Snapshot snapshot() const;
   void restore(const Snapshot& snapshot);
 
@@ -194,6 +220,7 @@ class Simulation {
 
  private:
   struct Impl;
+  explicit Simulation(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
 
