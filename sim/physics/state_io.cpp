@@ -144,8 +144,8 @@ class Reader {
   bool count(const std::string& field, const flatbuffers::Vector<T>* v, std::size_t max) {
     if (v == nullptr) return true;
     // The verifier checks only 4-byte alignment of a vector; reading 8-byte
-    // members from a misaligned one would be undefined.
-    if (reinterpret_cast<std::uintptr_t>(v->Data()) % alignof(T) != 0) {
+    // members from a misaligned one would be undefined (an empty one may be).
+    if (v->size() > 0 && reinterpret_cast<std::uintptr_t>(v->Data()) % alignof(T) != 0) {
       return fail(field, "misaligned");
     }
     return v->size() <= max ||
