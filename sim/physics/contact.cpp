@@ -139,6 +139,8 @@ void Contacts::apply(State& state, int a, int b, const Other& o, const PairKey& 
     }
     on_a.force += ft;
     on_a.torque += (centroid - ca).cross(ft);
+    // A belt surface passes its friction to the belt, and so to its motor.
+    if (key.kind == kBoxLink) belt_force_[key.b] += ft.dot(o.belt_dir);
     on_b.force -= ft;
     on_b.torque -= (centroid - o.centre).cross(ft);
 
@@ -165,6 +167,7 @@ void Contacts::apply(State& state, int a, int b, const Other& o, const PairKey& 
     }
     state.pairs.push_back({key, s, twist});
   }
+  if (key.kind == kBoxLink) link_force_[key.b] += on_b.force;
   Wrench& wa = wrenches[static_cast<std::size_t>(a)];
   wa.force += on_a.force;
   wa.torque += on_a.torque;
@@ -183,6 +186,8 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
   old_pairs_.swap(state.pairs);
   state.pairs.clear();
   dampers_.clear();
+  link_force_.assign(links.size(), Eigen::Vector3d::Zero());
+  belt_force_.assign(links.size(), 0.0);
   for (int i = 0; i < n; ++i) {
     const Body& b = bodies[static_cast<std::size_t>(i)];
     if (b.mode == Mode::kGone) continue;
@@ -206,8 +211,8 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
       {-Eigen::Vector3d::UnitY(), -hw},
       {-Eigen::Vector3d::UnitX(), -trailer_.depth},
   }};
-  const Other ground{0.0, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
-                     Eigen::Vector3d::Zero()};
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  const Other ground{0.0, zero, zero, zero, zero, zero};
 
   for (int i = 0; i < n; ++i) {
     Body& a = bodies[static_cast<std::size_t>(i)];
@@ -241,7 +246,7 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
       if (!take(patch_)) continue;
       // Pressed into hard by a slow box (e.g. a growing load): wake up too.
       if (b.mode == Mode::kAsleep && deepest() > options_.wake_depth) wake.push_back(j);
-      const Other other{b.box.mass, b.box.pose.translation(), b.v, b.w, Eigen::Vector3d::Zero()};
+      const Other other{b.box.mass, b.box.pose.translation(), b.v, b.w, zero, zero};
       const PairKey key{std::min(a.box.id, b.box.id), std::max(a.box.id, b.box.id), kBoxBox};
       // Held boxes take the reaction too: the cups feel it.
       apply(state, i, b.mode == Mode::kAsleep ? -1 : j, other, key, options_.friction_box, dt,
@@ -254,7 +259,7 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
     const Mover& link = links[l];
     const Eigen::Vector3d e = link.pose.linear().cwiseAbs() * link_half_[l];
     const Eigen::Vector3d llo = link.pose.translation() - e, lhi = link.pose.translation() + e;
-    const bool moving = link.speed > 1e-6 || link.belt.squaredNorm() > 0.0;
+    const bool moving = link.speed > 1e-6 || link.belt_dir.squaredNorm() > 0.0;
     for (int j = 0; j < n; ++j) {
       const std::size_t bj = static_cast<std::size_t>(j);
       const Body& b = bodies[bj];
@@ -266,7 +271,7 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
         wake.push_back(j);
         continue;
       }
-      const Other other{0.0, link.pose.translation(), link.v, link.w, link.belt};
+      const Other other{0.0, link.pose.translation(), link.v, link.w, link.belt, link.belt_dir};
       apply(state, j, -1, other, {b.box.id, static_cast<std::uint32_t>(l), kBoxLink},
             options_.friction_robot, dt, wrenches);
     }

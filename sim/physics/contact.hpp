@@ -27,6 +27,10 @@ class Contacts {
   // moving touches in `wake`.
   void compute(State& state, const std::vector<Mover>& links, double dt,
                std::vector<Wrench>& wrenches, std::vector<int>& wake);
+  // From the last compute(), per robot shape: the force the boxes exert on
+  // it (world frame), and the force its belt exerts on them along belt_dir.
+  const std::vector<Eigen::Vector3d>& link_forces() const { return link_force_; }
+  const std::vector<double>& belt_forces() const { return belt_force_; }
 
   // Damping of the box-box and box-trailer contacts found by the last
   // compute(): applied to the awake boxes' velocities before the step, as
@@ -46,7 +50,7 @@ class Contacts {
   };
   struct Other {
     double mass;  // 0 for the trailer and robot shapes (immovable)
-    Eigen::Vector3d centre, v, w, belt;
+    Eigen::Vector3d centre, v, w, belt, belt_dir;
   };
   struct Damper {
     int a, b;  // b < 0: the trailer or a sleeping box; a held b moves but takes no impulse
@@ -72,6 +76,8 @@ class Contacts {
   std::vector<PairState> old_pairs_;
   std::vector<Damper> dampers_;
   std::vector<Eigen::Matrix3d> inverse_inertia_;
+  std::vector<Eigen::Vector3d> link_force_;
+  std::vector<double> belt_force_;
   fcl::CollisionRequestd request_;
 };
 

@@ -19,6 +19,7 @@ constexpr double kScoopOut = 0.1;    // m; and the scoop is out this far (not a 
 constexpr double kLipSlope = 0.45;   // rad below horizontal
 constexpr double kLipThick = 0.004;  // m
 constexpr double kLipEdge = 0.001;   // m below the floor plane
+constexpr int kConveyorDrive = 0, kScoopDrive = 1;
 
 std::optional<LinkGeometry> scoop_lip(const LinkGeometry& scoop) {
   const Eigen::Vector3d edge =
@@ -65,6 +66,8 @@ std::vector<LinkGeometry> robot_link_geometry(const RobotModel& model, const Joi
       if (static_cast<int>(i) == conveyor || static_cast<int>(i) == feeder)
         g.belt_speed = belt_speed;
       g.feeds_belt = static_cast<int>(i) == feeder;
+      // Two motors: the nose conveyor's, and the scoop's (its lip included).
+      g.belt_drive = g.feeds_belt ? kScoopDrive : kConveyorDrive;
       out.push_back(g);
       if (g.feeds_belt && q[kNose3] > kScoopOut)
         if (auto lip = scoop_lip(g)) out.push_back(*lip);

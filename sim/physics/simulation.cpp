@@ -19,16 +19,28 @@ using detail::Mover;
 using detail::State;
 using detail::Wrench;
 
-struct Snapshot::Data {
-  State state;
-};
-
 Snapshot::Snapshot() = default;
 Snapshot::~Snapshot() = default;
 Snapshot::Snapshot(const Snapshot&) = default;
 Snapshot& Snapshot::operator=(const Snapshot&) = default;
+bool Snapshot::empty() const {
+  return !data_;
+}
 double Snapshot::time() const {
   return data_ ? data_->state.time : 0.0;
+}
+World Snapshot::world() const {
+  World w;
+  if (!data_) return w;
+  w.trailer = data_->trailer;
+  for (const Body& b : data_->state.bodies) {
+    if (b.mode != Mode::kGone) w.boxes.push_back(b.box);
+  }
+  return w;
+}
+const PhysicsOptions& Snapshot::options() const {
+  static const PhysicsOptions defaults;
+  return data_ ? data_->options : defaults;
 }
 
 namespace {
@@ -82,11 +94,16 @@ struct Simulation::Impl {
     Eigen::Vector3d v, w;
   };
   std::vector<Velocity> undamped;  // awake boxes' velocities before damping
+  // Per robot shape: index of its belt drive in state.belts, -1 if no belt
+  // runs on it; per drive, its fastest belt's speed. Set by step().
+  std::vector<int> link_drive;
+  std::vector<double> drive_speed, drive_load;
 
   Impl(const World& world, const PhysicsOptions& o)
       : options(o), trailer(world.trailer), contacts(o, world.trailer) {
-    if (!(o.step > 0.0) || !(o.contact_omega > 0.0)) {
-      throw std::invalid_argument("PhysicsOptions: step and contact_omega must be > 0");
+    if (!(o.step > 0.0) || !(o.contact_omega > 0.0) || !(o.belt_inertia > 0.0)) {
+      throw std::invalid_argument(
+          "PhysicsOptions: step, contact_omega and belt_inertia must be > 0");
     }
     for (const Box& b : world.boxes) {
       if (!(b.mass > 0.0)) {
@@ -99,6 +116,27 @@ struct Simulation::Impl {
       state.bodies.push_back(body);
     }
     contacts.set_boxes(state.bodies);
+  }
+
+  explicit Impl(const Snapshot::Data& saved)
+      : options(saved.options), trailer(saved.trailer), contacts(saved.options, saved.trailer) {
+    load(saved);
+  }
+
+  // Everything from the snapshot; Simbody's system is rebuilt lazily at the
+  // next step, from the exact coordinates.
+  void load(const Snapshot::Data& saved) {
+    options = saved.options;
+    trailer = saved.trailer;
+    state = saved.state;
+    state.slots.clear();
+    state.q.clear();
+    state.u.clear();
+    contacts = detail::Contacts(options, trailer);
+    contacts.set_boxes(state.bodies);
+    contacts.set_links(state.link_targets);
+    pending = Pending{saved.state.slots, saved.state.q, saved.state.u};
+    rebuild = saved.state.rebuild;
   }
 
   void wake_body(int i) {
@@ -196,6 +234,74 @@ struct Simulation::Impl {
     }
   }
 
+  // Drives of the belts switched on for this step() call (new ones start at
+  // full speed) and the call's measurements reset.
+  void prepare_loads() {
+    link_drive.assign(state.links.size(), -1);
+    for (std::size_t l = 0; l < state.links.size(); ++l) {
+      const LinkGeometry& g = state.links[l];
+      if (!(g.belt_speed > 0.0)) continue;
+      auto it = std::lower_bound(state.belts.begin(), state.belts.end(), g.belt_drive,
+                                 [](const BeltLoad& d, int id) { return d.drive < id; });
+      if (it == state.belts.end() || it->drive != g.belt_drive) {
+        BeltLoad d;
+        d.drive = g.belt_drive;
+        d.max_force = g.belt_max_force;
+        it = state.belts.insert(it, d);
+      }
+      link_drive[l] = static_cast<int>(it - state.belts.begin());
+    }
+    drive_speed.assign(state.belts.size(), 0.0);
+    std::vector<bool> limit_set(state.belts.size(), false);
+    for (std::size_t l = 0; l < state.links.size(); ++l) {
+      const int d = link_drive[l];
+      if (d < 0) continue;
+      const auto k = static_cast<std::size_t>(d);
+      drive_speed[k] = std::max(drive_speed[k], state.links[l].belt_speed);
+      if (!limit_set[k]) state.belts[k].max_force = state.links[l].belt_max_force;
+      limit_set[k] = true;
+    }
+    for (std::size_t k = 0; k < state.belts.size(); ++k) {
+      BeltLoad& d = state.belts[k];
+      // A belt switched off stands; switched on again it starts at full speed.
+      if (drive_speed[k] <= 0.0) d.speed_fraction = 1.0;
+      d.min_speed_fraction = d.speed_fraction;
+      d.mean_force = d.peak_force = 0.0;
+    }
+    state.robot_forces.assign(state.links.size(), RobotContactForce{});
+  }
+
+  // After this step's contacts: each drive's motor pulls at most its limit;
+  // the rest of the load (or, below the limit, the spare force while it runs
+  // up) changes the belt's speed through its reflected inertia. A stalled
+  // belt holds (gear motors are not driven backwards).
+  void update_loads(double dt) {
+    const std::vector<Eigen::Vector3d>& link_force = contacts.link_forces();
+    const std::vector<double>& belt_force = contacts.belt_forces();
+    std::vector<double>& load = drive_load;
+    load.assign(state.belts.size(), 0.0);
+    for (std::size_t l = 0; l < state.links.size(); ++l) {
+      RobotContactForce& f = state.robot_forces[l];
+      f.mean += link_force[l];
+      if (link_force[l].squaredNorm() > f.peak.squaredNorm()) f.peak = link_force[l];
+      if (link_drive[l] >= 0) load[static_cast<std::size_t>(link_drive[l])] += belt_force[l];
+    }
+    bool limited = false;
+    for (std::size_t k = 0; k < state.belts.size(); ++k) {
+      BeltLoad& d = state.belts[k];
+      d.mean_force += load[k];
+      d.peak_force = std::max(d.peak_force, load[k]);
+      if (drive_speed[k] <= 0.0) continue;
+      if (load[k] > d.max_force || d.speed_fraction < 1.0) {
+        const double a = (d.max_force - load[k]) / options.belt_inertia;
+        d.speed_fraction = std::clamp(d.speed_fraction + a * dt / drive_speed[k], 0.0, 1.0);
+      }
+      d.min_speed_fraction = std::min(d.min_speed_fraction, d.speed_fraction);
+      limited = limited || d.speed_fraction < 1.0;
+    }
+    stats.belt_limited_steps += limited;
+  }
+
   void fixed_step(double dt, double fraction, double duration,
                   const std::vector<LinkGeometry>& from_links,
                   const std::optional<SuctionPlate>& from_plate, const Eigen::Vector3d& plate_a) {
@@ -213,7 +319,12 @@ struct Simulation::Impl {
         m.v.setZero();
         m.w.setZero();
       }
-      m.belt = -target.belt_speed * m.pose.linear().col(0);
+      const int drive = link_drive[l];
+      m.belt_dir = drive >= 0 ? Eigen::Vector3d(-m.pose.linear().col(0)) : Eigen::Vector3d::Zero();
+      m.belt = drive >= 0
+                   ? Eigen::Vector3d(state.belts[static_cast<std::size_t>(drive)].speed_fraction *
+                                     target.belt_speed * m.belt_dir)
+                   : Eigen::Vector3d::Zero();
       m.speed = m.v.norm() + m.w.norm() * bounding_radius(target);
     }
     bool anything_moves = false;
@@ -228,7 +339,7 @@ struct Simulation::Impl {
       anything_moves = v.squaredNorm() + w.squaredNorm() > 0.0;
     }
     for (const Mover& m : movers) {
-      anything_moves = anything_moves || m.speed > 0.0 || m.belt.squaredNorm() > 0.0;
+      anything_moves = anything_moves || m.speed > 0.0 || m.belt_dir.squaredNorm() > 0.0;
     }
     if (pending) {
       slots.clear();
@@ -241,6 +352,7 @@ struct Simulation::Impl {
     wake.clear();
     if (anything_moves) {
       contacts.compute(state, movers, dt, wrenches, wake);
+      update_loads(dt);
     } else {
       state.pairs.clear();
       wrenches.assign(state.bodies.size(), Wrench{});
@@ -326,6 +438,12 @@ struct Simulation::Impl {
 
 Simulation::Simulation(const World& world, const PhysicsOptions& options)
     : impl_(std::make_unique<Impl>(world, options)) {}
+Simulation::Simulation(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+plr::Expected<Simulation> Simulation::from_snapshot(const Snapshot& snapshot) {
+  if (!snapshot.data_) return plr::make_error(PLR_ERR_INVALID, "from_snapshot: empty snapshot");
+  return Simulation(std::make_unique<Impl>(*snapshot.data_));
+}
 Simulation::~Simulation() = default;
 Simulation::Simulation(Simulation&&) noexcept = default;
 Simulation& Simulation::operator=(Simulation&&) noexcept = default;
@@ -350,11 +468,14 @@ void Simulation::step(double duration) {
     plate_v = (s.plate->pose.translation() - from_plate->pose.translation()) / total;
   }
   const Eigen::Vector3d plate_a = (plate_v - s.plate_velocity) / total;
+  m.prepare_loads();
   for (long k = 0; k < n; ++k) {
     m.fixed_step(m.options.step, static_cast<double>(k) / static_cast<double>(n), total, from_links,
                  from_plate, plate_a);
   }
   s.plate_velocity = plate_v;
+  for (RobotContactForce& f : s.robot_forces) f.mean /= static_cast<double>(n);
+  for (BeltLoad& d : s.belts) d.mean_force /= static_cast<double>(n);
   m.stats.wall_seconds +=
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -490,6 +611,13 @@ void Simulation::remove_box(std::uint32_t id) {
   throw std::invalid_argument("remove_box: no box " + std::to_string(id));
 }
 
+const std::vector<RobotContactForce>& Simulation::robot_contact_forces() const {
+  return impl_->state.robot_forces;
+}
+const std::vector<BeltLoad>& Simulation::belt_loads() const {
+  return impl_->state.belts;
+}
+
 const std::vector<UnloadEvent>& Simulation::unloaded() const {
   return impl_->state.unloaded;
 }
@@ -514,6 +642,8 @@ double Simulation::settle(double max_time) {
 Snapshot Simulation::snapshot() const {
   const Impl& m = *impl_;
   auto data = std::make_shared<Snapshot::Data>();
+  data->trailer = m.trailer;
+  data->options = m.options;
   data->state = m.state;
   State& s = data->state;
   s.rebuild = m.rebuild;
@@ -539,16 +669,7 @@ Snapshot Simulation::snapshot() const {
 
 void Simulation::restore(const Snapshot& snapshot) {
   if (!snapshot.data_) throw std::invalid_argument("restore: empty snapshot");
-  Impl& m = *impl_;
-  const State& saved = snapshot.data_->state;
-  m.state = saved;
-  m.state.slots.clear();
-  m.state.q.clear();
-  m.state.u.clear();
-  m.contacts.set_links(m.state.links);
-  // Simbody is rebuilt lazily at the next step, from the exact coordinates.
-  m.pending = Impl::Pending{saved.slots, saved.q, saved.u};
-  m.rebuild = saved.rebuild;
+  impl_->load(*snapshot.data_);
 }
 
 PhysicsStats Simulation::stats() const {

@@ -54,6 +54,8 @@ struct State {
   Eigen::Vector3d plate_velocity = Eigen::Vector3d::Zero();  // over the last step() call
   std::vector<UnloadEvent> unloaded;
   std::vector<SuctionEvent> suction_events;
+  std::vector<BeltLoad> belts;                  // by drive id; speed_fraction is the drive's state
+  std::vector<RobotContactForce> robot_forces;  // of the last step() call
   // Only filled inside snapshots: the bodies Simbody integrates and their
   // exact coordinates, so a restored run repeats the original bit for bit.
   std::vector<int> slots;
@@ -61,12 +63,29 @@ struct State {
   bool rebuild = true;
 };
 
+}  // namespace plr::sim::detail
+
+namespace plr::sim {
+
+struct Snapshot::Data {
+  Trailer trailer;
+  PhysicsOptions options;
+  detail::State state;
+};
+
+}  // namespace plr::sim
+
+namespace plr::sim::detail {
+
 // A robot shape or held box as it moves during one fixed step.
 struct Mover {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   Eigen::Vector3d v = Eigen::Vector3d::Zero(), w = Eigen::Vector3d::Zero();
   Eigen::Vector3d belt = Eigen::Vector3d::Zero();  // surface velocity of a belt
-  double speed = 0.0;                              // fastest point speed (m/s)
+  // Unit direction of a belt that is switched on (zero otherwise), even
+  // while its drive stalls: the load on it is still felt.
+  Eigen::Vector3d belt_dir = Eigen::Vector3d::Zero();
+  double speed = 0.0;  // fastest point speed (m/s)
 };
 
 struct Wrench {

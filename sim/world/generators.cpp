@@ -10,6 +10,7 @@
 #include <numeric>
 #include <random>
 #include <stdexcept>
+#include <string>
 
 #include "plr/sim/generators.hpp"
 
@@ -481,6 +482,50 @@ std::vector<std::uint32_t> toppling_boxes(const World& world) {
   }
   std::sort(ids.begin(), ids.end());
   return ids;
+}
+
+MassPrior mass_prior(EnvFamily family) {
+  if (family == EnvFamily::kA1 || family == EnvFamily::kA2) {
+    const WallParams p = wall_params(family);
+    return {p.mass_median, p.mass_spread, p.mass_min, p.mass_max};
+  }
+  const PileParams p = pile_params(family);
+  return {p.mass_median, p.mass_spread, p.mass_min, p.mass_max};
+}
+
+World sample_masses(const World& visible, EnvFamily family, std::uint64_t seed) {
+  const MassPrior prior = mass_prior(family);
+  World w = visible;
+  for (Box& b : w.boxes) {
+    if (b.mass > 0.0) continue;
+    // One generator per (seed, id), its seed mixed by splitmix64 so that
+    // neighbouring seeds and ids give unrelated streams.
+    std::uint64_t z = seed + 0x9e3779b97f4a7c15ULL * (static_cast<std::uint64_t>(b.id) + 1);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    std::mt19937_64 rng(z ^ (z >> 31));
+    b.mass = draw_mass(rng, prior.median, prior.spread, prior.min, prior.max);
+  }
+  return w;
+}
+
+plr::Status set_masses(World& world, const std::vector<std::pair<std::uint32_t, double>>& masses) {
+  std::vector<std::size_t> index;
+  index.reserve(masses.size());
+  for (const auto& [id, mass] : masses) {
+    const auto it = std::find_if(world.boxes.begin(), world.boxes.end(),
+                                 [id = id](const Box& b) { return b.id == id; });
+    if (it == world.boxes.end()) {
+      return plr::make_error(PLR_ERR_INVALID, "set_masses: no box " + std::to_string(id));
+    }
+    if (!std::isfinite(mass) || !(mass > 0.0)) {
+      return plr::make_error(PLR_ERR_INVALID, "set_masses: box " + std::to_string(id) +
+                                                  ": mass must be finite and > 0");
+    }
+    index.push_back(static_cast<std::size_t>(it - world.boxes.begin()));
+  }
+  for (std::size_t k = 0; k < masses.size(); ++k) world.boxes[index[k]].mass = masses[k].second;
+  return {};
 }
 
 World generate_world(EnvFamily family, std::uint64_t seed, const Trailer& trailer) {

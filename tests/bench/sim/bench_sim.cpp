@@ -5,6 +5,9 @@
 //   sweep     settled B1 pile: a nose-like slab with a running belt drives
 //             forward under the pile and back;
 //   sequence  10 pick actions in a row on one A1 wall.
+// Then the full state as bytes (Snapshot::to_bytes / from_bytes, and
+// Simulation::from_snapshot): size and time, for the settled wall and for
+// the pile in the middle of the sweep (boxes moving).
 // Robot shapes move kinematically at industrial speeds (0.5 m/s, 1 m/s^2).
 // Each scenario starts from the same snapshot; figures are medians over the
 // repetitions. --environments N also generates N seeds per family and checks
@@ -18,6 +21,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
 #include <string>
@@ -213,6 +217,62 @@ struct Row {
   int boxes = 0;
 };
 
+struct BytesRow {
+  std::string name;
+  int boxes = 0, awake = 0;
+  std::size_t size = 0;
+  double write_us = 0.0, read_us = 0.0, build_us = 0.0;  // medians
+};
+
+BytesRow measure_bytes(const std::string& name, const Simulation& sim, int reps) {
+  BytesRow row{name, static_cast<int>(sim.world().boxes.size()), sim.stats().awake, 0, 0, 0, 0};
+  const plr::sim::Snapshot snapshot = sim.snapshot();
+  std::vector<double> write, read, build;
+  for (int r = 0; r < reps; ++r) {
+    auto t = Clock::now();
+    const std::vector<std::uint8_t> bytes = snapshot.to_bytes();
+    write.push_back(1e6 * seconds_since(t));
+    t = Clock::now();
+    const auto back = plr::sim::Snapshot::from_bytes(bytes.data(), bytes.size());
+    read.push_back(1e6 * seconds_since(t));
+    if (!back) {
+      std::fprintf(stderr, "bench_sim: %s\n", back.error().message.c_str());
+      std::exit(1);
+    }
+    t = Clock::now();
+    const auto restored = Simulation::from_snapshot(back.value());
+    build.push_back(1e6 * seconds_since(t));
+    row.size = bytes.size();
+  }
+  row.write_us = median(write);
+  row.read_us = median(read);
+  row.build_us = median(build);
+  return row;
+}
+
+void print_bytes(const std::vector<BytesRow>& rows) {
+  std::printf("\n%-12s %6s %6s %10s %12s %12s %12s\n", "state", "boxes", "awake", "bytes",
+              "write [us]", "read [us]", "build [us]");
+  for (const BytesRow& r : rows) {
+    std::printf("%-12s %6d %6d %10zu %12.0f %12.0f %12.0f\n", r.name.c_str(), r.boxes, r.awake,
+                r.size, r.write_us, r.read_us, r.build_us);
+  }
+}
+
+std::string bytes_json(const std::vector<BytesRow>& rows) {
+  std::string json = ",\"state_bytes\":{";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf,
+                  "%s\"%s\":{\"boxes\":%d,\"awake\":%d,\"bytes\":%zu,\"write_us\":%.1f,"
+                  "\"read_us\":%.1f,\"build_us\":%.1f}",
+                  i ? "," : "", rows[i].name.c_str(), rows[i].boxes, rows[i].awake, rows[i].size,
+                  rows[i].write_us, rows[i].read_us, rows[i].build_us);
+    json += buf;
+  }
+  return json + "}";
+}
+
 void print_table(const std::vector<Row>& rows) {
   std::printf("%-9s %6s %9s %9s %10s %8s %8s %7s %7s %8s %6s\n", "scenario", "boxes", "sim [s]",
               "wall [s]", "physics[s]", "RTF [x]", "dyn [%]", "awake", "gripped", "unloaded",
@@ -235,7 +295,7 @@ void print_table(const std::vector<Row>& rows) {
   }
 }
 
-void print_json(const std::vector<Row>& rows, const std::string& env_json) {
+void print_json(const std::vector<Row>& rows, const std::string& extra_json) {
   std::printf("{\"scenarios\":{");
   for (std::size_t i = 0; i < rows.size(); ++i) {
     std::vector<double> sim, wall, phys, rtf, unl;
@@ -252,7 +312,7 @@ void print_json(const std::vector<Row>& rows, const std::string& env_json) {
         i ? "," : "", rows[i].name.c_str(), rows[i].boxes, median(sim), median(wall), median(phys),
         median(rtf), median(unl), rows[i].runs.size());
   }
-  std::printf("}%s}\n", env_json.c_str());
+  std::printf("}%s}\n", extra_json.c_str());
 }
 
 // Generates `seeds` worlds per family and checks each (piles are dropped and
@@ -372,6 +432,8 @@ int main(int argc, char** argv) {
   const int sequence_actions = quick ? 3 : 10;
 
   std::vector<Row> rows;
+  std::vector<BytesRow> bytes_rows;
+  const int bytes_reps = quick ? 5 : 20;
   {
     // Settled A1 wall, then pick / sequence from the same snapshot each run.
     Simulation sim(plr::sim::make_environment(EnvFamily::kA1, 1));
@@ -382,6 +444,7 @@ int main(int argc, char** argv) {
     drive.wait(0.1);
     const plr::sim::Snapshot start = sim.snapshot();
     const Robot robot0 = robot;
+    bytes_rows.push_back(measure_bytes("A1 wall", sim, bytes_reps));
     Row pick_row{"pick", {}, static_cast<int>(sim.world().boxes.size())};
     Row seq_row{"sequence", {}, pick_row.boxes};
     for (int r = 0; r < repeat; ++r) {
@@ -435,10 +498,17 @@ int main(int argc, char** argv) {
           before, sim.suction_events().size()));
     }
     rows.push_back(row);
+    sim.restore(start);
+    robot = robot0;
+    drive.move(robot.plate + Eigen::Vector3d(0.7, 0, 0), robot.base_x + 0.7, 0.3);
+    bytes_rows.push_back(measure_bytes("B1 sweeping", sim, bytes_reps));
   }
-  std::string env_json;
-  if (!json) print_table(rows);
-  if (environments > 0) env_json = check_environments(environments, !json);
-  if (json) print_json(rows, env_json);
+  std::string extra_json = bytes_json(bytes_rows);
+  if (!json) {
+    print_table(rows);
+    print_bytes(bytes_rows);
+  }
+  if (environments > 0) extra_json += check_environments(environments, !json);
+  if (json) print_json(rows, extra_json);
   return 0;
 }

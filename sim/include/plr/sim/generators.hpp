@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "plr/expected.hpp"
 #include "plr/sim/world.hpp"
 
 namespace plr::sim {
@@ -41,5 +42,25 @@ std::vector<std::uint32_t> toppling_boxes(const World& world);
 
 // The perceived world W: same boxes without masses.
 World without_masses(const World& world);
+
+// The masses a family's generator draws: log(mass) is normal around
+// log(median) with standard deviation `spread`, clipped to [min, max]. Walls
+// and piles alike draw every box's mass independently of its size.
+struct MassPrior {
+  double median = 0.0;  // kg
+  double spread = 0.0;
+  double min = 0.0, max = 0.0;  // kg
+};
+MassPrior mass_prior(EnvFamily family);
+
+// A particle of the belief over W^t: `visible` with every unknown mass (0)
+// drawn from the family's prior; masses already known (> 0, e.g. measured by
+// the suction cups) stay. A box's mass depends only on (seed, box id), so the
+// same particle keeps its masses as boxes leave the world.
+World sample_masses(const World& visible, EnvFamily family, std::uint64_t seed);
+
+// Sets the masses of the boxes named by id. An unknown id or a mass that is
+// not finite and > 0 is refused (naming it) and changes nothing.
+plr::Status set_masses(World& world, const std::vector<std::pair<std::uint32_t, double>>& masses);
 
 }  // namespace plr::sim

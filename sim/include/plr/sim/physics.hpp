@@ -12,10 +12,12 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <vector>
 
+#include "plr/expected.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/suction_plate.hpp"
 #include "plr/sim/world.hpp"
@@ -35,6 +37,14 @@ struct LinkGeometry {
   // unloaded, unless that end feeds another belt (`feeds_belt`).
   double belt_speed = 0.0;
   bool feeds_belt = false;
+  // The motor behind the belt. Shapes with the same `belt_drive` are one
+  // belt: the tangential forces their surfaces exert on boxes add up, and
+  // when the sum exceeds `belt_max_force` (the first such shape's) the
+  // surface slows down, to a stall if need be; a lighter load lets it run
+  // up to belt_speed again. Default: a 0.37 kW gear motor section (see
+  // docs/notes-sim.md).
+  int belt_drive = 0;
+  double belt_max_force = 350.0;  // N
 };
 
 struct PhysicsOptions {
@@ -64,6 +74,10 @@ struct PhysicsOptions {
   double sleep_drift = 0.001;      // m
   double wake_speed = 0.05;        // m/s of a box touching a sleeping one that wakes it
   double wake_depth = 0.003;       // m of penetration by something slower that wakes a box
+  // Inertia of a belt drive reflected to the belt surface (rotor through the
+  // gearbox, drums, belt): how fast a belt over its force limit slows down
+  // and an unloaded one runs up again.
+  double belt_inertia = 100.0;  // kg
 };
 
 struct UnloadEvent {
@@ -80,22 +94,62 @@ struct SuctionEvent {
   double capacity = 0.0;  // N they could hold
 };
 
+// A belt drive (LinkGeometry::belt_drive) over the last step() call.
+struct BeltLoad {
+  int drive = 0;
+  double max_force = 0.0;       // N
+  double speed_fraction = 1.0;  // of belt_speed, at the end of the call
+  double min_speed_fraction = 1.0;
+  // Force the belt surfaces exerted on the boxes along their motion (the
+  // motor's load), N: mean and largest over the call's fixed steps.
+  double mean_force = 0.0;
+  double peak_force = 0.0;
+};
+
+// What the boxes pushed on one robot shape (normal and friction forces of
+// every contact), world frame, N, over the last step() call: the mean over
+// its fixed steps and the fixed step's force of largest norm. Sleeping boxes
+// push on nothing that stands still.
+struct RobotContactForce {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  Eigen::Vector3d peak = Eigen::Vector3d::Zero();
+};
+
 struct PhysicsStats {
-  std::int64_t steps = 0;          // fixed steps taken
-  std::int64_t dynamic_steps = 0;  // steps that ran Simbody (some box awake)
-  std::int64_t body_steps = 0;     // sum over steps of awake boxes
-  std::int64_t rebuilds = 0;       // Simbody systems built for a new awake set
-  double wall_seconds = 0.0;       // time spent in step()
+  std::int64_t steps = 0;               // fixed steps taken
+  std::int64_t dynamic_steps = 0;       // steps that ran Simbody (some box awake)
+  std::int64_t body_steps = 0;          // sum over steps of awake boxes
+  std::int64_t rebuilds = 0;            // Simbody systems built for a new awake set
+  std::int64_t belt_limited_steps = 0;  // steps with a running belt below its speed
+  double wall_seconds = 0.0;            // time spent in step()
   int awake = 0, asleep = 0, held = 0, removed = 0;
 };
 
+// A simulation's full state: the trailer, the options and everything that
+// moves, including Simbody's exact coordinates of the moving boxes. A copy
+// shares the (immutable) data.
 class Snapshot {
  public:
   Snapshot();
   ~Snapshot();
   Snapshot(const Snapshot&);
   Snapshot& operator=(const Snapshot&);
+  bool empty() const;
   double time() const;
+  // Boxes still in the trailer (as Simulation::world() at the snapshot).
+  World world() const;
+  const PhysicsOptions& options() const;
+
+  // FlatBuffers bytes of sdk/schemas/sim_state.fbs (SimulationState, file
+  // identifier "PSIM"); empty for an empty snapshot. The bytes restore the
+  // exact doubles, so a run continued from them in another process repeats
+  // the original bit for bit (same binary and machine).
+  std::vector<std::uint8_t> to_bytes() const;
+  // Untrusted bytes: verified, every count bounded, every number checked
+  // (finite, in range, rotations orthonormal, consistent counts); the first
+  // problem is a one-line error naming the field, e.g.
+  // "sim state: bodies[3].mass: must be finite and > 0".
+  static plr::Expected<Snapshot> from_bytes(const std::uint8_t* data, std::size_t size);
 
  private:
   friend class Simulation;
@@ -106,6 +160,10 @@ class Snapshot {
 class Simulation {
  public:
   explicit Simulation(const World& world, const PhysicsOptions& options = {});
+  // A simulation that continues the snapshot's (its world, options and
+  // state) exactly as the one it was taken from would; an empty snapshot is
+  // refused.
+  static plr::Expected<Simulation> from_snapshot(const Snapshot& snapshot);
   ~Simulation();
   Simulation(Simulation&&) noexcept;
   Simulation& operator=(Simulation&&) noexcept;
@@ -136,6 +194,11 @@ class Simulation {
   // Takes a box out by hand (not counted as unloaded); what touched it wakes.
   void remove_box(std::uint32_t id);
 
+  // One per shape of the last step() call, in robot_links() order.
+  const std::vector<RobotContactForce>& robot_contact_forces() const;
+  // Belt drives met so far, by drive id.
+  const std::vector<BeltLoad>& belt_loads() const;
+
   const std::vector<UnloadEvent>& unloaded() const;
   const std::vector<SuctionEvent>& suction_events() const;
 
@@ -146,8 +209,10 @@ class Simulation {
   double settle(double max_time);
 
   // A snapshot is a copy of the plain state plus Simbody's coordinates of
-  // the moving boxes; restore copies it back and rebuilds Simbody's system
-  // lazily at the next step. Restored runs repeat bit for bit.
+  // the moving boxes; restore copies it back (trailer and options too, so
+  // any snapshot will do) and rebuilds Simbody's system lazily at the next
+  // step. Restored runs repeat bit for bit. Work counters (stats()) are not
+  // part of the state.
   Snapshot snapshot() const;
   void restore(const Snapshot& snapshot);
 
@@ -155,6 +220,7 @@ class Simulation {
 
  private:
   struct Impl;
+  explicit Simulation(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
 

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <numeric>
 
 #include "plr/sim/generators.hpp"
@@ -125,6 +127,90 @@ TEST(Generators, PilesStand) {
           << to_string(f) << " seed " << seed;
     }
   }
+}
+
+double median_of(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+// Particles draw masses from the distribution the generators draw from:
+// same median and clipping, and (like the generators) unrelated to size.
+TEST(MassPrior, SampledMassesFollowTheGenerators) {
+  for (EnvFamily f : kFamilies) {
+    const MassPrior prior = mass_prior(f);
+    std::vector<double> generated, sampled, volume;
+    for (std::uint64_t seed = 0; seed < 10; ++seed) {
+      const World w = generate_world(f, seed);
+      for (const Box& b : w.boxes) {
+        generated.push_back(b.mass);
+        volume.push_back(b.size.prod());
+      }
+      for (const Box& b : sample_masses(without_masses(w), f, seed).boxes)
+        sampled.push_back(b.mass);
+    }
+    for (const double m : sampled) {
+      ASSERT_GE(m, prior.min);
+      ASSERT_LE(m, prior.max);
+    }
+    EXPECT_NEAR(median_of(generated), prior.median, 0.1 * prior.median) << to_string(f);
+    EXPECT_NEAR(median_of(sampled), prior.median, 0.1 * prior.median) << to_string(f);
+    const auto clipped = [&](const std::vector<double>& v) {
+      const auto n = std::count_if(v.begin(), v.end(),
+                                   [&](double m) { return m == prior.min || m == prior.max; });
+      return static_cast<double>(n) / static_cast<double>(v.size());
+    };
+    EXPECT_NEAR(clipped(sampled), clipped(generated), 0.03) << to_string(f);
+    // Size and mass are independent in the generators (else the prior would
+    // have to be conditioned on the box's volume).
+    const double n = static_cast<double>(generated.size());
+    const double mm = std::accumulate(generated.begin(), generated.end(), 0.0) / n;
+    const double mv = std::accumulate(volume.begin(), volume.end(), 0.0) / n;
+    double cov = 0, vm = 0, vv = 0;
+    for (std::size_t i = 0; i < generated.size(); ++i) {
+      cov += (generated[i] - mm) * (volume[i] - mv);
+      vm += (generated[i] - mm) * (generated[i] - mm);
+      vv += (volume[i] - mv) * (volume[i] - mv);
+    }
+    EXPECT_LT(std::abs(cov / std::sqrt(vm * vv)), 0.1) << to_string(f);
+  }
+}
+
+TEST(MassPrior, SamplesDependOnSeedAndBoxOnly) {
+  const World visible = without_masses(generate_world(EnvFamily::kB1, 4));
+  const World a = sample_masses(visible, EnvFamily::kB1, 7);
+  const World b = sample_masses(visible, EnvFamily::kB1, 7);
+  const World c = sample_masses(visible, EnvFamily::kB1, 8);
+  ASSERT_EQ(a.boxes.size(), visible.boxes.size());
+  int differ = 0;
+  for (std::size_t i = 0; i < a.boxes.size(); ++i) {
+    EXPECT_EQ(a.boxes[i].mass, b.boxes[i].mass);
+    differ += a.boxes[i].mass != c.boxes[i].mass;
+  }
+  EXPECT_GT(differ, static_cast<int>(a.boxes.size()) / 2);
+  // A box leaving the world does not change the others' masses; known
+  // masses stay as they are.
+  World fewer = visible;
+  fewer.boxes.erase(fewer.boxes.begin());
+  fewer.boxes[0].mass = 12.5;
+  const World d = sample_masses(fewer, EnvFamily::kB1, 7);
+  EXPECT_EQ(d.boxes[0].mass, 12.5);
+  for (std::size_t i = 1; i < d.boxes.size(); ++i) EXPECT_EQ(d.boxes[i].mass, a.boxes[i + 1].mass);
+}
+
+TEST(MassPrior, SetMassesByIdOrNotAtAll) {
+  World w = without_masses(generate_world(EnvFamily::kA1, 2));
+  ASSERT_TRUE(set_masses(w, {{w.boxes[3].id, 4.5}, {w.boxes[0].id, 20.0}}).has_value());
+  EXPECT_EQ(w.boxes[3].mass, 4.5);
+  EXPECT_EQ(w.boxes[0].mass, 20.0);
+  const plr::Status missing = set_masses(w, {{w.boxes[1].id, 3.0}, {99999, 3.0}});
+  ASSERT_FALSE(missing.has_value());
+  EXPECT_EQ(missing.error().message, "set_masses: no box 99999");
+  EXPECT_EQ(w.boxes[1].mass, 0.0);  // nothing changed
+  const plr::Status nan = set_masses(w, {{w.boxes[1].id, std::nan("")}});
+  ASSERT_FALSE(nan.has_value());
+  EXPECT_EQ(nan.error().message,
+            "set_masses: box " + std::to_string(w.boxes[1].id) + ": mass must be finite and > 0");
 }
 
 TEST(Generators, FamilyNames) {
