@@ -1,5 +1,6 @@
 # Installs the SDK as the CMake package `plr` (component `sdk`):
-#   find_package(plr REQUIRED)                          -> plr::sdk, plr_add_plugin()
+#   find_package(plr REQUIRED)                          -> plr::sdk, plr::sdk_support,
+#                                                          plr_add_plugin()
 #   find_package(plr REQUIRED COMPONENTS testing)       -> also plr::testing (fake kernel),
 #     plr::conformance, plr::conformance_runner, plr_add_conformance_test()
 # Included from sdk/CMakeLists.txt, so generated_headers and schema_files are in scope.
@@ -10,7 +11,7 @@ set(PLR_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/plr)
 set(PLR_SCHEMA_INSTALL_DIR ${CMAKE_INSTALL_DATADIR}/plr/schemas)
 
 set_target_properties(plr_sdk PROPERTIES EXPORT_NAME sdk)
-install(TARGETS plr_sdk EXPORT plrTargets COMPONENT sdk)
+install(TARGETS plr_sdk plr_sdk_support EXPORT plrTargets COMPONENT sdk)
 install(DIRECTORY include/plr DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} COMPONENT sdk)
 install(FILES ${generated_headers} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/plr/msg COMPONENT sdk)
 install(FILES ${schema_files} DESTINATION ${PLR_SCHEMA_INSTALL_DIR} COMPONENT sdk)
