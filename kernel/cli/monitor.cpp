@@ -40,17 +40,6 @@ DdsConfig to_config(const DdsToolOptions& o) {
   return c;
 }
 
-dds_qos_t* qos(std::int32_t depth, bool transient) {
-  dds_qos_t* q = dds_create_qos();
-  dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
-  if (depth > 0)
-    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, depth);
-  else
-    dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
-  dds_qset_durability(q, transient ? DDS_DURABILITY_TRANSIENT_LOCAL : DDS_DURABILITY_VOLATILE);
-  return q;
-}
-
 // A participant with readers (and writers) on the kernel's control plane.
 class Tool {
  public:
@@ -103,7 +92,7 @@ class Tool {
   dds_entity_t endpoint(const char* topic, std::int32_t depth, bool transient, bool writer) {
     const auto t = dds_create_topic(participant_, &plr_dds_Envelope_desc, topic, nullptr, nullptr);
     if (t < 0) return t;
-    dds_qos_t* q = qos(depth, transient);
+    dds_qos_t* q = control_qos(depth, transient);
     const auto e = writer ? dds_create_writer(participant_, t, q, nullptr)
                           : dds_create_reader(participant_, t, q, nullptr);
     dds_delete_qos(q);

@@ -44,18 +44,6 @@ const char* envelope_problem(const plr_dds_Envelope& e) {
   return nullptr;
 }
 
-dds_qos_t* control_qos(std::int32_t depth, bool transient) {
-  dds_qos_t* q = dds_create_qos();
-  dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
-  if (depth > 0)
-    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, depth);
-  else
-    dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
-  dds_qset_durability(q, transient ? DDS_DURABILITY_TRANSIENT_LOCAL : DDS_DURABILITY_VOLATILE);
-  dds_qset_ignorelocal(q, DDS_IGNORELOCAL_PARTICIPANT);
-  return q;
-}
-
 dds_qos_t* topic_qos(const TopicSettings& t) {
   dds_qos_t* q = dds_create_qos();
   if (t.policy == TopicPolicy::Reliable)

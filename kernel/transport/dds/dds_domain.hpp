@@ -53,6 +53,11 @@ std::string dds_topic_name(const std::string& topic);
 Expected<std::string> cyclone_config_xml(const DdsConfig& dds);
 // Creates the domain from that XML (once per process) and a participant on it.
 Expected<dds_entity_t> open_participant(const DdsConfig& dds);
+// QoS of PLR's own DDS topics (announce, telemetry, control, result,
+// request, reply): reliable, keeping the last `depth` samples (0: all),
+// transient-local for late joiners when `transient`; a participant never
+// reads its own samples. dds_delete_qos() it after use.
+dds_qos_t* control_qos(std::int32_t depth, bool transient);
 // This machine's host name.
 std::string hostname();
 // "<pipeline>@<hostname>:<pid>"

@@ -294,18 +294,25 @@ void h_reject(void* ctx, const plr_msg*, const char* reason) {
   s->k->rejections.push_back({s->name, reason});
 }
 
+// A topic keeps the type it was first used with: false, and logged, for
+// another one (`lock` holds k.m and is released then).
+bool type_fits(Kernel& k, std::unique_lock<std::mutex>& lock, const Slot& s,
+               const std::string& topic, std::uint64_t type_id, const char* what) {
+  const auto [it, fresh] = k.topic_types.emplace(topic, type_id);
+  if (fresh || it->second == type_id) return true;
+  lock.unlock();
+  k.log(s.name, PLR_LOG_ERROR,
+        std::string(what) + " '" + topic + "': type differs from the topic's");
+  return false;
+}
+
 plr_status h_advertise(void* ctx, const char* topic, std::uint64_t type_id,
                        std::uint32_t schema_version, std::uint64_t* publisher) {
   Slot* s = slot_of(ctx);
   Kernel& k = *s->k;
   const std::string name = s->resolve(topic);
   std::unique_lock lock(k.m);
-  auto [it, fresh] = k.topic_types.emplace(name, type_id);
-  if (!fresh && it->second != type_id) {
-    lock.unlock();
-    k.log(s->name, PLR_LOG_ERROR, "advertise '" + name + "': type differs from the topic's");
-    return PLR_ERR_INVALID;
-  }
+  if (!type_fits(k, lock, *s, name, type_id, "advertise")) return PLR_ERR_INVALID;
   *publisher = k.next_id++;
   k.pubs.emplace(*publisher, Kernel::Pub{s, name, type_id, schema_version});
   return PLR_OK;
@@ -364,12 +371,7 @@ plr_status h_subscribe(void* ctx, const char* topic, std::uint64_t type_id, plr_
   Kernel& k = *s->k;
   const std::string name = s->resolve(topic);
   std::unique_lock lock(k.m);
-  auto [it, fresh] = k.topic_types.emplace(name, type_id);
-  if (!fresh && it->second != type_id) {
-    lock.unlock();
-    k.log(s->name, PLR_LOG_ERROR, "subscribe '" + name + "': type differs from the topic's");
-    return PLR_ERR_INVALID;
-  }
+  if (!type_fits(k, lock, *s, name, type_id, "subscribe")) return PLR_ERR_INVALID;
   *subscription = k.next_id++;
   k.subs.emplace(*subscription, Kernel::Sub{s, name, fn, user});
   return PLR_OK;

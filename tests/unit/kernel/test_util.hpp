@@ -10,6 +10,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -77,6 +78,23 @@ pid_t fork_child(Fn fn, unsigned alarm_seconds = 60) {
   if (pid == 0) {
     ::alarm(alarm_seconds);
     ::_exit(fn());
+  }
+  return pid;
+}
+
+// Starts `argv` (argv[0]: the program's path) in a child process, its
+// stdout and stderr written to `log` (a fresh file; /dev/null when empty).
+inline pid_t spawn(const std::vector<std::string>& argv, const std::string& log) {
+  const std::string out = log.empty() ? "/dev/null" : log;
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    std::freopen(out.c_str(), "w", stdout);
+    std::freopen(out.c_str(), "a", stderr);
+    std::vector<char*> args;
+    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    ::execv(args[0], args.data());
+    ::_exit(127);
   }
   return pid;
 }

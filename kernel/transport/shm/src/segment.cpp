@@ -195,6 +195,17 @@ Segment::~Segment() {
   if (base_ != nullptr) ::munmap(base_, size_);
 }
 
+Segment Segment::mapped(const std::string& name, void* base, std::size_t size,
+                        const struct stat& st) {
+  Segment s;
+  s.name_ = name;
+  s.base_ = static_cast<std::byte*>(base);
+  s.size_ = size;
+  s.dev_ = st.st_dev;
+  s.ino_ = st.st_ino;
+  return s;
+}
+
 Result<Segment> Segment::create(const std::string& name, std::size_t size, SegmentKind kind,
                                 std::string_view endpoint) {
   if (size < sizeof(SegmentHeader) || !valid_endpoint_name(endpoint)) {
@@ -226,12 +237,7 @@ Result<Segment> Segment::create(const std::string& name, std::size_t size, Segme
     ::shm_unlink(name.c_str());
     return Error::kOsError;
   }
-  Segment s;
-  s.name_ = name;
-  s.base_ = static_cast<std::byte*>(p);
-  s.size_ = size;
-  s.dev_ = st.st_dev;
-  s.ino_ = st.st_ino;
+  Segment s = mapped(name, p, size, st);
   s.owner_ = ProcessStamp::self();
   auto* h = new (p) SegmentHeader{};
   h->layout_version = kLayoutVersion;
@@ -273,12 +279,7 @@ Result<Segment> Segment::open(const std::string& name, SegmentKind kind,
   void* p = ::mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_POPULATE, fd, 0);
   ::close(fd);
   if (p == MAP_FAILED) return Error::kOsError;
-  Segment s;
-  s.name_ = name;
-  s.base_ = static_cast<std::byte*>(p);
-  s.size_ = size;
-  s.dev_ = st.st_dev;
-  s.ino_ = st.st_ino;
+  Segment s = mapped(name, p, size, st);
   const SegmentHeader& h = s.header();
   const std::uint64_t magic = load_magic(h);
   if (magic == 0) return Error::kNotFound;  // not stamped yet

@@ -1,5 +1,6 @@
 // The `plr` command line, run as a user would.
 #include "kernel_fixture.hpp"
+#include "test_util.hpp"
 
 #include <gtest/gtest.h>
 
@@ -14,6 +15,18 @@ namespace {
 using testing::run_command;
 
 const std::string kPlr = PLR_BINARY;
+
+// Until `plr status` of a pipeline started in the background answers (5 s
+// at most); `out` is its last answer.
+bool wait_until_running(const std::string& pipeline, std::string* out) {
+  for (int i = 0; i < 100; ++i) {
+    out->clear();
+    if (run_command(kPlr + " status --pipeline " + pipeline, out) == 0) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return false;
+}
+
 const std::string kDemo = std::string(PLR_SOURCE_DIR) + "/configs/demo.yaml";
 
 std::string temp_config(const std::string& name, const std::string& text) {
@@ -74,22 +87,10 @@ TEST(Cli, CtrlCStopsCleanlyAndSwapWorksOnTheRunningPipeline) {
                                 "  doubler: {plugin: demo_doubler, params: {factor: 2}}\n");
   const std::string log = ::testing::TempDir() + "plr_test_cli_swap.log";
   std::remove(log.c_str());  // never read a previous run's log
-  const pid_t pid = fork();
+  const pid_t pid = shm::test::spawn({kPlr, "run", path}, log);
   ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    std::freopen(log.c_str(), "w", stdout);
-    std::freopen(log.c_str(), "a", stderr);
-    execl(kPlr.c_str(), "plr", "run", path.c_str(), nullptr);
-    _exit(127);
-  }
   std::string out;
-  int rc = 1;
-  for (int i = 0; i < 100 && rc != 0; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    out.clear();
-    rc = run_command(kPlr + " status --pipeline cli_swap_test", &out);
-  }
-  ASSERT_EQ(rc, 0) << out;
+  ASSERT_TRUE(wait_until_running("cli_swap_test", &out)) << out;
   EXPECT_NE(out.find("\"doubler\""), std::string::npos) << out;
   out.clear();
   EXPECT_EQ(run_command(kPlr + " swap doubler demo_doubler --pipeline cli_swap_test", &out), 0)
@@ -116,22 +117,10 @@ TEST(Cli, SighupReloadsTheConfigAndSwapsChangedPlugins) {
   const auto path =
       temp_config("cli_reload.yaml",
                   head + "  doubler: {plugin: demo_doubler, params: {factor: 2}}\n" + counter);
-  const pid_t pid = fork();
+  const pid_t pid = shm::test::spawn({kPlr, "run", path}, "");
   ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    std::freopen("/dev/null", "w", stdout);
-    std::freopen("/dev/null", "w", stderr);
-    execl(kPlr.c_str(), "plr", "run", path.c_str(), nullptr);
-    _exit(127);
-  }
   std::string out;
-  int rc = 1;
-  for (int i = 0; i < 100 && rc != 0; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    out.clear();
-    rc = run_command(kPlr + " status --pipeline cli_reload_test", &out);
-  }
-  ASSERT_EQ(rc, 0) << out;
+  ASSERT_TRUE(wait_until_running("cli_reload_test", &out)) << out;
   temp_config("cli_reload.yaml",
               head + "  doubler: {plugin: test_probe, params: {factor: 2}}\n" + counter);
   kill(pid, SIGHUP);

@@ -21,7 +21,8 @@ int domain() {
 
 TEST(Monitor, FindsAKernelAndShowsItsTelemetry) {
   remote_test::BareKernel kernel(domain(), "monitored", true, "echo");
-  ASSERT_EQ(kernel.open(), "");
+  const Status joined = kernel.open();
+  ASSERT_TRUE(joined) << joined.error().message;
   const std::string id = kernel.bridge_stats()["kernel"];
   std::string out;
   ASSERT_EQ(testing::run_command(kPlr + " monitor --once --json --wait 10 --domain " +

@@ -55,13 +55,7 @@ pid_t start_run(const std::string& run_id) {
                            "  counter: {plugin: demo_counter, params: {period_ms: 2}}\n"
                            "  doubler: {plugin: demo_doubler, host: b, params: {factor: 2}}\n";
   const std::string log = ::testing::TempDir() + run_id + ".log";
-  const pid_t pid = fork();
-  if (pid == 0) {
-    std::freopen(log.c_str(), "w", stdout);
-    std::freopen(log.c_str(), "a", stderr);
-    execl(kPlr.c_str(), "plr", "run", config.c_str(), "--run-id", run_id.c_str(), nullptr);
-    _exit(127);
-  }
+  const pid_t pid = test::spawn({kPlr, "run", config, "--run-id", run_id}, log);
   // One segment per exported topic on each side: main/count and b/doubled.
   EXPECT_TRUE(eventually([&] { return test::run_segments(run_id).size() >= 2; }, 10s))
       << "the run never set up its segments";

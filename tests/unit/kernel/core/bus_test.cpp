@@ -104,38 +104,38 @@ TEST_F(BusTest, TopicRefusesASecondType) {
       << wrong.error().message;
 }
 
-TEST_F(BusTest, KeepLastDropsTheOldestForASlowSubscriber) {
-  bus_ = std::make_unique<Bus>(
-      [](const std::string&) { return topic_with(TopicPolicy::KeepLast, 4); });
-  for (auto* e : {&a_, &b_, &c_}) bus_->set_live(e, true);
+// "count" with `policy` and `depth`, published by a, read into `rb` by b,
+// whose thread stays busy until `release` is set.
+class SlowSubscriberTest : public BusTest {
+ protected:
+  void with(TopicPolicy policy, std::size_t depth) {
+    bus_ = std::make_unique<Bus>([=](const std::string&) { return topic_with(policy, depth); });
+    for (auto* e : {&a_, &b_, &c_}) bus_->set_live(e, true);
+    pub = *bus_->advertise(&a_, "count", kCount, 1);
+    ASSERT_TRUE(bus_->subscribe(&b_, "count", kCount, &Received::on, &rb));
+    ASSERT_TRUE(b_.node_thread().post([gate = release.get_future().share()] { gate.wait(); }));
+  }
   Received rb;
-  auto pub = bus_->advertise(&a_, "count", kCount, 1);
-  ASSERT_TRUE(bus_->subscribe(&b_, "count", kCount, &Received::on, &rb));
+  std::uint64_t pub = 0;
   std::promise<void> release;
-  auto gate = release.get_future().share();
-  ASSERT_TRUE(b_.node_thread().post([gate] { gate.wait(); }));  // b is busy
-  for (int i = 0; i < 10; ++i) ASSERT_TRUE(bus_->publish(*pub, count_msg(i)));
+};
+
+TEST_F(SlowSubscriberTest, KeepLastDropsTheOldest) {
+  with(TopicPolicy::KeepLast, 4);
+  for (int i = 0; i < 10; ++i) ASSERT_TRUE(bus_->publish(pub, count_msg(i)));
   release.set_value();
   settle();
   EXPECT_EQ(rb.values, (std::vector<std::int64_t>{6, 7, 8, 9}));
   EXPECT_EQ(bus_->topic_stats()[0].drops, 6u);
 }
 
-TEST_F(BusTest, ReliableMakesThePublisherWaitInsteadOfDropping) {
-  bus_ = std::make_unique<Bus>(
-      [](const std::string&) { return topic_with(TopicPolicy::Reliable, 2); });
-  for (auto* e : {&a_, &b_, &c_}) bus_->set_live(e, true);
-  Received rb;
-  auto pub = bus_->advertise(&a_, "count", kCount, 1);
-  ASSERT_TRUE(bus_->subscribe(&b_, "count", kCount, &Received::on, &rb));
-  std::promise<void> release;
-  auto gate = release.get_future().share();
-  ASSERT_TRUE(b_.node_thread().post([gate] { gate.wait(); }));
+TEST_F(SlowSubscriberTest, ReliableMakesThePublisherWaitInsteadOfDropping) {
+  with(TopicPolicy::Reliable, 2);
   std::thread opener([&] {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     release.set_value();
   });
-  for (int i = 0; i < 50; ++i) ASSERT_TRUE(bus_->publish(*pub, count_msg(i)));
+  for (int i = 0; i < 50; ++i) ASSERT_TRUE(bus_->publish(pub, count_msg(i)));
   opener.join();
   settle();
   EXPECT_EQ(rb.size(), 50u);
@@ -407,6 +407,18 @@ TEST_F(BusTest, RemovingACallerWaitsForItsReplyCallbackToReturn) {
   bus_->remove_endpoint(&a_);
   EXPECT_TRUE(r.done);
   replier.join();
+}
+
+// What an endpoint registered goes with it: an unconfigured node publishes nothing.
+TEST_F(BusTest, ARemovedEndpointsPublishersAreGone) {
+  auto pub = bus_->advertise(&a_, "count", kCount, 1);
+  ASSERT_TRUE(pub);
+  bus_->remove_endpoint(&a_);
+  const Status s = bus_->publish(*pub, count_msg(1));
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().code, PLR_ERR_INVALID);
+  std::uint8_t* data = nullptr;
+  EXPECT_EQ(bus_->loan(*pub, 16, &data), nullptr);
 }
 
 TEST_F(BusTest, NonLiveEndpointsGetNothing) {

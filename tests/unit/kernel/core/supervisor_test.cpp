@@ -2,6 +2,7 @@
 // only; a crashed host is restarted; nothing of the run stays in /dev/shm;
 // malformed bytes from another process are dropped and counted.
 #include "kernel_fixture.hpp"
+#include "test_util.hpp"
 
 #include <plr/messages.hpp>
 #include <plr/shm/shm.hpp>
@@ -90,14 +91,8 @@ nodes:
 )");
   const std::string log = ::testing::TempDir() + "plr_test_kill.log";
   std::remove(log.c_str());  // never read a previous run's log
-  const pid_t pid = fork();
+  const pid_t pid = shm::test::spawn({kPlr, "run", config, "--run-id", "hosts-kill"}, log);
   ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    std::freopen(log.c_str(), "w", stdout);
-    std::freopen(log.c_str(), "a", stderr);
-    execl(kPlr.c_str(), "plr", "run", config.c_str(), "--run-id", "hosts-kill", nullptr);
-    _exit(127);
-  }
   // Kill host b once the counter is well under way.
   std::string text;
   for (int i = 0; i < 500 && text.find("19 doubled is 38") == std::string::npos; ++i) {
@@ -130,15 +125,9 @@ TEST(Hosts, MalformedMessagesFromAnotherProcessAreDroppedAndCounted) {
   const auto config = write_config("evil.yaml", pipeline_on("b"));
   const std::string log = ::testing::TempDir() + "plr_test_evil.log";
   std::remove(log.c_str());  // never read a previous run's log
-  const pid_t pid = fork();
+  const pid_t pid =
+      shm::test::spawn({kPlr, "run", config, "--host", "b", "--run-id", "hosts-evil"}, log);
   ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    std::freopen(log.c_str(), "w", stdout);
-    std::freopen(log.c_str(), "a", stderr);
-    execl(kPlr.c_str(), "plr", "run", config.c_str(), "--host", "b", "--run-id", "hosts-evil",
-          nullptr);
-    _exit(127);
-  }
   auto pub = shm::PublisherBuilder().run_id("hosts-evil").topic("main/count").create();
   ASSERT_TRUE(pub);
   while (pub->subscriber_count() == 0) std::this_thread::sleep_for(5ms);

@@ -32,15 +32,15 @@ class BareKernel {
   BareKernel(const BareKernel&) = delete;
   BareKernel& operator=(const BareKernel&) = delete;
 
-  // Joins the DDS domain: "" or why not.
-  std::string open() {
+  // Joins the DDS domain.
+  Status open() {
     auto b = DdsBridge::create(
         bus_, config_, make_kernel_id(config_.pipeline), [] { return std::string("{}"); },
         [](const nlohmann::json&) -> Status { return make_error(PLR_ERR_STATE, "bare kernel"); });
-    if (!b) return b.error().message;
+    if (!b) return b.error();
     bridge_ = std::move(*b);
     bus_.attach(bridge_.get());
-    return "";
+    return {};
   }
   Bus& bus() { return bus_; }
   nlohmann::json bridge_stats() const { return bridge_->stats(); }

@@ -32,7 +32,7 @@ using Clock = std::chrono::steady_clock;
 [[noreturn]] void provide_echo(int domain) {
   ::prctl(PR_SET_PDEATHSIG, SIGKILL);
   BareKernel k(domain, "quick_provider", true, "echo");
-  if (!k.open().empty()) ::_exit(3);
+  if (!k.open()) ::_exit(3);
   if (!k.provide_echo(k.add_node("echo"), "echo", PLR_SERVICE_QUICK)) ::_exit(4);
   for (;;) ::pause();
 }
@@ -55,7 +55,8 @@ class RemoteQuickService : public ::testing::Test {
   // Until the provider answers.
   void SetUp() override {
     ASSERT_GT(provider_, 0) << "fork failed";
-    ASSERT_EQ(kernel_.open(), "");
+    const Status joined = kernel_.open();
+    ASSERT_TRUE(joined) << joined.error().message;
     const auto ready_by = Clock::now() + 20s;
     while (calls(1, 64) != 0 && Clock::now() < ready_by) std::this_thread::sleep_for(50ms);
   }

@@ -90,13 +90,20 @@ TEST(Ring, KeepLastLapsASlowReaderAndCountsWhatItMissed) {
   release_slot(r.ring.slot(t->slot), c.bit(), r.ring.header->space);
 }
 
-TEST(Ring, ReliableWaitsForItsSlowestReader) {
-  LocalRing r(geometry(2, Policy::kReliable));
-  Producer p(r.ring);
-  Consumer c(r.ring);
-  ASSERT_TRUE(c.attach(ProcessStamp::self()));
-  publish(p, 1, 0);
-  publish(p, 1, 1);
+// A reliable ring of two slots, both published, and one reader.
+class FullReliableRing : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(c.attach(ProcessStamp::self()));
+    publish(p, 1, 0);
+    publish(p, 1, 1);
+  }
+  LocalRing r{geometry(2, Policy::kReliable)};
+  Producer p{r.ring};
+  Consumer c{r.ring};
+};
+
+TEST_F(FullReliableRing, ThePublisherWaitsForItsSlowestReader) {
   const auto full = p.loan(1, kNoWait);
   ASSERT_FALSE(full);
   EXPECT_EQ(full.error(), Error::kTimeout);
@@ -108,13 +115,7 @@ TEST(Ring, ReliableWaitsForItsSlowestReader) {
   p.cancel(*slot);
 }
 
-TEST(Ring, AReaderThatLeavesGivesBackWhatItHeld) {
-  LocalRing r(geometry(2, Policy::kReliable));
-  Producer p(r.ring);
-  Consumer c(r.ring);
-  ASSERT_TRUE(c.attach(ProcessStamp::self()));
-  publish(p, 1, 0);
-  publish(p, 1, 1);
+TEST_F(FullReliableRing, AReaderThatLeavesGivesBackWhatItHeld) {
   ASSERT_TRUE(c.try_take()) << "taken and still held";
   c.detach();
   auto slot = p.loan(1, kNoWait);

@@ -52,6 +52,24 @@ class TopicTest : public ::testing::Test {
   }
   static int first_byte(const Sample& s) { return std::to_integer<int>(s.data()[0]); }
 
+  // A publisher's segment mapped as a foreign process would map it.
+  struct Mapping {
+    explicit Mapping(const Publisher& pub) {
+      const int fd = ::shm_open(pub.segment_name().c_str(), O_RDWR, 0);
+      struct stat st {};
+      if (fd < 0 || ::fstat(fd, &st) != 0) return;
+      size = static_cast<std::size_t>(st.st_size);
+      void* p = ::mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+      ::close(fd);
+      if (p != MAP_FAILED) base = static_cast<std::byte*>(p);
+    }
+    ~Mapping() {
+      if (base != nullptr) ::munmap(base, size);
+    }
+    std::byte* base = nullptr;
+    std::size_t size = 0;
+  };
+
   std::string run_ = test::unique_run_id();
 };
 
@@ -285,15 +303,9 @@ TEST_F(TopicTest, CorruptHeaderIsDroppedAndCounted) {
   Subscriber sub = make_sub();
   for (int i = 0; i < 4; ++i) send(pub, i);
 
-  // Map the segment as a foreign process would.
-  const int fd = ::shm_open(pub.segment_name().c_str(), O_RDWR, 0);
-  ASSERT_GE(fd, 0);
-  struct stat st {};
-  ASSERT_EQ(::fstat(fd, &st), 0);
-  void* p = ::mmap(nullptr, st.st_size, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
-  ::close(fd);
-  ASSERT_NE(p, MAP_FAILED);
-  auto* base = static_cast<std::byte*>(p) + detail::align_up(sizeof(detail::SegmentHeader), 64);
+  const Mapping segment(pub);
+  ASSERT_NE(segment.base, nullptr);
+  auto* base = segment.base + detail::align_up(sizeof(detail::SegmentHeader), 64);
   const detail::Ring ring =
       detail::Ring::view(base, reinterpret_cast<detail::RingHeader*>(base)->geo, nullptr);
   // Message 1: size beyond the slot. Message 2: descriptor names slot 9999.
@@ -317,10 +329,9 @@ TEST_F(TopicTest, CorruptHeaderIsDroppedAndCounted) {
   EXPECT_GE(sub.counters().dropped_invalid, 3u);
 
   // A bad magic makes the segment unusable for new subscribers.
-  reinterpret_cast<detail::SegmentHeader*>(p)->layout_version = 99;
+  reinterpret_cast<detail::SegmentHeader*>(segment.base)->layout_version = 99;
   EXPECT_EQ(SubscriberBuilder().run_id(run_).topic("telemetry/joint_state").create().error(),
             Error::kIncompatible);
-  ::munmap(p, st.st_size);
 }
 
 // Seeded random scribbles over the whole ring (headers, descriptors, reader
@@ -330,15 +341,10 @@ TEST_F(TopicTest, RandomScribblesNeverBreakTheReader) {
   const TopicConfig cfg = config(8, 128, Policy::kKeepLast);
   Publisher pub = make_pub(cfg);
   Subscriber sub = make_sub();
-  const int fd = ::shm_open(pub.segment_name().c_str(), O_RDWR, 0);
-  ASSERT_GE(fd, 0);
-  struct stat st {};
-  ASSERT_EQ(::fstat(fd, &st), 0);
-  void* p = ::mmap(nullptr, st.st_size, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
-  ::close(fd);
-  ASSERT_NE(p, MAP_FAILED);
+  const Mapping segment(pub);
+  ASSERT_NE(segment.base, nullptr);
   const std::size_t ring_off = detail::align_up(sizeof(detail::SegmentHeader), 64);
-  auto* bytes = static_cast<std::uint8_t*>(p);
+  auto* bytes = reinterpret_cast<std::uint8_t*>(segment.base);
   std::mt19937_64 rng(12345);
   std::uint64_t returned = 0;
   for (int round = 0; round < 2000; ++round) {
@@ -349,7 +355,7 @@ TEST_F(TopicTest, RandomScribblesNeverBreakTheReader) {
       }
     }
     for (int k = 0; k < 4; ++k) {
-      const std::size_t at = ring_off + rng() % (static_cast<std::size_t>(st.st_size) - ring_off);
+      const std::size_t at = ring_off + rng() % (segment.size - ring_off);
       bytes[at] = static_cast<std::uint8_t>(rng());
     }
     for (int t = 0; t < 8; ++t) {
@@ -362,7 +368,6 @@ TEST_F(TopicTest, RandomScribblesNeverBreakTheReader) {
   const Counters c = sub.counters();
   EXPECT_GT(returned, 0u);
   EXPECT_GT(c.dropped_invalid, 0u);
-  ::munmap(p, st.st_size);
 }
 
 class TopicThreadsTest : public TopicTest, public ::testing::WithParamInterface<WaitMode> {};
