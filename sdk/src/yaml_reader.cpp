@@ -93,18 +93,20 @@ void record(Tree& t, const Location& at, std::string_view path, std::string_view
   t.diagnostics.push_back({at.line == 0, at.line, at.column, one_line(text)});
 }
 
+// Enough of a scalar to recognise it; the location says where the rest is.
+std::string shown(const std::string& text) {
+  return text.size() > 60 ? text.substr(0, 57) + "..." : text;
+}
+
 std::string describe_value(const Value& v) {
   switch (v.kind) {
     case Kind::kMap:
       return "a map";
     case Kind::kList:
       return "a list";
-    case Kind::kScalar: {
+    case Kind::kScalar:
       if (v.text.empty()) return "an empty string";
-      // Enough to recognise it; the location says where the rest is.
-      const std::string shown = v.text.size() > 60 ? v.text.substr(0, 57) + "..." : v.text;
-      return (v.quoted ? "the string '" : "'") + shown + "'";
-    }
+      return (v.quoted ? "the string '" : "'") + shown(v.text) + "'";
     case Kind::kNull:
       break;
   }
@@ -395,7 +397,7 @@ std::optional<std::int64_t> Node::integer(std::int64_t min, std::int64_t max) co
     return std::nullopt;
   }
   if (parsed.in_range && parsed.value >= min && parsed.value <= max) return parsed.value;
-  const std::string got = ", got " + text();
+  const std::string got = ", got " + shown(text());
   if (parsed.in_range && parsed.value < min && min == 1)
     error("must be positive" + got);
   else if (parsed.in_range && parsed.value < min && min == 0)
@@ -419,7 +421,7 @@ std::optional<double> Node::number(double min, double max) const {
     return std::nullopt;
   }
   if (*value >= min && *value <= max) return value;
-  const std::string got = ", got " + text();
+  const std::string got = ", got " + shown(text());
   constexpr double kInf = std::numeric_limits<double>::infinity();
   if (min == 0 && max == kInf)
     error("must not be negative" + got);
@@ -435,7 +437,7 @@ std::optional<double> Node::number(double min, double max) const {
 std::optional<double> Node::positive() const {
   const auto value = number();
   if (!value || *value > 0) return value;
-  error("must be positive, got " + text());
+  error("must be positive, got " + shown(text()));
   return std::nullopt;
 }
 
@@ -524,14 +526,19 @@ List Node::list(std::string_view what, std::size_t min_items, std::size_t max_it
 nlohmann::json Node::to_json() const {
   if (!present()) return nullptr;
   std::size_t budget = tree_->limits.max_values;
-  return to_json(budget);
+  return to_json(budget, 0);
 }
 
-nlohmann::json Node::to_json(std::size_t& budget) const {
+nlohmann::json Node::to_json(std::size_t& budget, std::size_t depth) const {
   if (budget == 0) return nullptr;
-  // Aliases may repeat a value many times over (a "billion laughs").
-  if (--budget == 0) {
-    error(fmt::format("more than {} values with aliases expanded", tree_->limits.max_values));
+  // Aliases may repeat a value many times over (a "billion laughs"), and nest
+  // one anchored value in another deeper than the text does.
+  if (--budget == 0 || depth > tree_->limits.max_depth) {
+    error(budget == 0 ? fmt::format("more than {} values with aliases expanded",
+                                    tree_->limits.max_values)
+                      : fmt::format("nested deeper than {} levels with aliases expanded",
+                                    tree_->limits.max_depth));
+    budget = 0;
     return nullptr;
   }
   const Value& v = tree_->values[value_];
@@ -542,7 +549,7 @@ nlohmann::json Node::to_json(std::size_t& budget) const {
       if (auto b = plain_bool(s)) return *b;
       const PlainInt i = plain_int(s);
       if (i.is_int && !i.in_range) {
-        error("integer " + s + " is out of range (64 bits, signed)");
+        error("integer " + shown(s) + " is out of range (64 bits, signed)");
         return nullptr;
       }
       if (i.is_int) return i.value;
@@ -555,12 +562,12 @@ nlohmann::json Node::to_json(std::size_t& budget) const {
     }
     case Kind::kList: {
       nlohmann::json array = nlohmann::json::array();
-      for (const Node& item : list()) array.push_back(item.to_json(budget));
+      for (const Node& item : list()) array.push_back(item.to_json(budget, depth + 1));
       return array;
     }
     case Kind::kMap: {
       nlohmann::json object = nlohmann::json::object();
-      for (const Node& e : map()) object[e.name()] = e.to_json(budget);
+      for (const Node& e : map()) object[e.name()] = e.to_json(budget, depth + 1);
       return object;
     }
     case Kind::kNull:

@@ -104,7 +104,8 @@ class Node {
   List list(std::string_view what = "a list", std::size_t min_items = 0,
             std::size_t max_items = std::numeric_limits<std::size_t>::max()) const;
   // Any value as JSON (null for an absent Node); reports keys as map() does,
-  // integers beyond 64 bits, and .inf/.nan, which JSON cannot hold.
+  // integers beyond 64 bits, .inf/.nan (which JSON cannot hold), and aliases
+  // that expand past the limits.
   nlohmann::json to_json() const;
 
   // Records a problem at this value, or at its key.
@@ -125,7 +126,7 @@ class Node {
         path_(std::move(path)),
         name_(std::move(name)) {}
   Node child(std::uint32_t value, std::uint32_t key, std::string path, std::string name) const;
-  nlohmann::json to_json(std::size_t& budget) const;
+  nlohmann::json to_json(std::size_t& budget, std::size_t depth) const;
 
   detail::Tree* tree_ = nullptr;
   std::uint32_t value_ = 0;

@@ -227,6 +227,20 @@ TEST(YamlReader, AliasesAreSharedAndBoundedWhenExpanded) {
       << doc.error().message;
 }
 
+TEST(YamlReader, AliasesNestedInEachOtherAreBoundedInDepth) {
+  // Each anchor wraps the one before in a list: shallow as written, 100 deep expanded.
+  std::string text = "a0: &a0 [1]\n";
+  for (int i = 1; i <= 100; ++i)
+    text += "a" + std::to_string(i) + ": &a" + std::to_string(i) + " [*a" + std::to_string(i - 1) +
+            "]\n";
+  const Document doc = parse(text);
+  (void)doc.root().to_json();
+  ASSERT_FALSE(doc.ok());
+  EXPECT_NE(doc.error().message.find("nested deeper than 64 levels with aliases expanded"),
+            std::string::npos)
+      << doc.error().message;
+}
+
 TEST(YamlReader, EmptyDocumentIsNullAtTheStart) {
   EXPECT_EQ(error_after("", [](const Node& n) { n.error("the config is empty"); }),
             "w.yaml:1:1: the config is empty");
