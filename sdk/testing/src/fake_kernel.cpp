@@ -241,11 +241,17 @@ struct Kernel {
                status == PLR_ERR_CANCELLED ? "caller destroyed" : "provider gone");
   }
 
+  // Runs what `s` accepted while active and has not run yet, in order: a
+  // node's thread in the kernel runs it before the node's deactivate hook.
+  void deliver_accepted(Slot* s);
+
   plr_status call(Slot* s, const char* service_name, std::uint64_t request_type, plr_msg* request,
                   std::size_t offset, std::size_t size, std::int64_t timeout_ns, plr_reply_fn fn,
                   void* user, std::uint64_t* call_id,
                   std::string* error = nullptr);  // receives why a call is refused
+  // Times out one call whose deadline passed, else runs the front of the queue.
   bool spin_once();
+  bool run_front();
 };
 
 namespace {
@@ -288,18 +294,25 @@ void h_reject(void* ctx, const plr_msg*, const char* reason) {
   s->k->rejections.push_back({s->name, reason});
 }
 
+// A topic keeps the type it was first used with: false, and logged, for
+// another one (`lock` holds k.m and is released then).
+bool type_fits(Kernel& k, std::unique_lock<std::mutex>& lock, const Slot& s,
+               const std::string& topic, std::uint64_t type_id, const char* what) {
+  const auto [it, fresh] = k.topic_types.emplace(topic, type_id);
+  if (fresh || it->second == type_id) return true;
+  lock.unlock();
+  k.log(s.name, PLR_LOG_ERROR,
+        std::string(what) + " '" + topic + "': type differs from the topic's");
+  return false;
+}
+
 plr_status h_advertise(void* ctx, const char* topic, std::uint64_t type_id,
                        std::uint32_t schema_version, std::uint64_t* publisher) {
   Slot* s = slot_of(ctx);
   Kernel& k = *s->k;
   const std::string name = s->resolve(topic);
   std::unique_lock lock(k.m);
-  auto [it, fresh] = k.topic_types.emplace(name, type_id);
-  if (!fresh && it->second != type_id) {
-    lock.unlock();
-    k.log(s->name, PLR_LOG_ERROR, "advertise '" + name + "': type differs from the topic's");
-    return PLR_ERR_INVALID;
-  }
+  if (!type_fits(k, lock, *s, name, type_id, "advertise")) return PLR_ERR_INVALID;
   *publisher = k.next_id++;
   k.pubs.emplace(*publisher, Kernel::Pub{s, name, type_id, schema_version});
   return PLR_OK;
@@ -358,12 +371,7 @@ plr_status h_subscribe(void* ctx, const char* topic, std::uint64_t type_id, plr_
   Kernel& k = *s->k;
   const std::string name = s->resolve(topic);
   std::unique_lock lock(k.m);
-  auto [it, fresh] = k.topic_types.emplace(name, type_id);
-  if (!fresh && it->second != type_id) {
-    lock.unlock();
-    k.log(s->name, PLR_LOG_ERROR, "subscribe '" + name + "': type differs from the topic's");
-    return PLR_ERR_INVALID;
-  }
+  if (!type_fits(k, lock, *s, name, type_id, "subscribe")) return PLR_ERR_INVALID;
   *subscription = k.next_id++;
   k.subs.emplace(*subscription, Kernel::Sub{s, name, fn, user});
   return PLR_OK;
@@ -552,17 +560,44 @@ plr_status Kernel::call(Slot* s, const char* service_name, std::uint64_t request
   return PLR_OK;
 }
 
-bool Kernel::spin_once() {
+void Kernel::deliver_accepted(Slot* s) {
   std::unique_lock lock(m);
-  const std::int64_t t = now.load();
-  for (const auto& [id, p] : pending) {
-    if (p.deadline_ns > t) continue;
-    const std::uint64_t expired = id;
-    const std::string text = "service '" + p.service + "': timed out";
-    lock.unlock();
-    complete(expired, PLR_ERR_TIMEOUT, nullptr, text);
-    return true;
+  std::deque<Work> mine;
+  for (auto it = queue.begin(); it != queue.end();) {
+    const bool for_s = it->request ? pending.count(it->id) && pending.at(it->id).provider == s
+                                   : subs.count(it->id) && subs.at(it->id).owner == s;
+    if (for_s) {
+      mine.push_back(*it);
+      it = queue.erase(it);
+    } else {
+      ++it;
+    }
   }
+  // Run through the front of the queue, one at a time, as spin() would.
+  queue.insert(queue.begin(), mine.begin(), mine.end());
+  const std::size_t n = mine.size();
+  lock.unlock();
+  for (std::size_t i = 0; i < n; ++i) run_front();
+}
+
+bool Kernel::spin_once() {
+  {
+    std::unique_lock lock(m);
+    const std::int64_t t = now.load();
+    for (const auto& [id, p] : pending) {
+      if (p.deadline_ns > t) continue;
+      const std::uint64_t expired = id;
+      const std::string text = "service '" + p.service + "': timed out";
+      lock.unlock();
+      complete(expired, PLR_ERR_TIMEOUT, nullptr, text);
+      return true;
+    }
+  }
+  return run_front();
+}
+
+bool Kernel::run_front() {
+  std::unique_lock lock(m);
   if (queue.empty()) return false;
   Work w = queue.front();
   queue.pop_front();
@@ -642,6 +677,7 @@ Status NodeHandle::activate() {
   return transition(slot_->node.activate, NodeState::Configured, NodeState::Active, "activate");
 }
 Status NodeHandle::deactivate() {
+  if (slot_->alive && slot_->active()) kernel_->deliver_accepted(slot_);
   return transition(slot_->node.deactivate, NodeState::Active, NodeState::Configured, "deactivate");
 }
 Status NodeHandle::cleanup() {

@@ -55,8 +55,8 @@ constexpr Case kCases[] = {
 
 int serve(int domain) {
   BareKernel k(domain, "bench_server", true, "echo*");
-  if (const auto e = k.open(); !e.empty()) {
-    std::cerr << e << "\n";
+  if (const Status s = k.open(); !s) {
+    std::cerr << s.error().message << "\n";
     return 1;
   }
   (void)k.provide_echo(k.add_node("echo"), "echo", PLR_SERVICE_QUICK);
@@ -88,7 +88,7 @@ class Client {
  public:
   explicit Client(int domain)
       : kernel_(domain, "bench_client", false, "echo*"), caller_(kernel_.add_node("caller")) {}
-  std::string open() { return kernel_.open(); }
+  Status open() { return kernel_.open(); }
   struct RoundTrip {
     double resumed_us;   // until the calling thread runs again
     double callback_us;  // until the reply callback runs (Cyclone's receive thread)
@@ -211,8 +211,8 @@ int bench(bool quick, bool json) {
   const pid_t server = spawn({"/proc/self/exe", "--serve", std::to_string(domain)}, "", nullptr);
   {
     Client client(domain);
-    if (auto e = client.open(); !e.empty()) {
-      std::cerr << e << "\n";
+    if (const Status s = client.open(); !s) {
+      std::cerr << s.error().message << "\n";
       finish(server);
       return 1;
     }

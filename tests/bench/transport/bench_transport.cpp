@@ -366,7 +366,8 @@ std::string size_label(std::size_t s) {
   return std::to_string(s) + " B";
 }
 
-// Loopback-only Cyclone DDS config (DEPENDENCIES.md) with 64 KB datagrams.
+// Cyclone DDS on loopback only (no multicast, the one peer 127.0.0.1), with
+// 64 KB datagrams: what a kernel uses with `interfaces: [lo]`.
 std::string write_dds_config() {
   char path[] = "/tmp/plr_bench_ddsXXXXXX";
   const int fd = ::mkstemp(path);

@@ -13,9 +13,9 @@
 #include <thread>
 
 #include "bus.hpp"
-#include "config.hpp"
 #include "links.hpp"
 #include "message.hpp"
+#include "pipeline_config.hpp"
 #include "shm_bridge.hpp"
 
 namespace plr::bench {
@@ -23,7 +23,7 @@ namespace {
 
 using namespace std::chrono_literals;
 using kernel::Bus;
-using kernel::Config;
+using kernel::PipelineConfig;
 using kernel::ShmBridge;
 
 constexpr std::size_t kMaxSamples = 1000;
@@ -49,17 +49,17 @@ struct Received {
 
 class Ep final : public kernel::Endpoint {
  public:
-  explicit Ep(std::string n) : name_(std::move(n)), executor_(name_) {}
-  kernel::Executor& executor() override { return executor_; }
+  explicit Ep(std::string n) : name_(std::move(n)), node_thread_(name_) {}
+  kernel::NodeThread& node_thread() override { return node_thread_; }
   const std::string& endpoint_name() const override { return name_; }
 
  private:
   std::string name_;
-  kernel::Executor executor_;
+  kernel::NodeThread node_thread_;
 };
 
-Config make_config(std::size_t size) {
-  auto c = kernel::parse_config(
+PipelineConfig make_config(std::size_t size) {
+  auto c = kernel::parse_pipeline_config(
       "hosts:\n  b: {restart: never}\n"
       "nodes:\n  a: {plugin: none}\n  b: {plugin: none, host: b}\n"
       "topics:\n  blob: {policy: reliable, depth: 4, slot_size: " +
@@ -73,7 +73,7 @@ Config make_config(std::size_t size) {
 }
 
 // Host b: records receive time - stamp for each message, in its subscriber's callback.
-int receive(const Config& config, const std::string& run, std::size_t n, Received& out) {
+int receive(const PipelineConfig& config, const std::string& run, std::size_t n, Received& out) {
   cpu_set_t set;
   CPU_ZERO(&set);
   CPU_SET(1, &set);
@@ -99,7 +99,7 @@ int receive(const Config& config, const std::string& run, std::size_t n, Receive
   while (out.count.load() < n && std::chrono::steady_clock::now() < end)
     std::this_thread::sleep_for(1ms);
   bus.remove_endpoint(&ep);
-  ep.executor().drain();
+  ep.node_thread().drain();
   bus.detach(bridge.get());
   return out.count.load() >= n ? 0 : 3;
 }
@@ -116,7 +116,7 @@ KernelRow run_case(Path path, std::size_t size, std::size_t n, const std::string
   row.path = name(path);
   row.size = size;
   row.messages = n;
-  const Config config = make_config(size);
+  const PipelineConfig config = make_config(size);
   shared->count.store(0);
   const pid_t child = ::fork();
   if (child == 0) ::_exit(receive(config, run, n, *shared));

@@ -6,8 +6,8 @@
 
 namespace plr::kernel::testing {
 
-Config config_from_yaml(const std::string& yaml) {
-  auto c = parse_config("plugin_paths: [" PLR_TEST_PLUGIN_DIR "]\n" + yaml, "test.yaml");
+PipelineConfig config_from_yaml(const std::string& yaml) {
+  auto c = parse_pipeline_config("plugin_paths: [" PLR_TEST_PLUGIN_DIR "]\n" + yaml, "test.yaml");
   if (!c) throw std::runtime_error(c.error().message);
   return *c;
 }

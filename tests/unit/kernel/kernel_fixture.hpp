@@ -3,7 +3,7 @@
 #pragma once
 
 #include "bus.hpp"
-#include "config.hpp"
+#include "pipeline_config.hpp"
 #include "test_endpoint.hpp"
 
 #include <plr/message.hpp>
@@ -17,7 +17,7 @@
 namespace plr::kernel::testing {
 
 // A config whose plug-in path is the test plug-in folder.
-Config config_from_yaml(const std::string& yaml);
+PipelineConfig config_from_yaml(const std::string& yaml);
 
 template <class T>
 plr_msg* make_msg(const flatbuffers::FlatBufferBuilder& fbb) {

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -30,9 +31,50 @@ TEST(Expected, MovesMoveOnlyValuesOut) {
   EXPECT_EQ(*out, "payload");
 }
 
-TEST(Expected, ValueOfAnErrorThrows) {
-  plr::Expected<int> e = plr::make_error(PLR_ERR_INVALID, "bad");
-  EXPECT_THROW((void)e.value(), std::bad_variant_access);
+TEST(Expected, ConvertsWhatTheValueTypeAccepts) {
+  plr::Expected<std::unique_ptr<const std::string>> e = std::make_unique<std::string>("derived");
+  ASSERT_TRUE(e);
+  EXPECT_EQ(**e, "derived");
+  plr::Expected<std::string> text = "literal";
+  EXPECT_EQ(*text, "literal");
+}
+
+// Reading the wrong alternative is a bug in the caller: it aborts, naming it.
+TEST(ExpectedDeathTest, ValueOfAnErrorAbortsWithTheError) {
+  plr::Expected<int> e = plr::make_error(PLR_ERR_INVALID, "bad input");
+  EXPECT_DEATH((void)e.value(), "value\\(\\) of an error \\(the error: bad input\\)");
+}
+
+TEST(ExpectedDeathTest, ErrorOfAValueAborts) {
+  const plr::Expected<int> e = 1;
+  EXPECT_DEATH((void)e.error(), "error\\(\\) of a value");
+  const plr::Status ok;
+  EXPECT_DEATH((void)ok.error(), "error\\(\\) of a success");
+}
+
+// The data-path form: an enum error, no heap, same interface.
+enum class RingError : std::uint8_t { kFull, kClosed };
+
+plr::Expected<std::uint32_t, RingError> take(bool full) {
+  if (full) return RingError::kFull;
+  return 7u;
+}
+
+TEST(Expected, HoldsAnEnumErrorWithoutAString) {
+  static_assert(sizeof(plr::Expected<std::uint32_t, RingError>) <= 8);
+  static_assert(sizeof(plr::Expected<void, RingError>) <= 2);
+  EXPECT_EQ(take(false).value(), 7u);
+  ASSERT_FALSE(take(true));
+  EXPECT_EQ(take(true).error(), RingError::kFull);
+  plr::Expected<void, RingError> done;
+  EXPECT_TRUE(done);
+  plr::Expected<void, RingError> closed = RingError::kClosed;
+  ASSERT_FALSE(closed);
+  EXPECT_EQ(closed.error(), RingError::kClosed);
+}
+
+TEST(ExpectedDeathTest, ValueOfAnEnumErrorAborts) {
+  EXPECT_DEATH((void)take(true).value(), "value\\(\\) of an error");
 }
 
 TEST(Status, DefaultIsSuccess) {

@@ -103,16 +103,16 @@ PeerWatch::~PeerWatch() {
 
 Result<void> PeerWatch::check() const noexcept {
   if (closed_ != nullptr && closed_->load(std::memory_order_acquire) != 0) {
-    return unexpected(Error::kClosed);
+    return Error::kClosed;
   }
   if (peer_.pid == 0) return {};
   if (pidfd_ >= 0) {
     // A pidfd turns readable when the process exits (zombies included).
     pollfd p{pidfd_, POLLIN, 0};
     if (::poll(&p, 1, 0) == 0) return {};
-    return unexpected(Error::kPeerDead);
+    return Error::kPeerDead;
   }
-  if (!peer_.alive()) return unexpected(Error::kPeerDead);
+  if (!peer_.alive()) return Error::kPeerDead;
   return {};
 }
 

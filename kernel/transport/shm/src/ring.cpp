@@ -40,7 +40,7 @@ Result<void> Ring::check(const RingGeometry& g) noexcept {
                   (g.policy == Policy::kKeepLast || g.policy == Policy::kReliable) &&
                   (g.wait_mode == WaitMode::kBlocking || g.wait_mode == WaitMode::kPolling) &&
                   g.spin_us <= kMaxSpinUs && bytes(g) <= (std::size_t{16} << 30);
-  if (!ok) return unexpected(Error::kInvalidArgument);
+  if (!ok) return Error::kInvalidArgument;
   return {};
 }
 
@@ -139,14 +139,14 @@ bool Producer::find_slot(std::uint32_t& out) noexcept {
 
 Result<std::uint32_t> Producer::loan(std::size_t max_size, Timeout timeout, CheckFn check,
                                      const void* ctx) noexcept {
-  if (max_size > ring_.geo.slot_size) return unexpected(Error::kTooLarge);
+  if (max_size > ring_.geo.slot_size) return Error::kTooLarge;
   std::uint32_t slot = 0;
   if (find_slot(slot)) return slot;
   if (ring_.geo.policy == Policy::kKeepLast) {
     if (reclaim_dead_readers() > 0 && find_slot(slot)) return slot;
-    return unexpected(Error::kSlotsExhausted);
+    return Error::kSlotsExhausted;
   }
-  if (timeout == kNoWait) return unexpected(Error::kTimeout);
+  if (timeout == kNoWait) return Error::kTimeout;
   auto r = wait_until(
       ring_.header->space, ring_.geo.wait_mode, deadline_after(timeout),
       [&] { return find_slot(slot); },
@@ -155,7 +155,7 @@ Result<std::uint32_t> Producer::loan(std::size_t max_size, Timeout timeout, Chec
         return check != nullptr ? check(ctx) : Result<void>{};
       },
       kSpaceSpins);
-  if (!r) return unexpected(r.error());
+  if (!r) return r.error();
   return slot;
 }
 
@@ -169,7 +169,7 @@ Result<std::uint64_t> Producer::publish(std::uint32_t slot, MessageType type,
   const std::size_t cap = ring_.geo.slot_size;
   if (offset > cap || size > cap - offset) {
     cancel(slot);
-    return unexpected(Error::kInvalidArgument);
+    return Error::kInvalidArgument;
   }
   const std::uint64_t seq = next_seq_++;
   SlotHeader& h = ring_.slot(slot);
@@ -236,7 +236,7 @@ Result<void> Consumer::attach(const ProcessStamp& me) noexcept {
     bit_ = 1ULL << i;
     return {};
   }
-  return unexpected(Error::kTooManySubscribers);
+  return Error::kTooManySubscribers;
 }
 
 void Consumer::detach() noexcept {
@@ -287,7 +287,7 @@ Result<Taken> Consumer::try_take() noexcept {
     std::uint32_t idx = desc_slot(d);
     if (dseq != cursor_ || idx >= n) {
       const std::uint64_t head = ring_.header->head.load(std::memory_order_seq_cst);
-      if (cursor_ >= head) return unexpected(Error::kNoData);
+      if (cursor_ >= head) return Error::kNoData;
       d = ring_.desc[cursor_ % n].load(std::memory_order_acquire);
       dseq = desc_seq(d);
       idx = desc_slot(d);

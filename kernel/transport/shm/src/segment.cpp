@@ -139,9 +139,9 @@ std::string service_segment_name(std::string_view run_id, std::string_view servi
 }
 
 Result<std::size_t> remove_run_segments(std::string_view run_id) noexcept {
-  if (!valid_run_id(run_id)) return unexpected(Error::kInvalidArgument);
+  if (!valid_run_id(run_id)) return Error::kInvalidArgument;
   DIR* dir = ::opendir(kShmDir);
-  if (dir == nullptr) return unexpected(Error::kOsError);
+  if (dir == nullptr) return Error::kOsError;
   std::string prefix = user_prefix();
   prefix.append(run_id);
   prefix += '.';
@@ -195,20 +195,31 @@ Segment::~Segment() {
   if (base_ != nullptr) ::munmap(base_, size_);
 }
 
+Segment Segment::mapped(const std::string& name, void* base, std::size_t size,
+                        const struct stat& st) {
+  Segment s;
+  s.name_ = name;
+  s.base_ = static_cast<std::byte*>(base);
+  s.size_ = size;
+  s.dev_ = st.st_dev;
+  s.ino_ = st.st_ino;
+  return s;
+}
+
 Result<Segment> Segment::create(const std::string& name, std::size_t size, SegmentKind kind,
                                 std::string_view endpoint) {
   if (size < sizeof(SegmentHeader) || !valid_endpoint_name(endpoint)) {
-    return unexpected(Error::kInvalidArgument);
+    return Error::kInvalidArgument;
   }
   int fd = -1;
   for (int attempt = 0; attempt < 2 && fd < 0; ++attempt) {
     fd = ::shm_open(name.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
     if (fd >= 0) break;
-    if (errno == EACCES) return unexpected(Error::kPermission);
-    if (errno != EEXIST) return unexpected(Error::kOsError);
+    if (errno == EACCES) return Error::kPermission;
+    if (errno != EEXIST) return Error::kOsError;
     // A crashed previous owner (a restarted host) leaves its segment behind.
     if (attempt == 1 || segment_owner(name) != Owner::kDead) {
-      return unexpected(Error::kAlreadyExists);
+      return Error::kAlreadyExists;
     }
     ::shm_unlink(name.c_str());
   }
@@ -218,20 +229,15 @@ Result<Segment> Segment::create(const std::string& name, std::size_t size, Segme
       ::fstat(fd, &st) != 0) {
     ::close(fd);
     ::shm_unlink(name.c_str());
-    return unexpected(Error::kOsError);
+    return Error::kOsError;
   }
   void* p = ::mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_POPULATE, fd, 0);
   ::close(fd);
   if (p == MAP_FAILED) {
     ::shm_unlink(name.c_str());
-    return unexpected(Error::kOsError);
+    return Error::kOsError;
   }
-  Segment s;
-  s.name_ = name;
-  s.base_ = static_cast<std::byte*>(p);
-  s.size_ = size;
-  s.dev_ = st.st_dev;
-  s.ino_ = st.st_ino;
+  Segment s = mapped(name, p, size, st);
   s.owner_ = ProcessStamp::self();
   auto* h = new (p) SegmentHeader{};
   h->layout_version = kLayoutVersion;
@@ -249,45 +255,40 @@ void Segment::publish_header() noexcept {
 
 Result<Segment> Segment::open(const std::string& name, SegmentKind kind,
                               std::string_view endpoint) {
-  if (!valid_endpoint_name(endpoint)) return unexpected(Error::kInvalidArgument);
+  if (!valid_endpoint_name(endpoint)) return Error::kInvalidArgument;
   const int fd = ::shm_open(name.c_str(), O_RDWR | O_CLOEXEC, 0);
   if (fd < 0) {
-    if (errno == ENOENT) return unexpected(Error::kNotFound);
-    if (errno == EACCES) return unexpected(Error::kPermission);
-    return unexpected(Error::kOsError);
+    if (errno == ENOENT) return Error::kNotFound;
+    if (errno == EACCES) return Error::kPermission;
+    return Error::kOsError;
   }
   struct stat st {};
   if (::fstat(fd, &st) != 0) {
     ::close(fd);
-    return unexpected(Error::kOsError);
+    return Error::kOsError;
   }
   if (st.st_uid != ::geteuid() || (st.st_mode & 0777) != 0600) {
     ::close(fd);
-    return unexpected(Error::kPermission);
+    return Error::kPermission;
   }
   const auto size = static_cast<std::size_t>(st.st_size);
   if (size < sizeof(SegmentHeader)) {  // the creator has not sized it yet
     ::close(fd);
-    return unexpected(Error::kNotFound);
+    return Error::kNotFound;
   }
   void* p = ::mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_POPULATE, fd, 0);
   ::close(fd);
-  if (p == MAP_FAILED) return unexpected(Error::kOsError);
-  Segment s;
-  s.name_ = name;
-  s.base_ = static_cast<std::byte*>(p);
-  s.size_ = size;
-  s.dev_ = st.st_dev;
-  s.ino_ = st.st_ino;
+  if (p == MAP_FAILED) return Error::kOsError;
+  Segment s = mapped(name, p, size, st);
   const SegmentHeader& h = s.header();
   const std::uint64_t magic = load_magic(h);
-  if (magic == 0) return unexpected(Error::kNotFound);  // not stamped yet
+  if (magic == 0) return Error::kNotFound;  // not stamped yet
   char stored[kNameBytes];
   std::memcpy(stored, h.name, kNameBytes);
   stored[kNameBytes - 1] = '\0';
   if (magic != kMagic || h.layout_version != kLayoutVersion || h.kind != kind ||
       h.total_size != size || std::string_view(stored) != endpoint) {
-    return unexpected(Error::kIncompatible);
+    return Error::kIncompatible;
   }
   s.owner_ = ProcessStamp{h.owner_pid, h.owner_start};
   return s;

@@ -1,6 +1,7 @@
 // An mmap'ed POSIX shared-memory object (RAII). Not on the data path.
 #pragma once
 
+#include <sys/stat.h>
 #include <sys/types.h>
 
 #include <cstddef>
@@ -41,6 +42,10 @@ class Segment {
   const std::string& name() const noexcept { return name_; }
 
  private:
+  // The object `name` mapped at `base` (`st`: its identity, for unlink()).
+  static Segment mapped(const std::string& name, void* base, std::size_t size,
+                        const struct stat& st);
+
   std::string name_;
   std::byte* base_ = nullptr;
   std::size_t size_ = 0;

@@ -45,7 +45,7 @@ struct Layout {
 };
 
 Result<Layout> read_layout(const Segment& seg) {
-  if (seg.size() < kClientsOffset) return unexpected(Error::kIncompatible);
+  if (seg.size() < kClientsOffset) return Error::kIncompatible;
   Layout l{};
   const auto* sh = reinterpret_cast<const ServiceHeader*>(seg.data() + kServiceOffset);
   std::memcpy(&l.max_clients, &sh->max_clients, sizeof l.max_clients);
@@ -53,7 +53,7 @@ Result<Layout> read_layout(const Segment& seg) {
   if (l.max_clients < 1 || l.max_clients > detail::kMaxClients || !Ring::check(l.geo) ||
       l.geo.max_subscribers != 1 || l.geo.policy != Policy::kReliable ||
       seg.size() < segment_bytes(l.max_clients, l.geo)) {
-    return unexpected(Error::kIncompatible);
+    return Error::kIncompatible;
   }
   return l;
 }
@@ -68,9 +68,9 @@ struct ClientWatch {
     const auto& w = *static_cast<const ClientWatch*>(self);
     if (w.entry->generation.load(std::memory_order_acquire) != w.generation ||
         w.entry->state.load(std::memory_order_acquire) != ClientState::kActive) {
-      return unexpected(Error::kUnknownClient);
+      return Error::kUnknownClient;
     }
-    if (!w.stamp.alive()) return unexpected(Error::kPeerDead);
+    if (!w.stamp.alive()) return Error::kPeerDead;
     return {};
   }
 };
@@ -144,14 +144,14 @@ ServiceServer::~ServiceServer() {
 Result<ServiceServer> ServiceServerBuilder::create() const {
   if (!valid_run_id(run_id_) || !valid_endpoint_name(service_) || config_.max_clients < 1 ||
       config_.max_clients > detail::kMaxClients) {
-    return unexpected(Error::kInvalidArgument);
+    return Error::kInvalidArgument;
   }
   const Layout l{config_.max_clients, RingGeometry{config_.slot_count, config_.slot_size, 1,
                                                    Policy::kReliable, config_.wait_mode, 0}};
-  if (auto ok = Ring::check(l.geo); !ok) return unexpected(ok.error());
+  if (auto ok = Ring::check(l.geo); !ok) return ok.error();
   auto seg = Segment::create(service_segment_name(run_id_, service_),
                              segment_bytes(l.max_clients, l.geo), SegmentKind::kService, service_);
-  if (!seg) return unexpected(seg.error());
+  if (!seg) return seg.error();
   auto impl = std::make_unique<ServiceServer::Impl>();
   impl->segment = std::move(*seg);
   impl->layout = l;
@@ -201,31 +201,31 @@ Result<Request> ServiceServer::take_request(Timeout timeout) noexcept {
       return Request{std::move(s), ReplyTo{c, e.generation.load(std::memory_order_acquire),
                                            t->info.correlation_id}};
     }
-    if (timeout == kNoWait) return unexpected(Error::kNoData);
+    if (timeout == kNoWait) return Error::kNoData;
     auto w = detail::wait_until(im.sh->doorbell, im.layout.geo.wait_mode, deadline, any_data,
                                 [&]() -> Result<void> {
                                   im.reap();
                                   return {};
                                 });
-    if (!w) return unexpected(w.error());
+    if (!w) return w.error();
   }
 }
 
 Result<Loan> ServiceServer::loan_reply(const ReplyTo& to, std::size_t max_size,
                                        Timeout timeout) noexcept {
   Impl& im = *impl_;
-  if (to.channel >= im.layout.max_clients) return unexpected(Error::kUnknownClient);
+  if (to.channel >= im.layout.max_clients) return Error::kUnknownClient;
   const ClientEntry& e = im.clients[to.channel];
   const ClientWatch watch{&e, to.generation,
                           ProcessStamp{e.pid.load(std::memory_order_acquire),
                                        e.start_time.load(std::memory_order_acquire)}};
   if (e.generation.load(std::memory_order_acquire) != to.generation ||
       e.state.load(std::memory_order_acquire) != ClientState::kActive) {
-    return unexpected(Error::kUnknownClient);
+    return Error::kUnknownClient;
   }
   detail::Producer& p = im.replies[to.channel];
   auto slot = p.loan(max_size, timeout, &ClientWatch::check, &watch);
-  if (!slot) return unexpected(slot.error());
+  if (!slot) return slot.error();
   return Loan(&p, *slot, {p.ring().payload(*slot), p.ring().geo.slot_size});
 }
 
@@ -233,15 +233,15 @@ Result<void> ServiceServer::send_reply(Loan&& loan, const ReplyTo& to, MessageTy
                                        std::size_t offset, std::size_t size) noexcept {
   Impl& im = *impl_;
   if (to.channel >= im.layout.max_clients || loan.producer_ != &im.replies[to.channel]) {
-    return unexpected(Error::kInvalidArgument);
+    return Error::kInvalidArgument;
   }
   loan.producer_ = nullptr;
   if (im.clients[to.channel].generation.load(std::memory_order_acquire) != to.generation) {
     im.replies[to.channel].cancel(loan.slot_);
-    return unexpected(Error::kUnknownClient);
+    return Error::kUnknownClient;
   }
   auto r = im.replies[to.channel].publish(loan.slot_, type, to.correlation_id, offset, size);
-  if (!r) return unexpected(r.error());
+  if (!r) return r.error();
   return {};
 }
 
@@ -299,15 +299,15 @@ ServiceClient::~ServiceClient() = default;
 
 Result<ServiceClient> ServiceClientBuilder::create() const {
   if (!valid_run_id(run_id_) || !valid_endpoint_name(service_)) {
-    return unexpected(Error::kInvalidArgument);
+    return Error::kInvalidArgument;
   }
   auto seg =
       Segment::open(service_segment_name(run_id_, service_), SegmentKind::kService, service_);
-  if (!seg) return unexpected(seg.error());
+  if (!seg) return seg.error();
   auto l = read_layout(*seg);
-  if (!l) return unexpected(l.error());
+  if (!l) return l.error();
   auto impl = std::make_unique<ServiceClient::Impl>(std::move(*seg), *l);
-  if (auto alive = impl->watch.check(); !alive) return unexpected(alive.error());
+  if (auto alive = impl->watch.check(); !alive) return alive.error();
   std::byte* base = impl->segment.data();
   auto* clients = reinterpret_cast<ClientEntry*>(base + kClientsOffset);
   const ProcessStamp me = ProcessStamp::self();
@@ -322,35 +322,35 @@ Result<ServiceClient> ServiceClientBuilder::create() const {
     if (auto ok = impl->reply.attach(me); !ok) {
       e.start_time.store(0, std::memory_order_relaxed);
       e.pid.store(0, std::memory_order_release);
-      return unexpected(Error::kIncompatible);
+      return Error::kIncompatible;
     }
     impl->entry = &e;
     e.state.store(ClientState::kActive, std::memory_order_seq_cst);
     return ServiceClient(std::move(impl));
   }
-  return unexpected(Error::kTooManyClients);
+  return Error::kTooManyClients;
 }
 
 Result<Loan> ServiceClient::loan_request(std::size_t max_size, Timeout timeout) noexcept {
   Impl& im = *impl_;
-  if (auto alive = im.watch.check(); !alive) return unexpected(alive.error());
+  if (auto alive = im.watch.check(); !alive) return alive.error();
   auto slot = im.request.loan(max_size, timeout, &detail::PeerWatch::check_fn, &im.watch);
-  if (!slot) return unexpected(slot.error());
+  if (!slot) return slot.error();
   return Loan(&im.request, *slot, {im.request.ring().payload(*slot), im.layout.geo.slot_size});
 }
 
 Result<std::uint64_t> ServiceClient::send_request(Loan&& loan, MessageType type, std::size_t offset,
                                                   std::size_t size) noexcept {
   Impl& im = *impl_;
-  if (loan.producer_ != &im.request) return unexpected(Error::kInvalidArgument);
+  if (loan.producer_ != &im.request) return Error::kInvalidArgument;
   loan.producer_ = nullptr;
   if (auto alive = im.watch.check(); !alive) {
     im.request.cancel(loan.slot_);
-    return unexpected(alive.error());
+    return alive.error();
   }
   const std::uint64_t id = im.next_correlation++;
   auto r = im.request.publish(loan.slot_, type, id, offset, size);
-  if (!r) return unexpected(r.error());
+  if (!r) return r.error();
   im.sent.store(im.sent.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
   return id;
 }
@@ -367,8 +367,8 @@ Result<Sample> ServiceClient::take_reply(Timeout timeout) noexcept {
                     {r.payload(t->slot) + t->offset, t->info.size}, t->info);
     }
     // Nothing to read: a dead or closed server fails the call now, not at the timeout.
-    if (auto alive = im.watch.check(); !alive) return unexpected(alive.error());
-    if (timeout == kNoWait) return unexpected(Error::kNoData);
+    if (auto alive = im.watch.check(); !alive) return alive.error();
+    if (timeout == kNoWait) return Error::kNoData;
     auto w = detail::wait_until(
         im.reply.ring().header->data, im.layout.geo.wait_mode, deadline,
         [&] {
@@ -376,7 +376,7 @@ Result<Sample> ServiceClient::take_reply(Timeout timeout) noexcept {
                  im.segment.header().closed.load(std::memory_order_acquire) != 0;
         },
         [&] { return im.watch.check(); });
-    if (!w) return unexpected(w.error());
+    if (!w) return w.error();
   }
 }
 

@@ -99,14 +99,14 @@ Publisher::~Publisher() {
 
 Result<Publisher> PublisherBuilder::create() const {
   if (!valid_run_id(run_id_) || !valid_endpoint_name(topic_)) {
-    return unexpected(Error::kInvalidArgument);
+    return Error::kInvalidArgument;
   }
   const RingGeometry g{config_.slot_count, config_.slot_size, config_.max_subscribers,
                        config_.policy,     config_.wait_mode, config_.spin_us};
-  if (auto ok = Ring::check(g); !ok) return unexpected(ok.error());
+  if (auto ok = Ring::check(g); !ok) return ok.error();
   auto seg = Segment::create(topic_segment_name(run_id_, topic_), kRingOffset + Ring::bytes(g),
                              SegmentKind::kTopic, topic_);
-  if (!seg) return unexpected(seg.error());
+  if (!seg) return seg.error();
   const Ring ring = Ring::init(seg->data() + kRingOffset, g, nullptr);
   auto impl = std::make_unique<Publisher::Impl>(std::move(*seg), ring, config_);
   impl->segment.publish_header();
@@ -115,25 +115,25 @@ Result<Publisher> PublisherBuilder::create() const {
 
 Result<Loan> Publisher::loan(std::size_t max_size, Timeout timeout) noexcept {
   auto slot = impl_->producer.loan(max_size, timeout);
-  if (!slot) return unexpected(slot.error());
+  if (!slot) return slot.error();
   const Ring& r = impl_->producer.ring();
   return Loan(&impl_->producer, *slot, {r.payload(*slot), r.geo.slot_size});
 }
 
 Result<std::uint64_t> Publisher::publish(Loan&& loan, MessageType type, std::size_t offset,
                                          std::size_t size) noexcept {
-  if (loan.producer_ != &impl_->producer) return unexpected(Error::kInvalidArgument);
+  if (loan.producer_ != &impl_->producer) return Error::kInvalidArgument;
   loan.producer_ = nullptr;
   return impl_->producer.publish(loan.slot_, type, 0, offset, size);
 }
 
 Result<Sample> Publisher::publish_shared(Loan&& loan, MessageType type, std::size_t offset,
                                          std::size_t size) noexcept {
-  if (loan.producer_ != &impl_->producer) return unexpected(Error::kInvalidArgument);
+  if (loan.producer_ != &impl_->producer) return Error::kInvalidArgument;
   const std::uint32_t slot = std::exchange(loan.slot_, 0);
   loan.producer_ = nullptr;
   auto seq = impl_->producer.publish(slot, type, 0, offset, size, detail::kOwnerBit);
-  if (!seq) return unexpected(seq.error());
+  if (!seq) return seq.error();
   const Ring& r = impl_->producer.ring();
   const MessageInfo info{type.type_id, type.schema_version, static_cast<std::uint32_t>(size), *seq,
                          0};
@@ -144,7 +144,7 @@ Result<Sample> Publisher::publish_shared(Loan&& loan, MessageType type, std::siz
 Result<std::uint64_t> Publisher::publish_copy(MessageType type, std::span<const std::byte> bytes,
                                               Timeout timeout) noexcept {
   auto l = loan(bytes.size(), timeout);
-  if (!l) return unexpected(l.error());
+  if (!l) return l.error();
   if (!bytes.empty()) std::memcpy(l->data(), bytes.data(), bytes.size());
   return publish(std::move(*l), type, 0, bytes.size());
 }
@@ -201,26 +201,26 @@ Subscriber::~Subscriber() = default;
 
 Result<Subscriber> SubscriberBuilder::create() const {
   if (!valid_run_id(run_id_) || !valid_endpoint_name(topic_)) {
-    return unexpected(Error::kInvalidArgument);
+    return Error::kInvalidArgument;
   }
   auto seg = Segment::open(topic_segment_name(run_id_, topic_), SegmentKind::kTopic, topic_);
-  if (!seg) return unexpected(seg.error());
+  if (!seg) return seg.error();
   // The geometry is read once and checked; later changes by a faulty peer are ignored.
   if (seg->size() < kRingOffset + sizeof(detail::RingHeader)) {
-    return unexpected(Error::kIncompatible);
+    return Error::kIncompatible;
   }
   RingGeometry g;
   std::memcpy(&g, &reinterpret_cast<const detail::RingHeader*>(seg->data() + kRingOffset)->geo,
               sizeof g);
   if (!Ring::check(g) || seg->size() < kRingOffset + Ring::bytes(g)) {
-    return unexpected(Error::kIncompatible);
+    return Error::kIncompatible;
   }
   const Ring ring = Ring::view(seg->data() + kRingOffset, g, nullptr);
   auto impl = std::make_unique<Subscriber::Impl>(std::move(*seg), ring);
   auto ok = impl->consumer.attach(ProcessStamp::self());
   // A full table may hold readers that died: free those and try once more.
   if (!ok && detail::reclaim_dead(ring) > 0) ok = impl->consumer.attach(ProcessStamp::self());
-  if (!ok) return unexpected(ok.error());
+  if (!ok) return ok.error();
   return Subscriber(std::move(impl));
 }
 
@@ -234,14 +234,14 @@ Result<Sample> Subscriber::take(Timeout timeout) noexcept {
       return Sample(&r.slot(t->slot), &r.header->space, im.consumer.bit(),
                     {r.payload(t->slot) + t->offset, t->info.size}, t->info);
     }
-    if (t.error() != Error::kNoData) return unexpected(t.error());
-    if (im.closed()) return unexpected(Error::kClosed);
-    if (timeout == kNoWait) return unexpected(Error::kNoData);
+    if (t.error() != Error::kNoData) return t.error();
+    if (im.closed()) return Error::kClosed;
+    if (timeout == kNoWait) return Error::kNoData;
     auto w = detail::wait_until(
         *im.consumer.ring().doorbell, im.config.wait_mode, deadline,
         [&] { return im.consumer.has_data() || im.closed(); }, [&] { return im.watch.check(); }, 0,
         std::chrono::microseconds(im.config.spin_us));
-    if (!w) return unexpected(w.error());
+    if (!w) return w.error();
   }
 }
 

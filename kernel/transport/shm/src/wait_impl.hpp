@@ -43,7 +43,7 @@ Result<void> wait_until(Notifier& n, WaitMode mode, Clock::time_point deadline, 
       if (auto r = check(); !r) return r;
       if (ready()) return {};
     }
-    if (now >= deadline) return unexpected(Error::kTimeout);
+    if (now >= deadline) return Error::kTimeout;
     if (mode == WaitMode::kPolling) continue;
 
     n.sleepers.fetch_add(1, std::memory_order_seq_cst);

@@ -9,14 +9,13 @@
 namespace plr::shm {
 
 Result<WakeLatencyRequest> WakeLatencyRequest::hold(std::int32_t max_us) noexcept {
-  if (max_us < 0) return unexpected(Error::kInvalidArgument);
+  if (max_us < 0) return Error::kInvalidArgument;
   const int fd = ::open("/dev/cpu_dma_latency", O_WRONLY | O_CLOEXEC);
-  if (fd < 0)
-    return unexpected(errno == EACCES || errno == EPERM ? Error::kPermission : Error::kOsError);
+  if (fd < 0) return errno == EACCES || errno == EPERM ? Error::kPermission : Error::kOsError;
   // The device takes the value as a binary 32-bit integer.
   if (::write(fd, &max_us, sizeof max_us) != static_cast<ssize_t>(sizeof max_us)) {
     ::close(fd);
-    return unexpected(Error::kOsError);
+    return Error::kOsError;
   }
   return WakeLatencyRequest(fd, max_us);
 }

@@ -11,12 +11,14 @@
 //   auto reply = k.call<plr::msg::DoubleRequest, plr::msg::DoubleReply>("double", request);
 //   EXPECT_EQ(reply.value()->value(), 6);
 //
-// Rules it shares with the kernel, so tests see the real behaviour:
-// - Topic messages and new service requests reach only active nodes.
+// Rules it shares with the kernel, so tests see the real behaviour (the host
+// contract suite, plr/testing/host_contract.hpp, checks both against them):
+// - Topic messages and new service requests reach only active nodes; what a
+//   node accepted while active reaches it before its deactivate hook runs
+//   (deactivate() delivers it first, as the node's thread in the kernel does).
 // - A node that is unconfigured (after cleanup or a failed configure) holds no
-//   publishers, subscriptions or services: the fake kernel drops them, so the
-//   next configure can register them again. (The kernel, for now, drops them
-//   only when it destroys the node.)
+//   publishers, subscriptions or services: they are dropped, so the next
+//   configure can register them again.
 // - publish/call/respond take ownership of the message even when they fail.
 // - A call with no active provider, or of the wrong request type, is refused:
 //   call() returns the error and the reply callback never runs. Every other

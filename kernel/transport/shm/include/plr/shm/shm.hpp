@@ -2,7 +2,6 @@
 // never see it). See docs/transports.md.
 #pragma once
 
-#include "plr/shm/expected.hpp"
 #include "plr/shm/segments.hpp"
 #include "plr/shm/service.hpp"
 #include "plr/shm/topic.hpp"

@@ -6,7 +6,7 @@
 #include <chrono>
 #include <cstdint>
 
-#include "plr/shm/expected.hpp"
+#include <plr/expected.hpp>
 
 namespace plr::shm {
 

@@ -1,0 +1,483 @@
+#include "shm_bridge.hpp"
+
+#include <plr/message.hpp>
+#include <plr/shm/shm.hpp>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <cstring>
+
+namespace plr::kernel {
+
+namespace {
+
+using namespace std::chrono_literals;
+
+// Error replies travel as this type: one status byte, then the reason text.
+constexpr std::uint64_t kErrorType = fnv1a("plr.transport.Error");
+
+shm::TopicConfig shm_topic_config(const TopicSettings& t) {
+  shm::TopicConfig c;
+  c.slot_count = static_cast<std::uint32_t>(std::max<std::size_t>(t.depth, 2));
+  c.slot_size = static_cast<std::uint32_t>(t.slot_size);
+  c.policy = t.policy == TopicPolicy::Reliable ? shm::Policy::kReliable : shm::Policy::kKeepLast;
+  c.wait_mode = t.busy_poll ? shm::WaitMode::kPolling : shm::WaitMode::kBlocking;
+  c.spin_us = t.spin_us;
+  return c;
+}
+
+bool peer_gone(shm::Error e) {
+  return e == shm::Error::kPeerDead || e == shm::Error::kClosed;
+}
+
+std::string segment(const std::string& host, const std::string& name) {
+  return host + "/" + name;
+}
+
+// Keeps a shared-memory sample (and so its slot) alive while a message refers to it.
+template <class T>
+plr_msg* wrap_sample(T&& holder, const shm::Sample& sample, const void* origin) {
+  const auto data = sample.data();
+  const auto info = sample.info();
+  auto keep = std::make_shared<std::decay_t<T>>(std::forward<T>(holder));
+  return msg_wrap(reinterpret_cast<const std::uint8_t*>(data.data()), data.size(), info.type_id,
+                  info.schema_version, std::move(keep), origin);
+}
+
+}  // namespace
+
+// The segment of an exported topic. Shared with the messages built in its
+// slots, which may outlive the bridge's table entry.
+struct Writer {
+  std::mutex m;  // a shm::Publisher is used by one thread at a time
+  shm::Publisher publisher;
+  std::atomic<std::uint64_t> in_place{0};  // sent from a loaned slot: no copy
+  std::atomic<std::uint64_t> copied{0};    // built elsewhere, copied into a slot once
+
+  explicit Writer(shm::Publisher p) : publisher(std::move(p)) {}
+};
+
+// A slot loaned to a local publisher. Committed, it stays held for the
+// in-process readers of the same message (they read the slot in place).
+struct SlotLoan final : MsgLoan {
+  std::shared_ptr<Writer> writer;  // first: outlives the loan and the hold
+  std::optional<shm::Loan> loan;
+  std::optional<shm::Sample> held;
+
+  bool commit(const plr_msg& m) override {
+    if (!loan || m.offset > m.capacity || m.size > m.capacity - m.offset) return false;
+    std::lock_guard lock(writer->m);
+    auto s = writer->publisher.publish_shared(std::move(*loan), {m.type_id, m.schema_version},
+                                              m.offset, m.size);
+    loan.reset();
+    if (!s) return false;
+    held.emplace(std::move(*s));
+    writer->in_place.fetch_add(1, std::memory_order_relaxed);
+    return true;
+  }
+};
+
+struct ShmBridge::Outgoing {
+  ShmBridge* bridge = nullptr;
+  std::shared_ptr<Writer> writer;
+  shm::MessageType type;
+  shm::Timeout wait = shm::kNoWait;
+
+  // Messages not built in one of our slots: copied into one, once.
+  static void on_local(void* user, const plr_msg* msg) {
+    auto* self = static_cast<Outgoing*>(user);
+    if (msg->origin == self->bridge) return;
+    Writer& w = *self->writer;
+    std::lock_guard lock(w.m);
+    if (w.publisher.subscriber_count() == 0) return;
+    const auto v = msg_view(msg);
+    auto r = w.publisher.publish_copy(
+        self->type, {reinterpret_cast<const std::byte*>(v.data), v.size}, self->wait);
+    if (r) {
+      w.copied.fetch_add(1, std::memory_order_relaxed);
+    } else {
+      self->bridge->send_failures_.fetch_add(1, std::memory_order_relaxed);
+    }
+  }
+};
+
+struct ShmBridge::Incoming {
+  std::string topic;
+  std::uint64_t type_id = 0;
+  std::string host;
+  std::uint64_t publisher = 0;  // local publisher id, once known
+  std::thread thread;
+};
+
+struct ShmBridge::Server {
+  std::string service;
+  std::mutex m;  // the shm server is used by one thread at a time
+  std::optional<shm::ServiceServer> server;
+  std::thread thread;
+};
+
+struct ShmBridge::Client {
+  std::string service;
+  std::string host;
+  std::mutex m;
+  std::optional<shm::ServiceClient> client;
+  std::map<std::uint64_t, std::uint64_t> calls;  // correlation id -> bus call id
+  std::atomic<bool> dead{false};
+  std::thread thread;
+};
+
+// A reply from a local provider to a remote caller.
+struct ServerCall {
+  ShmBridge::Server* server;
+  shm::ReplyTo to;
+};
+
+ShmBridge::ShmBridge(Bus& bus, const PipelineConfig& config, std::string host,
+                     std::vector<std::string> hosts, std::string run_id)
+    : bus_(bus),
+      config_(config),
+      host_(std::move(host)),
+      run_id_(std::move(run_id)),
+      name_("shm@" + host_),
+      node_thread_(name_) {
+  for (auto& h : hosts)
+    if (h != host_) peers_.push_back(std::move(h));
+  bus_.set_live(this, true);
+}
+
+ShmBridge::~ShmBridge() {
+  stop_ = true;
+  bus_.remove_endpoint(this);
+  node_thread_.drain();
+  std::lock_guard lock(m_);
+  for (auto& [name, in] : incoming_)
+    if (in->thread.joinable()) in->thread.join();
+  for (auto& [name, s] : servers_)
+    if (s->thread.joinable()) s->thread.join();
+  for (auto& [name, c] : clients_) retired_.push_back(c);
+  for (auto& c : retired_)
+    if (c->thread.joinable()) c->thread.join();
+}
+
+// The bus calls these with its lock held: the work happens on our own thread.
+void ShmBridge::topic_advertised(const std::string& topic, std::uint64_t type_id,
+                                 std::uint32_t version) {
+  if (peers_.empty()) return;
+  node_thread_.post([=, this] { export_topic(topic, type_id, version); });
+}
+
+void ShmBridge::topic_subscribed(const std::string& topic, std::uint64_t type_id) {
+  if (peers_.empty()) return;
+  node_thread_.post([=, this] { import_topic(topic, type_id); });
+}
+
+void ShmBridge::service_provided(const std::string& service) {
+  if (peers_.empty()) return;
+  node_thread_.post([=, this] { serve(service); });
+}
+
+void ShmBridge::export_topic(const std::string& topic, std::uint64_t type_id,
+                             std::uint32_t version) {
+  {
+    std::lock_guard lock(m_);
+    if (outgoing_.count(topic)) return;
+  }
+  const auto settings = config_.topic(topic);
+  auto pub = shm::PublisherBuilder()
+                 .run_id(run_id_)
+                 .topic(segment(host_, topic))
+                 .config(shm_topic_config(settings))
+                 .create();
+  if (!pub) {
+    spdlog::error("shm: cannot export topic '{}': {}", topic, shm::to_string(pub.error()));
+    return;
+  }
+  auto out = std::make_unique<Outgoing>(
+      Outgoing{this, std::make_shared<Writer>(std::move(*pub)), {type_id, version}});
+  if (settings.policy == TopicPolicy::Reliable) out->wait = Bus::reliable_wait;
+  auto* raw = out.get();
+  {
+    std::lock_guard lock(m_);
+    outgoing_[topic] = std::move(out);
+  }
+  if (auto s = bus_.subscribe(this, topic, type_id, &Outgoing::on_local, raw); !s)
+    spdlog::error("shm: cannot export topic '{}': {}", topic, s.error().message);
+}
+
+plr_msg* ShmBridge::loan(const std::string& topic, std::size_t capacity, std::uint8_t** data) {
+  std::shared_ptr<Writer> w;
+  shm::Timeout wait;
+  {
+    std::lock_guard lock(m_);
+    auto it = outgoing_.find(topic);
+    if (it == outgoing_.end()) return nullptr;
+    w = it->second->writer;
+    wait = it->second->wait;
+  }
+  auto slot = std::make_unique<SlotLoan>();
+  {
+    std::lock_guard lock(w->m);
+    // Nobody in another process reads it: plain memory serves the local readers.
+    if (w->publisher.subscriber_count() == 0) return nullptr;
+    auto l = w->publisher.loan(capacity, wait);
+    if (!l) {
+      // Too big for a slot, or none free: plain memory, copied once if sent.
+      loan_fallbacks_.fetch_add(1, std::memory_order_relaxed);
+      return nullptr;
+    }
+    slot->loan.emplace(std::move(*l));
+  }
+  slot->writer = std::move(w);
+  slot->transport = this;
+  slot->endpoint = static_cast<const Endpoint*>(this);
+  *data = reinterpret_cast<std::uint8_t*>(slot->loan->data());
+  return msg_loaned(*data, capacity, std::move(slot));
+}
+
+void ShmBridge::import_topic(const std::string& topic, std::uint64_t type_id) {
+  std::lock_guard lock(m_);
+  for (const auto& peer : peers_) {
+    const auto key = segment(peer, topic);
+    if (incoming_.count(key)) continue;
+    auto in = std::make_unique<Incoming>();
+    in->topic = topic;
+    in->type_id = type_id;
+    in->host = peer;
+    auto* raw = in.get();
+    in->thread = std::thread([this, raw] { read_remote_topic(raw); });
+    incoming_[key] = std::move(in);
+  }
+}
+
+void ShmBridge::read_remote_topic(Incoming* in) {
+  std::optional<shm::Subscriber> sub;
+  while (!stop_) {
+    if (!sub) {
+      auto s =
+          shm::SubscriberBuilder().run_id(run_id_).topic(segment(in->host, in->topic)).create();
+      if (!s) {
+        std::this_thread::sleep_for(20ms);  // its publisher is not up (yet, or again)
+        continue;
+      }
+      sub.emplace(std::move(*s));
+    }
+    auto sample = sub->take(100ms);
+    if (!sample) {
+      if (peer_gone(sample.error())) sub.reset();
+      continue;
+    }
+    const auto info = sample->info();
+    if (info.type_id != in->type_id) {
+      invalid_.fetch_add(1, std::memory_order_relaxed);
+      continue;
+    }
+    if (in->publisher == 0) {
+      auto p = bus_.advertise(this, in->topic, info.type_id, info.schema_version);
+      if (!p) {
+        spdlog::error("shm: topic '{}' from host '{}': {}", in->topic, in->host, p.error().message);
+        continue;
+      }
+      in->publisher = *p;
+    }
+    received_.fetch_add(1, std::memory_order_relaxed);
+    const auto& ref = *sample;
+    plr_msg* m = wrap_sample(std::move(*sample), ref, this);
+    (void)bus_.publish(in->publisher, m);
+  }
+}
+
+void ShmBridge::serve(const std::string& service) {
+  std::lock_guard lock(m_);
+  if (servers_.count(service)) return;
+  auto created = shm::ServiceServerBuilder()
+                     .run_id(run_id_)
+                     .service(segment(host_, service))
+                     .config(shm::ServiceConfig{
+                         .slot_count = 4,
+                         .slot_size = static_cast<std::uint32_t>(config_.topic(service).slot_size),
+                         .max_clients = 16})
+                     .create();
+  if (!created) {
+    spdlog::error("shm: cannot serve '{}': {}", service, shm::to_string(created.error()));
+    return;
+  }
+  auto s = std::make_unique<Server>();
+  s->service = service;
+  s->server.emplace(std::move(*created));
+  auto* raw = s.get();
+  s->thread = std::thread([this, raw] { serve_loop(raw); });
+  servers_[service] = std::move(s);
+}
+
+namespace {
+
+void send_reply(ShmBridge::Server* server, const shm::ReplyTo& to, shm::MessageType type,
+                const std::uint8_t* data, std::size_t size) {
+  std::lock_guard lock(server->m);
+  auto loan = server->server->loan_reply(to, size, 1s);
+  if (!loan) return;  // the caller left or died; nobody is waiting
+  std::memcpy(loan->data(), data, size);
+  (void)server->server->send_reply(std::move(*loan), to, type, 0, size);
+}
+
+void send_error(ShmBridge::Server* server, const shm::ReplyTo& to, plr_status status,
+                const std::string& why) {
+  std::string payload(1, static_cast<char>(status));
+  payload += why;
+  send_reply(server, to, {kErrorType, 1}, reinterpret_cast<const std::uint8_t*>(payload.data()),
+             payload.size());
+}
+
+void on_local_reply(void* user, plr_status status, const plr_msg* reply, const char* error) {
+  std::unique_ptr<ServerCall> call(static_cast<ServerCall*>(user));
+  if (status != PLR_OK) {
+    send_error(call->server, call->to, status, error ? error : "call failed");
+    return;
+  }
+  const auto v = msg_view(reply);
+  send_reply(call->server, call->to, {v.type_id, v.schema_version}, v.data, v.size);
+}
+
+}  // namespace
+
+void ShmBridge::serve_loop(Server* server) {
+  while (!stop_) {
+    std::optional<shm::Request> request;
+    {
+      // Short waits: replies from other threads need the server between them.
+      std::lock_guard lock(server->m);
+      auto r = server->server->take_request(2ms);
+      if (r) request.emplace(std::move(*r));
+    }
+    if (!request) continue;
+    received_.fetch_add(1, std::memory_order_relaxed);
+    const auto info = request->sample.info();
+    const auto to = request->reply_to;
+    auto* call = new ServerCall{server, to};
+    const auto& sample = request->sample;
+    plr_msg* msg = wrap_sample(std::move(request->sample), sample, this);
+    auto s =
+        bus_.call(this, server->service, info.type_id, msg, 10min, &on_local_reply, call, nullptr);
+    if (!s) {
+      delete call;
+      send_error(server, to, s.error().code, s.error().message);
+    }
+  }
+}
+
+std::shared_ptr<ShmBridge::Client> ShmBridge::client_for(const std::string& service) {
+  std::lock_guard lock(m_);
+  auto it = clients_.find(service);
+  if (it != clients_.end()) {
+    if (!it->second->dead) return it->second;
+    retired_.push_back(it->second);
+    clients_.erase(it);
+  }
+  for (const auto& peer : peers_) {
+    auto c = shm::ServiceClientBuilder().run_id(run_id_).service(segment(peer, service)).create();
+    if (!c) continue;
+    auto client = std::make_shared<Client>();
+    client->service = service;
+    client->host = peer;
+    client->client.emplace(std::move(*c));
+    auto* raw = client.get();
+    client->thread = std::thread([this, raw] { reply_loop(raw); });
+    clients_[service] = client;
+    return client;
+  }
+  return nullptr;
+}
+
+bool ShmBridge::forward_call(const std::string& service, const MsgRef& request, std::uint64_t id) {
+  auto client = client_for(service);
+  if (!client) return false;
+  const auto v = msg_view(request.msg);
+  std::lock_guard lock(client->m);
+  auto loan = client->client->loan_request(v.size, 1s);
+  if (!loan) {
+    (void)bus_.respond(id, PLR_ERR_UNAVAILABLE, nullptr,
+                       fmt::format("service '{}' on host '{}': {}", service, client->host,
+                                   shm::to_string(loan.error())));
+    return true;
+  }
+  std::memcpy(loan->data(), v.data, v.size);
+  auto corr =
+      client->client->send_request(std::move(*loan), {v.type_id, v.schema_version}, 0, v.size);
+  if (!corr) {
+    (void)bus_.respond(id, PLR_ERR_UNAVAILABLE, nullptr,
+                       fmt::format("service '{}' on host '{}': {}", service, client->host,
+                                   shm::to_string(corr.error())));
+    return true;
+  }
+  client->calls[*corr] = id;
+  sent_.fetch_add(1, std::memory_order_relaxed);
+  return true;
+}
+
+void ShmBridge::reply_loop(Client* client) {
+  while (!stop_ && !client->dead) {
+    auto reply = client->client->take_reply(50ms);
+    if (!reply) {
+      if (!peer_gone(reply.error())) continue;
+      // The providing host died: everything it had in flight fails now.
+      std::map<std::uint64_t, std::uint64_t> lost;
+      {
+        std::lock_guard lock(client->m);
+        lost.swap(client->calls);
+        client->dead = true;
+      }
+      for (const auto& [corr, id] : lost)
+        (void)bus_.respond(
+            id, PLR_ERR_UNAVAILABLE, nullptr,
+            fmt::format("host '{}' providing '{}' died", client->host, client->service));
+      return;
+    }
+    const auto info = reply->info();
+    std::uint64_t id = 0;
+    {
+      std::lock_guard lock(client->m);
+      auto it = client->calls.find(info.correlation_id);
+      if (it == client->calls.end()) continue;  // the caller gave up already
+      id = it->second;
+      client->calls.erase(it);
+    }
+    received_.fetch_add(1, std::memory_order_relaxed);
+    const auto data = reply->data();
+    if (info.type_id == kErrorType) {
+      if (data.empty()) {
+        invalid_.fetch_add(1, std::memory_order_relaxed);
+        (void)bus_.respond(id, PLR_ERR_INVALID, nullptr, "malformed error reply");
+        continue;
+      }
+      const auto status = static_cast<plr_status>(std::to_integer<int>(data[0]));
+      std::string why(reinterpret_cast<const char*>(data.data()) + 1, data.size() - 1);
+      (void)bus_.respond(id, status == PLR_OK ? PLR_ERR_INTERNAL : status, nullptr, why);
+      continue;
+    }
+    const auto& ref = *reply;
+    (void)bus_.respond(id, PLR_OK, wrap_sample(std::move(*reply), ref, this), "");
+  }
+}
+
+nlohmann::json ShmBridge::stats() const {
+  std::uint64_t in_place = 0, copied = 0;
+  {
+    std::lock_guard lock(m_);
+    for (const auto& [topic, out] : outgoing_) {
+      in_place += out->writer->in_place.load(std::memory_order_relaxed);
+      copied += out->writer->copied.load(std::memory_order_relaxed);
+    }
+  }
+  return {{"host", host_},
+          {"run_id", run_id_},
+          {"sent", sent_.load() + in_place + copied},
+          {"sent_in_place", in_place},
+          {"sent_copied", copied},
+          {"loan_fallbacks", loan_fallbacks_.load()},
+          {"received", received_.load()},
+          {"invalid", invalid_.load()},
+          {"send_failures", send_failures_.load()}};
+}
+
+}  // namespace plr::kernel

@@ -1,0 +1,149 @@
+// The `plr` command line, run as a user would.
+#include "kernel_fixture.hpp"
+#include "test_util.hpp"
+
+#include <gtest/gtest.h>
+
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <thread>
+
+namespace plr::kernel {
+namespace {
+
+using testing::run_command;
+
+const std::string kPlr = PLR_BINARY;
+
+// Until `plr status` of a pipeline started in the background answers (5 s
+// at most); `out` is its last answer.
+bool wait_until_running(const std::string& pipeline, std::string* out) {
+  for (int i = 0; i < 100; ++i) {
+    out->clear();
+    if (run_command(kPlr + " status --pipeline " + pipeline, out) == 0) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return false;
+}
+
+const std::string kDemo = std::string(PLR_SOURCE_DIR) + "/configs/demo.yaml";
+
+std::string temp_config(const std::string& name, const std::string& text) {
+  const std::string path = ::testing::TempDir() + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+TEST(Cli, VersionNamesTheAbi) {
+  std::string out;
+  ASSERT_EQ(run_command(kPlr + " version", &out), 0);
+  EXPECT_NE(out.find("plug-in ABI 1."), std::string::npos) << out;
+}
+
+TEST(Cli, ValidateAcceptsTheDemo) {
+  std::string out;
+  ASSERT_EQ(run_command(kPlr + " validate " + kDemo, &out), 0) << out;
+  EXPECT_NE(out.find("ok (2 nodes"), std::string::npos) << out;
+}
+
+TEST(Cli, ValidateNamesTheUnknownPlugin) {
+  const auto path = temp_config("bad_plugin.yaml", "nodes:\n  x:\n    plugin: nope\n");
+  std::string out;
+  EXPECT_EQ(run_command(kPlr + " validate " + path, &out), 2);
+  EXPECT_NE(out.find(path + ":2:3: nodes.x.plugin:"), std::string::npos) << out;
+  EXPECT_NE(out.find("nope.so"), std::string::npos) << out;
+}
+
+// Tests run in parallel and a pipeline name is one control socket: each run
+// here gets its own name.
+TEST(Cli, RunFinishesTheDemoAndExitsZero) {
+  std::string out;
+  ASSERT_EQ(run_command(kPlr + " run " + kDemo +
+                            " --set pipeline=cli_run_demo --set nodes.counter.params.period_ms=1"
+                            " --set nodes.counter.params.limit=5",
+                        &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("4 doubled is 8"), std::string::npos) << out;
+  EXPECT_NE(out.find("pipeline done: counted to 5"), std::string::npos) << out;
+}
+
+TEST(Cli, RunRefusesABadOverride) {
+  std::string out;
+  EXPECT_EQ(
+      run_command(kPlr + " run " + kDemo +
+                      " --set pipeline=cli_bad_override --set nodes.counter.params.period_ms=fast",
+                  &out),
+      1);
+  EXPECT_NE(out.find("param 'period_ms': expected a number"), std::string::npos) << out;
+}
+
+TEST(Cli, CtrlCStopsCleanlyAndSwapWorksOnTheRunningPipeline) {
+  const auto path = temp_config("cli_swap.yaml",
+                                "pipeline: cli_swap_test\n"
+                                "nodes:\n"
+                                "  counter: {plugin: demo_counter, params: {period_ms: 5}}\n"
+                                "  doubler: {plugin: demo_doubler, params: {factor: 2}}\n");
+  const std::string log = ::testing::TempDir() + "plr_test_cli_swap.log";
+  std::remove(log.c_str());  // never read a previous run's log
+  const pid_t pid = shm::test::spawn({kPlr, "run", path}, log);
+  ASSERT_GE(pid, 0);
+  std::string out;
+  ASSERT_TRUE(wait_until_running("cli_swap_test", &out)) << out;
+  EXPECT_NE(out.find("\"doubler\""), std::string::npos) << out;
+  out.clear();
+  EXPECT_EQ(run_command(kPlr + " swap doubler demo_doubler --pipeline cli_swap_test", &out), 0)
+      << out;
+  out.clear();
+  EXPECT_EQ(run_command(kPlr + " swap doubler nope --pipeline cli_swap_test", &out), 1) << out;
+  EXPECT_NE(out.find("swap of 'doubler' to 'nope' failed, 'demo_doubler' keeps running"),
+            std::string::npos)
+      << out;
+  kill(pid, SIGINT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  std::ifstream in(log);
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_NE(text.find("saw "), std::string::npos) << "doubler deactivated cleanly:\n" << text;
+}
+
+TEST(Cli, SighupReloadsTheConfigAndSwapsChangedPlugins) {
+  const std::string head =
+      "pipeline: cli_reload_test\nplugin_paths: [" PLR_TEST_PLUGIN_DIR "]\nnodes:\n";
+  const std::string counter = "  counter: {plugin: demo_counter, params: {period_ms: 5}}\n";
+  const auto path =
+      temp_config("cli_reload.yaml",
+                  head + "  doubler: {plugin: demo_doubler, params: {factor: 2}}\n" + counter);
+  const pid_t pid = shm::test::spawn({kPlr, "run", path}, "");
+  ASSERT_GE(pid, 0);
+  std::string out;
+  ASSERT_TRUE(wait_until_running("cli_reload_test", &out)) << out;
+  temp_config("cli_reload.yaml",
+              head + "  doubler: {plugin: test_probe, params: {factor: 2}}\n" + counter);
+  kill(pid, SIGHUP);
+  bool swapped = false;
+  for (int i = 0; i < 100 && !swapped; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    out.clear();
+    run_command(kPlr + " status --pipeline cli_reload_test", &out);
+    swapped = out.find("\"plugin\": \"test_probe\"") != std::string::npos;
+  }
+  EXPECT_TRUE(swapped) << out;
+  kill(pid, SIGINT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+}
+
+TEST(Cli, PluginsListsTheDemoPluginsAsJson) {
+  std::string out;
+  ASSERT_EQ(run_command(kPlr + " plugins --json", &out), 0) << out;
+  EXPECT_NE(out.find("\"name\": \"demo_counter\""), std::string::npos) << out;
+  EXPECT_NE(out.find("\"kind\": \"other\""), std::string::npos) << out;
+}
+
+}  // namespace
+}  // namespace plr::kernel
