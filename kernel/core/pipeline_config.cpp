@@ -36,9 +36,12 @@ using yaml::List;
 using yaml::Map;
 using yaml::Node;
 
+// `shared` holds values several nodes use, each defined once with an anchor
+// (&name) and referenced from the nodes' params with an alias (*name); the
+// kernel reads nothing else from it.
 const std::vector<std::string> kTopKeys = {
-    "pipeline", "plugin_paths", "clock",  "cpu_wake_latency_us",
-    "hosts",    "nodes",        "topics", "remote"};
+    "pipeline", "plugin_paths", "clock", "cpu_wake_latency_us", "hosts", "nodes",
+    "topics",   "remote",       "shared"};
 const std::vector<std::string> kHostKeys = {"restart", "max_restarts", "backoff_ms"};
 const std::vector<std::string> kNodeKeys = {"plugin", "host", "params", "remap"};
 const std::vector<std::string> kTopicKeys = {"policy", "depth", "slot_size", "busy_poll",

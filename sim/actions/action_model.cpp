@@ -375,8 +375,14 @@ class Run {
         memory_.unreached[c.box] = step_failure_;
         continue;
       }
-      if (!step("pre-grasp", PlanMode::kArmBase, pose(c.pregrasp, {c.grasp, c.lift, c.retract}),
-                Suction::kKeep, Suction::kOn)) {
+      // From the arm left over the belt by the last delivery, a pre-grasp in
+      // a far corner can be out of the search's budget; from the folded arm
+      // it is a shorter search.
+      const Goal pregrasp = pose(c.pregrasp, {c.grasp, c.lift, c.retract});
+      if (!step("pre-grasp", PlanMode::kArmBase, pregrasp, Suction::kKeep, Suction::kOn) &&
+          !(step("arm clear", PlanMode::kArm, arm_clear(), Suction::kKeep, Suction::kKeep) &&
+            step("pre-grasp (arm folded)", PlanMode::kArmBase, pregrasp, Suction::kKeep,
+                 Suction::kOn))) {
         memory_.unreached[c.box] = step_failure_;
         continue;
       }
@@ -524,10 +530,10 @@ class Run {
 
   void sweep(const Perceived& w0) {
     const auto scene = sim::analyse(w0.world, o_.observation);
-    const auto plan =
-        sweep_plan(scene, action_, g_, o_.nose_sweep[2], w0.q, w0.world.trailer.depth);
+    const auto plan = sweep_plan(w0.world, scene, action_, g_, o_.nose_sweep[2], w0.q);
     if (!plan) {
-      not_applicable("no pile in front to sweep");
+      not_applicable(
+          fmt::format("nothing in front for a {} sweep", sim::to_string(sim::height(action_))));
       return;
     }
     // A pick may have left the arm over the belt: fold it before the scoop
@@ -535,11 +541,15 @@ class Run {
     step("arm clear", PlanMode::kArm, arm_clear(), Suction::kKeep, Suction::kKeep);
     if (step("back up", PlanMode::kBaseLine, joints({{sim::kBaseX, plan->start_base_x}}),
              Suction::kKeep, Suction::kKeep) &&
-        step("nose down", PlanMode::kNose, nose(o_.nose_sweep, plan->lift), Suction::kKeep,
+        step("nose to sweep", PlanMode::kNose, nose(o_.nose_sweep, plan->lift), Suction::kKeep,
              Suction::kKeep)) {
-      // The scoop goes under the pile: the planner must not treat it as an obstacle.
+      // The scoop goes under (or into) what it sweeps: the planner must not
+      // treat those boxes as obstacles. A drive the boxes stall stops there.
       step("sweep forward", PlanMode::kBaseLine, joints({{sim::kBaseX, plan->end_base_x}}),
            Suction::kKeep, Suction::kKeep, plan->swept);
+      if (plan->lower_at_end)
+        step("pull down", PlanMode::kNose, nose(o_.nose_sweep), Suction::kKeep, Suction::kKeep,
+             plan->swept);
       // What was scooped may still lie on the scoop: it rides along.
       step("back up", PlanMode::kBaseLine, joints({{sim::kBaseX, plan->start_base_x}}),
            Suction::kKeep, Suction::kKeep, plan->swept);

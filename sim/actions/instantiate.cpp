@@ -304,30 +304,54 @@ bool follows_lines(const sim::RobotModel& robot, const sim::JointVector& from,
   return true;
 }
 
-std::optional<SweepPlan> sweep_plan(const sim::SceneAnalysis& scene, sim::Action action,
-                                    const Geometry& g, double scoop_extension,
-                                    const sim::JointVector& current, double trailer_depth) {
-  if (scene.front_pile.empty()) return std::nullopt;
+std::optional<SweepPlan> sweep_plan(const sim::World& world, const sim::SceneAnalysis& scene,
+                                    sim::Action action, const Geometry& g, double scoop_extension,
+                                    const sim::JointVector& current) {
+  constexpr double kOnFloor = 0.05;  // m, a box bottom this low lies on the floor
   const double tip = g.conveyor_length + scoop_extension + g.scoop_lip;  // ahead of base_x
+  const double deepest = world.trailer.depth - kMargin;
+  std::unordered_set<std::uint32_t> front(scene.front_pile.begin(), scene.front_pile.end());
+  std::unordered_set<std::uint32_t> wall(scene.first_wall.begin(), scene.first_wall.end());
   SweepPlan p;
-  p.swept = scene.front_pile;
-  p.start_base_x = std::min(current[sim::kBaseX], scene.pile_near_x - tip - g.nose_clearance);
-  double far = scene.pile_far_x + g.sweep_overshoot;
-  if (!scene.first_wall.empty()) far = std::min(far, scene.wall_near_x - kMargin);
-  far = std::min(far, trailer_depth - kMargin);
-  p.end_base_x = std::max(p.start_base_x, far - tip);
-  // Higher sweeps skim higher: the scoop rides over what lies flat.
+  double near = std::numeric_limits<double>::infinity(), far = -near, top = 0.0;
   switch (sim::height(action)) {
     case sim::Height::kLow:
-      p.lift = 0.0;
+      for (const auto& box : world.boxes) {
+        const auto b = sim::bounds(box);
+        if (!front.count(box.id) || b.z0 > kOnFloor) continue;
+        near = std::min(near, b.x0);
+        far = std::max(far, b.x1);
+      }
+      if (far < near) return std::nullopt;
+      // What lies on the floor layer rides up with it.
+      p.swept = scene.front_pile;
+      far += g.sweep_overshoot;
+      if (!scene.first_wall.empty()) far = std::min(far, scene.wall_near_x - kMargin);
       break;
     case sim::Height::kMid:
-      p.lift = 0.05;
+      if (scene.front_pile.empty() && scene.first_wall.empty()) return std::nullopt;
+      p.swept = scene.front_pile;
+      p.swept.insert(p.swept.end(), scene.first_wall.begin(), scene.first_wall.end());
+      near = scene.front_pile.empty() ? scene.wall_near_x : scene.pile_near_x;
+      far = (scene.first_wall.empty() ? scene.pile_far_x : scene.wall_near_x) + g.sweep_dig;
       break;
     case sim::Height::kHigh:
-      p.lift = 0.1;
+      for (const auto& box : world.boxes) {
+        if (!front.count(box.id) && !wall.count(box.id)) continue;
+        const auto b = sim::bounds(box);
+        p.swept.push_back(box.id);
+        near = std::min(near, b.x0);
+        top = std::max(top, b.z1);
+      }
+      if (p.swept.empty() || top < g.sweep_high_min) return std::nullopt;
+      // The scoop's tip about halfway up what is in front, driven in past its face.
+      p.lift = std::clamp(top / 2 - g.nose_top, 0.0, g.nose_lift_max);
+      p.lower_at_end = true;
+      far = near + g.sweep_high_in;
       break;
   }
+  p.start_base_x = std::min(current[sim::kBaseX], near - tip - g.nose_clearance);
+  p.end_base_x = std::max(p.start_base_x, std::min(far, deepest) - tip);
   return p;
 }
 

@@ -14,7 +14,7 @@ plr::Status HardcodedParams::check() const {
 }
 
 Action hardcoded_action(const SceneAnalysis& scene, const HardcodedParams& p) {
-  if (!scene.front_pile.empty() && scene.pile_depth > p.d_min) return make_sweep(scene.pile_class);
+  if (!scene.front_pile.empty() && scene.pile_depth > p.d_min) return make_sweep(Height::kLow);
   if (!scene.first_wall.empty() && scene.wall_height > p.h_min)
     return make_pick(scene.wall_class, scene.wall_side);
   // Only low things are left: a pile too shallow to be worth a sweep, or a

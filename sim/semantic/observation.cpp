@@ -30,16 +30,46 @@ Height classify_height(double top, double mid, double high) {
 plr::Status ObservationParams::check() const {
   auto positive = [](double v) { return std::isfinite(v) && v > 0; };
   auto bad = [](const char* what) { return plr::make_error(PLR_ERR_INVALID, what); };
-  if (!positive(h_pile)) return bad("param 'h_pile': must be > 0");
-  if (!positive(wall_depth)) return bad("param 'wall_depth': must be > 0");
+  if (!positive(h_pile)) return bad("param 'observation.h_pile': must be > 0");
+  if (!positive(wall_depth)) return bad("param 'observation.wall_depth': must be > 0");
   if (!std::isfinite(min_pile_depth) || min_pile_depth < 0)
-    return bad("param 'min_pile_depth': must be >= 0");
+    return bad("param 'observation.min_pile_depth': must be >= 0");
   if (!positive(pile_mid) || !(pile_high > pile_mid))
-    return bad("params 'pile_mid'/'pile_high': need 0 < mid < high");
+    return bad("params 'observation.pile_mid'/'observation.pile_high': need 0 < mid < high");
   if (!positive(wall_mid) || !(wall_high > wall_mid))
-    return bad("params 'wall_mid'/'wall_high': need 0 < mid < high");
-  if (!(side_band > 0 && side_band < 1)) return bad("param 'side_band': must be in (0, 1)");
+    return bad("params 'observation.wall_mid'/'observation.wall_high': need 0 < mid < high");
+  if (!(side_band > 0 && side_band < 1))
+    return bad("param 'observation.side_band': must be in (0, 1)");
   return {};
+}
+
+plr::Expected<ObservationParams> ObservationParams::from_json(const nlohmann::json& values) {
+  ObservationParams p;
+  if (values.is_null()) return p;
+  if (!values.is_object())
+    return plr::make_error(PLR_ERR_INVALID, "param 'observation': expected a map of thresholds");
+  const std::pair<const char*, double*> fields[] = {{"h_pile", &p.h_pile},
+                                                    {"wall_depth", &p.wall_depth},
+                                                    {"min_pile_depth", &p.min_pile_depth},
+                                                    {"pile_mid", &p.pile_mid},
+                                                    {"pile_high", &p.pile_high},
+                                                    {"wall_mid", &p.wall_mid},
+                                                    {"wall_high", &p.wall_high},
+                                                    {"side_band", &p.side_band}};
+  for (const auto& [key, value] : values.items()) {
+    double* field = nullptr;
+    for (const auto& [name, target] : fields)
+      if (key == name) field = target;
+    if (field == nullptr)
+      return plr::make_error(PLR_ERR_INVALID, "param 'observation." + key + "': unknown");
+    if (!value.is_number())
+      return plr::make_error(
+          PLR_ERR_INVALID,
+          "param 'observation." + key + "': expected a number, got " + value.dump().substr(0, 40));
+    *field = value.get<double>();
+  }
+  if (auto ok = p.check(); !ok) return ok.error();
+  return p;
 }
 
 Bounds bounds(const Box& box) {

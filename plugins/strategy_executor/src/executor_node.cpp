@@ -71,13 +71,7 @@ class ExecutorNode : public plr::Node {
                          "seed",
                          "world_file",
                          "urdf",
-                         "h_pile",
-                         "wall_depth",
-                         "min_pile_depth",
-                         "pile_mid",
-                         "pile_high",
-                         "wall_mid",
-                         "wall_high",
+                         "observation",
                          "plan_timeout_s",
                          "plan_expansions",
                          "plan_epsilons",
@@ -102,14 +96,10 @@ class ExecutorNode : public plr::Node {
     seed_ = params().get<std::uint64_t>("seed", 1);
     world_file_ = params().get<std::string>("world_file", "");
     actions::ActionOptions& o = options_;
-    sim::ObservationParams& obs = o.observation;
-    obs.h_pile = params().get<double>("h_pile", obs.h_pile);
-    obs.wall_depth = params().get<double>("wall_depth", obs.wall_depth);
-    obs.min_pile_depth = params().get<double>("min_pile_depth", obs.min_pile_depth);
-    obs.pile_mid = params().get<double>("pile_mid", obs.pile_mid);
-    obs.pile_high = params().get<double>("pile_high", obs.pile_high);
-    obs.wall_mid = params().get<double>("wall_mid", obs.wall_mid);
-    obs.wall_high = params().get<double>("wall_high", obs.wall_high);
+    auto observation = sim::ObservationParams::from_json(
+        params().has("observation") ? params().json().at("observation") : nlohmann::json());
+    if (!observation) return observation.error();
+    o.observation = observation.value();
     o.plan_timeout_s = params().get<double>("plan_timeout_s", o.plan_timeout_s);
     o.plan_expansions = params().get<std::uint64_t>("plan_expansions", o.plan_expansions);
     o.plan_epsilons = params().get<std::vector<double>>("plan_epsilons", o.plan_epsilons);
@@ -376,14 +366,15 @@ class ExecutorNode : public plr::Node {
         break;
       }
       sim::Action action{};
+      const sim::SceneAnalysis scene = sim::analyse(w.world, options_.observation);
+      const sim::Observation observation = *scene.observation;
       if (repeating) {
         action = repeat;
       } else {
-        const auto observation = *sim::classify(w.world, options_.observation);
         // After an action that moved nothing, the strategy's next step is
         // not followed blindly: its source is asked again, told what failed.
-        const auto child = node && excluded_.empty() ? strategy.next(*node, observation)
-                                                     : std::nullopt;
+        const auto child =
+            node && excluded_.empty() ? strategy.next(*node, observation) : std::nullopt;
         if (child) {
           node = child;
           ++stats_.strategy_steps;
@@ -422,6 +413,9 @@ class ExecutorNode : public plr::Node {
         as.plan_s.add(o.plan_model_s);
         as.exec_s.add(o.exec_s);
       }
+      stats_.steps.push_back({sim::to_string(action), sim::to_string(observation),
+                              scene.wall_height, scene.pile_height, scene.pile_depth, o.applicable,
+                              o.boxes, o.robot_time_s});
       const double action_start = stats_.robot_time_s;
       stats_.robot_time_s += o.robot_time_s;
       stats_.plan_wall_s += o.plan_wall_s;

@@ -65,6 +65,16 @@ nlohmann::json to_json(const RunStats& s) {
   for (const auto& [id, why] : s.boxes_given_up) given_up[std::to_string(id)] = why;
   nlohmann::json curve = nlohmann::json::array();
   for (const auto& p : s.curve) curve.push_back({p.robot_time_s, p.boxes});
+  nlohmann::json steps = nlohmann::json::array();
+  for (const auto& r : s.steps)
+    steps.push_back({{"action", r.action},
+                     {"observation", r.observation},
+                     {"wall_height", r.wall_height},
+                     {"pile_height", r.pile_height},
+                     {"pile_depth", r.pile_depth},
+                     {"applicable", r.applicable},
+                     {"boxes", r.boxes},
+                     {"robot_time_s", r.robot_time_s}});
   return {{"boxes_total", s.boxes_total},
           {"boxes_unloaded", s.boxes_unloaded},
           {"unloaded_fraction",
@@ -86,7 +96,8 @@ nlohmann::json to_json(const RunStats& s) {
           {"planners", s.planners},
           {"plan_calls_unanswered", s.plan_calls_unanswered},
           {"actions", {{"pick", action_json(s.pick)}, {"sweep", action_json(s.sweep)}}},
-          {"curve", curve}};
+          {"curve", curve},
+          {"steps", steps}};
 }
 
 std::string curve_svg(const std::vector<CurvePoint>& curve, std::uint32_t total,

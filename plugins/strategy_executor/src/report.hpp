@@ -41,6 +41,16 @@ struct CurvePoint {
   std::uint32_t boxes = 0;
 };
 
+// One action of the run: what the robot saw, did, and got.
+struct StepRecord {
+  std::string action;
+  std::string observation;
+  double wall_height = 0, pile_height = 0, pile_depth = 0;  // m, the scene's raw figures
+  bool applicable = true;
+  std::uint32_t boxes = 0;
+  double robot_time_s = 0;
+};
+
 struct RunStats {
   std::array<ModeStats, 7> modes{};  // index = plan mode 1..6
   std::uint64_t m6_implicit = 0;     // escapes the planner ran inside another query
@@ -50,6 +60,7 @@ struct RunStats {
   std::uint64_t plan_calls_unanswered = 0;
   ActionStats pick, sweep;
   std::vector<CurvePoint> curve;
+  std::vector<StepRecord> steps;
   std::uint32_t boxes_total = 0;
   std::uint32_t boxes_unloaded = 0;
   double sim_time_s = 0;
@@ -58,7 +69,7 @@ struct RunStats {
   double wall_time_s = 0;
   std::uint64_t robot_trailer_collisions = 0;
   std::uint64_t failed_grasps = 0;
-  std::uint64_t not_applicable = 0;  // actions with nothing to do in their region
+  std::uint64_t not_applicable = 0;    // actions with nothing to do in their region
   std::uint64_t recoveries = 0;        // simulator restarts survived
   std::uint64_t strategies_asked = 0;  // strategy/next calls
   std::uint64_t strategy_steps = 0;    // actions taken by following a branch

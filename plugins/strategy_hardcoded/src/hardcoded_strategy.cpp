@@ -24,17 +24,13 @@ class HardcodedStrategy : public plr::Node {
 
  protected:
   plr::Status on_configure() override {
-    params().allow_only({"h_pile", "h_min", "d_min", "wall_depth", "pile_mid", "pile_high",
-                         "wall_mid", "wall_high"});
-    obs_.h_pile = params().get<double>("h_pile", obs_.h_pile);
-    obs_.wall_depth = params().get<double>("wall_depth", obs_.wall_depth);
-    obs_.pile_mid = params().get<double>("pile_mid", obs_.pile_mid);
-    obs_.pile_high = params().get<double>("pile_high", obs_.pile_high);
-    obs_.wall_mid = params().get<double>("wall_mid", obs_.wall_mid);
-    obs_.wall_high = params().get<double>("wall_high", obs_.wall_high);
+    params().allow_only({"observation", "h_min", "d_min"});
+    auto observation = plr::sim::ObservationParams::from_json(
+        params().has("observation") ? params().json().at("observation") : nlohmann::json());
+    if (!observation) return observation.error();
+    obs_ = observation.value();
     h_.h_min = params().get<double>("h_min", h_.h_min);
     h_.d_min = params().get<double>("d_min", h_.d_min);
-    if (auto ok = obs_.check(); !ok) return ok;
     if (auto ok = h_.check(); !ok) return ok;
     return ctx().provide<plr::msg::NextStrategyRequest, plr::msg::NextStrategyReply>(
         "strategy/next",

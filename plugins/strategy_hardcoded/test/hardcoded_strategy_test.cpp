@@ -14,7 +14,8 @@ using testing::NodeOptions;
 
 class Hardcoded : public ::testing::Test {
  protected:
-  void start(const std::string& params = R"({"h_pile": 0.55, "h_min": 0.5, "d_min": 0.5})") {
+  void start(const std::string& params =
+                 R"({"observation": {"h_pile": 0.55}, "h_min": 0.5, "d_min": 0.5})") {
     auto n = kernel_.load_node(STRATEGY_HARDCODED_SO, NodeOptions().with_params(params));
     ASSERT_TRUE(n) << n.error().message;
     node_ = *n;
@@ -22,14 +23,17 @@ class Hardcoded : public ::testing::Test {
     ASSERT_TRUE(node_->activate());
   }
 
-  Expected<Message<msg::NextStrategyReply>> ask(const std::vector<std::uint8_t>& world) {
+  Expected<Message<msg::NextStrategyReply>> ask(const std::vector<std::uint8_t>& world,
+                                                const std::vector<msg::Action>& excluded = {}) {
     flatbuffers::FlatBufferBuilder fbb;
-    fbb.Finish(msg::CreateNextStrategyRequestDirect(fbb, &world, msg::Observation::WallHighLeft));
+    fbb.Finish(msg::CreateNextStrategyRequestDirect(fbb, &world, msg::Observation::WallHighLeft,
+                                                    &excluded));
     return kernel_.call<msg::NextStrategyRequest, msg::NextStrategyReply>("strategy/next", fbb);
   }
 
-  Action decide(const sim::World& w) {
-    auto reply = ask(sim::testing::world_bytes(w));
+  Action decide(const sim::World& w, const std::vector<Action>& excluded = {}) {
+    std::vector<msg::Action> ex(excluded.begin(), excluded.end());
+    auto reply = ask(sim::testing::world_bytes(w), ex);
     EXPECT_TRUE(reply) << reply.error().message;
     if (!reply) return Action::PickLowLeft;
     EXPECT_EQ(reply.value()->source()->str(), "hardcoded");
@@ -58,9 +62,31 @@ TEST_F(Hardcoded, DeepPileIsSwept) {
   std::uint32_t id = 100;
   for (double x : {8.9, 9.3, 9.7})
     w.boxes.push_back(sim::testing::make_box(id++, x, 0.0, 0.0, {0.4, 0.4, 0.2}));
-  EXPECT_EQ(decide(w), Action::SweepLow);  // d_pile = 1.2 > d_min, top at 0.2 m
+  EXPECT_EQ(decide(w), Action::SweepLow);  // d_pile = 1.2 > d_min
+  // H has one sweep, along the floor, whatever the pile's height.
   w.boxes.push_back(sim::testing::make_box(id++, 9.3, 0.0, 0.2, {0.4, 0.4, 0.25}));
-  EXPECT_EQ(decide(w), Action::SweepHigh);  // top at 0.45 m
+  EXPECT_EQ(decide(w), Action::SweepLow);
+}
+
+// What the executor tried here and moved nothing is not answered again: the
+// other sides at the same height, then lower, then the sweeps; all tried,
+// H's own choice again.
+TEST_F(Hardcoded, ExcludedActionsAreReplacedByTheNextFallback) {
+  start();
+  sim::World w;
+  sim::testing::add_wall(w, 10.0, 5, 5);
+  w.boxes.push_back(sim::testing::make_box(99, 10.2, -0.82, 2.0));  // top box, right
+  EXPECT_EQ(decide(w), Action::PickHighRight);
+  EXPECT_EQ(decide(w, {Action::PickHighRight}), Action::PickHighCenter);
+  EXPECT_EQ(decide(w, {Action::PickHighRight, Action::PickHighCenter}), Action::PickHighLeft);
+  EXPECT_EQ(decide(w, {Action::PickHighRight, Action::PickHighCenter, Action::PickHighLeft}),
+            Action::PickMidRight);
+  std::vector<Action> all;
+  for (int a = 0; a < sim::kNumActions; ++a) all.push_back(static_cast<Action>(a));
+  all.pop_back();
+  EXPECT_EQ(decide(w, all), static_cast<Action>(sim::kNumActions - 1));
+  all.push_back(static_cast<Action>(sim::kNumActions - 1));
+  EXPECT_EQ(decide(w, all), Action::PickHighRight);
 }
 
 TEST_F(Hardcoded, ShallowPileLeavesTheWall) {
@@ -76,11 +102,11 @@ TEST_F(Hardcoded, DMinMovesTheDecision) {
   sim::World w;
   sim::testing::add_wall(w, 10.0, 5, 4);
   w.boxes.push_back(sim::testing::make_box(100, 9.75, 0.0, 0.0, {0.4, 0.4, 0.3}));
-  EXPECT_EQ(decide(w), Action::SweepMid);
+  EXPECT_EQ(decide(w), Action::SweepLow);
 }
 
 TEST_F(Hardcoded, LowLeftoversArePicked) {
-  start(R"({"h_pile": 0.3, "h_min": 0.5})");
+  start(R"({"observation": {"h_pile": 0.3}, "h_min": 0.5})");
   sim::World w;
   sim::testing::add_wall(w, 10.0, 3, 1);  // one row, 0.4 m: a wall (>= h_pile) below h_min
   EXPECT_EQ(decide(w), Action::PickLowCenter);
@@ -104,11 +130,12 @@ TEST_F(Hardcoded, RefusesEmptyAndBadWorlds) {
 }
 
 TEST_F(Hardcoded, RefusesBadThresholds) {
-  auto n = kernel_.load_node(STRATEGY_HARDCODED_SO, NodeOptions().with_params(R"({"h_pile": -1})"));
+  auto n = kernel_.load_node(STRATEGY_HARDCODED_SO,
+                             NodeOptions().with_params(R"({"observation": {"h_pile": -1}})"));
   ASSERT_TRUE(n);
   auto s = n->configure();
   ASSERT_FALSE(s);
-  EXPECT_EQ(s.error().message, "param 'h_pile': must be > 0");
+  EXPECT_EQ(s.error().message, "param 'observation.h_pile': must be > 0");
   auto m = kernel_.load_node(STRATEGY_HARDCODED_SO,
                              NodeOptions().with_name("second").with_params(R"({"d_min": -0.1})"));
   ASSERT_TRUE(m);

@@ -51,10 +51,13 @@ class [[nodiscard]] Expected {
 
  public:
   // Implicit from a value or an error, so a function returns either as is.
-  template <class U = T, std::enable_if_t<std::is_constructible_v<T, U&&> &&
-                                              !std::is_same_v<std::remove_cvref_t<U>, Expected> &&
-                                              !std::is_same_v<std::remove_cvref_t<U>, E>,
-                                          int> = 0>
+  // (C++17 spelling: code built against Simbody's headers includes this.)
+  template <class U = T,
+            std::enable_if_t<
+                std::is_constructible_v<T, U&&> &&
+                    !std::is_same_v<std::remove_cv_t<std::remove_reference_t<U>>, Expected> &&
+                    !std::is_same_v<std::remove_cv_t<std::remove_reference_t<U>>, E>,
+                int> = 0>
   Expected(U&& value) : v_(std::in_place_index<0>, std::forward<U>(value)) {}  // NOLINT
   Expected(E error) : v_(std::in_place_index<1>, std::move(error)) {}          // NOLINT
 

@@ -31,6 +31,10 @@ struct Geometry {
   double dropoff_bottom = 0.4;      // held box bottom over the floor, just above the lowered nose
   double dropoff_ahead = 0.5;       // held box centre ahead of base_x
   double sweep_overshoot = 0.1;     // scoop tip past the pile's far end
+  double sweep_dig = 0.3;           // Sweep(mid): scoop tip into the base of the wall behind
+  double sweep_high_min = 0.6;      // Sweep(high): what is in front must stand this high
+  double sweep_high_in = 0.2;       // Sweep(high): scoop tip past the front face
+  double nose_lift_max = 0.8;       // nose_1's upper limit
   double nose_top = 0.25;           // m, top of the lowered nose and conveyor
   // The suction cups: the robot's grid (its x runs up the plate, its y across).
   sim::SuctionPlate cups;
@@ -48,7 +52,7 @@ struct PickCandidate {
   // The box is first lifted straight up, off the one it rests on, before it
   // is pulled out: dragged out, it would press into that one.
   sim::PlateTarget lift;
-  int cups = 0;          // cups the grasp pose covers on the face
+  int cups = 0;  // cups the grasp pose covers on the face
 };
 
 // Pick points for Pick(height, side), best first: boxes of the structure in
@@ -83,17 +87,29 @@ std::vector<sim::PlateTarget> dropoff_targets(const sim::World& world,
 bool follows_lines(const sim::RobotModel& robot, const sim::JointVector& from,
                    const std::vector<sim::PlateTarget>& through);
 
+// The three sweeps do different things:
+//   Sweep(low)   the floor layer of the front pile: the scoop flat on the
+//                floor, as far as the boxes lying on the floor reach;
+//   Sweep(mid)   deeper: the scoop flat, through the whole front pile and
+//                `dig` into the base of the wall behind it, so that what
+//                stands on the pulled-out boxes comes down;
+//   Sweep(high)  the nose raised to the upper part of what is in front,
+//                driven in, then lowered there: it pulls boxes down onto the
+//                scoop and the floor.
 struct SweepPlan {
-  double start_base_x = 0;           // behind the pile, nose lowered there
-  double end_base_x = 0;             // scoop tip at the pile's far end
-  double lift = 0;                   // nose_1 during the sweep, from the action's height
-  std::vector<std::uint32_t> swept;  // the pile boxes the sweep drives through
+  double start_base_x = 0;           // where the nose is set before driving in
+  double end_base_x = 0;             // base at the end of the drive in
+  double lift = 0;                   // nose_1 (carriage height) during the drive in
+  bool lower_at_end = false;         // lower the nose to the floor before backing up
+  std::vector<std::uint32_t> swept;  // the boxes the scoop drives through
 };
 
-// nullopt when there is no pile in front to sweep. The scoop stops short of
-// the first wall behind the pile, and of the trailer's front wall.
-std::optional<SweepPlan> sweep_plan(const sim::SceneAnalysis& scene, sim::Action action,
-                                    const Geometry& g, double scoop_extension,
-                                    const sim::JointVector& current, double trailer_depth);
+// nullopt when the sweep has nothing to act on (Sweep(low): no pile box on
+// the floor; Sweep(mid): neither pile nor wall in front; Sweep(high): nothing
+// in front higher than `high_min`). The scoop stops short of the trailer's
+// front wall.
+std::optional<SweepPlan> sweep_plan(const sim::World& world, const sim::SceneAnalysis& scene,
+                                    sim::Action action, const Geometry& g, double scoop_extension,
+                                    const sim::JointVector& current);
 
 }  // namespace plr::actions

@@ -13,6 +13,8 @@
 #include <plr/msg/world_generated.h>
 #include <plr/expected.hpp>
 
+#include <nlohmann/json.hpp>
+
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -34,6 +36,11 @@ struct ObservationParams {
 
   // Whether the values are consistent; the error names the parameter.
   plr::Status check() const;
+
+  // From a node's `observation` param: a map of the fields above (absent
+  // ones keep their defaults), checked. Every node that classifies scenes
+  // reads it this way, and a pipeline config defines it once (an alias).
+  static plr::Expected<ObservationParams> from_json(const nlohmann::json& values);
 };
 
 // World-frame axis-aligned bounds of a (possibly rotated) box.

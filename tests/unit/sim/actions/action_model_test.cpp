@@ -2,6 +2,10 @@
 // real physics, the real lattice planner, hand-made worlds.
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <thread>
+#include <vector>
+
 #include "plr/actions/action_model.hpp"
 #include "plr/actions/in_process.hpp"
 #include "plr/planning/lattice_planner.hpp"
@@ -84,6 +88,43 @@ TEST(ActionModel, TheSameActionTwiceCostsTheSame) {
   ASSERT_EQ(one->queries.size(), two->queries.size());
   for (std::size_t i = 0; i < one->queries.size(); ++i)
     EXPECT_EQ(one->queries[i].expansions, two->queries[i].expansions);
+}
+
+// A few actions in a row, once on an idle machine and once with every core
+// kept busy: the same curve (boxes over robot time), to the bit.
+TEST(ActionModel, TheSameRunUnderCpuLoadGivesTheSameCurve) {
+  const sim::World w = wall(5.0, 3, 2);
+  const ActionModel model(robot(), {});
+  const std::vector<sim::Action> actions = {sim::make_pick(Height::kLow, Side::kCenter),
+                                            sim::make_pick(Height::kLow, Side::kLeft),
+                                            sim::make_pick(Height::kMid, Side::kRight)};
+  auto curve = [&] {
+    Fixture f(w);
+    std::vector<double> times;
+    double t = 0;
+    for (const auto a : actions) {
+      const auto out = model.run(a, f.backend, f.memory);
+      EXPECT_TRUE(out) << out.error().message;
+      if (!out) break;
+      for (double at : out->unloaded_at_s) times.push_back(t + at);
+      t += out->robot_time_s;
+    }
+    times.push_back(t);
+    return times;
+  };
+  const auto idle = curve();
+  std::atomic<bool> stop{false};
+  std::vector<std::thread> burners;
+  for (unsigned i = 0; i < std::max(2u, std::thread::hardware_concurrency()); ++i)
+    burners.emplace_back([&] {
+      volatile double x = 1;
+      while (!stop.load(std::memory_order_relaxed)) x = x * 1.0000001 + 1e-9;
+    });
+  const auto busy = curve();
+  stop = true;
+  for (auto& b : burners) b.join();
+  EXPECT_GE(idle.size(), 2u);
+  EXPECT_EQ(idle, busy);
 }
 
 TEST(ActionModel, ASweepCarriesALowPileOut) {

@@ -160,10 +160,31 @@ TEST(Observation, ParamsCheck) {
   ObservationParams p;
   EXPECT_TRUE(p.check());
   p.wall_high = 1.0;
-  EXPECT_EQ(p.check().error().message, "params 'wall_mid'/'wall_high': need 0 < mid < high");
+  EXPECT_EQ(p.check().error().message,
+            "params 'observation.wall_mid'/'observation.wall_high': need 0 < mid < high");
   p = {};
   p.h_pile = -1;
-  EXPECT_EQ(p.check().error().message, "param 'h_pile': must be > 0");
+  EXPECT_EQ(p.check().error().message, "param 'observation.h_pile': must be > 0");
+}
+
+TEST(Observation, ParamsFromJson) {
+  auto p =
+      ObservationParams::from_json(nlohmann::json::parse(R"({"h_pile": 0.9, "wall_high": 2})"));
+  ASSERT_TRUE(p) << p.error().message;
+  EXPECT_EQ(p.value().h_pile, 0.9);
+  EXPECT_EQ(p.value().wall_high, 2.0);
+  EXPECT_EQ(p.value().wall_mid, ObservationParams{}.wall_mid);
+  EXPECT_TRUE(ObservationParams::from_json(nullptr));
+  EXPECT_EQ(ObservationParams::from_json(nlohmann::json::parse(R"({"h_pil": 1})")).error().message,
+            "param 'observation.h_pil': unknown");
+  EXPECT_EQ(
+      ObservationParams::from_json(nlohmann::json::parse(R"({"h_pile": "high"})")).error().message,
+      "param 'observation.h_pile': expected a number, got \"high\"");
+  EXPECT_EQ(ObservationParams::from_json(nlohmann::json::parse("[1]")).error().message,
+            "param 'observation': expected a map of thresholds");
+  EXPECT_EQ(
+      ObservationParams::from_json(nlohmann::json::parse(R"({"pile_high": 0.1})")).error().message,
+      "params 'observation.pile_mid'/'observation.pile_high': need 0 < mid < high");
 }
 
 TEST(Observation, FromMessage) {

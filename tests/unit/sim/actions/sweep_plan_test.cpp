@@ -1,0 +1,111 @@
+// The three sweeps on hand-made scenes: each acts on what its kind is for,
+// is not applicable without it, and they differ where they go.
+#include <gtest/gtest.h>
+
+#include "plr/actions/instantiate.hpp"
+#include "plr/sim/testing/worlds.hpp"
+
+namespace plr::actions {
+namespace {
+
+using sim::Height;
+using sim::testing::add_wall;
+using sim::testing::make_box;
+
+sim::World trailer() {
+  sim::World w;
+  w.trailer = {2.5, 2.7, 16.0};
+  return w;
+}
+
+sim::JointVector at(double base_x) {
+  sim::JointVector q = sim::JointVector::Zero();
+  q[sim::kBaseX] = base_x;
+  return q;
+}
+
+std::optional<SweepPlan> plan(const sim::World& w, Height h, const Geometry& g = {}) {
+  sim::ObservationParams obs;
+  obs.h_pile = 1.35;
+  return sweep_plan(w, sim::analyse(w, obs), sim::make_sweep(h), g, 0.3, at(5.0));
+}
+
+// A floor layer two boxes deep and three wide, front face at x = 10.
+sim::World floor_pile() {
+  sim::World w = trailer();
+  std::uint32_t id = 1;
+  for (int row = 0; row < 2; ++row)
+    for (int col = -1; col <= 1; ++col)
+      w.boxes.push_back(make_box(id++, 10.2 + 0.4 * row, 0.45 * col, 0));
+  return w;
+}
+
+TEST(SweepPlan, NothingInFrontNothingToSweep) {
+  for (Height h : {Height::kLow, Height::kMid, Height::kHigh})
+    EXPECT_FALSE(plan(trailer(), h)) << sim::to_string(h);
+}
+
+TEST(SweepPlan, LowSweepsTheFloorLayerAndMidGoesDeeper) {
+  const sim::World w = floor_pile();
+  const auto low = plan(w, Height::kLow);
+  const auto mid = plan(w, Height::kMid);
+  ASSERT_TRUE(low);
+  ASSERT_TRUE(mid);
+  const Geometry g;
+  const double tip = g.conveyor_length + 0.3 + g.scoop_lip;
+  // Low: the scoop tip just past the floor layer's far end (10.8 m).
+  EXPECT_NEAR(low->end_base_x + tip, 10.8 + g.sweep_overshoot, 1e-9);
+  EXPECT_NEAR(mid->end_base_x + tip, 10.8 + g.sweep_dig, 1e-9);
+  EXPECT_EQ(low->lift, 0.0);
+  EXPECT_EQ(mid->lift, 0.0);
+  EXPECT_FALSE(low->lower_at_end);
+  // Both start behind the pile, the nose tip clear of it.
+  EXPECT_LE(low->start_base_x + tip, 10.0 - g.nose_clearance + 1e-9);
+  EXPECT_EQ(low->swept.size(), 6u);
+  // Nothing stands high enough for the raised nose.
+  EXPECT_FALSE(plan(w, Height::kHigh));
+}
+
+TEST(SweepPlan, AWallAloneIsNotLowSweptButDugIntoAndPulledDown) {
+  sim::World w = trailer();
+  add_wall(w, 12.0, 5, 5);  // 2 m high
+  EXPECT_FALSE(plan(w, Height::kLow));
+  const auto mid = plan(w, Height::kMid);
+  const auto high = plan(w, Height::kHigh);
+  ASSERT_TRUE(mid);
+  ASSERT_TRUE(high);
+  const Geometry g;
+  const double tip = g.conveyor_length + 0.3 + g.scoop_lip;
+  EXPECT_NEAR(mid->end_base_x + tip, 12.0 + g.sweep_dig, 1e-9);
+  // The raised nose meets the wall about halfway up, then lowers.
+  EXPECT_GT(high->lift, 0.5);
+  EXPECT_LE(high->lift, g.nose_lift_max);
+  EXPECT_TRUE(high->lower_at_end);
+  EXPECT_NEAR(high->end_base_x + tip, 12.0 + g.sweep_high_in, 1e-9);
+  EXPECT_EQ(high->swept.size(), 25u);
+}
+
+TEST(SweepPlan, TheLowSweepStopsAtTheWallBehindThePile) {
+  sim::World w = floor_pile();
+  add_wall(w, 11.0, 5, 5);
+  const auto low = plan(w, Height::kLow);
+  const auto mid = plan(w, Height::kMid);
+  ASSERT_TRUE(low);
+  ASSERT_TRUE(mid);
+  const Geometry g;
+  const double tip = g.conveyor_length + 0.3 + g.scoop_lip;
+  EXPECT_LT(low->end_base_x + tip, 11.0);
+  EXPECT_NEAR(mid->end_base_x + tip, 11.0 + g.sweep_dig, 1e-9);
+}
+
+TEST(SweepPlan, NeverPastTheTrailersFrontWall) {
+  sim::World w = trailer();
+  add_wall(w, 15.7, 5, 5);
+  const auto mid = plan(w, Height::kMid);
+  ASSERT_TRUE(mid);
+  const Geometry g;
+  EXPECT_LE(mid->end_base_x + g.conveyor_length + 0.3 + g.scoop_lip, 16.0);
+}
+
+}  // namespace
+}  // namespace plr::actions
