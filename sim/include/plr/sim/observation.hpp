@@ -24,14 +24,18 @@
 
 namespace plr::sim {
 
+// The defaults split what strategy H meets on the four families (A1, A2,
+// B1, B2; `steps` in an unloading report lists the raw heights): B's piles,
+// up to 1.3 m, stay piles; piles then range 0.25-1.35 m and first walls
+// 1.4-2.35 m, and each class below occurs on them.
 struct ObservationParams {
-  double h_pile = 0.55;         // m; columns lower than this are pile
+  double h_pile = 1.35;         // m; columns lower than this are pile
   double wall_depth = 0.7;      // m; depth of the first wall from its nearest face
   double min_pile_depth = 0.3;  // m; a thinner pile in front of a wall is not "the" structure
-  double pile_mid = 0.25;       // m; pile top at or above this is mid
-  double pile_high = 0.4;       // m; ... high
-  double wall_mid = 1.2;        // m; first-wall top at or above this is mid
-  double wall_high = 1.9;       // m; ... high
+  double pile_mid = 0.4;        // m; pile top at or above this is mid
+  double pile_high = 0.8;       // m; ... high
+  double wall_mid = 1.6;        // m; first-wall top at or above this is mid
+  double wall_high = 2.2;       // m; ... high
   double side_band = 1.0 / 3;   // centre band as a fraction of the trailer width
 
   // Whether the values are consistent; the error names the parameter.

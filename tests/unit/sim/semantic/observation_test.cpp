@@ -7,6 +7,17 @@
 namespace plr::sim {
 namespace {
 
+// Thresholds for these hand-made scenes of 0.4 m boxes (not the defaults,
+// which are set for the generated trailers).
+const ObservationParams kParams{.h_pile = 0.55,
+                                .wall_depth = 0.7,
+                                .min_pile_depth = 0.3,
+                                .pile_mid = 0.25,
+                                .pile_high = 0.4,
+                                .wall_mid = 1.2,
+                                .wall_high = 1.9,
+                                .side_band = 1.0 / 3};
+
 // A box resting with its bottom at z0, centred at (x, y).
 Box box(std::uint32_t id, double x, double y, double z0, Eigen::Vector3d size = {0.4, 0.4, 0.4}) {
   Box b;
@@ -27,7 +38,7 @@ void add_wall(World& w, double x_front, int cols, int rows, double y_mid = 0.0) 
 
 TEST(Observation, EmptyTrailerHasNoObservation) {
   const World w;
-  const auto a = analyse(w);
+  const auto a = analyse(w, kParams);
   EXPECT_FALSE(a.observation);
   EXPECT_TRUE(a.pile.empty());
   EXPECT_TRUE(a.wall.empty());
@@ -36,7 +47,7 @@ TEST(Observation, EmptyTrailerHasNoObservation) {
 TEST(Observation, FullWallIsWallHigh) {
   World w;
   add_wall(w, 10.0, 6, 6);  // 2.4 m high
-  const auto a = analyse(w);
+  const auto a = analyse(w, kParams);
   ASSERT_TRUE(a.observation);
   EXPECT_EQ(structure(*a.observation), Structure::kWall);
   EXPECT_EQ(height(*a.observation), Height::kHigh);
@@ -48,7 +59,7 @@ TEST(Observation, FullWallIsWallHigh) {
 }
 
 TEST(Observation, WallHeightClassesFollowThresholds) {
-  ObservationParams p;
+  ObservationParams p = kParams;
   p.wall_mid = 1.0;
   p.wall_high = 2.0;
   for (const auto& [rows, expected] : std::vector<std::pair<int, Height>>{
@@ -69,7 +80,7 @@ TEST(Observation, SideOfTheTopBox) {
     add_wall(w, 9.0, 6, 3);
     w.boxes.push_back(box(100, 9.2, y, 1.2));
     w.boxes.push_back(box(101, 9.2, y, 1.6));
-    const auto a = analyse(w);
+    const auto a = analyse(w, kParams);
     ASSERT_TRUE(a.observation);
     EXPECT_EQ(side(*a.observation), expected) << "y = " << y;
     EXPECT_EQ(a.top_box, 101u);
@@ -86,7 +97,7 @@ TEST(Observation, DeepPileInFrontOfAWallIsThePile) {
     for (double y : {-0.6, 0.0, 0.6}) w.boxes.push_back(box(id++, x, y, 0.0, {0.4, 0.4, 0.3}));
   // One flat box on another one: still below h_pile.
   w.boxes.push_back(box(id++, 9.2, 0.6, 0.3, {0.4, 0.4, 0.2}));
-  const auto a = analyse(w);
+  const auto a = analyse(w, kParams);
   ASSERT_TRUE(a.observation);
   EXPECT_EQ(a.front_pile.size(), 10u);
   EXPECT_NEAR(a.pile_near_x, 8.6, 1e-9);
@@ -102,7 +113,7 @@ TEST(Observation, ThinPileInFrontOfAWallLeavesTheWall) {
   World w;
   add_wall(w, 10.0, 6, 4);
   w.boxes.push_back(box(300, 9.85, 0.0, 0.0, {0.2, 0.3, 0.2}));
-  ObservationParams p;
+  ObservationParams p = kParams;
   p.min_pile_depth = 0.3;
   const auto a = analyse(w, p);
   ASSERT_TRUE(a.observation);
@@ -117,7 +128,7 @@ TEST(Observation, HPileSplitsPileFromWall) {
   w.boxes.push_back(box(1, 5.0, 0.5, 0.0, {0.4, 0.4, 0.45}));
   w.boxes.push_back(box(2, 5.0, -0.5, 0.0));
   w.boxes.push_back(box(3, 5.0, -0.5, 0.4));
-  ObservationParams p;
+  ObservationParams p = kParams;
   p.h_pile = 0.5;
   auto a = analyse(w, p);
   EXPECT_EQ(a.pile, (std::vector<std::uint32_t>{1}));
@@ -134,7 +145,7 @@ TEST(Observation, SecondWallIsNotTheFirst) {
   World w;
   add_wall(w, 12.0, 6, 6);
   add_wall(w, 10.0, 6, 2);
-  ObservationParams p;
+  ObservationParams p = kParams;
   p.wall_depth = 0.7;
   const auto a = analyse(w, p);
   EXPECT_EQ(a.first_wall.size(), 12u);
@@ -153,11 +164,11 @@ TEST(Observation, RotatedBoxesUseTheirWorldBounds) {
   EXPECT_NEAR(bb.x1 - bb.x0, 0.2, 1e-9);
   World w;
   w.boxes.push_back(b);
-  EXPECT_EQ(structure(*classify(w)), Structure::kWall);
+  EXPECT_EQ(structure(*classify(w, kParams)), Structure::kWall);
 }
 
 TEST(Observation, ParamsCheck) {
-  ObservationParams p;
+  ObservationParams p = kParams;
   EXPECT_TRUE(p.check());
   p.wall_high = 1.0;
   EXPECT_EQ(p.check().error().message,
