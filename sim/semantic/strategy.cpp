@@ -1,14 +1,13 @@
 #include "plr/sim/strategy.hpp"
 
 #include <yaml-cpp/yaml.h>
+#include <plr/atomic_file.hpp>
 
 #include <algorithm>
 #include <array>
 #include <cctype>
 #include <fstream>
 #include <sstream>
-
-#include "atomic_write.hpp"
 
 namespace plr::sim {
 
@@ -349,8 +348,8 @@ void save_strategy(const Strategy& s, const std::filesystem::path& file) {
     const auto bytes = serialize(s);
     content.assign(bytes.begin(), bytes.end());
   }
-  if (const auto err = write_atomically(file, content); !err.empty())
-    throw StrategyFileError(file.string() + ": " + err);
+  if (const Status written = write_file_atomically(file.string(), content); !written)
+    throw StrategyFileError(written.error().message);
 }
 
 Strategy load_strategy(const std::filesystem::path& file) {

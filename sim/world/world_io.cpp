@@ -1,11 +1,8 @@
 #include "plr/sim/world_io.hpp"
 
-#include "plr/sim/atomic_file.hpp"
-
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <unistd.h>
 #include <yaml-cpp/yaml.h>
+#include <plr/atomic_file.hpp>
 
 #include <cerrno>
 #include <cmath>
@@ -181,43 +178,9 @@ std::string format_world(const World& world) {
   return std::string(out.c_str()) + "\n";
 }
 
-void write_file_atomically(const std::filesystem::path& file, const std::string& content) {
-  const std::string target = file.string();
-  const std::string temp = fmt::format("{}.tmp.{}", target, ::getpid());
-  const auto io_error = [&](const char* what) {
-    const int err = errno;
-    ::unlink(temp.c_str());
-    return WorldFileError(fmt::format("{}:0: (file): {}: {}", target, what, std::strerror(err)));
-  };
-  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw io_error("cannot create temporary file");
-  std::size_t done = 0;
-  while (done < content.size()) {
-    const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      ::close(fd);
-      throw io_error("write failed");
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  if (::fsync(fd) != 0) {
-    ::close(fd);
-    throw io_error("fsync failed");
-  }
-  if (::close(fd) != 0) throw io_error("close failed");
-  if (::rename(temp.c_str(), target.c_str()) != 0) throw io_error("rename failed");
-  // The rename itself must reach the disk for the new file to survive a crash.
-  const std::filesystem::path dir = file.has_parent_path() ? file.parent_path() : ".";
-  const int dir_fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dir_fd >= 0) {
-    ::fsync(dir_fd);
-    ::close(dir_fd);
-  }
-}
-
 void save_world(const World& world, const std::filesystem::path& file) {
-  write_file_atomically(file, format_world(world));
+  if (const Status written = write_file_atomically(file.string(), format_world(world)); !written)
+    throw WorldFileError(written.error().message);
 }
 
 }  // namespace plr::sim

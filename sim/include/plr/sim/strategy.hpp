@@ -108,7 +108,7 @@ std::string format_yaml(const Strategy& strategy);
 Strategy parse_yaml(const std::string& text, const std::string& origin);
 
 // By extension: .yaml/.yml as YAML, anything else as the binary form. Writes
-// are atomic (temporary file, fsync, rename); errors throw StrategyFileError
+// are atomic (plr::write_file_atomically); errors throw StrategyFileError
 // with one line "<file>: <cause>".
 void save_strategy(const Strategy& strategy, const std::filesystem::path& file);
 Strategy load_strategy(const std::filesystem::path& file);

@@ -29,8 +29,8 @@ World parse_world(const std::string& text, const std::string& origin);
 World load_world(const std::filesystem::path& file);
 
 std::string format_world(const World& world);
-// Atomic: writes a temporary file next to `file`, fsyncs it and renames it over
-// `file`, so a reader never sees half a world. Throws WorldFileError on I/O errors.
+// Atomic (plr::write_file_atomically), so a reader never sees half a world.
+// Throws WorldFileError naming the file on I/O errors.
 void save_world(const World& world, const std::filesystem::path& file);
 
 }  // namespace plr::sim

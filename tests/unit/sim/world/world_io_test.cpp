@@ -121,7 +121,7 @@ TEST_F(WorldIo, SaveIntoMissingDirectoryFailsCleanly) {
     FAIL();
   } catch (const WorldFileError& e) {
     EXPECT_EQ(std::string(e.what()),
-              p.string() + ":0: (file): cannot create temporary file: No such file or directory");
+              p.string() + ": cannot create a temporary file: No such file or directory");
   }
 }
 
