@@ -1,14 +1,14 @@
 #include "plr/sim/strategy.hpp"
 
 #include <yaml-cpp/yaml.h>
+#include <plr/atomic_file.hpp>
+#include <plr/yaml_reader.hpp>
 
 #include <algorithm>
 #include <array>
 #include <cctype>
 #include <fstream>
 #include <sstream>
-
-#include "atomic_write.hpp"
 
 namespace plr::sim {
 
@@ -277,57 +277,74 @@ std::string format_yaml(const Strategy& s) {
   return std::string(out.c_str()) + "\n";
 }
 
+namespace {
+
+// A tree of 18-way branches grows fast, but a strategy file of more nodes
+// than this is a mistake (and its YAML is far past yaml::Limits anyway).
+constexpr std::size_t kMaxNodes = 1'000'000;
+
+std::optional<StrategyNode> read_node(const yaml::Node& item, std::size_t num_nodes) {
+  const yaml::Map fields = item.map("a node", {"action", "children"});
+  if (!fields) return std::nullopt;
+  const yaml::Node action_node = fields.required("action");
+  const auto text = action_node.string("an action");
+  std::optional<Action> action;
+  if (text) {
+    action = parse_action(*text);
+    if (!action) action_node.error("'" + *text + "' is not Pick(h, s) or Sweep(h)");
+  }
+  StrategyNode node{action.value_or(Action::PickLowLeft), {}};
+  bool ok = action.has_value();
+  for (const yaml::Node& edge : fields.find("children").map("a map of observation -> node index")) {
+    const auto observation = parse_observation(edge.name());
+    if (!observation)
+      edge.key_error("'" + edge.name() + "' is not pile|wall/low|mid|high/left|center|right");
+    const auto child = edge.integer(0, static_cast<std::int64_t>(num_nodes) - 1);
+    if (observation && child)
+      node.children.emplace_back(*observation, static_cast<std::uint32_t>(*child));
+    else
+      ok = false;
+  }
+  if (!ok) return std::nullopt;
+  return node;
+}
+
+}  // namespace
+
 Strategy parse_yaml(const std::string& text, const std::string& origin) {
-  auto fail = [&](const YAML::Node& at, const std::string& why) -> StrategyFileError {
-    const auto mark = at.Mark();
-    return StrategyFileError(origin + (mark.line >= 0 ? ":" + std::to_string(mark.line + 1) : "") +
-                             ": " + why);
-  };
-  YAML::Node doc;
-  try {
-    doc = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw StrategyFileError(origin + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
-  }
-  if (!doc.IsMap()) throw fail(doc, "expected a map with format: plr-strategy");
-  if (!doc["format"] || doc["format"].as<std::string>("") != "plr-strategy")
-    throw fail(doc, "format: expected plr-strategy");
-  if (!doc["version"] || doc["version"].as<int>(0) != 1) throw fail(doc, "version: expected 1");
+  auto doc = yaml::Document::parse(text, origin);
+  if (!doc) throw StrategyFileError(doc.error().message);
+  const yaml::Map top =
+      doc->root().map("a strategy", {"format", "version", "name", "root", "nodes"});
   Strategy s;
-  try {
-    s.name = doc["name"] ? doc["name"].as<std::string>() : "";
-    s.root = doc["root"] ? doc["root"].as<std::uint32_t>() : 0;
-  } catch (const YAML::Exception& e) {
-    throw fail(doc, "name/root: " + e.msg);
+  if (top) {
+    const yaml::Node format = top.required("format");
+    if (const auto f = format.string(); f && *f != "plr-strategy")
+      format.error("expected 'plr-strategy', got '" + *f + "'");
+    const yaml::Node version = top.required("version");
+    if (const auto v = version.integer(); v && *v != 1)
+      version.error("unsupported version " + std::to_string(*v) + " (this reader knows 1)");
+    // The name may be empty ("" is what format_yaml writes for no name).
+    const yaml::Node name = top.find("name");
+    if (name.is_scalar())
+      s.name = name.text();
+    else if (name.present() && !name.is_null())
+      name.error("expected a string, got " + name.describe());
+    const yaml::Node nodes_node = top.required("nodes");
+    const yaml::List nodes = nodes_node.list("a list of nodes", 0, kMaxNodes);
+    if (nodes && nodes.size() == 0) nodes_node.error("a strategy needs at least one node");
+    // The root is checked against the nodes when there are any.
+    const std::int64_t last =
+        nodes.size() > 0 ? static_cast<std::int64_t>(nodes.size()) - 1 : std::int64_t{kMaxNodes};
+    if (const auto root = top.find("root").integer(0, last))
+      s.root = static_cast<std::uint32_t>(*root);
+    for (const yaml::Node& item : nodes)
+      if (auto node = read_node(item, nodes.size())) s.nodes.push_back(std::move(*node));
+    // What only the whole tree shows (two parents, unreachable nodes).
+    if (doc->ok())
+      if (const auto valid = validate(s); !valid) nodes_node.error(valid.error().message);
   }
-  const YAML::Node nodes = doc["nodes"];
-  if (!nodes || !nodes.IsSequence()) throw fail(doc, "nodes: expected a list");
-  for (const auto& n : nodes) {
-    if (!n.IsMap() || !n["action"]) throw fail(n, "nodes: each node needs an action");
-    const auto a = parse_action(n["action"].as<std::string>(""));
-    if (!a)
-      throw fail(n["action"],
-                 "action: '" + n["action"].as<std::string>("") + "' is not Pick(h, s) or Sweep(h)");
-    StrategyNode node{*a, {}};
-    if (const YAML::Node ch = n["children"]) {
-      if (!ch.IsMap()) throw fail(ch, "children: expected a map observation -> node index");
-      for (const auto& kv : ch) {
-        const auto o = parse_observation(kv.first.as<std::string>(""));
-        if (!o)
-          throw fail(kv.first, "children: '" + kv.first.as<std::string>("") +
-                                   "' is not pile|wall/low|mid|high/left|center|right");
-        std::uint32_t child = 0;
-        try {
-          child = kv.second.as<std::uint32_t>();
-        } catch (const YAML::Exception&) {
-          throw fail(kv.second, "children: expected a node index");
-        }
-        node.children.emplace_back(*o, child);
-      }
-    }
-    s.nodes.push_back(std::move(node));
-  }
-  if (const auto ok = validate(s); !ok) throw StrategyFileError(origin + ": " + ok.error().message);
+  if (!doc->ok()) throw StrategyFileError(doc->error().message);
   return s;
 }
 
@@ -349,8 +366,8 @@ void save_strategy(const Strategy& s, const std::filesystem::path& file) {
     const auto bytes = serialize(s);
     content.assign(bytes.begin(), bytes.end());
   }
-  if (const auto err = write_atomically(file, content); !err.empty())
-    throw StrategyFileError(file.string() + ": " + err);
+  if (const Status written = write_file_atomically(file.string(), content); !written)
+    throw StrategyFileError(written.error().message);
 }
 
 Strategy load_strategy(const std::filesystem::path& file) {

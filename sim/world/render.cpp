@@ -3,12 +3,13 @@
 #include "plr/sim/render.hpp"
 
 #include <fmt/format.h>
+#include <plr/atomic_file.hpp>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 
-#include "plr/sim/atomic_file.hpp"
+#include "plr/sim/world_io.hpp"
 
 namespace plr::sim {
 namespace {
@@ -130,7 +131,9 @@ std::string render_svg(const World& world, View view, const RenderOptions& o) {
 
 void write_svg(const std::filesystem::path& file, const World& world, View view,
                const RenderOptions& options) {
-  write_file_atomically(file, render_svg(world, view, options));
+  if (const Status written = write_file_atomically(file.string(), render_svg(world, view, options));
+      !written)
+    throw WorldFileError(written.error().message);
 }
 
 std::string xml_escape(const std::string& text) {

@@ -1,18 +1,15 @@
 #include "plr/sim/world_io.hpp"
 
-#include "plr/sim/atomic_file.hpp"
-
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <unistd.h>
 #include <yaml-cpp/yaml.h>
+#include <plr/atomic_file.hpp>
+#include <plr/yaml_reader.hpp>
 
-#include <cerrno>
-#include <cmath>
-#include <cstring>
-#include <fstream>
-#include <set>
-#include <sstream>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <optional>
+#include <string_view>
 
 namespace plr::sim {
 namespace {
@@ -20,135 +17,94 @@ namespace {
 constexpr const char* kFormat = "plr-world";
 constexpr int kVersion = 1;
 
-class Reader {
- public:
-  explicit Reader(std::string origin) : origin_(std::move(origin)) {}
+// A trailer holds a few hundred boxes; this many is a mistake, not a world.
+constexpr std::size_t kMaxBoxes = 100'000;
 
-  [[noreturn]] void fail(const YAML::Node& at, const std::string& key,
-                         const std::string& cause) const {
-    const int line = at.Mark().is_null() ? 0 : at.Mark().line + 1;
-    throw WorldFileError(fmt::format("{}:{}: {}: {}", origin_, line, key, cause));
+template <int N>
+std::optional<Eigen::Matrix<double, N, 1>> vector(const yaml::Node& node, std::string_view what) {
+  const yaml::List items = node.list(what, N, N);
+  if (!items) return std::nullopt;
+  Eigen::Matrix<double, N, 1> v;
+  bool ok = true;
+  for (int i = 0; i < N; ++i) {
+    const auto x = items[static_cast<std::size_t>(i)].number();
+    ok = ok && x.has_value();
+    v[i] = x.value_or(0.0);
   }
+  if (!ok) return std::nullopt;
+  return v;
+}
 
-  YAML::Node require(const YAML::Node& map, const char* name, const std::string& key) const {
-    const YAML::Node node = map[name];
-    if (!node) fail(map, key, "missing");
-    return node;
-  }
-
-  double number(const YAML::Node& node, const std::string& key) const {
-    if (!node.IsScalar()) fail(node, key, "expected a number");
-    double value = 0.0;
-    if (!YAML::convert<double>::decode(node, value) || !std::isfinite(value)) {
-      fail(node, key, fmt::format("expected a number, got '{}'", node.Scalar()));
-    }
-    return value;
-  }
-
-  double positive(const YAML::Node& node, const std::string& key) const {
-    const double value = number(node, key);
-    if (value <= 0.0) fail(node, key, fmt::format("must be > 0, got {}", value));
-    return value;
-  }
-
-  template <int N>
-  Eigen::Matrix<double, N, 1> vector(const YAML::Node& node, const std::string& key) const {
-    if (!node.IsSequence() || node.size() != N) {
-      fail(node, key, fmt::format("expected a list of {} numbers", N));
-    }
-    Eigen::Matrix<double, N, 1> v;
-    for (int i = 0; i < N; ++i) v[i] = number(node[i], fmt::format("{}[{}]", key, i));
-    return v;
-  }
-
-  const std::string& origin() const { return origin_; }
-
- private:
-  std::string origin_;
-};
-
-Box read_box(const Reader& r, const YAML::Node& node, const std::string& key) {
-  if (!node.IsMap()) r.fail(node, key, "expected a map");
+std::optional<Box> read_box(const yaml::Map& fields) {
   Box box;
-  const YAML::Node id = r.require(node, "id", key + ".id");
-  const double id_value = r.number(id, key + ".id");
-  if (id_value < 0 || id_value > 4294967295.0 || std::floor(id_value) != id_value) {
-    r.fail(id, key + ".id", "expected an unsigned integer");
-  }
-  box.id = static_cast<std::uint32_t>(id_value);
-  const YAML::Node size = r.require(node, "size", key + ".size");
-  box.size = r.vector<3>(size, key + ".size");
-  for (int i = 0; i < 3; ++i) {
-    if (box.size[i] <= 0.0) r.fail(size[i], fmt::format("{}.size[{}]", key, i), "must be > 0");
-  }
-  const Eigen::Vector3d position =
-      r.vector<3>(r.require(node, "position", key + ".position"), key + ".position");
+  const auto id = fields.required("id").integer(0, std::numeric_limits<std::uint32_t>::max());
+  if (id) box.id = static_cast<std::uint32_t>(*id);
+  const yaml::List size = fields.required("size").list("3 sizes", 3, 3);
+  for (std::size_t i = 0; i < size.size(); ++i)
+    box.size[static_cast<int>(i)] = size[i].positive().value_or(1.0);
+  const auto position = vector<3>(fields.required("position"), "a position x, y, z");
   Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
-  if (const YAML::Node o = node["orientation"]) {
-    const Eigen::Vector4d wxyz = r.vector<4>(o, key + ".orientation");
-    if (wxyz.norm() < 1e-9) r.fail(o, key + ".orientation", "zero quaternion");
-    q = Eigen::Quaterniond(wxyz[0], wxyz[1], wxyz[2], wxyz[3]).normalized();
+  const yaml::Node orientation = fields.find("orientation");
+  if (const auto wxyz = vector<4>(orientation, "a quaternion w, x, y, z")) {
+    if (wxyz->norm() < 1e-9)
+      orientation.error("must be a rotation, got a zero quaternion");
+    else
+      q = Eigen::Quaterniond((*wxyz)[0], (*wxyz)[1], (*wxyz)[2], (*wxyz)[3]).normalized();
   }
   box.pose = Eigen::Isometry3d::Identity();
   box.pose.linear() = q.toRotationMatrix();
-  box.pose.translation() = position;
-  if (const YAML::Node m = node["mass"]) {
-    box.mass = r.number(m, key + ".mass");
-    if (box.mass < 0.0) r.fail(m, key + ".mass", "must be >= 0");
-  }
+  box.pose.translation() = position.value_or(Eigen::Vector3d::Zero());
+  box.mass = fields.find("mass").number(0.0).value_or(0.0);
+  if (!id || !size || !position) return std::nullopt;
   return box;
+}
+
+Expected<World> read_world(Expected<yaml::Document> doc) {
+  if (!doc) return doc.error();
+  const yaml::Map top = doc->root().map("a world", {"format", "version", "trailer", "boxes"});
+  if (!top) return doc->error();
+  const yaml::Node format = top.required("format");
+  if (const auto f = format.string(); f && *f != kFormat)
+    format.error(fmt::format("expected '{}', got '{}'", kFormat, *f));
+  const yaml::Node version = top.required("version");
+  if (const auto v = version.integer(); v && *v != kVersion)
+    version.error(fmt::format("unsupported version {} (this reader knows {})", *v, kVersion));
+  // Not a world of this version: what else is wrong with it does not matter.
+  if (!doc->ok()) return doc->error();
+  World world;
+  const yaml::Map trailer = top.required("trailer").map("a trailer", {"width", "height", "depth"});
+  world.trailer.width = trailer.required("width").positive().value_or(1.0);
+  world.trailer.height = trailer.required("height").positive().value_or(1.0);
+  world.trailer.depth = trailer.required("depth").positive().value_or(1.0);
+
+  std::map<std::uint32_t, std::string> ids;  // id -> the path of the box that has it
+  for (const yaml::Node& item : top.required("boxes").list("a list of boxes", 0, kMaxBoxes)) {
+    const yaml::Map fields = item.map("a box", {"id", "size", "position", "orientation", "mass"});
+    auto box = fields ? read_box(fields) : std::nullopt;
+    if (!box) continue;
+    const yaml::Node id = fields.find("id");
+    if (const auto [first, inserted] = ids.emplace(box->id, id.path()); !inserted) {
+      id.error(fmt::format("duplicate id {} (also {})", box->id, first->second));
+      continue;
+    }
+    world.boxes.push_back(std::move(*box));
+  }
+  return doc->result(std::move(world));
+}
+
+World value_or_throw(Expected<World> world) {
+  if (!world) throw WorldFileError(world.error().message);
+  return std::move(*world);
 }
 
 }  // namespace
 
 World parse_world(const std::string& text, const std::string& origin) {
-  const Reader r(origin);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw WorldFileError(fmt::format("{}:{}: (syntax): {}", origin, e.mark.line + 1, e.msg));
-  }
-  if (!root.IsMap()) r.fail(root, "(document)", "expected a map");
-  const YAML::Node format = r.require(root, "format", "format");
-  if (!format.IsScalar() || format.Scalar() != kFormat) {
-    r.fail(format, "format", fmt::format("expected '{}'", kFormat));
-  }
-  const YAML::Node version = r.require(root, "version", "version");
-  if (r.number(version, "version") != kVersion) {
-    r.fail(version, "version", fmt::format("unsupported, this reader knows {}", kVersion));
-  }
-  World world;
-  const YAML::Node trailer = r.require(root, "trailer", "trailer");
-  if (!trailer.IsMap()) r.fail(trailer, "trailer", "expected a map");
-  world.trailer.width = r.positive(r.require(trailer, "width", "trailer.width"), "trailer.width");
-  world.trailer.height =
-      r.positive(r.require(trailer, "height", "trailer.height"), "trailer.height");
-  world.trailer.depth = r.positive(r.require(trailer, "depth", "trailer.depth"), "trailer.depth");
-
-  const YAML::Node boxes = r.require(root, "boxes", "boxes");
-  if (!boxes.IsSequence()) r.fail(boxes, "boxes", "expected a list");
-  std::set<std::uint32_t> ids;
-  for (std::size_t i = 0; i < boxes.size(); ++i) {
-    const std::string key = fmt::format("boxes[{}]", i);
-    Box box = read_box(r, boxes[i], key);
-    if (!ids.insert(box.id).second) {
-      r.fail(boxes[i]["id"], key + ".id", fmt::format("duplicate id {}", box.id));
-    }
-    world.boxes.push_back(std::move(box));
-  }
-  return world;
+  return value_or_throw(read_world(yaml::Document::parse(text, origin)));
 }
 
 World load_world(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) {
-    throw WorldFileError(
-        fmt::format("{}:0: (file): cannot open: {}", file.string(), std::strerror(errno)));
-  }
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_world(text.str(), file.string());
+  return value_or_throw(read_world(yaml::Document::open(file.string(), "the world")));
 }
 
 std::string format_world(const World& world) {
@@ -181,43 +137,9 @@ std::string format_world(const World& world) {
   return std::string(out.c_str()) + "\n";
 }
 
-void write_file_atomically(const std::filesystem::path& file, const std::string& content) {
-  const std::string target = file.string();
-  const std::string temp = fmt::format("{}.tmp.{}", target, ::getpid());
-  const auto io_error = [&](const char* what) {
-    const int err = errno;
-    ::unlink(temp.c_str());
-    return WorldFileError(fmt::format("{}:0: (file): {}: {}", target, what, std::strerror(err)));
-  };
-  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw io_error("cannot create temporary file");
-  std::size_t done = 0;
-  while (done < content.size()) {
-    const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      ::close(fd);
-      throw io_error("write failed");
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  if (::fsync(fd) != 0) {
-    ::close(fd);
-    throw io_error("fsync failed");
-  }
-  if (::close(fd) != 0) throw io_error("close failed");
-  if (::rename(temp.c_str(), target.c_str()) != 0) throw io_error("rename failed");
-  // The rename itself must reach the disk for the new file to survive a crash.
-  const std::filesystem::path dir = file.has_parent_path() ? file.parent_path() : ".";
-  const int dir_fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dir_fd >= 0) {
-    ::fsync(dir_fd);
-    ::close(dir_fd);
-  }
-}
-
 void save_world(const World& world, const std::filesystem::path& file) {
-  write_file_atomically(file, format_world(world));
+  if (const Status written = write_file_atomically(file.string(), format_world(world)); !written)
+    throw WorldFileError(written.error().message);
 }
 
 }  // namespace plr::sim

@@ -1,6 +1,6 @@
 #include "checkpoint.hpp"
 
-#include <plr/sim/atomic_file.hpp>
+#include <plr/atomic_file.hpp>
 #include <plr/sim/world_io.hpp>
 
 #include <nlohmann/json.hpp>
@@ -22,7 +22,9 @@ void save_checkpoint(const fs::path& dir, const Checkpoint& c) {
   j["boxes_total"] = c.boxes_total;
   j["boxes_unloaded"] = c.boxes_unloaded;
   // Written last: its presence marks a complete checkpoint.
-  sim::write_file_atomically(dir / "state.json", j.dump());
+  if (const Status written = write_file_atomically((dir / "state.json").string(), j.dump());
+      !written)
+    throw std::runtime_error(written.error().message);
 }
 
 std::optional<Checkpoint> load_checkpoint(const fs::path& dir) {

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <plr/actions/action_model.hpp>
+#include <plr/atomic_file.hpp>
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
@@ -491,8 +492,8 @@ class ExecutorNode : public plr::Node {
     fs::create_directories(dir, ec);
     if (ec) throw std::runtime_error(dir.string() + ": " + ec.message());
     auto write = [&](const std::string& name, const std::string& content) {
-      if (const auto err = write_atomically(dir / name, content); !err.empty())
-        throw std::runtime_error((dir / name).string() + ": " + err);
+      if (const Status written = write_file_atomically((dir / name).string(), content); !written)
+        throw std::runtime_error(written.error().message);
     };
     write("report.json", to_json(stats_).dump(2) + "\n");
     write("unloading.svg", curve_svg(stats_.curve, stats_.boxes_total,

@@ -2,16 +2,9 @@
 
 #include <plr/sim/render.hpp>
 
-#include <plr/sim/atomic_file.hpp>
-
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstring>
 
@@ -144,15 +137,6 @@ std::string curve_svg(const std::vector<CurvePoint>& curve, std::uint32_t total,
   svg += "<polyline fill=\"none\" stroke=\"#c0392b\" stroke-width=\"2\" points=\"" + points +
          "\"/>\n</svg>\n";
   return svg;
-}
-
-std::string write_atomically(const std::filesystem::path& file, const std::string& content) {
-  try {
-    sim::write_file_atomically(file, content);
-    return {};
-  } catch (const std::exception& e) {
-    return e.what();
-  }
 }
 
 std::string progress_line(std::uint32_t done, std::uint32_t total, double robot_time_s,

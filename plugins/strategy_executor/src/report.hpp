@@ -4,7 +4,6 @@
 
 #include <array>
 #include <cstdint>
-#include <filesystem>
 #include <map>
 #include <string>
 #include <vector>
@@ -83,9 +82,6 @@ nlohmann::json to_json(const RunStats& stats);
 // The unloading curve: boxes unloaded against robot time.
 std::string curve_svg(const std::vector<CurvePoint>& curve, std::uint32_t total,
                       const std::string& title);
-
-// Temporary file, fsync, rename, fsync of the folder. Empty, or why it failed.
-std::string write_atomically(const std::filesystem::path& file, const std::string& content);
 
 // One progress line: "[#####-----] 12/30 boxes  40%  0.21 boxes/s  Pick(high, left): approach".
 std::string progress_line(std::uint32_t done, std::uint32_t total, double robot_time_s,

@@ -1,88 +1,78 @@
 #include "plr/planning/lattice_config.hpp"
 
-#include <yaml-cpp/yaml.h>
+#include <plr/yaml_reader.hpp>
 
-#include <fstream>
-#include <sstream>
+#include <cstdint>
+#include <string>
+#include <vector>
 
 namespace plr::planning {
 namespace {
 
-// The reader stops at the first error; the public functions return it.
-struct Failure {
-  std::string what;
-};
+// Far beyond any useful lattice, small enough to keep a mistyped file from
+// building millions of primitives.
+constexpr std::size_t kMaxSteps = 64;
+constexpr std::int64_t kMaxStep = 10'000;
+constexpr std::size_t kMaxPrimitives = 4096;
 
-[[noreturn]] void fail(const std::string& source, const std::string& cause) {
-  throw Failure{source + ": " + cause};
-}
+const std::vector<std::string> kModeKeys = {"resolution",     "steps",     "primitives",
+                                            "snap_distance",  "snap_time", "ee_speed",
+                                            "line_tolerance", "plate_step"};
 
-ModeLattice parse_mode(const YAML::Node& n, PlanMode mode, const std::string& where) {
+ModeLattice read_mode(const yaml::Map& fields, PlanMode mode) {
   ModeLattice m;
   m.joints = planned_joints(mode);
   const std::size_t dims = mode == PlanMode::kArmCartesian ? 1 : m.joints.size();
-  if (!n["resolution"]) fail(where, "missing 'resolution'");
-  m.resolution = n["resolution"].as<std::vector<double>>();
-  if (m.resolution.size() != dims) {
-    fail(where, "'resolution' needs " + std::to_string(dims) + " values, has " +
-                    std::to_string(m.resolution.size()));
-  }
-  for (double r : m.resolution) {
-    if (!(r > 0.0)) fail(where, "resolutions must be positive");
-  }
-  if (n["steps"]) {
-    for (int k : n["steps"].as<std::vector<int>>()) {
-      if (k <= 0) fail(where, "'steps' must be positive");
-      for (std::size_t d = 0; d < dims; ++d) {
-        for (int sign : {1, -1}) {
-          std::vector<int> p(dims, 0);
-          p[d] = sign * k;
-          m.primitives.push_back(p);
-        }
+  for (const yaml::Node& r :
+       fields.required("resolution").list("a list of resolutions", dims, dims))
+    m.resolution.push_back(r.positive().value_or(1.0));
+  for (const yaml::Node& step : fields.find("steps").list("a list of step counts", 0, kMaxSteps)) {
+    const auto k = step.integer(1, kMaxStep);
+    if (!k) continue;
+    for (std::size_t d = 0; d < dims; ++d) {
+      for (int sign : {1, -1}) {
+        std::vector<int> p(dims, 0);
+        p[d] = sign * static_cast<int>(*k);
+        m.primitives.push_back(p);
       }
     }
   }
-  if (n["primitives"]) {
-    for (const auto& p : n["primitives"]) {
-      auto v = p.as<std::vector<int>>();
-      if (v.size() != dims) fail(where, "a primitive needs " + std::to_string(dims) + " values");
-      m.primitives.push_back(std::move(v));
-    }
+  for (const yaml::Node& p :
+       fields.find("primitives").list("a list of primitives", 0, kMaxPrimitives)) {
+    std::vector<int> v;
+    for (const yaml::Node& x : p.list("a primitive (steps per variable)", dims, dims))
+      v.push_back(static_cast<int>(x.integer(-kMaxStep, kMaxStep).value_or(0)));
+    m.primitives.push_back(std::move(v));
   }
-  if (m.primitives.empty()) fail(where, "no primitives ('steps' or 'primitives')");
-  m.snap_distance = n["snap_distance"].as<double>(0.0);
-  m.snap_time = n["snap_time"].as<double>(0.0);
-  m.ee_speed = n["ee_speed"].as<double>(1.0);
-  m.line_tolerance = n["line_tolerance"].as<double>(0.005);
-  m.plate_step = n["plate_step"].as<double>(0.0);
-  if (!(m.ee_speed > 0.0) || !(m.line_tolerance > 0.0))
-    fail(where, "ee_speed and line_tolerance must be positive");
+  m.snap_distance = fields.find("snap_distance").number(0.0).value_or(m.snap_distance);
+  m.snap_time = fields.find("snap_time").number(0.0).value_or(m.snap_time);
+  m.ee_speed = fields.find("ee_speed").positive().value_or(m.ee_speed);
+  m.line_tolerance = fields.find("line_tolerance").positive().value_or(m.line_tolerance);
+  m.plate_step = fields.find("plate_step").number(0.0).value_or(m.plate_step);
   return m;
 }
 
-LatticeConfig parse(const std::string& yaml, const std::string& source) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml);
-  } catch (const YAML::Exception& e) {
-    fail(source, std::string("YAML error: ") + e.what());
-  }
+Expected<LatticeConfig> read(Expected<yaml::Document> doc) {
+  if (!doc) return doc.error();
+  const yaml::Map top =
+      doc->root().map("a map of mode -> lattice", {"M1", "M2", "M3", "M4", "M5", "M6"});
   LatticeConfig c;
+  if (!top) return doc->error();
   for (int i = 1; i <= 6; ++i) {
     const auto mode = static_cast<PlanMode>(i);
     const std::string key = "M" + std::to_string(i);
-    if (!root[key]) {
-      if (mode != PlanMode::kEscape) fail(source, "missing mode '" + key + "'");
-      c.modes[mode] = default_escape_lattice();
+    const yaml::Node n = mode == PlanMode::kEscape ? top.find(key) : top.required(key);
+    if (!n.present()) {
+      if (mode == PlanMode::kEscape) c.modes[mode] = default_escape_lattice();
       continue;
     }
-    try {
-      c.modes[mode] = parse_mode(root[key], mode, source + ": " + key);
-    } catch (const YAML::Exception& e) {
-      fail(source, key + ": " + e.what());
-    }
+    const yaml::Map fields = n.map("a mode's lattice", kModeKeys);
+    if (!fields) continue;
+    c.modes[mode] = read_mode(fields, mode);
+    if (c.modes[mode].primitives.empty() && doc->ok())
+      n.error("no primitives ('steps' or 'primitives')");
   }
-  return c;
+  return doc->result(std::move(c));
 }
 
 }  // namespace
@@ -105,20 +95,12 @@ ModeLattice default_escape_lattice() {
 }
 
 plr::Expected<LatticeConfig> LatticeConfig::from_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) return plr::make_error(PLR_ERR_INVALID, path + ": cannot open file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return from_string(ss.str(), path);
+  return read(yaml::Document::open(path, "the lattice"));
 }
 
 plr::Expected<LatticeConfig> LatticeConfig::from_string(const std::string& yaml,
                                                         const std::string& source) {
-  try {
-    return parse(yaml, source);
-  } catch (const Failure& f) {
-    return plr::make_error(PLR_ERR_INVALID, f.what);
-  }
+  return read(yaml::Document::parse(yaml, source));
 }
 
 }  // namespace plr::planning

@@ -27,8 +27,10 @@ struct ModeLattice {
 struct LatticeConfig {
   std::map<PlanMode, ModeLattice> modes;
 
-  // Errors are one line, "<source>: <cause>". A file without M6 gets
-  // default_escape_lattice().
+  // Read with plr/yaml_reader.hpp: unknown keys are errors, step and
+  // primitive counts are bounded. The error is the first problem as one line,
+  // "<source>:line:col: M1.steps[0]: must be positive, got 0". A file without
+  // M6 gets default_escape_lattice().
   static plr::Expected<LatticeConfig> from_file(const std::string& path);
   static plr::Expected<LatticeConfig> from_string(const std::string& yaml,
                                                   const std::string& source = "<string>");

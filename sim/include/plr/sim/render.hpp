@@ -28,7 +28,7 @@ struct RenderOptions {
 };
 
 std::string render_svg(const World& world, View view, const RenderOptions& options = {});
-// Atomic write, like save_world.
+// Atomic write (plr::write_file_atomically); throws WorldFileError naming the file.
 void write_svg(const std::filesystem::path& file, const World& world, View view,
                const RenderOptions& options = {});
 

@@ -105,11 +105,15 @@ std::vector<std::uint8_t> serialize(const Strategy& strategy);
 Strategy deserialize(const std::uint8_t* data, std::size_t size, const std::string& origin);
 
 std::string format_yaml(const Strategy& strategy);
+// Read with plr/yaml_reader.hpp: unknown keys are errors, child and root
+// indices must name a node. Throws StrategyFileError with the first problem as
+// one line, "<origin>:line:col: key: cause"; what only the whole tree shows
+// (validate()) is located at the list of nodes.
 Strategy parse_yaml(const std::string& text, const std::string& origin);
 
 // By extension: .yaml/.yml as YAML, anything else as the binary form. Writes
-// are atomic (temporary file, fsync, rename); errors throw StrategyFileError
-// with one line "<file>: <cause>".
+// are atomic (plr::write_file_atomically); errors throw StrategyFileError
+// with one line "<file>[:line:col]: <cause>".
 void save_strategy(const Strategy& strategy, const std::filesystem::path& file);
 Strategy load_strategy(const std::filesystem::path& file);
 

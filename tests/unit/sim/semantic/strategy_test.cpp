@@ -188,9 +188,40 @@ TEST(StrategyFile, BadFilesGiveOneLineErrors) {
   const auto yaml = dir.path() / "bad.yaml";
   std::ofstream(yaml) << "format: plr-strategy\nversion: 1\nnodes:\n  - {action: Jump(high)}\n";
   EXPECT_EQ(load_error(yaml),
-            yaml.string() + ":4: action: 'Jump(high)' is not Pick(h, s) or Sweep(h)");
+            yaml.string() + ":4:14: nodes[0].action: 'Jump(high)' is not Pick(h, s) or Sweep(h)");
   for (const auto& f : {garbage, corrupt, tree, yaml})
     EXPECT_EQ(load_error(f).find('\n'), std::string::npos);
+}
+
+std::string yaml_error(const std::string& nodes) {
+  try {
+    parse_yaml("format: plr-strategy\nversion: 1\nroot: 0\nnodes:\n" + nodes, "s.yaml");
+  } catch (const StrategyFileError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(StrategyFile, YamlErrorsAreLocated) {
+  // A value of the wrong type.
+  EXPECT_EQ(yaml_error("  - {action: [Sweep(low)]}\n"),
+            "s.yaml:5:14: nodes[0].action: expected an action, got a list");
+  EXPECT_EQ(yaml_error("  - {action: Sweep(low), children: {wall/low/left: one}}\n"),
+            "s.yaml:5:52: nodes[0].children.wall/low/left: expected an integer, got 'one'");
+  // A key the reader does not know.
+  EXPECT_EQ(yaml_error("  - {action: Sweep(low), child: {}}\n"),
+            "s.yaml:5:26: nodes[0].child: unknown key 'child' (known keys: action, children)");
+  EXPECT_EQ(yaml_error("  - {action: Sweep(low), children: {wall/low/up: 0}}\n"),
+            "s.yaml:5:37: nodes[0].children.wall/low/up: 'wall/low/up' is not "
+            "pile|wall/low|mid|high/left|center|right");
+  // Out of range: a child or the root past the last node.
+  EXPECT_EQ(yaml_error("  - {action: Sweep(low), children: {wall/low/left: 1}}\n"),
+            "s.yaml:5:52: nodes[0].children.wall/low/left: must be between 0 and 0, got 1");
+  EXPECT_EQ(yaml_error("  - {action: Sweep(low)}\n").find("no error"), 0u);
+  // What only the whole tree shows is reported at the list of nodes.
+  EXPECT_EQ(yaml_error("  - {action: Sweep(low), children: {wall/low/left: 0}}\n"),
+            "s.yaml:5:3: nodes: root 0 has a parent");
+  EXPECT_EQ(yaml_error(" []\n"), "s.yaml:5:2: nodes: a strategy needs at least one node");
 }
 
 TEST(StrategyFile, RefusesToWriteInvalidTreesAndReportsIoErrors) {

@@ -79,29 +79,57 @@ TEST_F(WorldIo, ErrorsNameLineAndKey) {
   EXPECT_EQ(error_of(std::string(kHeader) +
                      "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5]}\n"
                      "  - {id: 2, position: [3, 0, 0.5]}\n"),
-            "6: boxes[1].size: missing");
+            "6:5: boxes[1]: missing required key 'size'");
   EXPECT_EQ(
       error_of(std::string(kHeader) + "boxes:\n  - {id: 1, size: [1, 1], position: [1, 0, 0.5]}\n"),
-      "5: boxes[0].size: expected a list of 3 numbers");
+      "5:19: boxes[0].size: must have exactly 3 items, got 2");
   EXPECT_EQ(error_of(std::string(kHeader) +
                      "boxes:\n  - id: 1\n    size: [1, 1, 1]\n    position: [1, 0, 0.5]\n"
                      "    mass: heavy\n"),
-            "8: boxes[0].mass: expected a number, got 'heavy'");
+            "8:11: boxes[0].mass: expected a number, got 'heavy'");
   EXPECT_EQ(error_of(std::string(kHeader) +
                      "boxes:\n  - {id: 1, size: [1, -1, 1], position: [1, 0, 0.5]}\n"),
-            "5: boxes[0].size[1]: must be > 0");
+            "5:23: boxes[0].size[1]: must be positive, got -1");
   EXPECT_EQ(error_of(std::string(kHeader) +
                      "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5]}\n"
                      "  - {id: 1, size: [1, 1, 1], position: [3, 0, 0.5]}\n"),
-            "6: boxes[1].id: duplicate id 1");
+            "6:10: boxes[1].id: duplicate id 1 (also boxes[0].id)");
   EXPECT_EQ(error_of("format: plr-world\nversion: 1\ntrailer: {width: 2.5, height: 0, depth: 16}\n"
                      "boxes: []\n"),
-            "3: trailer.height: must be > 0, got 0");
+            "3:31: trailer.height: must be positive, got 0");
   EXPECT_EQ(error_of("format: plr-world\nversion: 2\n"),
-            "2: version: unsupported, this reader knows 1");
-  EXPECT_EQ(error_of("format: something\n"), "1: format: expected 'plr-world'");
+            "2:10: version: unsupported version 2 (this reader knows 1)");
+  EXPECT_EQ(error_of("format: something\nversion: 1\n"),
+            "1:9: format: expected 'plr-world', got 'something'");
   EXPECT_EQ(error_of(std::string(kHeader) + "boxes: [\n"),
-            "5: (syntax): end of sequence flow not found");
+            "5:1: syntax error: end of sequence flow not found");
+}
+
+TEST_F(WorldIo, BadTypesUnknownKeysAndRangesAreLocated) {
+  // A value of the wrong type.
+  EXPECT_EQ(
+      error_of(std::string(kHeader) + "boxes:\n  - {id: 1, size: 1, position: [1, 0, 0.5]}\n"),
+      "5:19: boxes[0].size: expected 3 sizes, got '1'");
+  EXPECT_EQ(error_of(std::string(kHeader) + "boxes: {id: 1}\n"),
+            "4:8: boxes: expected a list of boxes, got a map");
+  // A key the reader does not know, with the one it probably meant.
+  EXPECT_EQ(error_of(std::string(kHeader) +
+                     "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5], mas: 2}\n"),
+            "5:53: boxes[0].mas: unknown key 'mas' (did you mean 'mass'?)");
+  EXPECT_EQ(error_of("format: plr-world\nversion: 1\n"
+                     "trailer: {width: 2.5, height: 2.7, depth: 16, length: 3}\nboxes: []\n"),
+            "3:47: trailer.length: unknown key 'length' (known keys: width, height, depth)");
+  // Out of range.
+  EXPECT_EQ(error_of(std::string(kHeader) +
+                     "boxes:\n  - {id: -1, size: [1, 1, 1], position: [1, 0, 0.5]}\n"),
+            "5:10: boxes[0].id: must not be negative, got -1");
+  EXPECT_EQ(error_of(std::string(kHeader) +
+                     "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5], mass: -2}\n"),
+            "5:59: boxes[0].mass: must not be negative, got -2");
+  EXPECT_EQ(
+      error_of(std::string(kHeader) + "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5],"
+                                      " orientation: [0, 0, 0, 0]}\n"),
+      "5:66: boxes[0].orientation: must be a rotation, got a zero quaternion");
 }
 
 TEST_F(WorldIo, MissingFileIsReported) {
@@ -110,7 +138,7 @@ TEST_F(WorldIo, MissingFileIsReported) {
     FAIL();
   } catch (const WorldFileError& e) {
     EXPECT_EQ(std::string(e.what()),
-              (dir_ / "nope.yaml").string() + ":0: (file): cannot open: No such file or directory");
+              (dir_ / "nope.yaml").string() + ": cannot read the world: No such file or directory");
   }
 }
 
@@ -121,7 +149,7 @@ TEST_F(WorldIo, SaveIntoMissingDirectoryFailsCleanly) {
     FAIL();
   } catch (const WorldFileError& e) {
     EXPECT_EQ(std::string(e.what()),
-              p.string() + ":0: (file): cannot create temporary file: No such file or directory");
+              p.string() + ": cannot create a temporary file: No such file or directory");
   }
 }
 

@@ -21,7 +21,8 @@ std::string error_of(const std::string& yaml) {
 }
 
 TEST(LatticeConfig, TheShippedFileLoads) {
-  const auto c = LatticeConfig::from_file(sim::shipped_file("robots/unloader_lattice.yaml").value());
+  const auto c =
+      LatticeConfig::from_file(sim::shipped_file("robots/unloader_lattice.yaml").value());
   ASSERT_TRUE(c) << c.error().message;
   EXPECT_EQ(c->modes.size(), 6u);
 }
@@ -51,19 +52,47 @@ TEST(LatticeConfig, WithoutM6TheDefaultEscape) {
   EXPECT_EQ(m6.plate_step, 0.015);
 }
 
-TEST(LatticeConfig, ErrorsNameTheSourceAndTheMode) {
-  EXPECT_EQ(error_of("M1: {resolution: [0.02]}"),
-            "test.yaml: M1: 'resolution' needs 4 values, has 1");
-  EXPECT_EQ(error_of("M1: [1, 2").rfind("test.yaml: YAML error: ", 0), 0u) << error_of("M1: [1, 2");
+std::string with(const std::string& from, const std::string& to) {
+  std::string yaml = kMinimal;
+  yaml.replace(yaml.find(from), from.size(), to);
+  return yaml;
+}
+
+TEST(LatticeConfig, ErrorsNameTheFileLineColumnAndKey) {
+  EXPECT_EQ(error_of(with("[0.02, 0.02, 0.02, 0.02], steps", "[0.02], steps")),
+            "test.yaml:2:18: M1.resolution: must have exactly 4 items, got 1");
+  EXPECT_EQ(error_of("M1: [1, 2"), "test.yaml:1:1: syntax error: end of sequence flow not found");
   std::string no_m3 = kMinimal;
   no_m3.erase(no_m3.find("M3:"), no_m3.find("M4:") - no_m3.find("M3:"));
-  EXPECT_EQ(error_of(no_m3), "test.yaml: missing mode 'M3'");
-  std::string bad_step = kMinimal;
-  bad_step.replace(bad_step.find("steps: [1, 5]"), 13, "steps: [0]");
-  EXPECT_EQ(error_of(bad_step), "test.yaml: M1: 'steps' must be positive");
+  EXPECT_EQ(error_of(no_m3), "test.yaml:2:1: missing required key 'M3'");
+  EXPECT_EQ(error_of(with("M5: {resolution: [0.01], primitives: [[10], [-10]]}",
+                          "M5: {resolution: [0.01]}")),
+            "test.yaml:6:5: M5: no primitives ('steps' or 'primitives')");
   const auto missing = LatticeConfig::from_file("/nonexistent/lattice.yaml");
   ASSERT_FALSE(missing);
-  EXPECT_EQ(missing.error().message, "/nonexistent/lattice.yaml: cannot open file");
+  EXPECT_EQ(missing.error().message,
+            "/nonexistent/lattice.yaml: cannot read the lattice: No such file or directory");
+}
+
+TEST(LatticeConfig, BadTypesUnknownKeysAndRangesAreLocated) {
+  // A value of the wrong type.
+  EXPECT_EQ(error_of(with("ee_speed: 0.5", "ee_speed: fast")),
+            "test.yaml:5:51: M4.ee_speed: expected a number, got 'fast'");
+  EXPECT_EQ(
+      error_of(with("primitives: [[10], [-10]]", "primitives: [10, [-10]]")),
+      "test.yaml:6:39: M5.primitives[0]: expected a primitive (steps per variable), got '10'");
+  // A key the reader does not know.
+  EXPECT_EQ(error_of(with("snap_time: 3.0", "snap_tme: 3.0")),
+            "test.yaml:4:50: M3.snap_tme: unknown key 'snap_tme' (did you mean 'snap_time'?)");
+  EXPECT_EQ(error_of(std::string(kMinimal) + "M7: {resolution: [1]}\n"),
+            "test.yaml:7:1: M7: unknown key 'M7' (did you mean 'M1'?)");
+  // Out of range.
+  EXPECT_EQ(error_of(with("steps: [1, 5]", "steps: [0]")),
+            "test.yaml:2:52: M1.steps[0]: must be positive, got 0");
+  EXPECT_EQ(error_of(with("[0.01, 0.01, 0.01]", "[0.01, 0, 0.01]")),
+            "test.yaml:4:25: M3.resolution[1]: must be positive, got 0");
+  EXPECT_EQ(error_of(with("snap_time: 3.0", "snap_time: -3.0")),
+            "test.yaml:4:61: M3.snap_time: must not be negative, got -3.0");
 }
 
 }  // namespace
