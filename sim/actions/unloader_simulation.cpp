@@ -7,6 +7,7 @@
 #include <map>
 #include <set>
 
+#include "plr/msg/sim_state_generated.h"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/robot_links.hpp"
 
@@ -220,6 +221,39 @@ void UnloaderSimulation::restore(const Saved& saved) {
   // The restored physics carries its own unload events; count from there.
   m.unloaded_before = saved.unloaded - static_cast<std::uint32_t>(m.sim.unloaded().size());
   m.move_robot(m.q, false);
+}
+
+plr::Status UnloaderSimulation::set_masses(
+    const std::vector<std::pair<std::uint32_t, double>>& masses) {
+  Impl& m = *impl_;
+  // Through the state's bytes: the physics keeps its state private, and the
+  // bytes carry every double exactly, so only the masses change.
+  const std::vector<std::uint8_t> bytes = m.sim.snapshot().to_bytes();
+  msg::SimulationStateT state;
+  msg::GetSimulationState(bytes.data())->UnPackTo(&state);
+  std::map<std::uint32_t, std::size_t> at;
+  for (std::size_t i = 0; i < state.bodies.size(); ++i) {
+    const msg::SimBody& b = state.bodies[i];
+    if (b.mode() != msg::SimBodyMode::Gone) at.emplace(b.id(), i);
+  }
+  for (const auto& [id, mass] : masses) {
+    if (!at.count(id))
+      return plr::make_error(PLR_ERR_INVALID, fmt::format("set_masses: no box {}", id));
+    if (!std::isfinite(mass) || !(mass > 0))
+      return plr::make_error(PLR_ERR_INVALID,
+                             fmt::format("set_masses: box {}: mass must be finite and > 0", id));
+  }
+  for (const auto& [id, mass] : masses) {
+    msg::SimBody& b = state.bodies[at[id]];
+    b = msg::SimBody(b.id(), b.mode(), b.size(), mass, b.pose(), b.velocity(), b.angular_velocity(),
+                     b.still(), b.rest(), b.grip(), b.capacity(), b.load());
+  }
+  flatbuffers::FlatBufferBuilder fbb;
+  msg::FinishSimulationStateBuffer(fbb, msg::SimulationState::Pack(fbb, &state));
+  auto snapshot = sim::Snapshot::from_bytes(fbb.GetBufferPointer(), fbb.GetSize());
+  if (!snapshot) return snapshot.error();
+  m.sim.restore(*snapshot);
+  return {};
 }
 
 }  // namespace plr::actions

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "plr/planning/plan_messages.hpp"
@@ -77,6 +78,12 @@ class UnloaderSimulation {
   struct Saved;
   std::shared_ptr<const Saved> save() const;
   void restore(const Saved& saved);
+
+  // Gives the boxes named by id these masses (kg) and leaves everything else
+  // as it is: the same state on another particle of the belief over W^t
+  // (sim::sample_masses). An unknown id or a mass that is not finite and > 0
+  // is refused, naming it, and changes nothing.
+  plr::Status set_masses(const std::vector<std::pair<std::uint32_t, double>>& masses);
 
  private:
   struct Impl;
