@@ -32,6 +32,9 @@ struct ModeStats {
 struct ActionStats {
   std::uint64_t executions = 0;
   std::uint64_t boxes = 0;
+  // Executions by the boxes each moved out (0, 1, 2, ...): a multi-box pick
+  // shows as 2 or more.
+  std::map<std::uint32_t, std::uint64_t> boxes_histogram;
   Accumulator plan_s;  // per execution: planning time the robot waited for (modelled)
   Accumulator exec_s;  // per execution: simulated execution time
 };
@@ -58,7 +61,7 @@ struct RunStats {
   double wall_time_s = 0;
   std::uint64_t robot_trailer_collisions = 0;
   std::uint64_t failed_grasps = 0;
-  std::uint64_t not_applicable = 0;  // actions with nothing to do in their region
+  std::uint64_t not_applicable = 0;    // actions with nothing to do in their region
   std::uint64_t recoveries = 0;        // simulator restarts survived
   std::uint64_t strategies_asked = 0;  // strategy/next calls
   std::uint64_t strategy_steps = 0;    // actions taken by following a branch
