@@ -13,13 +13,17 @@ struct SuctionPlate {
   // Centre of the cup face; local +z points out of the plate towards what it grips.
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   // Cup field, local x (up the plate) and y (across it), m: the robot's
-  // 0.5 m high x 0.6 m wide plate. Centred on the seam between two typical
-  // boxes (0.4-0.55 m wide, 0.3-0.4 m high) side by side or stacked, it
-  // puts two or more rows or columns of cups on each; centred on one box,
-  // its outer cups mostly fall beside it.
-  Eigen::Vector2d extent{0.5, 0.6};
-  int cups_x = 4;            // 0.125 m pitch
-  int cups_y = 6;            // 0.1 m pitch
+  // 0.4 m high x 0.5 m wide plate, cups on a 0.1 m grid. On the seam
+  // between two typical boxes (0.4-0.55 m wide, 0.3-0.4 m high) side by side
+  // or stacked, two columns or rows of cups seal on each, and on the corner
+  // of four (or three) boxes two by two on each. Centred on one such box, no
+  // whole cup lies on a neighbour (the outer cups straddle its edges or stay
+  // on it), so a pick can take one box of a tightly packed wall: a larger
+  // grid would seal on neighbours too, which a Pick of another region must
+  // not take.
+  Eigen::Vector2d extent{0.4, 0.5};
+  int cups_x = 4;
+  int cups_y = 5;
   double cup_radius = 0.03;  // m; a cup seals only with its whole rim on the face
   double cup_force = 90.0;   // N a cup holds (60 mm bellows cup, safety factor 2)
   double reach = 0.02;       // largest gap between cup face and box face that still grips
@@ -28,8 +32,8 @@ struct SuctionPlate {
   // blower-type generator holds the full vacuum (cup_force per cup) on about
   // six cups sealed on cardboard; with more, the vacuum level falls and the
   // sealed cups share this force (each holds min(cup_force, pump_max_force /
-  // sealed cups)). One box of up to ~55 kg holds; two at once hold ~27 kg
-  // each, three ~18 kg each.
+  // sealed cups)). One box of up to ~55 kg holds; two at once (four cups
+  // each on their seam) ~27 kg each, three ~18 kg, four ~14 kg each.
   double pump_max_force = 540.0;
 };
 

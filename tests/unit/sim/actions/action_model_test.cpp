@@ -103,7 +103,7 @@ TEST(ActionModel, ASweepCarriesALowPileOut) {
 
 // Two columns of two 0.45 m wide, 0.35 m high boxes side by side in the
 // centre third, front face at x = 5: one low block the plate seals on whole
-// (on the seams, six cups on each box).
+// (on the corner of the four, four cups on each box).
 sim::World block(double mass) {
   sim::World w;
   w.trailer.depth = 8.0;
