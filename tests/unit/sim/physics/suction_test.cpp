@@ -117,10 +117,10 @@ World two_boxes(double mass) {
   return w;
 }
 
-// The robot's plate (the default grid: 4 x 6 cups over 0.5 x 0.6 m) over
-// the seam between the two boxes, pointing down: three columns of two cups
-// seal on each, 6 * 90 = 540 N on either alone. Together their twelve cups
-// share the pump's 540 N: 270 N each.
+// The robot's plate (the default grid: 4 x 5 cups over 0.4 x 0.5 m) over
+// the seam between the two boxes, pointing down: two columns of four cups
+// seal on each, 8 * 90 = 720 N, held to the pump's 540 N on either alone.
+// Together their sixteen cups share the pump's 540 N: 270 N each.
 SuctionPlate robot_plate_at(double z) {
   SuctionPlate p;
   p.pose = Eigen::Translation3d(10.0, 0.0, z) * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX());
@@ -179,8 +179,8 @@ TEST(Suction, SeveralBoxesAtOnceHoldWhenLightAndDropWhenHeavy) {
 }
 
 TEST(Suction, ThePumpHoldsEachBoxAloneButNotBothTogether) {
-  // 30 kg, 294 N: under the 540 N one box's six cups hold alone, over the
-  // 270 N each holds when both share the pump.
+  // 30 kg, 294 N: under the 540 N one box's eight cups hold alone (the
+  // pump's limit), over the 270 N each holds when both share the pump.
   for (std::uint32_t id : {1u, 2u}) {
     World w = two_boxes(30.0);
     w.boxes.erase(w.boxes.begin() + (id == 1 ? 1 : 0));
