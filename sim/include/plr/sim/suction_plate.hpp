@@ -30,11 +30,12 @@ struct SuctionPlate {
   double max_tilt = 0.26;    // rad between the plate normal and the box face normal
   // The vacuum source's limit on the cups together, N. Cardboard leaks: a
   // blower-type generator holds the full vacuum (cup_force per cup) on about
-  // six cups sealed on cardboard; with more, the vacuum level falls and the
-  // sealed cups share this force (each holds min(cup_force, pump_max_force /
-  // sealed cups)). One box of up to ~55 kg holds; two at once (four cups
-  // each on their seam) ~27 kg each, three ~18 kg, four ~14 kg each.
-  double pump_max_force = 540.0;
+  // twelve cups sealed on cardboard; with more, the vacuum level falls and
+  // the sealed cups share this force (each holds min(cup_force,
+  // pump_max_force / sealed cups)). One box holds up to ~110 kg (sealed by
+  // twelve cups or more); two, three or four at once sealed by four cups
+  // each, ~37, ~37 and ~27 kg each.
+  double pump_max_force = 1080.0;
 };
 
 }  // namespace plr::sim

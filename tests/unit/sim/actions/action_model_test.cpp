@@ -130,11 +130,11 @@ TEST(ActionModel, APickOfSeveralBoxesHoldsWhenLightAndNotWhenHeavy) {
   EXPECT_GE(a->boxes, 3u);
   for (const auto& e : light.simulation.physics().suction_events())
     EXPECT_NE(e.kind, sim::SuctionEvent::Kind::kRefused);
-  // The same boxes at 20 kg: their twelve-odd cups share the pump, and the
-  // share of each is less than its weight: some are left or lost.
+  // The same boxes at 35 kg: their sixteen cups share the pump (270 N each
+  // of 343 N): some are left or lost.
   sim::World heavy = block(4.0);
   std::vector<std::pair<std::uint32_t, double>> masses;
-  for (const auto& b : heavy.boxes) masses.emplace_back(b.id, 20.0);
+  for (const auto& b : heavy.boxes) masses.emplace_back(b.id, 35.0);
   ASSERT_TRUE(sim::set_masses(heavy, masses));
   Fixture f(heavy);
   const auto b = model.run(action, f.backend, f.memory);

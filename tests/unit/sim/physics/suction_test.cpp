@@ -119,8 +119,8 @@ World two_boxes(double mass) {
 
 // The robot's plate (the default grid: 4 x 5 cups over 0.4 x 0.5 m) over
 // the seam between the two boxes, pointing down: two columns of four cups
-// seal on each, 8 * 90 = 720 N, held to the pump's 540 N on either alone.
-// Together their sixteen cups share the pump's 540 N: 270 N each.
+// seal on each, 8 * 90 = 720 N on either alone. Together their sixteen cups
+// share the pump's 1080 N: 540 N each.
 SuctionPlate robot_plate_at(double z) {
   SuctionPlate p;
   p.pose = Eigen::Translation3d(10.0, 0.0, z) * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX());
@@ -140,20 +140,20 @@ void lift_robot_plate(Simulation& sim, double a, double height) {
 }
 
 TEST(Suction, SeveralBoxesAtOnceHoldWhenLightAndDropWhenHeavy) {
-  // Light: 8 kg each, 94 N at 2 m/s^2 upwards against 270 N each.
+  // Light: 8 kg each, 111 N at 4 m/s^2 upwards against 540 N each.
   {
     Simulation sim(two_boxes(8.0));
     sim.set_suction_plate(robot_plate_at(0.4));
     ASSERT_EQ(sim.suction_on().size(), 2u);
-    for (const SuctionEvent& e : sim.suction_events()) EXPECT_NEAR(e.capacity, 270.0, 1e-9);
+    for (const SuctionEvent& e : sim.suction_events()) EXPECT_NEAR(e.capacity, 540.0, 1e-9);
     lift_robot_plate(sim, 4.0, 0.4);
     EXPECT_EQ(sim.held_boxes().size(), 2u);
     for (const Box& b : sim.world().boxes) EXPECT_GT(b.pose.translation().z(), 0.55);
   }
-  // The same boxes at 24 kg: 235 N at rest is held, 331 N while lifted is
-  // not. The first to let go leaves the other all the pump's force (540 N).
+  // The same boxes at 45 kg: 441 N at rest is held, 621 N while lifted is
+  // not. The first to let go leaves the other all its cups' force (720 N).
   World heavy = two_boxes(8.0);
-  ASSERT_TRUE(set_masses(heavy, {{1, 24.0}, {2, 24.0}}));
+  ASSERT_TRUE(set_masses(heavy, {{1, 45.0}, {2, 45.0}}));
   Simulation sim(heavy);
   sim.set_suction_plate(robot_plate_at(0.4));
   ASSERT_EQ(sim.suction_on().size(), 2u);
@@ -166,7 +166,7 @@ TEST(Suction, SeveralBoxesAtOnceHoldWhenLightAndDropWhenHeavy) {
   EXPECT_EQ(drops.size() + sim.held_boxes().size(), 2u);  // one event per box dropped
   for (const SuctionEvent& e : drops) {
     EXPECT_GT(e.load, e.capacity);
-    EXPECT_NEAR(e.capacity, 270.0, 1e-9);
+    EXPECT_NEAR(e.capacity, 540.0, 1e-9);
   }
   // What dropped fell back to the floor.
   sim.step(1.0);
@@ -179,27 +179,27 @@ TEST(Suction, SeveralBoxesAtOnceHoldWhenLightAndDropWhenHeavy) {
 }
 
 TEST(Suction, ThePumpHoldsEachBoxAloneButNotBothTogether) {
-  // 30 kg, 294 N: under the 540 N one box's eight cups hold alone (the
-  // pump's limit), over the 270 N each holds when both share the pump.
+  // 60 kg, 589 N: under the 720 N one box's eight cups hold alone, over the
+  // 540 N each holds when both share the pump.
   for (std::uint32_t id : {1u, 2u}) {
-    World w = two_boxes(30.0);
+    World w = two_boxes(60.0);
     w.boxes.erase(w.boxes.begin() + (id == 1 ? 1 : 0));
     Simulation sim(w);
     sim.set_suction_plate(robot_plate_at(0.4));
     EXPECT_EQ(sim.suction_on(), std::vector<std::uint32_t>{id});
-    EXPECT_NEAR(sim.suction_events().back().capacity, 540.0, 1e-9);
+    EXPECT_NEAR(sim.suction_events().back().capacity, 720.0, 1e-9);
   }
-  Simulation sim(two_boxes(30.0));
+  Simulation sim(two_boxes(60.0));
   sim.set_suction_plate(robot_plate_at(0.4));
   EXPECT_EQ(sim.suction_on().size(), 1u);
   ASSERT_EQ(sim.suction_events().size(), 2u);
   const SuctionEvent& refused = sim.suction_events()[0];
   EXPECT_EQ(refused.kind, SuctionEvent::Kind::kRefused);
-  EXPECT_NEAR(refused.load, 30.0 * 9.81, 1e-9);
-  EXPECT_NEAR(refused.capacity, 270.0, 1e-9);
+  EXPECT_NEAR(refused.load, 60.0 * 9.81, 1e-9);
+  EXPECT_NEAR(refused.capacity, 540.0, 1e-9);
   // The other, alone on the pump, holds with all of it.
   EXPECT_EQ(sim.suction_events()[1].kind, SuctionEvent::Kind::kGripped);
-  EXPECT_NEAR(sim.suction_events()[1].capacity, 540.0, 1e-9);
+  EXPECT_NEAR(sim.suction_events()[1].capacity, 720.0, 1e-9);
 }
 
 // A 2 m belt lying at x 2..4, its centre at height z, running towards the rear.
