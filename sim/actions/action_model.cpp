@@ -388,7 +388,7 @@ class Run {
       }
       // The plate ends touching the box (a settled box may lean a little).
       if (!step("approach", PlanMode::kArmCartesian, pose(c.grasp), Suction::kKeep, Suction::kOn,
-                {c.box})) {
+                c.boxes)) {
         memory_.unreached[c.box] = step_failure_;
         continue;
       }
@@ -399,7 +399,7 @@ class Run {
       const bool gripped = !last_held_.empty();
       if (!gripped) {
         out_.failed_grasp = true;
-        memory_.ungripped.insert(chosen->box);
+        memory_.ungripped.insert(chosen->boxes.begin(), chosen->boxes.end());
         note(fmt::format("grasp of box {} failed (nothing held)", chosen->box));
       }
       // A box dropped before is carried slower: half the speed, a quarter of
@@ -420,10 +420,10 @@ class Run {
         // Still in the wall: no drop-off can be planned from here. Set the
         // box down where it was and withdraw; it is tried after the others.
         step("put back", PlanMode::kArmCartesian, pose(chosen->grasp), Suction::kKeep,
-             Suction::kOff, {chosen->box});
+             Suction::kOff, chosen->boxes);
         step("withdraw", PlanMode::kArmCartesian, pose(chosen->pregrasp), Suction::kKeep,
-             Suction::kKeep, {chosen->box});
-        memory_.ungripped.insert(chosen->box);
+             Suction::kKeep, chosen->boxes);
+        memory_.ungripped.insert(chosen->boxes.begin(), chosen->boxes.end());
       }
       const Perceived w = observe();
       if (!w.held.empty() && last_held_.empty()) out_.failed_grasp = false;
@@ -457,14 +457,20 @@ class Run {
 
   // A grip that failed: the next attempt at that box must change what failed
   // (more cups on its face; after a drop, a slower carry too).
+  // Every box of the group is remembered: taken with others, its cups
+  // shared the pump, so any pose that takes it alone covers more (cups 0).
   void grip_failed(const PickCandidate& c, bool dropped, const char* what) {
-    auto& h = memory_.grips[c.box];
-    h.last =
-        fmt::format("{} ({} cups{})", what, c.cups,
-                    h.drops > 0 ? fmt::format(", 1/{:.0f} speed", std::pow(2.0, h.drops)) : "");
-    ++h.failures;
-    h.drops += dropped ? 1 : 0;
-    h.cups = c.cups;
+    for (std::size_t k = 0; k < c.boxes.size(); ++k) {
+      auto& h = memory_.grips[c.boxes[k]];
+      const int cups = c.boxes.size() > 1 ? 0 : c.box_cups[k];
+      h.last = fmt::format(
+          "{} ({} cups{}{})", what, c.box_cups[k],
+          c.boxes.size() > 1 ? fmt::format(", with {} other boxes", c.boxes.size() - 1) : "",
+          h.drops > 0 ? fmt::format(", 1/{:.0f} speed", std::pow(2.0, h.drops)) : "");
+      ++h.failures;
+      h.drops += dropped ? 1 : 0;
+      h.cups = cups;
+    }
   }
 
   // Whether a box whose grip failed before is worth another attempt from

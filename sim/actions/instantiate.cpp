@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <tuple>
 #include <unordered_set>
 
 namespace plr::actions {
@@ -19,6 +20,10 @@ constexpr double kProud = 0.015;  // m a neighbour may stand out of the face (th
 // cups seal up to about 0.26 rad).
 constexpr double kMaxFaceTilt = 0.2;
 constexpr double kSquare = 0.03;  // rad: faces turned less than this are taken square to the axis
+// m past the cups' reach at which a face still counts as sealed on: a
+// settled box leans a little, and a box outside the region the plate might
+// take must keep the pose from being chosen.
+constexpr double kSealMargin = 0.01;
 
 sim::Height height_class(double top, double mid, double high) {
   if (top >= high) return sim::Height::kHigh;
@@ -58,33 +63,35 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
                                            const std::unordered_set<std::uint32_t>& most_cups) {
   std::unordered_set<std::uint32_t> wall(scene.first_wall.begin(), scene.first_wall.end());
   std::unordered_set<std::uint32_t> front(scene.front_pile.begin(), scene.front_pile.end());
-  std::vector<std::size_t> members;
-  std::vector<sim::Bounds> b(world.boxes.size());
+  const std::size_t count = world.boxes.size();
+  std::vector<sim::Bounds> b(count);
   double nearest = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < world.boxes.size(); ++i) {
-    b[i] = sim::bounds(world.boxes[i]);
-    nearest = std::min(nearest, b[i].x0);
-    if (wall.count(world.boxes[i].id) || front.count(world.boxes[i].id)) members.push_back(i);
-  }
-
-  struct Ranked {
-    PickCandidate c;
-    double x_bin, top, centre_distance;
-  };
-  std::vector<Ranked> ranked;
-  for (auto i : members) {
+  // The action's region: boxes of the first wall or front pile of its
+  // height class (a box's top against the wall or pile thresholds) and
+  // third of the width.
+  std::vector<bool> in_region(count, false);
+  for (std::size_t i = 0; i < count; ++i) {
     const auto& box = world.boxes[i];
+    b[i] = sim::bounds(box);
+    nearest = std::min(nearest, b[i].x0);
     const bool is_wall = wall.count(box.id) > 0;
-    const double y = box.pose.translation().y();
+    if (!is_wall && !front.count(box.id)) continue;
     const auto cls = is_wall ? height_class(b[i].z1, obs.wall_mid, obs.wall_high)
                              : height_class(b[i].z1, obs.pile_mid, obs.pile_high);
-    // The action's region: its height class and third of the width.
-    if (cls != sim::height(action) || side_of(y, world, obs) != sim::side(action)) continue;
+    in_region[i] = cls == sim::height(action) &&
+                   side_of(box.pose.translation().y(), world, obs) == sim::side(action);
+  }
 
-    // The front face: of the box's horizontal axes, the one nearest the
-    // trailer's axis gives the face's normal and the plate's yaw (the wrist
-    // turns the plate square to it). A box tilted on an edge has no face
-    // the vertical plate can seal on.
+  // The front face: of the box's horizontal axes, the one nearest the
+  // trailer's axis gives the face's normal and the plate's yaw (the wrist
+  // turns the plate square to it). A box tilted on an edge has no face the
+  // vertical plate can seal on.
+  struct Face {
+    Eigen::Vector3d n, lateral, centre;
+    double half_d = 0, half_w = 0, half_up = 0;
+  };
+  auto face_of = [&](std::size_t i) -> std::optional<Face> {
+    const auto& box = world.boxes[i];
     const Eigen::Matrix3d R = box.pose.linear();
     int normal_axis = -1, up_axis = 0;
     for (int k = 0; k < 3; ++k) {
@@ -93,32 +100,69 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
           (normal_axis < 0 || std::abs(R(0, k)) > std::abs(R(0, normal_axis))))
         normal_axis = k;
     }
-    if (normal_axis < 0 || std::abs(R(2, up_axis)) < std::cos(kMaxFaceTilt)) continue;
-    Eigen::Vector3d n = R.col(normal_axis);
-    n.z() = 0;
-    n = n.normalized() * (n.x() < 0 ? -1.0 : 1.0);
+    if (normal_axis < 0 || std::abs(R(2, up_axis)) < std::cos(kMaxFaceTilt)) return std::nullopt;
+    Face f;
+    f.n = R.col(normal_axis);
+    f.n.z() = 0;
+    f.n = f.n.normalized() * (f.n.x() < 0 ? -1.0 : 1.0);
     // A settled wall's few milliradians are not worth turning the plate for:
     // turned, it would lead with a corner.
-    if (std::abs(n.y()) < kSquare) n = Eigen::Vector3d::UnitX();
-    const Eigen::Vector3d lateral(-n.y(), n.x(), 0.0);
+    if (std::abs(f.n.y()) < kSquare) f.n = Eigen::Vector3d::UnitX();
+    f.lateral = Eigen::Vector3d(-f.n.y(), f.n.x(), 0.0);
+    f.half_d = box.size[normal_axis] / 2;
+    f.half_w = box.size[3 - normal_axis - up_axis] / 2;
+    f.half_up = box.size[up_axis] / 2;
+    f.centre = box.pose.translation() - f.half_d * f.n;
+    return f;
+  };
+  std::vector<std::optional<Face>> faces(count);
+  for (std::size_t i = 0; i < count; ++i)
+    if (wall.count(world.boxes[i].id) || front.count(world.boxes[i].id)) faces[i] = face_of(i);
+
+  auto near = [](double a0, double a1, double b0, double b1) {
+    return a0 - kClearance < b1 && b0 < a1 + kClearance;
+  };
+  // Whether the region is free of every box but those of `group`.
+  auto clear = [&](const std::vector<std::size_t>& group, double x0, double x1, double y0,
+                   double y1, double z0, double z1) {
+    for (std::size_t j = 0; j < count; ++j) {
+      if (std::find(group.begin(), group.end(), j) == group.end() &&
+          near(x0, x1, b[j].x0, b[j].x1) && near(y0, y1, b[j].y0, b[j].y1) &&
+          near(z0, z1, b[j].z0, b[j].z1))
+        return false;
+    }
+    return true;
+  };
+  const double pw = g.plate_half_width(), ph = g.plate_half_height();
+
+  struct Ranked {
+    PickCandidate c;
+    double x_bin, top, centre_distance;
+  };
+  std::vector<Ranked> ranked;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!in_region[i] || !faces[i]) continue;
+    const auto& box = world.boxes[i];
+    const Face& f = *faces[i];
+    const Eigen::Vector3d& n = f.n;
+    const Eigen::Vector3d& lateral = f.lateral;
+    const Eigen::Vector3d& face_centre = f.centre;
     const double plate_yaw = std::atan2(n.y(), n.x());
-    const double half_d = box.size[normal_axis] / 2;
-    const double half_w = box.size[3 - normal_axis - up_axis] / 2;
-    const Eigen::Vector3d face_centre = box.pose.translation() - half_d * n;
+    const double half_w = f.half_w, half_up = f.half_up;
+    const double y = box.pose.translation().y();
 
     // Plate centred on the face, kept inside the trailer and off the floor.
-    const double ylim = world.trailer.width / 2 - g.plate_half_width - kMargin;
-    const double zc = std::clamp(face_centre.z(), g.plate_half_height + kMargin,
-                                 world.trailer.height - g.plate_half_height - kMargin);
+    const double ylim = world.trailer.width / 2 - pw - kMargin;
+    const double zc =
+        std::clamp(face_centre.z(), ph + kMargin, world.trailer.height - ph - kMargin);
     const Eigen::Vector3d face(face_centre.x(), face_centre.y(), zc);
     // Base: the arm at its preferred reach, the lowered nose short of every box.
     const double by_reach = face.x() - g.pick_reach + g.arm_yaw_offset;
     const double by_nose = nearest - g.conveyor_length - g.nose_clearance;
     // A plate low enough to meet the lowered nose stays ahead of its tip.
-    const double by_plate =
-        face.z() - g.plate_half_height < g.nose_top
-            ? face.x() - g.pregrasp_distance - g.conveyor_length - g.nose_clearance
-            : by_reach;
+    const double by_plate = face.z() - ph < g.nose_top ? face.x() - g.pregrasp_distance -
+                                                             g.conveyor_length - g.nose_clearance
+                                                       : by_reach;
     const double base_x = std::min({by_reach, by_nose, by_plate});
     sim::JointVector at = current;
     at[sim::kBaseX] = base_x;
@@ -126,18 +170,6 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     // the face must be clear of every other box. Where a neighbour is in the
     // way, the plate slides off centre as long as it still covers most of
     // the face.
-    const double pw = g.plate_half_width, ph = g.plate_half_height;
-    auto near = [](double a0, double a1, double b0, double b1) {
-      return a0 - kClearance < b1 && b0 < a1 + kClearance;
-    };
-    auto clear = [&](double x0, double x1, double y0, double y1, double z0, double z1) {
-      for (std::size_t j = 0; j < world.boxes.size(); ++j) {
-        if (j != i && near(x0, x1, b[j].x0, b[j].x1) && near(y0, y1, b[j].y0, b[j].y1) &&
-            near(z0, z1, b[j].z0, b[j].z1))
-          return false;
-      }
-      return true;
-    };
     auto slides = [&](double half_extent) {
       std::vector<double> out{0.0};
       for (double d = kSlide; d <= half_extent - kCovered + 1e-9; d += kSlide) {
@@ -152,7 +184,6 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     // out (by its leading corner, if the plate is turned off the trailer's
     // axis). The cups reach the face across kProud of extra gap.
     const double half_h = (b[i].z1 - b[i].z0) / 2;
-    const double half_up = box.size[up_axis] / 2;
     const double reach_y = pw * std::abs(n.x());
     const double lead = pw * std::abs(n.y());
     auto plate_at = [&](double dy, double dz) {
@@ -161,71 +192,128 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       p.z() = std::clamp(face.z() + dz, ph + kMargin, world.trailer.height - ph - kMargin);
       return p;
     };
-    auto cups_at = [&](const Eigen::Vector3d& p) {
-      return covered_cups(g, half_w, half_up, (p - face_centre).dot(lateral),
-                          p.z() - face_centre.z());
+    auto cups_on = [&](std::size_t j, const Eigen::Vector3d& p) {
+      const Face& fj = *faces[j];
+      return covered_cups(g, fj.half_w, fj.half_up, (p - fj.centre).dot(lateral),
+                          p.z() - fj.centre.z());
     };
-    // Plate offsets (across, up) from the face's centre, in the order tried.
+    // Plate offsets (across, up) from the face's centre, in the order tried:
+    // on the face, then centred on its edges, where it may take the
+    // neighbours there too.
     std::vector<std::pair<double, double>> offsets;
     for (const double dz : slides(half_h))
       for (const double dy : slides(half_w)) offsets.emplace_back(dy, dz);
-    if (most_cups.count(box.id)) {
+    for (const double dz : {0.0, half_up, -half_up})
+      for (const double dy : {0.0, half_w, -half_w})
+        if (dy != 0.0 || dz != 0.0) offsets.emplace_back(dy, dz);
+    const bool fewer = most_cups.count(box.id) > 0;
+    if (fewer) {
       // Half a cup pitch off centre puts two columns (or rows) of cups on a
       // face the centred grid covers with one.
       const double across = 0.5 * g.cups.extent.y() / g.cups.cups_y;
       const double up = 0.5 * g.cups.extent.x() / g.cups.cups_x;
       for (const double dz : {0.0, up, -up})
         for (const double dy : {0.0, across, -across}) offsets.emplace_back(dy, dz);
-      std::vector<int> cups;
-      for (const auto& [dy, dz] : offsets) cups.push_back(cups_at(plate_at(dy, dz)));
-      std::vector<std::size_t> order(offsets.size());
-      for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-      std::stable_sort(order.begin(), order.end(),
-                       [&](std::size_t a, std::size_t b) { return cups[a] > cups[b]; });
-      std::vector<std::pair<double, double>> sorted;
-      for (auto k : order) sorted.push_back(offsets[k]);
-      offsets = std::move(sorted);
     }
-    std::optional<Eigen::Vector3d> at_face;
-    double stop_x = 0.0;
+    // Each plate pose the corridor allows: the boxes it seals on (all in the
+    // region, else the pose is not taken), which must come out together.
+    struct Grip {
+      std::vector<std::size_t> group;  // the box first
+      std::vector<int> cups;
+      Eigen::Vector3d at_face;
+      double stop_x = 0, lift = 0, out_depth = 0;
+    };
+    std::optional<Grip> best;
     for (const auto& [dy, dz] : offsets) {
       const Eigen::Vector3d p = plate_at(dy, dz);
       const double at_target = p.x() - g.grasp_gap * n.x();
       double stop = at_target;
-      for (std::size_t j = 0; j < world.boxes.size(); ++j) {
+      for (std::size_t j = 0; j < count; ++j) {
         if (j != i && near(b[i].x0 - g.pregrasp_distance, b[i].x0, b[j].x0, b[j].x1) &&
             near(p.y() - reach_y - lead, p.y() + reach_y + lead, b[j].y0, b[j].y1) &&
             near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1))
           stop = std::min(stop, b[j].x0 - g.grasp_gap - lead);
       }
-      if (at_target - stop <= kProud) {
-        at_face = p;
-        stop_x = stop;
-        break;
+      if (at_target - stop > kProud) continue;
+      Grip grip;
+      grip.at_face = p;
+      grip.stop_x = stop;
+      const Eigen::Vector3d surface = p - (p.x() - stop) / n.x() * n;
+      const int own = cups_on(i, p);
+      if (own == 0) continue;
+      grip.group.push_back(i);
+      grip.cups.push_back(own);
+      // Every other box whose face the cups reach (with a margin: a settled
+      // box may lean) and that whole cups cover.
+      bool foreign = false;
+      for (std::size_t j = 0; j < count && !foreign; ++j) {
+        if (j == i || !near(p.y() - pw, p.y() + pw, b[j].y0, b[j].y1) ||
+            !near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1))
+          continue;
+        if (!faces[j]) {
+          // Not in the structure, or no face the plate seals on: only in the way if at the face.
+          continue;
+        }
+        const double gap = (faces[j]->centre - surface).dot(n);
+        if (std::abs(gap) > g.cups.reach + kSealMargin) continue;
+        const int k = cups_on(j, p);
+        if (k == 0) continue;
+        if (!in_region[j]) foreign = true;
+        grip.group.push_back(j);
+        grip.cups.push_back(k);
       }
+      if (foreign) continue;
+      // The group is lifted off what it rests on (and over the lowered
+      // nose) before it comes out: nothing but its own boxes may rest on it.
+      double z0 = b[i].z0, depth = 0;
+      for (auto j : grip.group) {
+        z0 = std::min(z0, b[j].z0);
+        depth = std::max(depth, b[j].x1 - b[j].x0);
+      }
+      grip.lift = std::max(g.retract_lift, g.nose_top + kMargin - z0);
+      grip.out_depth = std::max(2 * f.half_d, depth) + kMargin;
+      bool free = true;
+      for (auto j : grip.group) {
+        // Pulled out, each box (it may be wider than the plate) passes over
+        // what stands in front of it; neighbours beside it, flush with its
+        // face (clear() adds kClearance), are not in the way.
+        free = free &&
+               clear(grip.group, b[j].x0 + kMargin, b[j].x1 - kMargin, b[j].y0 + kMargin,
+                     b[j].y1 - kMargin, b[j].z1, b[j].z1 + grip.lift) &&
+               clear(grip.group, b[j].x0 - grip.out_depth, b[j].x0 - 2 * kClearance, b[j].y0,
+                     b[j].y1, b[j].z0 + grip.lift, b[j].z1 + grip.lift);
+      }
+      if (!free) continue;
+      // More boxes at once first, then more cups on the box that has the
+      // fewest (the cups' force is shared by cups), then more in all; after
+      // a failed grip, fewer boxes and more cups on the box itself.
+      auto fewest = [](const Grip& x) { return *std::min_element(x.cups.begin(), x.cups.end()); };
+      auto total = [](const Grip& x) {
+        int n = 0;
+        for (int k : x.cups) n += k;
+        return n;
+      };
+      auto rank = [&](const Grip& x) {
+        const int n = static_cast<int>(x.group.size());
+        return fewer ? std::make_tuple(-n, x.cups.front(), total(x))
+                     : std::make_tuple(n, fewest(x), total(x));
+      };
+      if (!best || rank(grip) > rank(*best)) best = std::move(grip);
     }
-    // The box is lifted off what it rests on (and over the lowered nose)
-    // before it comes out: nothing may rest on it.
-    const double lift = std::max(g.retract_lift, g.nose_top + kMargin - b[i].z0);
-    const bool liftable = clear(b[i].x0 + kMargin, b[i].x1 - kMargin, b[i].y0 + kMargin,
-                                b[i].y1 - kMargin, b[i].z1, b[i].z1 + lift);
-    // Pulled out, the whole box (it may be wider than the plate) passes over
-    // what stands in front of it; neighbours beside it, flush with its face
-    // (clear() adds kClearance), are not in the way.
-    const double out_depth = 2 * half_d + kMargin;
-    const bool extractable = clear(b[i].x0 - out_depth, b[i].x0 - 2 * kClearance, b[i].y0, b[i].y1,
-                                   b[i].z0 + lift, b[i].z1 + lift);
-    if (!at_face || !liftable || !extractable) continue;
+    if (!best) continue;
     PickCandidate c;
     c.box = box.id;
+    for (auto j : best->group) c.boxes.push_back(world.boxes[j].id);
+    c.box_cups = best->cups;
     c.base_x = base_x;
-    c.cups = cups_at(*at_face);
-    c.grasp = {*at_face - (at_face->x() - stop_x) / n.x() * n, plate_yaw};
-    c.pregrasp = {*at_face - g.pregrasp_distance * n, plate_yaw};
+    c.cups = best->cups.front();
+    const Eigen::Vector3d& at_face = best->at_face;
+    c.grasp = {at_face - (at_face.x() - best->stop_x) / n.x() * n, plate_yaw};
+    c.pregrasp = {at_face - g.pregrasp_distance * n, plate_yaw};
     // Lifted, then pulled out until clear of what it rested on: the
     // drop-off move after that swings freely.
-    c.lift = {c.grasp.position + Eigen::Vector3d(0, 0, lift), plate_yaw};
-    c.retract = {c.lift.position - out_depth * n, plate_yaw};
+    c.lift = {c.grasp.position + Eigen::Vector3d(0, 0, best->lift), plate_yaw};
+    c.retract = {c.lift.position - best->out_depth * n, plate_yaw};
     if (!reachable(robot, c.grasp, at) || !reachable(robot, c.pregrasp, at)) continue;
     ranked.push_back({c, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
   }
@@ -237,9 +325,16 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     if (std::abs(a.top - b.top) > 1e-3) return a.top > b.top;
     return a.centre_distance < b.centre_distance;
   });
+  // A group found from each of its boxes is one candidate.
   std::vector<PickCandidate> out;
-  for (std::size_t i = 0; i < ranked.size() && out.size() < max_count; ++i)
+  std::vector<std::vector<std::uint32_t>> taken;
+  for (std::size_t i = 0; i < ranked.size() && out.size() < max_count; ++i) {
+    auto ids = ranked[i].c.boxes;
+    std::sort(ids.begin(), ids.end());
+    if (std::find(taken.begin(), taken.end(), ids) != taken.end()) continue;
+    taken.push_back(std::move(ids));
     out.push_back(ranked[i].c);
+  }
   return out;
 }
 
@@ -247,15 +342,29 @@ std::vector<sim::PlateTarget> dropoff_targets(const sim::World& world,
                                               const std::vector<std::uint32_t>& held,
                                               const sim::RobotModel& robot, const Geometry& g,
                                               const sim::JointVector& at, std::size_t max_count) {
-  // The held load's extents: along the plate's normal (depth: it sticks out
-  // of the plate by that much), across it, and its height.
+  // The held load's extents (all the boxes the plate holds together):
+  // along the plate's normal (depth: it sticks out of the plate by that
+  // much), across it, and its height.
   double depth = 0.3, across = 0.3, height = 0.3;
+  std::optional<sim::Bounds> load;
   for (const auto& box : world.boxes) {
     if (std::find(held.begin(), held.end(), box.id) == held.end()) continue;
     const auto bb = sim::bounds(box);
-    depth = std::max(depth, bb.x1 - bb.x0);
-    across = std::max(across, bb.y1 - bb.y0);
-    height = std::max(height, bb.z1 - bb.z0);
+    if (!load) {
+      load = bb;
+      continue;
+    }
+    load->x0 = std::min(load->x0, bb.x0);
+    load->x1 = std::max(load->x1, bb.x1);
+    load->y0 = std::min(load->y0, bb.y0);
+    load->y1 = std::max(load->y1, bb.y1);
+    load->z0 = std::min(load->z0, bb.z0);
+    load->z1 = std::max(load->z1, bb.z1);
+  }
+  if (load) {
+    depth = std::max(depth, load->x1 - load->x0);
+    across = std::max(across, load->y1 - load->y0);
+    height = std::max(height, load->z1 - load->z0);
   }
   // Facing forward, the wrist stands behind the box and close to the arm's
   // yaw axis, which folds the forearm over the plate; turned sideways the

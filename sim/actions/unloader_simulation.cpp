@@ -142,17 +142,42 @@ plr::Expected<Executed> UnloaderSimulation::execute(const Motion& motion) {
     touching = now;
   };
   m.apply_suction(motion.before);
-  for (std::size_t i = 1; i < motion.points.size(); ++i) {
+  // The base's drive against what the boxes push back on the robot: the
+  // force along the base's motion, low-pass filtered.
+  double push = 0.0;
+  auto pushed_back = [&](double dt, double direction) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (const auto& f : m.sim.robot_contact_forces()) sum += f.mean;
+    const double against = -direction * sum.x();
+    push += (against - push) * std::min(1.0, dt / m.options.base_push_filter_s);
+    out.peak_push_force = std::max(out.peak_push_force, push);
+    return push > m.options.base_max_push_force;
+  };
+  JointVector now = m.q;
+  for (std::size_t i = 1; i < motion.points.size() && !out.stalled; ++i) {
     const auto& a = motion.points[i - 1];
     const auto& b = motion.points[i];
     const double span = b.time_s - a.time_s;
     const int steps = std::max(1, static_cast<int>(std::ceil(span / period)));
+    const double base_move = b.position[sim::kBaseX] - a.position[sim::kBaseX];
     for (int k = 1; k <= steps; ++k) {
       const double f = static_cast<double>(k) / steps;
-      advance(span / steps, a.position + f * (b.position - a.position));
+      now = a.position + f * (b.position - a.position);
+      advance(span / steps, now);
+      if (base_move == 0.0) {
+        push = 0.0;
+        continue;
+      }
+      if (pushed_back(span / steps, base_move > 0.0 ? 1.0 : -1.0)) {
+        // The drive gives up: the robot stops where it is.
+        out.stalled = true;
+        out.stall_force = push;
+        out.stall_after_s = m.sim.time() - start_time;
+        break;
+      }
     }
   }
-  if (!motion.points.empty()) m.q = motion.points.back().position;
+  if (!motion.points.empty()) m.q = out.stalled ? now : motion.points.back().position;
   m.apply_suction(motion.after);
   for (double t = 0; t < motion.settle_s; t += period) advance(period, m.q);
   // The belt keeps running until nothing lies on it (a real conveyor does

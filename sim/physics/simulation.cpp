@@ -302,6 +302,16 @@ struct Simulation::Impl {
     stats.belt_limited_steps += limited;
   }
 
+  // The fraction of cup_force each sealed cup holds with the held boxes'
+  // cups (Body::capacity = cups * cup_force) sharing the pump's limit.
+  double pump_share() const {
+    if (!state.plate) return 1.0;
+    double sealed = 0.0;
+    for (const Body& b : state.bodies)
+      if (b.mode == Mode::kHeld) sealed += b.capacity;
+    return sealed > state.plate->pump_max_force ? state.plate->pump_max_force / sealed : 1.0;
+  }
+
   void fixed_step(double dt, double fraction, double duration,
                   const std::vector<LinkGeometry>& from_links,
                   const std::optional<SuctionPlate>& from_plate, const Eigen::Vector3d& plate_a) {
@@ -388,22 +398,36 @@ struct Simulation::Impl {
 
     for (const int i : wake) wake_body(i);
     const Eigen::Vector3d gravity(0.0, 0.0, -options.gravity);
+    // The held boxes' cups share the pump: each box holds what its cups do
+    // at the vacuum level the pump keeps on all of them. Of the boxes over
+    // their share, the most overloaded lets go; the others' share grows.
+    const double share = pump_share();
+    int overloaded = -1;
+    double worst = 1.0;
     for (std::size_t i = 0; i < state.bodies.size(); ++i) {
       Body& b = state.bodies[i];
-      if (b.mode == Mode::kHeld) {
-        // What the cups must supply: the box's inertia and weight plus what
-        // its neighbours push on it.
-        const Eigen::Vector3d need = b.box.mass * (plate_a - gravity) - wrenches[i].force;
-        b.load += (need.norm() - b.load) * std::min(1.0, dt / kLoadFilter);
-        if (b.load > b.capacity) {
-          b.mode = Mode::kAwake;
-          b.still = 0.0;
-          rebuild = true;
-          state.suction_events.push_back(
-              {b.box.id, state.time, SuctionEvent::Kind::kDropped, b.load, b.capacity});
-        }
-        continue;
+      if (b.mode != Mode::kHeld) continue;
+      // What the cups must supply: the box's inertia and weight plus what
+      // its neighbours push on it.
+      const Eigen::Vector3d need = b.box.mass * (plate_a - gravity) - wrenches[i].force;
+      b.load += (need.norm() - b.load) * std::min(1.0, dt / kLoadFilter);
+      const double ratio = b.load / (share * b.capacity);
+      if (ratio > worst) {
+        worst = ratio;
+        overloaded = static_cast<int>(i);
       }
+    }
+    if (overloaded >= 0) {
+      Body& b = state.bodies[static_cast<std::size_t>(overloaded)];
+      b.mode = Mode::kAwake;
+      b.still = 0.0;
+      rebuild = true;
+      state.suction_events.push_back(
+          {b.box.id, state.time, SuctionEvent::Kind::kDropped, b.load, share * b.capacity});
+    }
+    for (std::size_t i = 0; i < state.bodies.size(); ++i) {
+      Body& b = state.bodies[i];
+      if (b.mode == Mode::kHeld) continue;
       if (b.mode == Mode::kGone) continue;
       if (b.box.pose.translation().x() < 0.0 || unloaded_by_belt(b)) {
         state.unloaded.push_back({b.box.id, state.time});
@@ -534,6 +558,11 @@ std::vector<std::uint32_t> Simulation::suction_on() {
   }
   std::vector<bool> used(cups.size(), false);
   const double g = m.options.gravity;
+  struct Sealed {
+    std::size_t body;
+    double capacity, load;  // N: its cups at full vacuum, its weight
+  };
+  std::vector<Sealed> sealed;
   for (std::size_t i = 0; i < s.bodies.size(); ++i) {
     Body& b = s.bodies[i];
     if (b.mode == Mode::kGone || b.mode == Mode::kHeld) continue;
@@ -561,23 +590,43 @@ std::vector<std::uint32_t> Simulation::suction_on() {
       }
     }
     if (covered == 0) continue;
-    const double capacity = covered * plate.cup_force;
-    const double load = b.box.mass * g;
-    if (load > capacity) {
-      s.suction_events.push_back({b.box.id, s.time, SuctionEvent::Kind::kRefused, load, capacity});
-      continue;
-    }
-    if (b.mode == Mode::kAwake) m.rebuild = true;
-    b.mode = Mode::kHeld;
-    b.grip = plate.pose.inverse() * b.box.pose;
-    b.capacity = capacity;
-    b.load = load;
-    b.v.setZero();
-    b.w.setZero();
-    s.suction_events.push_back({b.box.id, s.time, SuctionEvent::Kind::kGripped, load, capacity});
-    gripped.push_back(b.box.id);
+    sealed.push_back({i, covered * plate.cup_force, b.box.mass * g});
   }
-  return gripped;
+  // The sealed boxes share the pump (pump_share): while one's weight is over
+  // its share, the most overloaded one is refused and its cups let go.
+  double held = 0.0;  // boxes the plate holds already
+  for (const Body& b : s.bodies)
+    if (b.mode == Mode::kHeld) held += b.capacity;
+  for (;;) {
+    double total = held;
+    for (const Sealed& x : sealed) total += x.capacity;
+    const double share = total > plate.pump_max_force ? plate.pump_max_force / total : 1.0;
+    auto worst = sealed.end();
+    for (auto it = sealed.begin(); it != sealed.end(); ++it) {
+      if (it->load > share * it->capacity &&
+          (worst == sealed.end() || it->load / it->capacity > worst->load / worst->capacity))
+        worst = it;
+    }
+    if (worst == sealed.end()) {
+      for (const Sealed& x : sealed) {
+        Body& b = s.bodies[x.body];
+        if (b.mode == Mode::kAwake) m.rebuild = true;
+        b.mode = Mode::kHeld;
+        b.grip = plate.pose.inverse() * b.box.pose;
+        b.capacity = x.capacity;
+        b.load = x.load;
+        b.v.setZero();
+        b.w.setZero();
+        s.suction_events.push_back(
+            {b.box.id, s.time, SuctionEvent::Kind::kGripped, x.load, share * x.capacity});
+        gripped.push_back(b.box.id);
+      }
+      return gripped;
+    }
+    s.suction_events.push_back({s.bodies[worst->body].box.id, s.time, SuctionEvent::Kind::kRefused,
+                                worst->load, share * worst->capacity});
+    sealed.erase(worst);
+  }
 }
 
 void Simulation::suction_off() {

@@ -66,8 +66,10 @@ msg::SimLink to_msg(const LinkGeometry& l) {
       l.feeds_belt, l.belt_drive, to_msg(l.size), to_msg(l.pose), l.belt_speed, l.belt_max_force);
 }
 msg::SimPlate to_msg(const SuctionPlate& p) {
-  return msg::SimPlate(to_msg(p.pose), msg::Vec3(p.extent.x(), p.extent.y(), 0.0), p.cups_x,
-                       p.cups_y, p.cup_radius, p.cup_force, p.reach, p.max_tilt);
+  // The schema's SimPlate is a fixed struct whose extent.z is unused: it
+  // carries pump_max_force until the schema gets a field of its own.
+  return msg::SimPlate(to_msg(p.pose), msg::Vec3(p.extent.x(), p.extent.y(), p.pump_max_force),
+                       p.cups_x, p.cups_y, p.cup_radius, p.cup_force, p.reach, p.max_tilt);
 }
 
 flatbuffers::Offset<msg::SimOptions> to_msg(flatbuffers::FlatBufferBuilder& fbb,
@@ -282,6 +284,10 @@ bool read_plate(Reader& r, const msg::SimPlate* m, const char* field,
     return false;
   }
   p.extent = extent.head<2>();
+  // extent.z: the pump's limit (0 in bytes written before it existed: the default).
+  if (extent.z() != 0.0 && !r.positive(f + ".extent.z (pump_max_force)", extent.z(), 1e9))
+    return false;
+  if (extent.z() != 0.0) p.pump_max_force = extent.z();
   out = p;
   return true;
 }

@@ -411,6 +411,7 @@ class ExecutorNode : public plr::Node {
         auto& as = sim::kind(action) == sim::ActionKind::kPick ? stats_.pick : stats_.sweep;
         ++as.executions;
         as.boxes += o.boxes;
+        ++as.boxes_histogram[o.boxes];
         as.plan_s.add(o.plan_model_s);
         as.exec_s.add(o.exec_s);
       }

@@ -24,10 +24,25 @@ double Accumulator::sd() const {
 
 namespace {
 
+// Boxes per execution, and per execution that moved any.
+double per_execution(const ActionStats& a) {
+  return a.executions ? static_cast<double>(a.boxes) / static_cast<double>(a.executions) : 0.0;
+}
+double per_success(const ActionStats& a) {
+  const auto none = a.boxes_histogram.count(0) ? a.boxes_histogram.at(0) : 0;
+  const auto n = a.executions - std::min(a.executions, none);
+  return n ? static_cast<double>(a.boxes) / static_cast<double>(n) : 0.0;
+}
+
 nlohmann::json action_json(const ActionStats& a) {
   const double total = a.plan_s.sum + a.exec_s.sum;
+  nlohmann::json histogram = nlohmann::json::object();
+  for (const auto& [boxes, n] : a.boxes_histogram) histogram[std::to_string(boxes)] = n;
   return {{"executions", a.executions},
           {"boxes", a.boxes},
+          {"boxes_per_execution", per_execution(a)},
+          {"boxes_per_success", per_success(a)},
+          {"boxes_histogram", histogram},
           {"plan_s", a.plan_s.mean},
           {"plan_s_sd", a.plan_s.sd()},
           {"exec_s", a.exec_s.mean},
@@ -77,6 +92,9 @@ nlohmann::json to_json(const RunStats& s) {
           {"plan_wall_s", s.plan_wall_s},
           {"wall_time_s", s.wall_time_s},
           {"boxes_per_robot_s", s.robot_time_s > 0 ? s.boxes_unloaded / s.robot_time_s : 0.0},
+          // Boxes a pick moved out: per applicable pick, and per pick that moved any.
+          {"boxes_per_pick", per_execution(s.pick)},
+          {"boxes_per_successful_pick", per_success(s.pick)},
           {"robot_trailer_collisions", s.robot_trailer_collisions},
           {"failed_grasps", s.failed_grasps},
           {"not_applicable", s.not_applicable},

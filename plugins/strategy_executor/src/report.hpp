@@ -31,6 +31,9 @@ struct ModeStats {
 struct ActionStats {
   std::uint64_t executions = 0;
   std::uint64_t boxes = 0;
+  // Executions by the boxes each moved out (0, 1, 2, ...): a multi-box pick
+  // shows as 2 or more.
+  std::map<std::uint32_t, std::uint64_t> boxes_histogram;
   Accumulator plan_s;  // per execution: planning time the robot waited for (modelled)
   Accumulator exec_s;  // per execution: simulated execution time
 };

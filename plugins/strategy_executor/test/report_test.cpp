@@ -51,6 +51,20 @@ TEST(Report, JsonHasTheFiguresOfTheTables) {
   EXPECT_FALSE(j["boxes_given_up"].empty());
 }
 
+TEST(Report, BoxesPerPick) {
+  // Three picks: one moved nothing, one a box, one three boxes at once.
+  RunStats s;
+  s.pick.executions = 3;
+  s.pick.boxes = 4;
+  s.pick.boxes_histogram = {{0, 1}, {1, 1}, {3, 1}};
+  const auto j = to_json(s);
+  EXPECT_DOUBLE_EQ(j["boxes_per_pick"].get<double>(), 4.0 / 3.0);
+  EXPECT_DOUBLE_EQ(j["boxes_per_successful_pick"].get<double>(), 2.0);
+  EXPECT_DOUBLE_EQ(j["actions"]["pick"]["boxes_per_execution"].get<double>(), 4.0 / 3.0);
+  EXPECT_EQ(j["actions"]["pick"]["boxes_histogram"]["3"], 1);
+  EXPECT_EQ(j["actions"]["sweep"]["boxes_per_execution"], 0.0);  // none
+}
+
 TEST(Report, CurveIsAnSvgWithItsTitle) {
   const std::string svg = curve_svg({{0.0, 0}, {10.0, 3}, {25.0, 8}}, 10, "A1 <seed 1>");
   EXPECT_EQ(svg.rfind("<svg ", 0), 0u);

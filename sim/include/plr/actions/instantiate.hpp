@@ -21,8 +21,6 @@ struct Geometry {
   double conveyor_length = 1.0;     // nose hinge (at base_x) to conveyor end
   double scoop_lip = 0.06;          // lip the physics adds past the scoop's end near the floor
   double arm_yaw_offset = 0.45;     // arm_1 axis behind base_x
-  double plate_half_width = 0.25;   // plate extent along y / 2
-  double plate_half_height = 0.2;   // plate extent along z / 2
   double pick_reach = 1.5;          // preferred horizontal arm_1-axis-to-plate distance
   double pregrasp_distance = 0.25;  // plate stand-off before the approach
   double grasp_gap = 0.005;         // plate to box face at the grasp (suction reaches 2 cm)
@@ -38,6 +36,9 @@ struct Geometry {
   double nose_top = 0.25;           // m, top of the lowered nose and conveyor
   // The suction cups: the robot's grid (its x runs up the plate, its y across).
   sim::SuctionPlate cups;
+  // The plate's outline is the cup field's.
+  double plate_half_width() const { return cups.extent.y() / 2; }   // along y
+  double plate_half_height() const { return cups.extent.x() / 2; }  // along z
 };
 
 // Cups of the plate's grid whose whole rim lies on a face of half-extents
@@ -46,25 +47,34 @@ struct Geometry {
 int covered_cups(const Geometry& g, double half_across, double half_up, double across, double up);
 
 struct PickCandidate {
-  std::uint32_t box = 0;
+  std::uint32_t box = 0;  // the box the plate is put on
+  // Every box the plate seals on at the grasp, `box` first, all in the
+  // action's region: they come out together.
+  std::vector<std::uint32_t> boxes;
+  std::vector<int> box_cups;  // cups on each of `boxes`
   double base_x = 0;
   sim::PlateTarget pregrasp, grasp, retract;
-  // The box is first lifted straight up, off the one it rests on, before it
-  // is pulled out: dragged out, it would press into that one.
+  // The boxes are first lifted straight up, off what they rest on, before
+  // they are pulled out: dragged out, they would press into it.
   sim::PlateTarget lift;
-  int cups = 0;  // cups the grasp pose covers on the face
+  int cups = 0;  // cups the grasp pose covers on the face of `box`
 };
 
 // Pick points for Pick(height, side), best first: boxes of the structure in
 // front (first wall and front pile) in the action's region — their height
 // class (a box's top against the wall or pile thresholds) and third of the
-// width — whose front face nothing hides, on which nothing rests and that
-// come out over what stands in front of them; near the robot first (0.2 m
+// width — whose front face nothing hides; near the robot first (0.2 m
 // bins), then high up. Empty: the action is not applicable here.
-// Candidates whose plate poses the arm cannot reach from their base position
-// are left out. The plate is centred on the face, or as near as the corridor
-// allows; for the boxes in `most_cups` (a grip failed) it goes where it covers
-// the most cups, off centre if need be.
+// The plate goes on a box's face, or on its edges where it seals on the
+// neighbours there too: a candidate takes every box the plate seals on, and
+// a plate pose that would seal on a box outside the region is not taken.
+// Nothing but the group may rest on the group, and the group comes out over
+// what stands in front of it. Of the poses the corridor allows, the one
+// that takes the most boxes; for the boxes in `most_cups` (a grip failed)
+// the fewest boxes and the most cups on the box, off centre if need be.
+// Candidates whose plate poses the arm cannot reach from their base
+// position are left out; a group found from several of its boxes is one
+// candidate.
 std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::SceneAnalysis& scene,
                                            sim::Action action, const sim::ObservationParams& obs,
                                            const sim::RobotModel& robot, const Geometry& g,

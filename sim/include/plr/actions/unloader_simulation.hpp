@@ -38,12 +38,30 @@ struct Executed {
   std::uint32_t robot_trailer_contacts = 0;
   std::vector<sim::SuctionEvent> suction;  // grips refused and loads dropped
   double sim_time_s = 0.0;                 // the simulated clock afterwards
+  // The base stalled: the boxes pushed back on the robot harder than its
+  // drive can push (UnloaderOptions::base_max_push_force) while the base
+  // moved, so the robot stopped there and left the rest of the trajectory.
+  bool stalled = false;
+  double stall_force = 0.0;    // N the boxes pushed back with when it stalled
+  double stall_after_s = 0.0;  // s after the motion's start
+  // The largest push back against the base's motion over the motion, N
+  // (filtered as the stall check sees it; 0 if the base did not move).
+  double peak_push_force = 0.0;
 };
 
 struct UnloaderOptions {
   double control_period_s = 0.01;  // the robot's pose is updated this often
   double belt_speed = 0.8;         // m/s of the nose conveyor
   double carry_max_s = 4.0;        // the belt keeps running this long at most after a motion
+  // The base's drive: the force its wheels can push with along the
+  // trailer's axis. When what the boxes push back on the robot (the sum of
+  // robot_contact_forces() against the base's motion, averaged over
+  // base_push_filter_s so that the blow of meeting a box is not a stall)
+  // exceeds it while the base moves, the base stalls. Default: four
+  // omnidirectional wheel drives of about 0.5 kN tractive force each at
+  // sweep speed (a 2 kW drive train at 1 m/s).
+  double base_max_push_force = 2000.0;  // N
+  double base_push_filter_s = 0.1;
   sim::PhysicsOptions physics;
 };
 

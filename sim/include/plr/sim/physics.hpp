@@ -186,7 +186,12 @@ class Simulation {
 
   void set_suction_plate(const SuctionPlate& plate);
   // Grips every box facing the plate within reach that the covering cups can
-  // hold (load = mass * g); boxes too heavy are refused. Returns the ids gripped.
+  // hold (load = mass * g); boxes too heavy are refused. The sealed cups of
+  // all held boxes share the pump (SuctionPlate::pump_max_force): each box
+  // holds its cups' share, and while a box is over its share the most
+  // overloaded one is refused (here) or dropped (while held, by the load of
+  // mass * (g + acceleration) and what its neighbours push), one at a time.
+  // Returns the ids gripped.
   std::vector<std::uint32_t> suction_on();
   void suction_off();
   std::vector<std::uint32_t> held_boxes() const;

@@ -9,6 +9,7 @@
 #include "plr/actions/action_model.hpp"
 #include "plr/actions/in_process.hpp"
 #include "plr/planning/lattice_planner.hpp"
+#include "plr/sim/generators.hpp"
 #include "plr/sim/physics.hpp"
 #include "plr/sim/shipped_files.hpp"
 
@@ -139,6 +140,56 @@ TEST(ActionModel, ASweepCarriesALowPileOut) {
   const auto out = model.run(sim::make_sweep(Height::kLow), f.backend, f.memory);
   ASSERT_TRUE(out) << out.error().message;
   EXPECT_GE(out->boxes, 3u);
+}
+
+// Two columns of two 0.45 m wide, 0.35 m high boxes side by side in the
+// centre third, front face at x = 5: one low block the plate seals on whole
+// (on the corner of the four, four cups on each box).
+sim::World block(double mass) {
+  sim::World w;
+  w.trailer.depth = 8.0;
+  std::uint32_t id = 1;
+  for (double y : {-0.23, 0.23})
+    for (int r = 0; r < 2; ++r) {
+      sim::Box b;
+      b.id = id++;
+      b.size = {0.45, 0.45, 0.35};
+      b.mass = mass;
+      b.pose.translation() = Eigen::Vector3d(5.0 + 0.225, y, 0.175 + 0.35 * r);
+      w.boxes.push_back(b);
+    }
+  return w;
+}
+
+TEST(ActionModel, APickOfSeveralBoxesHoldsWhenLightAndNotWhenHeavy) {
+  const ActionModel model(robot(), {});
+  const auto action = sim::make_pick(Height::kLow, Side::kCenter);
+  // Light (4 kg): the plate takes the whole block at once and delivers it.
+  Fixture light(block(4.0));
+  const auto a = model.run(action, light.backend, light.memory);
+  ASSERT_TRUE(a) << a.error().message;
+  EXPECT_GE(a->boxes, 3u);
+  for (const auto& e : light.simulation.physics().suction_events())
+    EXPECT_NE(e.kind, sim::SuctionEvent::Kind::kRefused);
+  // The same boxes at 35 kg: their sixteen cups share the pump (270 N each
+  // of 343 N): some are left or lost.
+  sim::World heavy = block(4.0);
+  std::vector<std::pair<std::uint32_t, double>> masses;
+  for (const auto& b : heavy.boxes) masses.emplace_back(b.id, 35.0);
+  ASSERT_TRUE(sim::set_masses(heavy, masses));
+  Fixture f(heavy);
+  const auto b = model.run(action, f.backend, f.memory);
+  ASSERT_TRUE(b) << b.error().message;
+  EXPECT_LT(b->boxes, a->boxes);
+  int lost = 0;
+  for (const auto& e : f.simulation.physics().suction_events()) {
+    if (e.kind == sim::SuctionEvent::Kind::kRefused ||
+        e.kind == sim::SuctionEvent::Kind::kDropped) {
+      ++lost;
+      EXPECT_GT(e.load, e.capacity);
+    }
+  }
+  EXPECT_GE(lost, 1);
 }
 
 }  // namespace

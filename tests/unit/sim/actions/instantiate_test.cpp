@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <unordered_set>
 
 #include "plr/sim/generators.hpp"
 #include "plr/sim/testing/worlds.hpp"
@@ -25,13 +27,30 @@ sim::JointVector home(double base_x) {
   return q;
 }
 
-std::vector<PickCandidate> candidates(const sim::World& w, double base_x = 8.0) {
-  return pick_candidates(w, sim::analyse(w), sim::make_pick(sim::Height::kHigh, sim::Side::kCenter),
-                         {}, robot(), {}, home(base_x), 1000);
+constexpr std::array<sim::Height, 3> kHeights{sim::Height::kLow, sim::Height::kMid,
+                                              sim::Height::kHigh};
+constexpr std::array<sim::Side, 3> kSides{sim::Side::kLeft, sim::Side::kCenter, sim::Side::kRight};
+
+std::vector<PickCandidate> candidates(const sim::World& w, sim::Action action, double base_x = 8.0,
+                                      const Geometry& g = {},
+                                      const std::unordered_set<std::uint32_t>& most_cups = {}) {
+  return pick_candidates(w, sim::analyse(w), action, {}, robot(), g, home(base_x), 1000, most_cups);
 }
 
+// The candidates of all nine Pick actions.
+std::vector<PickCandidate> candidates(const sim::World& w, double base_x = 8.0) {
+  std::vector<PickCandidate> out;
+  for (auto h : kHeights)
+    for (auto s : kSides)
+      for (auto& c : candidates(w, sim::make_pick(h, s), base_x)) out.push_back(std::move(c));
+  return out;
+}
+
+// The candidate that takes `box` (with others or alone).
 const PickCandidate* find(const std::vector<PickCandidate>& c, std::uint32_t box) {
-  const auto it = std::find_if(c.begin(), c.end(), [&](const auto& k) { return k.box == box; });
+  const auto it = std::find_if(c.begin(), c.end(), [&](const auto& k) {
+    return std::find(k.boxes.begin(), k.boxes.end(), box) != k.boxes.end();
+  });
   return it == c.end() ? nullptr : &*it;
 }
 
@@ -63,7 +82,7 @@ TEST(PickCandidates, EveryTopBoxOfTheFrontRowOfAnA1WallIsAPickPoint) {
     ASSERT_NE(k, nullptr) << "top box " << b.id << " at y " << b.pose.translation().y() << " z "
                           << bb.z1;
     EXPECT_NEAR(k->grasp.yaw, 0.0, 1e-9);
-    EXPECT_LE(std::abs(k->grasp.position.y()), w.trailer.width / 2 - 0.25);
+    EXPECT_LE(std::abs(k->grasp.position.y()), w.trailer.width / 2 - Geometry{}.plate_half_width());
   }
   EXPECT_GE(tops, 4);
 }
@@ -78,9 +97,15 @@ TEST(PickCandidates, PlateStopsShortOfAProudNeighbourWithinTheCupsReach) {
   const PickCandidate* k = find(c, 2);
   ASSERT_NE(k, nullptr);
   EXPECT_NEAR(k->grasp.position.x(), 9.99 - 0.005, 1e-9);
-  // A neighbour standing out 3 cm leaves the face beyond the cups' reach.
+  // A neighbour standing out 3 cm would leave the face beyond the cups'
+  // reach: the plate goes up, its lower edge clear of that one.
   w.boxes[0] = sim::testing::make_box(1, 10.17, 0.0, 0.0, {0.4, 0.4, 0.4});
-  EXPECT_EQ(find(candidates(w), 2), nullptr);
+  const auto up = candidates(w);
+  k = find(up, 2);
+  ASSERT_NE(k, nullptr);
+  EXPECT_EQ(k->boxes, std::vector<std::uint32_t>{2});
+  EXPECT_NEAR(k->grasp.position.x(), 10.0 - 0.005, 1e-9);
+  EXPECT_GE(k->grasp.position.z() - Geometry{}.plate_half_height(), 0.4);
 }
 
 TEST(PickCandidates, ABoxThatCannotComeOutOverTheOneInFrontIsNotAPickPoint) {
@@ -101,8 +126,15 @@ TEST(PickCandidates, ABoxRestingOnTheTargetKeepsItInPlace) {
   w.boxes.push_back(sim::testing::make_box(1, 10.2, 0.0, 0.0));
   w.boxes.push_back(sim::testing::make_box(2, 10.6, 0.0, 0.4));  // behind and above: not on it
   w.boxes.push_back(sim::testing::make_box(3, 10.2, 0.0, 0.4));  // on it
+  // Box 1 is taken only with the box resting on it.
   const auto c = candidates(w);
-  EXPECT_EQ(find(c, 1), nullptr);
+  ASSERT_FALSE(c.empty());
+  for (const auto& k : c) {
+    const bool one = std::count(k.boxes.begin(), k.boxes.end(), 1u) > 0;
+    const bool three = std::count(k.boxes.begin(), k.boxes.end(), 3u) > 0;
+    EXPECT_TRUE(!one || three);
+    EXPECT_EQ(std::count(k.boxes.begin(), k.boxes.end(), 2u), 0);
+  }
   EXPECT_NE(find(c, 3), nullptr);
 }
 
@@ -122,30 +154,123 @@ TEST(PickCandidates, ATurnedBoxIsFacedSquarely) {
 }
 
 TEST(CoveredCups, CountsTheCupsWhoseRimLiesOnTheFace) {
-  const Geometry g;
-  EXPECT_EQ(covered_cups(g, 0.25, 0.25, 0, 0), 12);  // a 0.5 m face takes the whole grid
-  // A 0.29 m face: the centred grid straddles it with one column of three,
-  // half a cup pitch off centre puts two columns on it.
-  EXPECT_EQ(covered_cups(g, 0.145, 0.145, 0, 0), 2);
-  EXPECT_EQ(covered_cups(g, 0.145, 0.145, 0.25 / 3, 0), 4);
+  const Geometry g;                                 // 5 x 4 cups over 0.5 m across, 0.4 m up
+  EXPECT_EQ(covered_cups(g, 0.25, 0.2, 0, 0), 20);  // a 0.5 x 0.4 m face takes the whole grid
+  // A 0.29 m face: the centred grid puts three columns of its five on it,
+  // half a cup pitch off centre two.
+  EXPECT_EQ(covered_cups(g, 0.145, 0.145, 0, 0), 6);
+  EXPECT_EQ(covered_cups(g, 0.145, 0.145, 0.05, 0), 4);
   EXPECT_EQ(covered_cups(g, 0.145, 0.145, 0.5, 0), 0);
+  // Centred on the seam of two 0.45 x 0.35 m faces side by side: two
+  // columns of two rows on each.
+  EXPECT_EQ(covered_cups(g, 0.225, 0.175, 0.23, 0), 4);
+  // Centred on a 0.4 m wide face, no whole cup on the neighbour 1 cm away.
+  EXPECT_EQ(covered_cups(g, 0.2, 0.2, 0.41, 0), 0);
 }
 
-TEST(PickCandidates, AfterAFailedGripThePlateCoversMoreCups) {
+TEST(PickCandidates, ThePlateGoesWhereItCoversTheMostCups) {
   // A 0.29 m box on the floor: the plate, kept off the floor, covers its two
-  // lower rows; centred across, one column.
+  // lower rows, three columns centred.
   sim::World w = trailer_world();
   w.boxes.push_back(sim::testing::make_box(1, 6.2, 0.0, 0.0, {0.4, 0.29, 0.29}));
-  const auto centred = candidates(w);
-  ASSERT_EQ(centred.size(), 1u);
-  EXPECT_EQ(centred[0].cups, 2);
-  EXPECT_NEAR(centred[0].grasp.position.y(), 0.0, 1e-9);
-  const auto moved =
-      pick_candidates(w, sim::analyse(w), sim::make_pick(sim::Height::kHigh, sim::Side::kCenter),
-                      {}, robot(), {}, home(8.0), 1000, {1});
-  ASSERT_EQ(moved.size(), 1u);
-  EXPECT_EQ(moved[0].cups, 4);
-  EXPECT_NEAR(std::abs(moved[0].grasp.position.y()), 0.25 / 3, 1e-9);
+  // 0.29 m: a pile box, mid.
+  const auto c = candidates(w, sim::make_pick(sim::Height::kMid, sim::Side::kCenter));
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(c[0].cups, 6);
+  EXPECT_NEAR(c[0].grasp.position.y(), 0.0, 1e-9);
+}
+
+TEST(PickCandidates, AfterAFailedGripOfSeveralTheBoxIsTakenAlone) {
+  // Two 0.45 m pile boxes side by side: taken together, unless the grip of
+  // one failed (the group's cups shared the pump): then alone, with the most cups.
+  sim::World w = trailer_world();
+  w.boxes.push_back(sim::testing::make_box(1, 6.2, 0.23, 0.0, {0.45, 0.45, 0.35}));
+  w.boxes.push_back(sim::testing::make_box(2, 6.2, -0.23, 0.0, {0.45, 0.45, 0.35}));
+  const auto pick = sim::make_pick(sim::Height::kMid, sim::Side::kCenter);
+  const auto together = candidates(w, pick);
+  ASSERT_FALSE(together.empty());
+  EXPECT_EQ(together.front().boxes.size(), 2u);
+  const auto alone = candidates(w, pick, 8.0, {}, {1, 2});
+  ASSERT_EQ(alone.size(), 2u);
+  for (const auto& k : alone) {
+    EXPECT_EQ(k.boxes.size(), 1u);
+    EXPECT_GE(k.cups, together.front().box_cups.front());
+  }
+}
+
+// A wall of 0.45 m wide, 0.35 m high boxes: five columns 0.46 m apart (the
+// middle one at y = 0; in a 2.5 m trailer the centre third is |y| < 0.417)
+// and `rows` rows, front face at x = 6.
+sim::World even_wall(int rows) {
+  sim::World w = trailer_world();
+  std::uint32_t id = 1;
+  for (int c = -2; c <= 2; ++c)
+    for (int r = 0; r < rows; ++r)
+      w.boxes.push_back(
+          sim::testing::make_box(id++, 6.225, 0.46 * c, 0.35 * r, {0.45, 0.45, 0.35}));
+  return w;
+}
+
+TEST(PickCandidates, APickTakesTheBoxesOfItsRegionOnly) {
+  // Four rows: every top is 1.4 m (mid), the row below 1.05 m (low).
+  const sim::World w = even_wall(4);
+  const sim::ObservationParams obs;
+  const auto scene = sim::analyse(w, obs);
+  std::size_t groups = 0;
+  for (auto h : kHeights)
+    for (auto side : kSides) {
+      const auto action = sim::make_pick(h, side);
+      const auto c = candidates(w, action);
+      // Only the top row comes out, and only with the plate on it alone: the
+      // low boxes under it have boxes resting on them, and are of another class.
+      if (h != sim::Height::kMid) {
+        EXPECT_TRUE(c.empty()) << sim::to_string(action);
+      }
+      for (const auto& k : c) {
+        ASSERT_EQ(k.boxes.size(), k.box_cups.size());
+        EXPECT_EQ(k.boxes.front(), k.box);
+        groups += k.boxes.size() > 1;
+        for (std::size_t i = 0; i < k.boxes.size(); ++i) {
+          const auto& b = *std::find_if(w.boxes.begin(), w.boxes.end(),
+                                        [&](const sim::Box& x) { return x.id == k.boxes[i]; });
+          EXPECT_GT(k.box_cups[i], 0);
+          EXPECT_NEAR(sim::bounds(b).z1, 1.4, 1e-9) << "box " << b.id;
+          const double y = b.pose.translation().y();
+          const double band = obs.side_band * w.trailer.width / 2;
+          const auto s = y > band    ? sim::Side::kLeft
+                         : y < -band ? sim::Side::kRight
+                                     : sim::Side::kCenter;
+          EXPECT_EQ(s, side) << sim::to_string(action) << " takes box " << b.id;
+        }
+      }
+    }
+  // The middle column is the centre third alone: a single box. Each outer
+  // third has two columns, their tops taken together by a plate on their seam.
+  const auto centre = candidates(w, sim::make_pick(sim::Height::kMid, sim::Side::kCenter));
+  ASSERT_EQ(centre.size(), 1u);
+  EXPECT_EQ(centre[0].boxes.size(), 1u);
+  for (auto side : {sim::Side::kLeft, sim::Side::kRight}) {
+    const auto c = candidates(w, sim::make_pick(sim::Height::kMid, side));
+    ASSERT_FALSE(c.empty());
+    EXPECT_EQ(c.front().boxes.size(), 2u) << sim::to_string(side);
+    EXPECT_EQ(c.front().box_cups, (std::vector<int>{4, 4}));
+  }
+  EXPECT_GE(groups, 2u);
+  (void)scene;
+}
+
+TEST(PickCandidates, TwoStackedBoxesOfOneClassComeOutTogether) {
+  // Two rows (tops 0.35 and 0.7 m, both low): the plate on their seam takes
+  // a column whole; the lower box alone has the upper one resting on it.
+  const sim::World w = even_wall(2);
+  const auto c = candidates(w, sim::make_pick(sim::Height::kLow, sim::Side::kCenter));
+  ASSERT_FALSE(c.empty());
+  ASSERT_EQ(c.front().boxes.size(), 2u);
+  std::vector<std::uint32_t> ids = c.front().boxes;
+  std::sort(ids.begin(), ids.end());
+  EXPECT_EQ(ids, (std::vector<std::uint32_t>{5, 6}));  // the middle column (c = 0)
+  // Lifted together over the nose, pulled out clear of the floor.
+  EXPECT_GT(c.front().lift.position.z(), c.front().grasp.position.z());
 }
 
 TEST(DropOff, PlacesHoldTheBoxOverTheConveyorAndTurnTheWristSideways) {

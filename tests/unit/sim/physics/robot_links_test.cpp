@@ -28,6 +28,20 @@ TEST(RobotLinks, ShapesFollowTheModel) {
   EXPECT_TRUE(plate.pose.translation().isApprox(model.plate_pose(q).translation(), 1e-12));
 }
 
+TEST(RobotLinks, ThePlateLinkHasTheCupFieldsOutline) {
+  // One size for the plate: the URDF's plate link is the suction cups' field
+  // (plr/sim/suction_plate.hpp), which the instantiation sizes its plate by.
+  const RobotModel model = load_robot().value();
+  const int plate = model.link_index("plate");
+  ASSERT_GE(plate, 0);
+  const auto& shapes = model.links()[static_cast<std::size_t>(plate)].shapes;
+  ASSERT_EQ(shapes.size(), 1u);
+  ASSERT_EQ(shapes[0].type, CollisionShape::Type::kBox);
+  const SuctionPlate cups;
+  EXPECT_NEAR(shapes[0].size.y(), cups.extent.y(), 1e-9);  // across
+  EXPECT_NEAR(shapes[0].size.z(), cups.extent.x(), 1e-9);  // up
+}
+
 TEST(RobotLinks, DrivingTheBaseForwardPushesABox) {
   const RobotModel model = load_robot().value();
   JointVector q = JointVector::Zero();

@@ -1,6 +1,9 @@
 // Suction gripping, holding by load, and the conveyor.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
+#include "plr/sim/generators.hpp"
 #include "plr/sim/physics.hpp"
 
 namespace plr::sim {
@@ -22,6 +25,8 @@ World one_box(double mass) {
 SuctionPlate plate_at(double z) {
   SuctionPlate p;
   p.extent = {0.6, 0.4};
+  p.cups_x = 4;
+  p.cups_y = 3;
   p.cup_force = 45.0;
   p.pose = Eigen::Translation3d(10.0, 0.0, z) * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX());
   return p;
@@ -95,6 +100,106 @@ TEST(Suction, MissesABoxOutOfReach) {
   sim.set_suction_plate(plate_at(0.45));  // 5 cm above the top face
   EXPECT_TRUE(sim.suction_on().empty());
   EXPECT_TRUE(sim.suction_events().empty());
+}
+
+// Two 0.4 m boxes side by side on the floor, 1 cm apart (ids 1 and 2, y > 0
+// and y < 0), with the masses given.
+World two_boxes(double mass) {
+  World w;
+  for (std::uint32_t id : {1u, 2u}) {
+    Box b;
+    b.id = id;
+    b.size = {0.4, 0.4, 0.4};
+    b.pose.translation() = Eigen::Vector3d(10.0, id == 1 ? 0.205 : -0.205, 0.2);
+    b.mass = mass;
+    w.boxes.push_back(b);
+  }
+  return w;
+}
+
+// The robot's plate (the default grid: 4 x 5 cups over 0.4 x 0.5 m) over
+// the seam between the two boxes, pointing down: two columns of four cups
+// seal on each, 8 * 90 = 720 N on either alone. Together their sixteen cups
+// share the pump's 1080 N: 540 N each.
+SuctionPlate robot_plate_at(double z) {
+  SuctionPlate p;
+  p.pose = Eigen::Translation3d(10.0, 0.0, z) * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX());
+  return p;
+}
+
+void lift_robot_plate(Simulation& sim, double a, double height) {
+  double z = 0.4, v = 0.0;
+  const double dt = 0.01;
+  while (z < 0.4 + height) {
+    v += a * dt;
+    z += v * dt;
+    sim.set_suction_plate(robot_plate_at(z));
+    sim.step(dt);
+  }
+  sim.step(0.3);  // and hold it there
+}
+
+TEST(Suction, SeveralBoxesAtOnceHoldWhenLightAndDropWhenHeavy) {
+  // Light: 8 kg each, 111 N at 4 m/s^2 upwards against 540 N each.
+  {
+    Simulation sim(two_boxes(8.0));
+    sim.set_suction_plate(robot_plate_at(0.4));
+    ASSERT_EQ(sim.suction_on().size(), 2u);
+    for (const SuctionEvent& e : sim.suction_events()) EXPECT_NEAR(e.capacity, 540.0, 1e-9);
+    lift_robot_plate(sim, 4.0, 0.4);
+    EXPECT_EQ(sim.held_boxes().size(), 2u);
+    for (const Box& b : sim.world().boxes) EXPECT_GT(b.pose.translation().z(), 0.55);
+  }
+  // The same boxes at 45 kg: 441 N at rest is held, 621 N while lifted is
+  // not. The first to let go leaves the other all its cups' force (720 N).
+  World heavy = two_boxes(8.0);
+  ASSERT_TRUE(set_masses(heavy, {{1, 45.0}, {2, 45.0}}));
+  Simulation sim(heavy);
+  sim.set_suction_plate(robot_plate_at(0.4));
+  ASSERT_EQ(sim.suction_on().size(), 2u);
+  lift_robot_plate(sim, 4.0, 0.4);
+  std::vector<SuctionEvent> drops;
+  for (const SuctionEvent& e : sim.suction_events())
+    if (e.kind == SuctionEvent::Kind::kDropped) drops.push_back(e);
+  ASSERT_FALSE(drops.empty());
+  EXPECT_LT(sim.held_boxes().size(), 2u);
+  EXPECT_EQ(drops.size() + sim.held_boxes().size(), 2u);  // one event per box dropped
+  for (const SuctionEvent& e : drops) {
+    EXPECT_GT(e.load, e.capacity);
+    EXPECT_NEAR(e.capacity, 540.0, 1e-9);
+  }
+  // What dropped fell back to the floor.
+  sim.step(1.0);
+  for (const Box& b : sim.world().boxes) {
+    const auto held = sim.held_boxes();
+    if (std::find(held.begin(), held.end(), b.id) == held.end()) {
+      EXPECT_NEAR(b.pose.translation().z(), 0.2, 0.02) << "box " << b.id;
+    }
+  }
+}
+
+TEST(Suction, ThePumpHoldsEachBoxAloneButNotBothTogether) {
+  // 60 kg, 589 N: under the 720 N one box's eight cups hold alone, over the
+  // 540 N each holds when both share the pump.
+  for (std::uint32_t id : {1u, 2u}) {
+    World w = two_boxes(60.0);
+    w.boxes.erase(w.boxes.begin() + (id == 1 ? 1 : 0));
+    Simulation sim(w);
+    sim.set_suction_plate(robot_plate_at(0.4));
+    EXPECT_EQ(sim.suction_on(), std::vector<std::uint32_t>{id});
+    EXPECT_NEAR(sim.suction_events().back().capacity, 720.0, 1e-9);
+  }
+  Simulation sim(two_boxes(60.0));
+  sim.set_suction_plate(robot_plate_at(0.4));
+  EXPECT_EQ(sim.suction_on().size(), 1u);
+  ASSERT_EQ(sim.suction_events().size(), 2u);
+  const SuctionEvent& refused = sim.suction_events()[0];
+  EXPECT_EQ(refused.kind, SuctionEvent::Kind::kRefused);
+  EXPECT_NEAR(refused.load, 60.0 * 9.81, 1e-9);
+  EXPECT_NEAR(refused.capacity, 540.0, 1e-9);
+  // The other, alone on the pump, holds with all of it.
+  EXPECT_EQ(sim.suction_events()[1].kind, SuctionEvent::Kind::kGripped);
+  EXPECT_NEAR(sim.suction_events()[1].capacity, 720.0, 1e-9);
 }
 
 // A 2 m belt lying at x 2..4, its centre at height z, running towards the rear.
