@@ -53,28 +53,32 @@ TEST(PlannerSwap, RequestsFromFourThreadsAcrossSwapsAreEachSolvedOnce) {
   TestEndpoint client;
   kernel.bus().set_live(&client, true);
 
-  constexpr std::size_t kRequests = 200;
-  Ledger ledger(kRequests);
-  std::vector<CallCtx> ctx(kRequests);
+  // Requests go out until the swaps are done (a fast planner answers a
+  // fixed number before the first swap); at most kMaxRequests.
+  constexpr std::size_t kMaxRequests = 20000;
+  constexpr int kSwaps = 12;
+  Ledger ledger(kMaxRequests);
+  std::vector<CallCtx> ctx(kMaxRequests);
   const std::uint64_t type = MessageTraits<msg::PlanRequest>::type_id();
 
-  // Swaps every 50 ms for as long as requests are outstanding.
-  std::atomic<bool> loaded{true};
-  int swaps = 0;
+  // Swaps every 20 ms, kSwaps times.
+  std::atomic<int> swaps{0};
   std::thread swapper([&] {
-    while (loaded) {
+    while (swaps < kSwaps) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
       const auto s = kernel.swap("planner", swaps % 2 == 0 ? "planner_ompl" : "planner_arastar");
       EXPECT_TRUE(s) << s.error().message;
       ++swaps;
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
   });
+  std::atomic<std::size_t> sent{0};
   std::vector<std::thread> callers;
   for (std::size_t t = 0; t < 4; ++t)
     callers.emplace_back([&, t] {
       // Closed loop: each caller waits for its answer, as the executor does,
       // so the planner's queue stays short and swaps land between requests.
-      for (std::size_t i = t; i < kRequests; i += 4) {
+      for (std::size_t i = t; i < kMaxRequests && swaps < kSwaps; i += 4) {
+        ++sent;
         ctx[i] = {&ledger, i};
         const auto s = kernel.bus().call(&client, "plan", type, plan_request(),
                                          std::chrono::seconds(30), &on_reply, &ctx[i], nullptr);
@@ -84,24 +88,26 @@ TEST(PlannerSwap, RequestsFromFourThreadsAcrossSwapsAreEachSolvedOnce) {
       }
     });
   for (auto& c : callers) c.join();
+  swapper.join();
+  const std::size_t requests = sent;
   {
     std::unique_lock lock(ledger.m);
     const bool all = ledger.cv.wait_for(lock, std::chrono::seconds(60),
-                                        [&] { return ledger.completed >= kRequests; });
-    loaded = false;
-    lock.unlock();
-    swapper.join();
-    ASSERT_TRUE(all) << ledger.completed << " of " << kRequests << " answered";
+                                        [&] { return ledger.completed >= requests; });
+    ASSERT_TRUE(all) << ledger.completed << " of " << requests << " answered";
   }
-  EXPECT_GE(swaps, 10);
+  EXPECT_LT(requests, kMaxRequests) << "the swaps took longer than the requests";
   std::this_thread::sleep_for(std::chrono::milliseconds(50));  // a second answer would land here
   std::lock_guard lock(ledger.m);
-  for (std::size_t i = 0; i < kRequests; ++i) EXPECT_EQ(ledger.answers[i], 1) << "request " << i;
+  // Each caller stops after its own last send: the sent ids are a prefix
+  // per caller, so check every id that went out.
+  for (std::size_t i = 0; i < kMaxRequests; ++i)
+    if (ctx[i].ledger != nullptr) EXPECT_EQ(ledger.answers[i], 1) << "request " << i;
   EXPECT_TRUE(ledger.errors.empty())
       << ledger.errors.size() << " failed, first: " << ledger.errors.front();
   // The load really spanned the swaps: both planners answered.
   EXPECT_EQ(ledger.solved_by.size(), 2u);
-  for (const auto& [planner, n] : ledger.solved_by) EXPECT_GT(n, 20) << planner;
+  for (const auto& [planner, n] : ledger.solved_by) EXPECT_GT(n, 4) << planner;
   kernel.bus().remove_endpoint(&client);
   client.executor().drain();
 }

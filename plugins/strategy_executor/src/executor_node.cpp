@@ -401,9 +401,12 @@ class ExecutorNode : public plr::Node {
       ++actions;
       const actions::Outcome& o = *outcome;
       tally(o.queries);
+      // An action that moved nothing is not tried again before progress,
+      // unless its grip failed: the grip memory then makes the next attempt
+      // differ (more cups, a slower carry) and gives the box up in the end.
       if (o.boxes > 0)
         excluded_.clear();
-      else
+      else if (!o.applicable || !o.failed_grasp)
         excluded_.insert(static_cast<std::uint8_t>(action));
       if (!o.applicable) {
         ++stats_.not_applicable;
@@ -585,8 +588,9 @@ class ExecutorNode : public plr::Node {
   std::unique_ptr<BusBackend> backend_;
   RunStats stats_, checkpoint_stats_;
   actions::Memory memory_, checkpoint_memory_;
-  // Actions tried since the last box left that moved nothing (as uint8_t
-  // values of sim::Action, as they travel in NextStrategyRequest).
+  // Actions tried since the last box left that moved nothing and have
+  // nothing new to try (as uint8_t values of sim::Action, as they travel in
+  // NextStrategyRequest).
   std::set<std::uint8_t> excluded_, checkpoint_excluded_;
   std::uint32_t unloaded_at_start_ = 0;
   std::string action_name_;

@@ -133,7 +133,7 @@ TEST(PipelineConfig, UnknownKeySuggestsClosest) {
 TEST(PipelineConfig, UnknownKeyWithoutNearMatchListsKnownKeys) {
   EXPECT_EQ(error_of("nodes: {a: {plugin: x}}\nwhatever: 1\n"),
             "configs/x.yaml:2:1: whatever: unknown key 'whatever' (known keys: pipeline, "
-            "plugin_paths, clock, cpu_wake_latency_us, hosts, nodes, topics, remote)");
+            "plugin_paths, clock, cpu_wake_latency_us, hosts, nodes, topics, remote, shared)");
   EXPECT_EQ(error_of("nodes: {a: {plugin: x}}\nhosts: {h: {retries: 1}}\n"),
             "configs/x.yaml:2:13: hosts.h.retries: unknown key 'retries' (known keys: restart, "
             "max_restarts, backoff_ms)");

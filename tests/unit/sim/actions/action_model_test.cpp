@@ -12,6 +12,7 @@
 #include "plr/sim/generators.hpp"
 #include "plr/sim/physics.hpp"
 #include "plr/sim/shipped_files.hpp"
+#include "plr/sim/testing/worlds.hpp"
 
 namespace plr::actions {
 namespace {
@@ -22,6 +23,13 @@ using sim::Side;
 const sim::RobotModel& robot() {
   static const sim::RobotModel m = sim::load_robot().value();
   return m;
+}
+
+// Hand-made walls of 0.4 m boxes: their thresholds.
+ActionOptions options() {
+  ActionOptions o;
+  o.observation = sim::testing::small_scene_observation();
+  return o;
 }
 
 planning::LatticePlanner& planner() {
@@ -61,7 +69,7 @@ struct Fixture {
 
 TEST(ActionModel, APickTakesABoxOutOfAWall) {
   Fixture f(wall(5.0, 3, 2));
-  const ActionModel model(robot(), {});
+  const ActionModel model(robot(), options());
   const auto out = model.run(sim::make_pick(Height::kLow, Side::kCenter), f.backend, f.memory);
   ASSERT_TRUE(out) << out.error().message;
   EXPECT_GE(out->boxes, 1u);
@@ -78,7 +86,7 @@ TEST(ActionModel, APickTakesABoxOutOfAWall) {
 // world and action give the same figures, whatever the machine's load.
 TEST(ActionModel, TheSameActionTwiceCostsTheSame) {
   const sim::World w = wall(5.0, 3, 2);
-  const ActionModel model(robot(), {});
+  const ActionModel model(robot(), options());
   Fixture a(w), b(w);
   const auto one = model.run(sim::make_pick(Height::kLow, Side::kLeft), a.backend, a.memory);
   const auto two = model.run(sim::make_pick(Height::kLow, Side::kLeft), b.backend, b.memory);
@@ -95,7 +103,7 @@ TEST(ActionModel, TheSameActionTwiceCostsTheSame) {
 // kept busy: the same curve (boxes over robot time), to the bit.
 TEST(ActionModel, TheSameRunUnderCpuLoadGivesTheSameCurve) {
   const sim::World w = wall(5.0, 3, 2);
-  const ActionModel model(robot(), {});
+  const ActionModel model(robot(), options());
   const std::vector<sim::Action> actions = {sim::make_pick(Height::kLow, Side::kCenter),
                                             sim::make_pick(Height::kLow, Side::kLeft),
                                             sim::make_pick(Height::kMid, Side::kRight)};
@@ -136,7 +144,7 @@ TEST(ActionModel, ASweepCarriesALowPileOut) {
   for (double x : {4.0, 4.45, 4.9})
     for (double y : {-0.6, 0.0, 0.6}) w.boxes.push_back(box(id++, x, y, 0.0, 3.0));
   Fixture f(w);
-  const ActionModel model(robot(), {});
+  const ActionModel model(robot(), options());
   const auto out = model.run(sim::make_sweep(Height::kLow), f.backend, f.memory);
   ASSERT_TRUE(out) << out.error().message;
   EXPECT_GE(out->boxes, 3u);
@@ -162,7 +170,7 @@ sim::World block(double mass) {
 }
 
 TEST(ActionModel, APickOfSeveralBoxesHoldsWhenLightAndNotWhenHeavy) {
-  const ActionModel model(robot(), {});
+  const ActionModel model(robot(), options());
   const auto action = sim::make_pick(Height::kLow, Side::kCenter);
   // Light (4 kg): the plate takes the whole block at once and delivers it.
   Fixture light(block(4.0));

@@ -8,6 +8,7 @@
 #include "plr/actions/in_process.hpp"
 #include "plr/planning/lattice_planner.hpp"
 #include "plr/sim/shipped_files.hpp"
+#include "plr/sim/testing/worlds.hpp"
 
 namespace plr::actions {
 namespace {
@@ -18,6 +19,13 @@ using sim::Side;
 const sim::RobotModel& robot() {
   static const sim::RobotModel m = sim::load_robot().value();
   return m;
+}
+
+// Hand-made walls of 0.4 m boxes: their thresholds.
+ActionOptions options() {
+  ActionOptions o;
+  o.observation = sim::testing::small_scene_observation();
+  return o;
 }
 
 planning::LatticePlanner& planner() {
@@ -75,7 +83,7 @@ void expect_same(const Outcome& a, const Outcome& b) {
 // between its queries.
 TEST(InProcessBackend, AKeptCheckerPlansAsAFreshOnePerQuery) {
   const sim::World w = wall(5.0, 3, 2);
-  const ActionModel model(robot(), {});
+  const ActionModel model(robot(), options());
   Fixture kept(w, {}), fresh(w, InProcessOptions{.reuse_checker = false});
   for (const sim::Action action :
        {sim::make_pick(Height::kLow, Side::kCenter), sim::make_pick(Height::kLow, Side::kLeft),
@@ -138,7 +146,7 @@ TEST(InProcessBackend, PlansOnChangedWorldsAsAFreshChecker) {
 // out; given their own masses again, the state repeats the original run.
 TEST(UnloaderSimulation, SetMassesChangesOnlyTheMasses) {
   const sim::World w = wall(5.0, 3, 2, 5.0);
-  const ActionModel model(robot(), {});
+  const ActionModel model(robot(), options());
   const sim::Action pick = sim::make_pick(Height::kLow, Side::kCenter);
   Fixture f(w, {});
   const auto start = f.simulation.save();

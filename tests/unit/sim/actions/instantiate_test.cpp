@@ -34,7 +34,9 @@ constexpr std::array<sim::Side, 3> kSides{sim::Side::kLeft, sim::Side::kCenter, 
 std::vector<PickCandidate> candidates(const sim::World& w, sim::Action action, double base_x = 8.0,
                                       const Geometry& g = {},
                                       const std::unordered_set<std::uint32_t>& most_cups = {}) {
-  return pick_candidates(w, sim::analyse(w), action, {}, robot(), g, home(base_x), 1000, most_cups);
+  const auto obs = sim::testing::small_scene_observation();
+  return pick_candidates(w, sim::analyse(w, obs), action, obs, robot(), g, home(base_x), 1000,
+                         most_cups);
 }
 
 // The candidates of all nine Pick actions.
@@ -214,7 +216,7 @@ sim::World even_wall(int rows) {
 TEST(PickCandidates, APickTakesTheBoxesOfItsRegionOnly) {
   // Four rows: every top is 1.4 m (mid), the row below 1.05 m (low).
   const sim::World w = even_wall(4);
-  const sim::ObservationParams obs;
+  const sim::ObservationParams obs = sim::testing::small_scene_observation();
   const auto scene = sim::analyse(w, obs);
   std::size_t groups = 0;
   for (auto h : kHeights)

@@ -7,9 +7,23 @@
 #include <cstdint>
 #include <vector>
 
+#include "plr/sim/observation.hpp"
 #include "plr/sim/world.hpp"
 
 namespace plr::sim::testing {
+
+// Observation thresholds for hand-made scenes of 0.3-0.45 m boxes a few rows
+// high (the defaults are set for the generated trailers, whose walls reach
+// 2.3 m): a wall from 0.55 m, its boxes' classes split at 1.2 and 1.9 m.
+inline sim::ObservationParams small_scene_observation() {
+  sim::ObservationParams p;
+  p.h_pile = 0.55;
+  p.pile_mid = 0.25;
+  p.pile_high = 0.4;
+  p.wall_mid = 1.2;
+  p.wall_high = 1.9;
+  return p;
+}
 
 // A box resting with its bottom at z0, centred at (x, y).
 inline sim::Box make_box(std::uint32_t id, double x, double y, double z0,
