@@ -97,8 +97,8 @@ class ExecutorNode : public plr::Node {
     seed_ = params().get<std::uint64_t>("seed", 1);
     world_file_ = params().get<std::string>("world_file", "");
     actions::ActionOptions& o = options_;
-    auto observation = sim::ObservationParams::from_json(
-        params().has("observation") ? params().json().at("observation") : nlohmann::json());
+    auto observation =
+        sim::ObservationParams::from_json(params().json().value("observation", nlohmann::json()));
     if (!observation) return observation.error();
     o.observation = observation.value();
     o.plan_timeout_s = params().get<double>("plan_timeout_s", o.plan_timeout_s);

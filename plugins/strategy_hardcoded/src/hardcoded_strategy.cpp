@@ -26,7 +26,7 @@ class HardcodedStrategy : public plr::Node {
   plr::Status on_configure() override {
     params().allow_only({"observation", "h_min", "d_min"});
     auto observation = plr::sim::ObservationParams::from_json(
-        params().has("observation") ? params().json().at("observation") : nlohmann::json());
+        params().json().value("observation", nlohmann::json()));
     if (!observation) return observation.error();
     obs_ = observation.value();
     h_.h_min = params().get<double>("h_min", h_.h_min);

@@ -4,11 +4,7 @@
 // on another particle of the masses.
 #include <gtest/gtest.h>
 
-#include "plr/actions/action_model.hpp"
-#include "plr/actions/in_process.hpp"
-#include "plr/planning/lattice_planner.hpp"
-#include "plr/sim/shipped_files.hpp"
-#include "plr/sim/testing/worlds.hpp"
+#include "scene.hpp"
 
 namespace plr::actions {
 namespace {
@@ -16,52 +12,7 @@ namespace {
 using sim::Height;
 using sim::Side;
 
-const sim::RobotModel& robot() {
-  static const sim::RobotModel m = sim::load_robot().value();
-  return m;
-}
-
-// Hand-made walls of 0.4 m boxes: their thresholds.
-ActionOptions options() {
-  ActionOptions o;
-  o.observation = sim::testing::small_scene_observation();
-  return o;
-}
-
-planning::LatticePlanner& planner() {
-  static planning::LatticePlanner p(
-      planning::LatticeConfig::from_file(sim::shipped_file("robots/unloader_lattice.yaml").value())
-          .value());
-  return p;
-}
-
-sim::Box box(std::uint32_t id, double x, double y, double z0, double mass = 5.0) {
-  sim::Box b;
-  b.id = id;
-  b.size = {0.4, 0.4, 0.4};
-  b.mass = mass;
-  b.pose.translation() = Eigen::Vector3d(x + 0.2, y, z0 + 0.2);
-  return b;
-}
-
-// A wall of `cols` x `rows` 0.4 m boxes, front face at x, in an 8 m trailer.
-sim::World wall(double x, int cols, int rows, double mass = 5.0) {
-  sim::World w;
-  w.trailer.depth = 8.0;
-  std::uint32_t id = 1;
-  for (int c = 0; c < cols; ++c)
-    for (int r = 0; r < rows; ++r)
-      w.boxes.push_back(box(id++, x, (c - (cols - 1) / 2.0) * 0.41, r * 0.4, mass));
-  return w;
-}
-
-struct Fixture {
-  Fixture(const sim::World& truth, InProcessOptions options)
-      : simulation(robot(), truth), backend(simulation, planner(), options) {}
-  UnloaderSimulation simulation;
-  InProcessBackend backend;
-  Memory memory;
-};
+using namespace testing;
 
 void expect_same(const Outcome& a, const Outcome& b) {
   EXPECT_EQ(a.applicable, b.applicable);
