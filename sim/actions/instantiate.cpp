@@ -15,6 +15,7 @@ constexpr double kMargin = 0.03;     // m, footprint shrink and clearances
 constexpr double kClearance = 0.02;  // m, the plate's distance to boxes it must not touch
 constexpr double kSlide = 0.05;      // m, steps of the plate off the face's centre
 constexpr double kCovered = 0.1;     // m, the plate's centre stays this far inside the face
+constexpr double kPlateBody = 0.05;  // m of plate behind its suction face (the URDF's)
 constexpr double kProud = 0.015;  // m a neighbour may stand out of the face (the cups reach 2 cm)
 // rad: a face tilted further than this from the vertical is not taken (the
 // cups seal up to about 0.26 rad).
@@ -156,16 +157,6 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     const double zc =
         std::clamp(face_centre.z(), ph + kMargin, world.trailer.height - ph - kMargin);
     const Eigen::Vector3d face(face_centre.x(), face_centre.y(), zc);
-    // Base: the arm at its preferred reach, the lowered nose short of every box.
-    const double by_reach = face.x() - g.pick_reach + g.arm_yaw_offset;
-    const double by_nose = nearest - g.conveyor_length - g.nose_clearance;
-    // A plate low enough to meet the lowered nose stays ahead of its tip.
-    const double by_plate = face.z() - ph < g.nose_top ? face.x() - g.pregrasp_distance -
-                                                             g.conveyor_length - g.nose_clearance
-                                                       : by_reach;
-    const double base_x = std::min({by_reach, by_nose, by_plate});
-    sim::JointVector at = current;
-    at[sim::kBaseX] = base_x;
     // The plate is wider than many boxes: the corridor it moves through to
     // the face must be clear of every other box. Where a neighbour is in the
     // way, the plate slides off centre as long as it still covers most of
@@ -305,11 +296,24 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     c.box = box.id;
     for (auto j : best->group) c.boxes.push_back(world.boxes[j].id);
     c.box_cups = best->cups;
-    c.base_x = base_x;
     c.cups = best->cups.front();
     const Eigen::Vector3d& at_face = best->at_face;
     c.grasp = {at_face - (at_face.x() - best->stop_x) / n.x() * n, plate_yaw};
     c.pregrasp = {at_face - g.pregrasp_distance * n, plate_yaw};
+    // Base: the arm at its preferred reach, the lowered nose short of every
+    // box. A plate low enough to meet the lowered nose stays ahead of its tip
+    // at the pre-grasp by its whole outline: turned off the trailer's axis, a
+    // corner leads.
+    const double by_reach = face.x() - g.pick_reach + g.arm_yaw_offset;
+    const double by_nose = nearest - g.conveyor_length - g.nose_clearance;
+    const double plate_back =
+        c.pregrasp.position.x() - kPlateBody * std::abs(n.x()) - pw * std::abs(n.y());
+    const double by_plate = c.pregrasp.position.z() - ph < g.nose_top
+                                ? plate_back - g.conveyor_length - g.nose_clearance
+                                : by_reach;
+    c.base_x = std::min({by_reach, by_nose, by_plate});
+    sim::JointVector at = current;
+    at[sim::kBaseX] = c.base_x;
     // Lifted, then pulled out until clear of what it rested on: the
     // drop-off move after that swings freely.
     c.lift = {c.grasp.position + Eigen::Vector3d(0, 0, best->lift), plate_yaw};

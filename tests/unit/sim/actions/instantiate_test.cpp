@@ -155,6 +155,23 @@ TEST(PickCandidates, ATurnedBoxIsFacedSquarely) {
   EXPECT_LT((d - d.dot(n) * n).norm(), 1e-9);
 }
 
+// A low box turned well off the axis: the plate's trailing corner at the
+// pre-grasp, not only its centre, stays ahead of the lowered nose's tip.
+TEST(PickCandidates, ALowTurnedBoxKeepsThePlatesCornerAheadOfTheNose) {
+  sim::World w = trailer_world();
+  sim::Box b = sim::testing::make_box(1, 10.2, 0.6, 0.0);
+  const double yaw = 0.65;
+  b.pose.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  w.boxes.push_back(b);
+  const Geometry g;
+  const PickCandidate* k = find(candidates(w), 1);
+  ASSERT_NE(k, nullptr);
+  const double corner_x = k->pregrasp.position.x() -
+                          0.05 * std::cos(yaw) -  // the plate's body behind its face
+                          g.plate_half_width() * std::sin(yaw);
+  EXPECT_GE(corner_x, k->base_x + g.conveyor_length + g.nose_clearance - 1e-9);
+}
+
 TEST(CoveredCups, CountsTheCupsWhoseRimLiesOnTheFace) {
   const Geometry g;                                 // 5 x 4 cups over 0.5 m across, 0.4 m up
   EXPECT_EQ(covered_cups(g, 0.25, 0.2, 0, 0), 20);  // a 0.5 x 0.4 m face takes the whole grid
