@@ -213,7 +213,7 @@ class Run {
 
   // Runs a trajectory; the outcome, or nullopt when the robot refused it.
   std::optional<Executed> execute(std::vector<planning::TimedPoint> points, Suction before,
-                                  Suction after) {
+                                  Suction after, const std::vector<bool>& cups_open = {}) {
     // A robot goes straight on to its next move; only a grip or a release
     // waits for what it moved to come to rest.
     Motion m;
@@ -226,6 +226,7 @@ class Run {
     m.points = std::move(points);
     m.before = before;
     m.after = after;
+    m.cups_open = cups_open;
     auto r = backend_.execute(m);
     if (!r) {
       if (ends_the_action(r.error())) throw Aborted{r.error()};
@@ -251,7 +252,8 @@ class Run {
   // One step: observe, plan (asking for M6 when the planner reports a start
   // in collision it did not leave), execute. False when it could not be done.
   bool step(const std::string& what, PlanMode mode, const Goal& goal, Suction before, Suction after,
-            const std::vector<std::uint32_t>& leave_out = {}) {
+            const std::vector<std::uint32_t>& leave_out = {},
+            const std::vector<bool>& cups_open = {}) {
     if (reporter_.progress) reporter_.progress(what);
     Perceived w = observe();
     if (!goal.pose && !goal.joints.empty()) {
@@ -279,7 +281,7 @@ class Run {
       step_failure_ = what + " not planned: " + p.message;
       return false;
     }
-    auto done = execute(std::move(p.points), before, after);
+    auto done = execute(std::move(p.points), before, after, cups_open);
     if (!done) {
       step_failure_ = what + " not executed";
       return false;
@@ -379,16 +381,17 @@ class Run {
       // a far corner can be out of the search's budget; from the folded arm
       // it is a shorter search.
       const Goal pregrasp = pose(c.pregrasp, {c.grasp, c.lift, c.retract});
-      if (!step("pre-grasp", PlanMode::kArmBase, pregrasp, Suction::kKeep, Suction::kOn) &&
+      if (!step("pre-grasp", PlanMode::kArmBase, pregrasp, Suction::kKeep, Suction::kOn, {},
+                c.cups_open) &&
           !(step("arm clear", PlanMode::kArm, arm_clear(), Suction::kKeep, Suction::kKeep) &&
             step("pre-grasp (arm folded)", PlanMode::kArmBase, pregrasp, Suction::kKeep,
-                 Suction::kOn))) {
+                 Suction::kOn, {}, c.cups_open))) {
         memory_.unreached[c.box] = step_failure_;
         continue;
       }
       // The plate ends touching the box (a settled box may lean a little).
       if (!step("approach", PlanMode::kArmCartesian, pose(c.grasp), Suction::kKeep, Suction::kOn,
-                c.boxes)) {
+                c.boxes, c.cups_open)) {
         memory_.unreached[c.box] = step_failure_;
         continue;
       }

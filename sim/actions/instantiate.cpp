@@ -15,7 +15,6 @@ constexpr double kMargin = 0.03;     // m, footprint shrink and clearances
 constexpr double kClearance = 0.02;  // m, the plate's distance to boxes it must not touch
 constexpr double kSlide = 0.05;      // m, steps of the plate off the face's centre
 constexpr double kCovered = 0.1;     // m, the plate's centre stays this far inside the face
-constexpr double kPlateBody = 0.05;  // m of plate behind its suction face (the URDF's)
 constexpr double kProud = 0.015;  // m a neighbour may stand out of the face (the cups reach 2 cm)
 // rad: a face tilted further than this from the vertical is not taken (the
 // cups seal up to about 0.26 rad).
@@ -55,6 +54,17 @@ int covered_cups(const Geometry& g, double half_across, double half_up, double a
   };
   return on_face(g.cups.cups_y, g.cups.extent.y(), across, half_across) *
          on_face(g.cups.cups_x, g.cups.extent.x(), up, half_up);
+}
+
+bool has_sealable_face(const sim::Box& box) {
+  const Eigen::Matrix3d R = box.pose.linear();
+  int up_axis = 0;
+  bool side = false;
+  for (int k = 0; k < 3; ++k) {
+    if (std::abs(R(2, k)) > std::abs(R(2, up_axis))) up_axis = k;
+    side = side || std::abs(R(2, k)) < kMaxFaceTilt;
+  }
+  return side && std::abs(R(2, up_axis)) >= std::cos(kMaxFaceTilt);
 }
 
 std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::SceneAnalysis& scene,
@@ -101,7 +111,7 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
           (normal_axis < 0 || std::abs(R(0, k)) > std::abs(R(0, normal_axis))))
         normal_axis = k;
     }
-    if (normal_axis < 0 || std::abs(R(2, up_axis)) < std::cos(kMaxFaceTilt)) return std::nullopt;
+    if (!has_sealable_face(box)) return std::nullopt;
     Face f;
     f.n = R.col(normal_axis);
     f.n.z() = 0;
@@ -234,10 +244,10 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       if (own == 0) continue;
       grip.group.push_back(i);
       grip.cups.push_back(own);
-      // Every other box whose face the cups reach (with a margin: a settled
-      // box may lean) and that whole cups cover.
-      bool foreign = false;
-      for (std::size_t j = 0; j < count && !foreign; ++j) {
+      // Every other box of the region whose face the cups reach (with a
+      // margin: a settled box may lean) and that whole cups cover. Cups over
+      // a box of another region stay closed.
+      for (std::size_t j = 0; j < count; ++j) {
         if (j == i || !near(p.y() - pw, p.y() + pw, b[j].y0, b[j].y1) ||
             !near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1))
           continue;
@@ -248,12 +258,10 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
         const double gap = (faces[j]->centre - surface).dot(n);
         if (std::abs(gap) > g.cups.reach + kSealMargin) continue;
         const int k = cups_on(j, p);
-        if (k == 0) continue;
-        if (!in_region[j]) foreign = true;
+        if (k == 0 || !in_region[j]) continue;
         grip.group.push_back(j);
         grip.cups.push_back(k);
       }
-      if (foreign) continue;
       // The group is lifted off what it rests on (and over the lowered
       // nose) before it comes out: nothing but its own boxes may rest on it.
       double z0 = b[i].z0, depth = 0;
@@ -300,14 +308,29 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     const Eigen::Vector3d& at_face = best->at_face;
     c.grasp = {at_face - (at_face.x() - best->stop_x) / n.x() * n, plate_yaw};
     c.pregrasp = {at_face - g.pregrasp_distance * n, plate_yaw};
+    // The valves: the cup grid runs down the plate by rows, across by columns.
+    const sim::SuctionPlate& grid = g.cups;
+    c.cups_open.assign(static_cast<std::size_t>(grid.cups_x * grid.cups_y), false);
+    for (int r = 0; r < grid.cups_x; ++r) {
+      for (int k = 0; k < grid.cups_y; ++k) {
+        const Eigen::Vector3d cup =
+            at_face + (0.5 - (r + 0.5) / grid.cups_x) * grid.extent.x() * Eigen::Vector3d::UnitZ() +
+            ((k + 0.5) / grid.cups_y - 0.5) * grid.extent.y() * lateral;
+        c.cups_open[static_cast<std::size_t>(r * grid.cups_y + k)] =
+            std::any_of(best->group.begin(), best->group.end(), [&](std::size_t j) {
+              const Face& fj = *faces[j];
+              return std::abs((cup - fj.centre).dot(lateral)) <= fj.half_w - grid.cup_radius &&
+                     std::abs(cup.z() - fj.centre.z()) <= fj.half_up - grid.cup_radius;
+            });
+      }
+    }
     // Base: the arm at its preferred reach, the lowered nose short of every
     // box. A plate low enough to meet the lowered nose stays ahead of its tip
-    // at the pre-grasp by its whole outline: turned off the trailer's axis, a
-    // corner leads.
+    // at the pre-grasp (nose_clearance covers the plate's body): turned off
+    // the trailer's axis, by its leading corner.
     const double by_reach = face.x() - g.pick_reach + g.arm_yaw_offset;
     const double by_nose = nearest - g.conveyor_length - g.nose_clearance;
-    const double plate_back =
-        c.pregrasp.position.x() - kPlateBody * std::abs(n.x()) - pw * std::abs(n.y());
+    const double plate_back = c.pregrasp.position.x() - pw * std::abs(n.y());
     const double by_plate = c.pregrasp.position.z() - ph < g.nose_top
                                 ? plate_back - g.conveyor_length - g.nose_clearance
                                 : by_reach;

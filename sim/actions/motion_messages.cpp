@@ -6,6 +6,8 @@ namespace plr::actions {
 
 namespace {
 
+constexpr std::size_t kMaxCups = 1024;  // a plate's cups, bounded for a message from outside
+
 plr::msg::Suction to_msg(Suction s) {
   switch (s) {
     case Suction::kOn:
@@ -42,9 +44,12 @@ void encode_execute_request(const Motion& motion, flatbuffers::FlatBufferBuilder
     points.push_back(plr::msg::CreateTrajectoryPointDirect(out, p.time_s, &pos, &vel));
   }
   const auto trajectory = plr::msg::CreateTrajectoryDirect(out, &points);
+  const auto cups = motion.cups_open.empty()
+                        ? flatbuffers::Offset<flatbuffers::Vector<std::uint8_t>>()
+                        : out.CreateVector(motion.cups_open);
   out.Finish(plr::msg::CreateExecuteRequest(out, trajectory, to_msg(motion.before),
-                                            to_msg(motion.after), motion.conveyor,
-                                            motion.settle_s));
+                                            to_msg(motion.after), motion.conveyor, motion.settle_s,
+                                            cups));
 }
 
 plr::Expected<Motion> decode_execute_request(const plr::msg::ExecuteRequest& r) {
@@ -77,6 +82,10 @@ plr::Expected<Motion> decode_execute_request(const plr::msg::ExecuteRequest& r) 
   m.conveyor = r.conveyor();
   m.settle_s = r.settle_s();
   if (!(m.settle_s >= 0.0 && m.settle_s <= 60.0)) return bad("settle_s: must be in [0, 60]");
+  if (const auto* cups = r.cups_open()) {
+    if (cups->size() > kMaxCups) return bad("cups_open: more than 1024 cups");
+    m.cups_open.assign(cups->begin(), cups->end());
+  }
   return m;
 }
 

@@ -96,9 +96,9 @@ struct UnloaderSimulation::Impl {
     return false;
   }
 
-  void apply_suction(Suction s) {
+  void apply_suction(Suction s, const std::vector<bool>& open) {
     if (s == Suction::kOn)
-      sim.suction_on();
+      sim.suction_on(open);
     else if (s == Suction::kOff)
       sim.suction_off();
   }
@@ -141,7 +141,7 @@ plr::Expected<Executed> UnloaderSimulation::execute(const Motion& motion) {
     if (now && !touching) ++out.robot_trailer_contacts;
     touching = now;
   };
-  m.apply_suction(motion.before);
+  m.apply_suction(motion.before, motion.cups_open);
   // The base's drive against what the boxes push back on the robot: the
   // force along the base's motion, low-pass filtered.
   double push = 0.0;
@@ -178,7 +178,7 @@ plr::Expected<Executed> UnloaderSimulation::execute(const Motion& motion) {
     }
   }
   if (!motion.points.empty()) m.q = out.stalled ? now : motion.points.back().position;
-  m.apply_suction(motion.after);
+  m.apply_suction(motion.after, motion.cups_open);
   for (double t = 0; t < motion.settle_s; t += period) advance(period, m.q);
   // The belt keeps running until nothing lies on it (a real conveyor does
   // not stop between actions), bounded by carry_max_s.

@@ -539,7 +539,7 @@ void Simulation::set_suction_plate(const SuctionPlate& plate) {
   s.plate_target = plate;
 }
 
-std::vector<std::uint32_t> Simulation::suction_on() {
+std::vector<std::uint32_t> Simulation::suction_on(const std::vector<bool>& open) {
   Impl& m = *impl_;
   State& s = m.state;
   std::vector<std::uint32_t> gripped;
@@ -556,7 +556,9 @@ std::vector<std::uint32_t> Simulation::suction_on() {
       cups.push_back(plate.pose * local);
     }
   }
+  // A closed valve's cup is as good as used.
   std::vector<bool> used(cups.size(), false);
+  for (std::size_t c = 0; c < open.size() && c < used.size(); ++c) used[c] = !open[c];
   const double g = m.options.gravity;
   struct Sealed {
     std::size_t body;

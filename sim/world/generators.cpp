@@ -7,6 +7,8 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <functional>
+#include <map>
 #include <numeric>
 #include <random>
 #include <stdexcept>
@@ -444,6 +446,107 @@ World make_pile(EnvFamily family, std::uint64_t seed, const Trailer& trailer) {
   return world;
 }
 
+// Family C. A wall of A1's or A2's boxes, then what happens to its front:
+// each of three changes with even odds, at least one of them.
+//  - stair-stepped: the front slab's columns lose a random number of top
+//    boxes (some columns all of them), as a partly unloaded wall;
+//  - fallen: a few of the front slab's top boxes lie on the floor before it,
+//    on their largest face, at any yaw;
+//  - loose layer: flat boxes on the floor before the wall.
+// Floor boxes are placed clear of each other and of the wall; the physics
+// settles them (make_environment).
+double near_x(const Box& b) {
+  return b.pose.translation().x() - (b.pose.linear().cwiseAbs() * (0.5 * b.size)).x();
+}
+
+World make_mixed(std::uint64_t seed, const Trailer& given) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  Trailer trailer = given;
+  const double kind = unit(rng);
+  if (kind < 1.0 / 3.0) {
+    trailer.width = 2.35;  // 40 ft ISO container inside
+    trailer.height = 2.39;
+  } else if (kind < 2.0 / 3.0) {
+    trailer.width = 2.35;  // 45 ft high cube
+    trailer.height = 2.69;
+  }
+  const EnvFamily walls = unit(rng) < 0.5 ? EnvFamily::kA1 : EnvFamily::kA2;
+  World world = make_wall(walls, rng(), trailer);
+  bool stair = unit(rng) < 0.5, fallen = unit(rng) < 0.5, loose = unit(rng) < 0.5;
+  if (!stair && !fallen && !loose) (unit(rng) < 0.5 ? fallen : loose) = true;
+
+  double front = trailer.depth;
+  for (const Box& b : world.boxes) front = std::min(front, near_x(b));
+  // The front slab's columns, each bottom up (make_wall stacks them so).
+  std::map<long, std::vector<std::size_t>> columns;
+  for (std::size_t i = 0; i < world.boxes.size(); ++i)
+    if (near_x(world.boxes[i]) < front + kGap)
+      columns[std::lround(world.boxes[i].pose.translation().y() * 100)].push_back(i);
+  std::vector<bool> removed(world.boxes.size(), false);
+  std::vector<Box> down;  // fallen boxes, to lay on the floor
+  for (auto& [y, column] : columns) {
+    std::size_t keep = column.size();
+    if (stair) {
+      keep =
+          unit(rng) < 0.2 ? 0 : std::uniform_int_distribution<std::size_t>(1, column.size())(rng);
+    }
+    for (std::size_t k = keep; k < column.size(); ++k) removed[column[k]] = true;
+    if (fallen && keep > 1 && unit(rng) < 0.4) {
+      removed[column[keep - 1]] = true;
+      down.push_back(world.boxes[column[keep - 1]]);
+    }
+  }
+  std::vector<Box> kept;
+  for (std::size_t i = 0; i < world.boxes.size(); ++i)
+    if (!removed[i]) kept.push_back(world.boxes[i]);
+  world.boxes = std::move(kept);
+  if (loose) {
+    const int n = std::uniform_int_distribution<int>(4, 12)(rng);
+    for (int k = 0; k < n; ++k) {
+      Box b;
+      b.size = {0.3 + 0.3 * unit(rng), 0.3 + 0.3 * unit(rng), 0.15 + 0.15 * unit(rng)};
+      down.push_back(b);
+    }
+  }
+  // On the floor before the wall, on the largest face, clear of the rest.
+  fcl::CollisionRequestd request;
+  const double region = 1.6;
+  for (Box b : down) {
+    std::sort(b.size.data(), b.size.data() + 3, std::greater<>());
+    const double yaw = M_PI * (unit(rng) - 0.5);
+    b.pose = Eigen::Isometry3d::Identity();
+    b.pose.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const Eigen::Vector3d ext = b.pose.linear().cwiseAbs() * (0.5 * b.size);
+    const double y_lim = 0.5 * trailer.width - ext.y() - kGap;
+    const fcl::Boxd shape(b.size + Eigen::Vector3d::Constant(2 * kGap));
+    for (int tries = 0; tries < 50 && y_lim > 0; ++tries) {
+      // Never in the rear half: that is the robot's.
+      const double x_hi = front - kGap - ext.x();
+      const double x_lo = std::max(x_hi - region, 0.5 * trailer.depth + ext.x());
+      b.pose.translation() = Eigen::Vector3d(x_hi - (x_hi - x_lo) * unit(rng),
+                                             y_lim * (2.0 * unit(rng) - 1.0), 0.5 * b.size.z());
+      const bool clear = std::none_of(world.boxes.begin(), world.boxes.end(), [&](const Box& o) {
+        fcl::CollisionResultd result;
+        const fcl::Boxd other(o.size);
+        return fcl::collide(&shape, b.pose, &other, o.pose, request, result) > 0;
+      });
+      if (clear) {
+        world.boxes.push_back(b);
+        break;
+      }
+    }
+  }
+  // One prior for the whole family (mass_prior(kC)): A2's, the wider one.
+  const WallParams prior = wall_params(EnvFamily::kA2);
+  std::uint32_t id = 1;
+  for (Box& b : world.boxes) {
+    b.id = id++;
+    b.mass = draw_mass(rng, prior.mass_median, prior.mass_spread, prior.mass_min, prior.mass_max);
+  }
+  return world;
+}
+
 }  // namespace
 
 std::string_view to_string(EnvFamily family) {
@@ -456,17 +559,23 @@ std::string_view to_string(EnvFamily family) {
       return "B1";
     case EnvFamily::kB2:
       return "B2";
+    case EnvFamily::kC:
+      return "C";
   }
   return "?";
 }
 
+std::vector<EnvFamily> all_env_families() {
+  return {EnvFamily::kA1, EnvFamily::kA2, EnvFamily::kB1, EnvFamily::kB2, EnvFamily::kC};
+}
+
 std::optional<EnvFamily> parse_env_family(std::string_view name) {
-  for (EnvFamily f : {EnvFamily::kA1, EnvFamily::kA2, EnvFamily::kB1, EnvFamily::kB2}) {
+  for (EnvFamily f : all_env_families()) {
     const std::string_view s = to_string(f);
-    if (name.size() == 2 && std::toupper(static_cast<unsigned char>(name[0])) == s[0] &&
-        name[1] == s[1]) {
+    if (name.size() == s.size() &&
+        std::equal(name.begin(), name.end(), s.begin(),
+                   [](char a, char b) { return std::toupper(static_cast<unsigned char>(a)) == b; }))
       return f;
-    }
   }
   return std::nullopt;
 }
@@ -485,6 +594,8 @@ std::vector<std::uint32_t> toppling_boxes(const World& world) {
 }
 
 MassPrior mass_prior(EnvFamily family) {
+  // C draws every mass from A2's prior (make_mixed).
+  if (family == EnvFamily::kC) family = EnvFamily::kA2;
   if (family == EnvFamily::kA1 || family == EnvFamily::kA2) {
     const WallParams p = wall_params(family);
     return {p.mass_median, p.mass_spread, p.mass_min, p.mass_max};
@@ -535,6 +646,7 @@ World generate_world(EnvFamily family, std::uint64_t seed, const Trailer& traile
   if (family == EnvFamily::kA1 || family == EnvFamily::kA2) {
     return make_wall(family, seed, trailer);
   }
+  if (family == EnvFamily::kC) return make_mixed(seed, trailer);
   return make_pile(family, seed, trailer);
 }
 

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <plr/actions/action_model.hpp>
+#include <plr/actions/episode.hpp>
 #include <plr/atomic_file.hpp>
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
@@ -154,7 +155,7 @@ class ExecutorNode : public plr::Node {
     stop_ = false;
     stats_ = {};
     memory_ = {};
-    excluded_.clear();
+    rules_ = actions::RunRules({max_actions_, max_idle_});
     backend_ = std::make_unique<BusBackend>(ctx(), bus_, [this](std::chrono::nanoseconds d) {
       std::unique_lock lock(m_);
       return !cv_.wait_for(lock, d, [this] { return stop_.load(); });
@@ -227,7 +228,8 @@ class ExecutorNode : public plr::Node {
     const auto view = world->view();
     flatbuffers::FlatBufferBuilder fbb;
     const auto nested = plr::create_nested(fbb, view.data, view.size);
-    const std::vector<std::uint8_t> excluded(excluded_.begin(), excluded_.end());
+    const std::vector<std::uint8_t> excluded(rules_.exclusions().begin(),
+                                             rules_.exclusions().end());
     fbb.Finish(msg::CreateNextStrategyRequest(
         fbb, nested, observation,
         fbb.CreateVector(reinterpret_cast<const msg::Action*>(excluded.data()), excluded.size())));
@@ -253,7 +255,7 @@ class ExecutorNode : public plr::Node {
       log().warn("sim/snapshot 'checkpoint' failed: {}", why);
     checkpoint_stats_ = stats_;
     checkpoint_memory_ = memory_;
-    checkpoint_excluded_ = excluded_;
+    checkpoint_rules_ = rules_;
   }
 
   void recover(const std::string& why) {
@@ -269,7 +271,7 @@ class ExecutorNode : public plr::Node {
     stats_ = checkpoint_stats_;
     stats_.recoveries = recoveries;
     memory_ = checkpoint_memory_;
-    excluded_ = checkpoint_excluded_;
+    rules_ = checkpoint_rules_;
     log().info("simulator back; restored 'checkpoint', repeating the interrupted action");
   }
 
@@ -340,7 +342,6 @@ class ExecutorNode : public plr::Node {
     // (a flag, not an optional: GCC 12 warns falsely on optional<enum> here).
     bool repeating = false;
     sim::Action repeat{};
-    std::uint64_t idle = 0, actions = 0;
     const actions::Reporter reporter{
         [this](const std::string& step) { report_progress(step); },
         [this](const std::string& line) { log().info("{}: {}", action_name_, line); }};
@@ -352,18 +353,9 @@ class ExecutorNode : public plr::Node {
         continue;
       }
       stats_.boxes_unloaded = w.unloaded - unloaded_at_start_;
-      left_.clear();
-      for (const auto& b : w.world.boxes) left_.push_back(b.id);
-      if (w.world.boxes.empty()) {
-        stats_.stop_reason = "trailer empty";
-        break;
-      }
-      if (max_actions_ != 0 && actions >= max_actions_) {
-        stats_.stop_reason = fmt::format("action limit ({})", max_actions_);
-        break;
-      }
-      if (excluded_.size() == sim::kNumActions) {
-        stats_.stop_reason = "no action moves a box: all 12 tried since the last progress";
+      if (auto why = rules_.stop(w.world.boxes.size())) {
+        stats_.stop_reason = std::move(*why);
+        classify_left(w);
         break;
       }
       sim::Action action{};
@@ -375,7 +367,7 @@ class ExecutorNode : public plr::Node {
         // After an action that moved nothing, the strategy's next step is
         // not followed blindly: its source is asked again, told what failed.
         const auto child =
-            node && excluded_.empty() ? strategy.next(*node, observation) : std::nullopt;
+            node && rules_.fresh() ? strategy.next(*node, observation) : std::nullopt;
         if (child) {
           node = child;
           ++stats_.strategy_steps;
@@ -385,7 +377,7 @@ class ExecutorNode : public plr::Node {
         }
         action = strategy.nodes[*node].action;
       }
-      action_name_ = fmt::format("#{} {}", actions + 1, sim::to_string(action));
+      action_name_ = fmt::format("#{} {}", rules_.actions() + 1, sim::to_string(action));
       repeat = action;
       repeating = true;
       auto outcome = model_->run(action, *backend_, memory_, reporter);
@@ -398,16 +390,9 @@ class ExecutorNode : public plr::Node {
         }
       }
       repeating = false;
-      ++actions;
       const actions::Outcome& o = *outcome;
+      rules_.record(action, o);
       tally(o.queries);
-      // An action that moved nothing is not tried again before progress,
-      // unless its grip failed: the grip memory then makes the next attempt
-      // differ (more cups, a slower carry) and gives the box up in the end.
-      if (o.boxes > 0)
-        excluded_.clear();
-      else if (!o.applicable || !o.failed_grasp)
-        excluded_.insert(static_cast<std::uint8_t>(action));
       if (!o.applicable) {
         ++stats_.not_applicable;
       } else {
@@ -440,11 +425,6 @@ class ExecutorNode : public plr::Node {
       stats_.wall_time_s = seconds_since(t0);
       report_progress(fmt::format("{}: +{} boxes", action_name_, o.boxes), true);
       publish_status();
-      idle = o.boxes == 0 ? idle + 1 : 0;
-      if (idle >= max_idle_) {
-        stats_.stop_reason = fmt::format("no progress in {} actions", idle);
-        break;
-      }
       try {
         checkpoint();
       } catch (const SimulatorLost& lost) {
@@ -453,26 +433,40 @@ class ExecutorNode : public plr::Node {
     }
   }
 
+  void classify_left(const actions::Perceived& w) {
+    stats_.boxes_left.clear();
+    for (const auto& b : actions::boxes_left(w.world, w.q, memory_, *model_))
+      stats_.boxes_left.push_back({b.id, actions::to_string(b.reason), b.detail});
+  }
+
+  // Why each box still in the trailer is there: known where the run stopped
+  // by its rules; a stopped or failed run asks the simulator, if it can.
+  void log_boxes_left() {
+    if (stats_.boxes_left.empty() && stats_.boxes_unloaded < stats_.boxes_total && model_) {
+      try {
+        classify_left(observe());
+      } catch (...) {  // the simulator is gone: the report says only what is known
+      }
+    }
+    if (stats_.boxes_left.empty()) return;
+    std::map<std::string, std::uint32_t> counts;
+    for (const auto& b : stats_.boxes_left) ++counts[b.reason];
+    std::string summary;
+    for (const auto& [reason, n] : counts)
+      summary += fmt::format("{}{}: {}", summary.empty() ? "" : ", ", reason, n);
+    log().info("left in the trailer: {} box{} ({})", stats_.boxes_left.size(),
+               stats_.boxes_left.size() == 1 ? "" : "es", summary);
+    for (const auto& b : stats_.boxes_left)
+      log().info("  box {}: {}{}", b.id, b.reason, b.detail.empty() ? "" : " (" + b.detail + ")");
+  }
+
   void finish(bool ok, Clock::time_point t0) {
     stats_.wall_time_s = seconds_since(t0);
     if (show_progress_ && tty_) std::fputs("\n", stderr);
     log().info("done: {} of {} boxes in {:.1f} s robot time ({:.1f} s wall): {}",
                stats_.boxes_unloaded, stats_.boxes_total, stats_.robot_time_s, stats_.wall_time_s,
                stats_.stop_reason);
-    if (!left_.empty()) {
-      std::string why;
-      for (const auto id : left_) {
-        if (const auto it = memory_.grips.find(id);
-            it != memory_.grips.end() && it->second.given_up) {
-          stats_.boxes_given_up[id] = it->second.why;
-          why += fmt::format("; box {} given up: {}", id, it->second.why);
-        } else if (const auto miss = memory_.unreached.find(id); miss != memory_.unreached.end()) {
-          why += fmt::format("; box {}: its last pick stopped at {}", id, miss->second);
-        }
-      }
-      log().info("left in the trailer: {} box{} ({}; the others no pick or sweep took){}",
-                 left_.size(), left_.size() == 1 ? "" : "es", stats_.stop_reason, why);
-    }
+    log_boxes_left();
     std::string report_error;
     try {
       write_report();
@@ -591,10 +585,9 @@ class ExecutorNode : public plr::Node {
   // Actions tried since the last box left that moved nothing and have
   // nothing new to try (as uint8_t values of sim::Action, as they travel in
   // NextStrategyRequest).
-  std::set<std::uint8_t> excluded_, checkpoint_excluded_;
+  actions::RunRules rules_, checkpoint_rules_;
   std::uint32_t unloaded_at_start_ = 0;
   std::string action_name_;
-  std::vector<std::uint32_t> left_;  // boxes in the trailer when last observed
 };
 
 }  // namespace

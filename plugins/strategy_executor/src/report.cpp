@@ -69,8 +69,12 @@ nlohmann::json to_json(const RunStats& s) {
         {"max_expansions", ms.max_expansions}};
   }
   modes["M6"]["implicit"] = s.m6_implicit;
-  nlohmann::json given_up = nlohmann::json::object();
-  for (const auto& [id, why] : s.boxes_given_up) given_up[std::to_string(id)] = why;
+  nlohmann::json left = nlohmann::json::array();
+  std::map<std::string, std::uint32_t> left_by_reason;
+  for (const auto& b : s.boxes_left) {
+    left.push_back({{"id", b.id}, {"reason", b.reason}, {"detail", b.detail}});
+    ++left_by_reason[b.reason];
+  }
   nlohmann::json curve = nlohmann::json::array();
   for (const auto& p : s.curve) curve.push_back({p.robot_time_s, p.boxes});
   nlohmann::json steps = nlohmann::json::array();
@@ -102,7 +106,8 @@ nlohmann::json to_json(const RunStats& s) {
           {"strategies_asked", s.strategies_asked},
           {"strategy_steps", s.strategy_steps},
           {"stop_reason", s.stop_reason},
-          {"boxes_given_up", given_up},
+          {"boxes_left", left},
+          {"boxes_left_by_reason", left_by_reason},
           {"planner_modes", modes},
           {"planners", s.planners},
           {"plan_calls_unanswered", s.plan_calls_unanswered},

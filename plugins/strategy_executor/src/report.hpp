@@ -76,8 +76,12 @@ struct RunStats {
   std::uint64_t strategies_asked = 0;  // strategy/next calls
   std::uint64_t strategy_steps = 0;    // actions taken by following a branch
   std::string stop_reason;
-  // Boxes left in the trailer whose grips were given up, and why.
-  std::map<std::uint32_t, std::string> boxes_given_up;
+  // Each box left in the trailer: why (a category) and what stood in its way.
+  struct LeftBox {
+    std::uint32_t id = 0;
+    std::string reason, detail;
+  };
+  std::vector<LeftBox> boxes_left;
 };
 
 nlohmann::json to_json(const RunStats& stats);

@@ -506,8 +506,10 @@ TEST_F(Executor, GivesUpABoxNoGripHoldsAndUnloadsTheOthers) {
   EXPECT_EQ(done_reason_, "no progress in 3 actions: 5/6 boxes unloaded");
   // Refused with the 6 cups that fit its face; no pose covers more: given up.
   EXPECT_EQ(report["failed_grasps"], 1);
-  ASSERT_EQ(report["boxes_given_up"].size(), 1u);
-  EXPECT_TRUE(logged(kernel_, "left in the trailer: 1 box ("));
+  ASSERT_EQ(report["boxes_left"].size(), 1u);
+  EXPECT_EQ(report["boxes_left"][0]["reason"], "given up");
+  EXPECT_EQ(report["boxes_left_by_reason"]["given up"], 1);
+  EXPECT_TRUE(logged(kernel_, "left in the trailer: 1 box (given up: 1)"));
 }
 
 TEST_F(Executor, FollowsTheStrategyTreeAndAsksAgainWhenItEnds) {

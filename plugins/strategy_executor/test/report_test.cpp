@@ -33,7 +33,9 @@ TEST(Report, JsonHasTheFiguresOfTheTables) {
   s.pick.exec_s.add(5.0);
   s.pick.exec_s.add(7.0);
   s.stop_reason = "trailer empty";
-  s.boxes_given_up[12] = "too heavy";
+  s.boxes_left = {{12, "given up", "too heavy"},
+                  {13, "blocked", "in front: 12"},
+                  {14, "blocked", "in front: 12"}};
   s.curve = {{0.0, 0}, {20.0, 4}};
   const auto j = to_json(s);
   EXPECT_EQ(j["boxes_unloaded"], 4);
@@ -48,7 +50,11 @@ TEST(Report, JsonHasTheFiguresOfTheTables) {
   EXPECT_DOUBLE_EQ(j["actions"]["pick"]["boxes_per_s"].get<double>(), 3.0 / (1.0 + 12.0));
   EXPECT_EQ(j["stop_reason"], "trailer empty");
   EXPECT_EQ(j["curve"].size(), 2u);
-  EXPECT_FALSE(j["boxes_given_up"].empty());
+  ASSERT_EQ(j["boxes_left"].size(), 3u);
+  EXPECT_EQ(j["boxes_left"][0]["reason"], "given up");
+  EXPECT_EQ(j["boxes_left"][0]["detail"], "too heavy");
+  EXPECT_EQ(j["boxes_left_by_reason"]["blocked"], 2);
+  EXPECT_EQ(j["boxes_left_by_reason"]["given up"], 1);
 }
 
 TEST(Report, BoxesPerPick) {

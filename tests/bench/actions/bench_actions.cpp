@@ -46,6 +46,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench_util.hpp"
 #include "plr/actions/action_model.hpp"
 #include "plr/actions/in_process.hpp"
 #include "plr/planning/lattice_planner.hpp"
@@ -69,6 +70,8 @@ using plr::sim::Action;
 using plr::sim::EnvFamily;
 using plr::sim::World;
 using Clock = std::chrono::steady_clock;
+using plr::bench::median;
+using plr::bench::Progress;
 
 // Issue 17's targets.
 constexpr double kTargetSensitivity = 0.30;  // on A2 and B1
@@ -92,13 +95,6 @@ double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 double mean(const std::vector<double>& v) {
   if (v.empty()) return std::nan("");
   double s = 0;
@@ -116,31 +112,6 @@ std::vector<Action> all_actions() {
   for (int a = 0; a < plr::sim::kNumActions; ++a) all.push_back(static_cast<Action>(a));
   return all;
 }
-
-class Progress {
- public:
-  explicit Progress(std::size_t total) : total_(total), tty_(isatty(STDERR_FILENO) == 1) {}
-  void step(const std::string& what) {
-    ++done_;
-    const int width = 30;
-    const int filled = static_cast<int>(width * done_ / std::max<std::size_t>(total_, 1));
-    if (tty_) {
-      std::fprintf(stderr, "\r[%s%s] %zu/%zu %-40.40s", std::string(filled, '#').c_str(),
-                   std::string(width - filled, '.').c_str(), done_, total_, what.c_str());
-    } else if (done_ * 10 / total_ != (done_ - 1) * 10 / total_ || done_ == total_) {
-      std::fprintf(stderr, "bench_actions: %zu/%zu %s\n", done_, total_, what.c_str());
-    }
-    std::fflush(stderr);
-  }
-  void finish() {
-    if (tty_) std::fprintf(stderr, "\n");
-  }
-  void add(std::size_t more) { total_ += more; }
-
- private:
-  std::size_t total_, done_ = 0;
-  bool tty_;
-};
 
 // A state H visits.
 struct State {
@@ -487,7 +458,8 @@ int main(int argc, char** argv) {
   const auto start = Clock::now();
   // States H visits: states_per_seed from each seed until K per family.
   const std::size_t per_state = o.actions.size() * static_cast<std::size_t>(o.particles);
-  Progress progress(o.families.size() * static_cast<std::size_t>(o.states) * (1 + per_state));
+  Progress progress("bench_actions",
+                    o.families.size() * static_cast<std::size_t>(o.states) * (1 + per_state));
   std::map<EnvFamily, std::vector<State>> states;
   for (const EnvFamily f : o.families) {
     auto& list = states[f];

@@ -142,6 +142,7 @@ class ActionModel {
                              const Reporter& reporter = {}) const;
 
   const ActionOptions& options() const { return options_; }
+  const sim::RobotModel& robot() const { return *robot_; }
 
  private:
   const sim::RobotModel* robot_;

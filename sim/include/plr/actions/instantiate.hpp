@@ -46,6 +46,10 @@ struct Geometry {
 // face's centre.
 int covered_cups(const Geometry& g, double half_across, double half_up, double across, double up);
 
+// Whether the vertical plate can seal on a side face of the box: it stands
+// on a face, not tilted on an edge.
+bool has_sealable_face(const sim::Box& box);
+
 struct PickCandidate {
   std::uint32_t box = 0;  // the box the plate is put on
   // Every box the plate seals on at the grasp, `box` first, all in the
@@ -58,6 +62,10 @@ struct PickCandidate {
   // they are pulled out: dragged out, they would press into it.
   sim::PlateTarget lift;
   int cups = 0;  // cups the grasp pose covers on the face of `box`
+  // The plate's cup valves at the grasp (sim::SuctionPlate's order): open
+  // over the faces of `boxes`, closed elsewhere, so that a neighbour of
+  // another region under the plate is not taken.
+  std::vector<bool> cups_open;
 };
 
 // Pick points for Pick(height, side), best first: boxes of the structure in

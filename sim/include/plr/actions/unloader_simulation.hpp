@@ -26,6 +26,9 @@ struct Motion {
   std::vector<planning::TimedPoint> points;
   Suction before = Suction::kKeep;
   Suction after = Suction::kKeep;
+  // The plate's cup valves for a kOn (Simulation::suction_on): cups that
+  // would seal on boxes not to be taken stay closed. Empty: all open.
+  std::vector<bool> cups_open;
   bool conveyor = true;
   double settle_s = 0.0;
 };

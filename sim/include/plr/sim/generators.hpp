@@ -20,9 +20,16 @@
 
 namespace plr::sim {
 
-enum class EnvFamily { kA1, kA2, kB1, kB2 };
+// C: mixed scenes between the paper's families, as a robot meets them: a
+// wall (A1's or A2's boxes) with boxes fallen in front of it, a partly
+// unloaded (stair-stepped) front, or a loose layer of flat boxes before it;
+// in a trailer or in a 40/45 ft ISO container (2.35 m wide, 2.39 or 2.69 m
+// high: C chooses the width and height, the depth is the caller's).
+enum class EnvFamily { kA1, kA2, kB1, kB2, kC };
 
 std::string_view to_string(EnvFamily family);
+// Every family, in order.
+std::vector<EnvFamily> all_env_families();
 // "A1", "a1", ... ; nullopt for anything else.
 std::optional<EnvFamily> parse_env_family(std::string_view name);
 

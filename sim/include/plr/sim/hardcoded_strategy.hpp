@@ -16,7 +16,9 @@ namespace plr::sim {
 
 struct HardcodedParams {
   double h_min = 0.5;  // m; a lower first wall is not picked from (unless nothing else is left)
-  double d_min = 0.5;  // m; a shallower pile is not swept
+  // m; a shallower pile is not swept: the bottom row left of a wall (one box
+  // deep) is picked.
+  double d_min = 0.6;
 
   // Whether the values are usable; the error names the parameter.
   plr::Status check() const;

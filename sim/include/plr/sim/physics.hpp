@@ -191,8 +191,10 @@ class Simulation {
   // holds its cups' share, and while a box is over its share the most
   // overloaded one is refused (here) or dropped (while held, by the load of
   // mass * (g + acceleration) and what its neighbours push), one at a time.
-  // Returns the ids gripped.
-  std::vector<std::uint32_t> suction_on();
+  // `open`: the plate's valves, one per cup (SuctionPlate's order: row by
+  // row up the plate, across each row); a closed cup seals on nothing. Empty:
+  // all open. Returns the ids gripped.
+  std::vector<std::uint32_t> suction_on(const std::vector<bool>& open = {});
   void suction_off();
   std::vector<std::uint32_t> held_boxes() const;
 

@@ -166,9 +166,7 @@ TEST(PickCandidates, ALowTurnedBoxKeepsThePlatesCornerAheadOfTheNose) {
   const Geometry g;
   const PickCandidate* k = find(candidates(w), 1);
   ASSERT_NE(k, nullptr);
-  const double corner_x = k->pregrasp.position.x() -
-                          0.05 * std::cos(yaw) -  // the plate's body behind its face
-                          g.plate_half_width() * std::sin(yaw);
+  const double corner_x = k->pregrasp.position.x() - g.plate_half_width() * std::sin(yaw);
   EXPECT_GE(corner_x, k->base_x + g.conveyor_length + g.nose_clearance - 1e-9);
 }
 

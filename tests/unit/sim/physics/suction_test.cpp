@@ -178,6 +178,22 @@ TEST(Suction, SeveralBoxesAtOnceHoldWhenLightAndDropWhenHeavy) {
   }
 }
 
+// The plate's valves: over the seam, with only the cups on box 1's side open
+// (local y < 0: the plate faces down, turned about x), box 2 is not taken.
+TEST(Suction, ClosedCupsSealOnNothing) {
+  Simulation sim(two_boxes(8.0));
+  const SuctionPlate plate = robot_plate_at(0.4);
+  sim.set_suction_plate(plate);
+  std::vector<bool> open;
+  for (int row = 0; row < plate.cups_x; ++row)
+    for (int col = 0; col < plate.cups_y; ++col) open.push_back(col < plate.cups_y / 2);
+  EXPECT_EQ(sim.suction_on(open), std::vector<std::uint32_t>{1});
+  // Its two columns of four cups, at full vacuum.
+  EXPECT_NEAR(sim.suction_events().front().capacity, 720.0, 1e-9);
+  lift_robot_plate(sim, 2.0, 0.3);
+  EXPECT_EQ(sim.held_boxes(), std::vector<std::uint32_t>{1});
+}
+
 TEST(Suction, ThePumpHoldsEachBoxAloneButNotBothTogether) {
   // 60 kg, 589 N: under the 720 N one box's eight cups hold alone, over the
   // 540 N each holds when both share the pump.

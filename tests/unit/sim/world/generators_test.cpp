@@ -9,8 +9,7 @@
 namespace plr::sim {
 namespace {
 
-const std::array<EnvFamily, 4> kFamilies{EnvFamily::kA1, EnvFamily::kA2, EnvFamily::kB1,
-                                         EnvFamily::kB2};
+const std::vector<EnvFamily> kFamilies = all_env_families();
 
 double mean_mass(const World& w) {
   double s = 0.0;
@@ -213,8 +212,33 @@ TEST(MassPrior, SetMassesByIdOrNotAtAll) {
             "set_masses: box " + std::to_string(w.boxes[1].id) + ": mass must be finite and > 0");
 }
 
+// C: walls with something changed in front, in trailers and containers.
+TEST(Generators, CMixesWallsFloorBoxesAndContainers) {
+  int containers = 0, with_floor_boxes = 0;
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    const World w = generate_world(EnvFamily::kC, seed);
+    ASSERT_FALSE(w.boxes.empty());
+    containers += w.trailer.width == 2.35 ? 1 : 0;
+    // Fallen and loose boxes lie flat on the floor, turned.
+    int floor = 0;
+    for (const Box& b : w.boxes) {
+      EXPECT_GT(b.pose.translation().x(), 0.5 * w.trailer.depth);
+      const bool flat = std::abs(b.pose.linear()(2, 2) - 1.0) < 1e-9;
+      floor += flat && b.pose.translation().z() < 0.35 && b.size.z() <= b.size.x() &&
+               b.size.z() <= b.size.y() && b.pose.linear()(0, 0) < 0.999;
+    }
+    with_floor_boxes += floor > 0 ? 1 : 0;
+    // Ids are 1..n.
+    for (std::size_t i = 0; i < w.boxes.size(); ++i) EXPECT_EQ(w.boxes[i].id, i + 1);
+  }
+  EXPECT_GE(containers, 5);
+  EXPECT_LE(containers, 18);
+  EXPECT_GE(with_floor_boxes, 5);
+}
+
 TEST(Generators, FamilyNames) {
   EXPECT_EQ(parse_env_family("b2"), EnvFamily::kB2);
+  EXPECT_EQ(parse_env_family("c"), EnvFamily::kC);
   EXPECT_EQ(parse_env_family("A1"), EnvFamily::kA1);
   EXPECT_FALSE(parse_env_family("C1").has_value());
   EXPECT_FALSE(parse_env_family("A").has_value());

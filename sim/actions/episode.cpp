@@ -1,0 +1,204 @@
+#include "plr/actions/episode.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "plr/actions/instantiate.hpp"
+#include "plr/sim/observation.hpp"
+
+namespace plr::actions {
+
+std::optional<std::string> RunRules::stop(std::size_t boxes) const {
+  if (boxes == 0) return "trailer empty";
+  if (limits_.max_actions != 0 && actions_ >= limits_.max_actions)
+    return fmt::format("action limit ({})", limits_.max_actions);
+  if (excluded_.size() == static_cast<std::size_t>(sim::kNumActions))
+    return fmt::format("no action moves a box: all {} tried since the last progress",
+                       sim::kNumActions);
+  if (limits_.max_idle_actions != 0 && idle_ >= limits_.max_idle_actions)
+    return fmt::format("no progress in {} actions", idle_);
+  return std::nullopt;
+}
+
+void RunRules::record(sim::Action action, const Outcome& outcome) {
+  ++actions_;
+  if (outcome.boxes > 0) {
+    excluded_.clear();
+    idle_ = 0;
+    return;
+  }
+  ++idle_;
+  if (!outcome.applicable || !outcome.failed_grasp)
+    excluded_.insert(static_cast<std::uint8_t>(action));
+}
+
+bool RunRules::excluded(sim::Action action) const {
+  return excluded_.count(static_cast<std::uint8_t>(action)) > 0;
+}
+
+const char* to_string(LeftReason reason) {
+  switch (reason) {
+    case LeftReason::kGivenUp:
+      return "given up";
+    case LeftReason::kUnplanned:
+      return "no motion planned";
+    case LeftReason::kOnRobot:
+      return "on the robot";
+    case LeftReason::kNoFace:
+      return "no face the plate seals on";
+    case LeftReason::kOutOfReach:
+      return "out of reach";
+    case LeftReason::kBlocked:
+      return "blocked";
+  }
+  return "?";
+}
+
+namespace {
+
+constexpr double kTouch = 0.02;  // m: closer than this to a robot link is touching it
+constexpr double kOffFloor = 0.02;
+constexpr double kInFront = 1.0;  // m: boxes further before a box are not named as in its way
+
+bool overlap(double a0, double a1, double b0, double b1, double margin = 0.0) {
+  return a0 < b1 + margin && b0 < a1 + margin;
+}
+
+// The robot's links as axis-aligned boxes at q.
+std::vector<sim::Bounds> robot_bounds(const sim::RobotModel& robot, const sim::JointVector& q) {
+  std::vector<Eigen::Isometry3d> poses;
+  robot.forward_kinematics(q, poses);
+  std::vector<sim::Bounds> out;
+  for (std::size_t i = 0; i < robot.links().size(); ++i) {
+    for (const auto& shape : robot.links()[i].shapes) {
+      if (shape.type != sim::CollisionShape::Type::kBox) continue;
+      const Eigen::Isometry3d pose = poses[i] * shape.origin;
+      const Eigen::Vector3d e = pose.linear().cwiseAbs() * (shape.size / 2);
+      const Eigen::Vector3d lo = pose.translation() - e, hi = pose.translation() + e;
+      out.push_back({lo.x(), hi.x(), lo.y(), hi.y(), lo.z(), hi.z()});
+    }
+  }
+  return out;
+}
+
+bool pickable_alone(const sim::World& world, const sim::Box& box, const sim::JointVector& q,
+                    const ActionModel& model) {
+  sim::World alone;
+  alone.trailer = world.trailer;
+  alone.boxes.push_back(box);
+  const auto& obs = model.options().observation;
+  const sim::SceneAnalysis scene = sim::analyse(alone, obs);
+  for (int a = 0; a < sim::kNumActions; ++a) {
+    const auto action = static_cast<sim::Action>(a);
+    if (sim::kind(action) != sim::ActionKind::kPick) continue;
+    if (!pick_candidates(alone, scene, action, obs, model.robot(), model.options().geometry, q, 1,
+                         {})
+             .empty())
+      return true;
+  }
+  return false;
+}
+
+// The boxes in front of `b` (between it and the robot, overlapping its
+// outline across) and those resting on it.
+std::string in_the_way(const sim::World& world, const sim::Box& box) {
+  const sim::Bounds b = sim::bounds(box);
+  std::vector<std::uint32_t> front, top;
+  for (const auto& other : world.boxes) {
+    if (other.id == box.id) continue;
+    const sim::Bounds o = sim::bounds(other);
+    if (!overlap(o.y0, o.y1, b.y0, b.y1)) continue;
+    if (o.x1 <= b.x0 + kTouch && o.x1 > b.x0 - kInFront && overlap(o.z0, o.z1, b.z0, b.z1))
+      front.push_back(other.id);
+    else if (o.z0 >= b.z1 - kTouch && overlap(o.x0, o.x1, b.x0, b.x1))
+      top.push_back(other.id);
+  }
+  std::string out;
+  if (!front.empty()) out = fmt::format("in front: {}", fmt::join(front, ", "));
+  if (!top.empty())
+    out += fmt::format("{}resting on it: {}", out.empty() ? "" : "; ", fmt::join(top, ", "));
+  return out.empty() ? "no pick region takes it" : out;
+}
+
+}  // namespace
+
+std::vector<LeftBox> boxes_left(const sim::World& world, const sim::JointVector& q,
+                                const Memory& memory, const ActionModel& model) {
+  const std::vector<sim::Bounds> robot = robot_bounds(model.robot(), q);
+  std::vector<LeftBox> out;
+  for (const auto& box : world.boxes) {
+    LeftBox left{box.id, LeftReason::kBlocked, {}};
+    const sim::Bounds b = sim::bounds(box);
+    const bool on_robot =
+        b.z0 > kOffFloor && std::any_of(robot.begin(), robot.end(), [&](const sim::Bounds& r) {
+          return overlap(b.x0, b.x1, r.x0, r.x1, kTouch) &&
+                 overlap(b.y0, b.y1, r.y0, r.y1, kTouch) && overlap(b.z0, b.z1, r.z0, r.z1, kTouch);
+        });
+    if (const auto g = memory.grips.find(box.id); g != memory.grips.end() && g->second.given_up) {
+      left.reason = LeftReason::kGivenUp;
+      left.detail = g->second.why;
+    } else if (on_robot) {
+      left.reason = LeftReason::kOnRobot;
+    } else if (const auto u = memory.unreached.find(box.id); u != memory.unreached.end()) {
+      left.reason = LeftReason::kUnplanned;
+      left.detail = u->second;
+    } else if (!has_sealable_face(box)) {
+      left.reason = LeftReason::kNoFace;
+    } else if (!pickable_alone(world, box, q, model)) {
+      left.reason = LeftReason::kOutOfReach;
+    } else {
+      left.detail = in_the_way(world, box);
+    }
+    out.push_back(std::move(left));
+  }
+  return out;
+}
+
+std::map<std::string, std::uint32_t> count_by_reason(const std::vector<LeftBox>& left) {
+  std::map<std::string, std::uint32_t> out;
+  for (const auto& l : left) ++out[to_string(l.reason)];
+  return out;
+}
+
+plr::Expected<Episode> run_hardcoded(const ActionModel& model, Backend& backend,
+                                     const sim::HardcodedParams& h, const RunLimits& limits,
+                                     const std::function<void(const EpisodeStep&)>& on_step) {
+  Episode e;
+  RunRules rules(limits);
+  Memory memory;
+  std::optional<std::uint32_t> unloaded_at_start;
+  for (;;) {
+    auto seen = backend.observe();
+    if (!seen) return seen.error();
+    if (!unloaded_at_start) {
+      unloaded_at_start = seen->unloaded;
+      e.boxes_total = static_cast<std::uint32_t>(seen->world.boxes.size());
+    }
+    e.boxes_unloaded = seen->unloaded - *unloaded_at_start;
+    if (auto why = rules.stop(seen->world.boxes.size())) {
+      e.stop_reason = std::move(*why);
+      e.left = boxes_left(seen->world, seen->q, memory, model);
+      e.final_world = std::move(seen->world);
+      return e;
+    }
+    const sim::SceneAnalysis scene = sim::analyse(seen->world, model.options().observation);
+    std::optional<sim::Action> action;
+    for (const sim::Action a : sim::hardcoded_ranking(scene, h)) {
+      if (!rules.excluded(a)) {
+        action = a;
+        break;
+      }
+    }
+    auto out = model.run(*action, backend, memory);
+    if (!out) return out.error();
+    rules.record(*action, *out);
+    ++e.actions;
+    e.robot_time_s += out->robot_time_s;
+    e.robot_trailer_contacts += out->robot_trailer_contacts;
+    e.failed_grasps += out->failed_grasp ? 1 : 0;
+    if (on_step) on_step(EpisodeStep{*action, *scene.observation, *out});
+  }
+}
+
+}  // namespace plr::actions

@@ -1,0 +1,331 @@
+// Strategy H to the end of the run on many seeds of every family, in process
+// (the action model on the simulation, no bus), in parallel worker processes.
+// Per family: the unloaded fraction (mean and the worst seed), robot time,
+// boxes per robot-second, why runs stopped, why boxes were left,
+// robot-trailer collisions. Issue 18's target is printed beside them: every
+// run >= 98 % unloaded.
+//
+//   bench_unload [--quick] [--json] [--seeds N] [--first S] [--families A1,C]
+//                [--workers W] [--out DIR] [--timeout S]
+// Defaults: seeds 1-20 of every family, one worker per core, results in
+// ./bench_unload. --quick: seeds 1-5. Each run's result is written to DIR as
+// it finishes (atomically), with the world it left (F_seedS.final.yaml) when
+// boxes remain; a stopped benchmark started again with the same DIR runs
+// only what is missing. A run past --timeout (wall seconds, default
+// 3600) is killed and counted as such.
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "bench_util.hpp"
+#include "plr/actions/episode.hpp"
+#include "plr/actions/in_process.hpp"
+#include "plr/atomic_file.hpp"
+#include "plr/planning/lattice_planner.hpp"
+#include "plr/sim/generators.hpp"
+#include "plr/sim/physics.hpp"
+#include "plr/sim/shipped_files.hpp"
+#include "plr/sim/world_io.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using plr::sim::EnvFamily;
+using Clock = std::chrono::steady_clock;
+
+constexpr double kTargetFraction = 0.98;  // issue 18: every run
+
+struct Options {
+  std::uint64_t first = 1, seeds = 20;
+  std::vector<EnvFamily> families;
+  unsigned workers = 0;
+  std::string out = "bench_unload";
+  double timeout_s = 3600;
+  bool json = false;
+};
+
+struct Job {
+  EnvFamily family;
+  std::uint64_t seed;
+  fs::path file;
+};
+
+[[noreturn]] void die(const std::string& what) {
+  std::fprintf(stderr, "bench_unload: %s\n", what.c_str());
+  std::_Exit(1);
+}
+
+template <typename T>
+T value_or_die(plr::Expected<T> e) {
+  if (!e) die(e.error().message);
+  return std::move(*e);
+}
+
+// One run, in the worker process: H from the family's environment to the end.
+nlohmann::json run(const Job& job) {
+  const auto start = Clock::now();
+  const plr::sim::RobotModel robot = value_or_die(plr::sim::load_robot());
+  plr::planning::LatticePlanner planner(value_or_die(plr::planning::LatticeConfig::from_file(
+      value_or_die(plr::sim::shipped_file("robots/unloader_lattice.yaml")))));
+  plr::actions::UnloaderSimulation simulation(robot,
+                                              plr::sim::make_environment(job.family, job.seed));
+  plr::actions::InProcessBackend backend(simulation, planner);
+  // As configs/unload_sim.yaml: plans are bounded by expansions; the time
+  // limit is a safety net for a machine loaded by the other workers.
+  plr::actions::ActionOptions options;
+  options.plan_timeout_s = 30.0;
+  const plr::actions::ActionModel model(robot, options);
+  const auto episode =
+      value_or_die(plr::actions::run_hardcoded(model, backend, plr::sim::HardcodedParams{}, {}));
+  if (!episode.final_world.boxes.empty()) {
+    auto world = job.file;
+    plr::sim::save_world(episode.final_world, world.replace_extension(".final.yaml"));
+  }
+  nlohmann::json left = nlohmann::json::array();
+  for (const auto& l : episode.left)
+    left.push_back({{"id", l.id}, {"reason", to_string(l.reason)}, {"detail", l.detail}});
+  return {{"family", std::string(to_string(job.family))},
+          {"seed", job.seed},
+          {"boxes_total", episode.boxes_total},
+          {"boxes_unloaded", episode.boxes_unloaded},
+          {"robot_time_s", episode.robot_time_s},
+          {"actions", episode.actions},
+          {"failed_grasps", episode.failed_grasps},
+          {"robot_trailer_collisions", episode.robot_trailer_contacts},
+          {"stop_reason", episode.stop_reason},
+          {"left", left},
+          {"left_by_reason", plr::actions::count_by_reason(episode.left)},
+          {"wall_s", std::chrono::duration<double>(Clock::now() - start).count()}};
+}
+
+nlohmann::json timed_out(const Job& job, double after_s) {
+  return {{"family", std::string(to_string(job.family))},
+          {"seed", job.seed},
+          {"timed_out", true},
+          {"stop_reason", fmt::format("killed after {:.0f} s wall", after_s)},
+          {"wall_s", after_s}};
+}
+
+void save(const fs::path& file, const nlohmann::json& j) {
+  if (auto ok = plr::write_file_atomically(file.string(), j.dump(1) + "\n"); !ok)
+    die(ok.error().message);
+}
+
+// Runs the jobs, at most `workers` at once, each in a process of its own
+// (the simulation is single-threaded; a crash takes one run, not the
+// benchmark).
+void run_all(const std::vector<Job>& jobs, const Options& o) {
+  struct Running {
+    Job job;
+    Clock::time_point start;
+  };
+  std::map<pid_t, Running> running;
+  plr::bench::Progress progress("bench_unload", jobs.size());
+  std::size_t next = 0;
+  while (next < jobs.size() || !running.empty()) {
+    while (next < jobs.size() && running.size() < o.workers) {
+      const Job& job = jobs[next++];
+      const pid_t pid = fork();
+      if (pid < 0) die("fork failed");
+      if (pid == 0) {
+        // The worker's own log lines (the planner's, the simulation's) stay
+        // out of the table.
+        const int null = ::open("/dev/null", O_WRONLY);
+        if (null >= 0) dup2(null, STDOUT_FILENO);
+        save(job.file, run(job));
+        std::_Exit(0);
+      }
+      running.emplace(pid, Running{job, Clock::now()});
+    }
+    int status = 0;
+    const pid_t done = waitpid(-1, &status, WNOHANG);
+    if (done > 0) {
+      const auto it = running.find(done);
+      if (it == running.end()) continue;
+      const Job job = it->second.job;
+      running.erase(it);
+      if (!(WIFEXITED(status) && WEXITSTATUS(status) == 0) && !fs::exists(job.file))
+        save(job.file, {{"family", std::string(to_string(job.family))},
+                        {"seed", job.seed},
+                        {"failed", true},
+                        {"stop_reason", WIFSIGNALED(status) ? fmt::format("worker died (signal {})",
+                                                                          WTERMSIG(status))
+                                                            : "worker failed"}});
+      progress.step(fmt::format("{} seed {}", to_string(job.family), job.seed));
+      continue;
+    }
+    for (auto& [pid, r] : running) {
+      const double s = std::chrono::duration<double>(Clock::now() - r.start).count();
+      if (s > o.timeout_s) {
+        kill(pid, SIGKILL);
+        save(r.job.file, timed_out(r.job, s));
+      }
+    }
+    usleep(50'000);
+  }
+  progress.finish();
+}
+
+nlohmann::json summarize(const std::vector<nlohmann::json>& runs, EnvFamily family) {
+  std::vector<double> fractions, robot_s;
+  double boxes = 0, seconds = 0;
+  std::uint64_t collisions = 0, below = 0;
+  std::map<std::string, int> stops;
+  std::map<std::string, std::uint64_t> left;
+  std::string worst;
+  double worst_fraction = 2;
+  for (const auto& r : runs) {
+    if (r.value("family", "") != to_string(family)) continue;
+    ++stops[r.value("stop_reason", "?")];
+    const auto total = r.value("boxes_total", 0u);
+    const double f = total > 0 ? r.value("boxes_unloaded", 0u) / static_cast<double>(total) : 0.0;
+    fractions.push_back(f);
+    if (f < kTargetFraction) ++below;
+    if (f < worst_fraction) {
+      worst_fraction = f;
+      worst =
+          fmt::format("seed {}: {}/{}", r.value("seed", 0), r.value("boxes_unloaded", 0u), total);
+    }
+    if (r.contains("robot_time_s")) {
+      robot_s.push_back(r["robot_time_s"].get<double>());
+      seconds += r["robot_time_s"].get<double>();
+      boxes += r.value("boxes_unloaded", 0u);
+    }
+    collisions += r.value("robot_trailer_collisions", 0u);
+    if (r.contains("left_by_reason"))
+      for (const auto& [k, v] : r["left_by_reason"].items()) left[k] += v.get<std::uint64_t>();
+  }
+  double mean = 0;
+  for (double f : fractions) mean += f;
+  mean = fractions.empty() ? 0 : mean / static_cast<double>(fractions.size());
+  return {{"runs", fractions.size()},
+          {"unloaded_fraction_mean", mean},
+          {"unloaded_fraction_worst", fractions.empty() ? 0.0 : worst_fraction},
+          {"worst", worst},
+          {"runs_below_target", below},
+          {"robot_time_s_median", plr::bench::median(robot_s)},
+          {"boxes_per_robot_s", seconds > 0 ? boxes / seconds : 0.0},
+          {"robot_trailer_collisions", collisions},
+          {"stop_reasons", stops},
+          {"left_by_reason", left}};
+}
+
+void print_table(const nlohmann::json& families) {
+  std::printf("strategy H, in process; target: every run >= %.0f %% unloaded, no collision\n\n",
+              100 * kTargetFraction);
+  std::printf("%-6s %5s %8s %24s %7s %10s %9s %6s\n", "family", "runs", "mean", "worst", "<98 %",
+              "robot s", "boxes/s", "coll.");
+  for (const auto& [name, f] : families.items()) {
+    std::printf("%-6s %5d %7.1f%% %24s %7d %10.0f %9.3f %6d\n", name.c_str(), f["runs"].get<int>(),
+                100 * f["unloaded_fraction_mean"].get<double>(),
+                f["worst"].get<std::string>().c_str(), f["runs_below_target"].get<int>(),
+                f["robot_time_s_median"].is_number() ? f["robot_time_s_median"].get<double>() : 0.0,
+                f["boxes_per_robot_s"].get<double>(), f["robot_trailer_collisions"].get<int>());
+  }
+  std::printf("\nwhy runs stopped / why boxes were left:\n");
+  for (const auto& [name, f] : families.items()) {
+    for (const auto& [why, n] : f["stop_reasons"].items())
+      std::printf("  %-3s %3d runs: %s\n", name.c_str(), n.get<int>(), why.c_str());
+    for (const auto& [why, n] : f["left_by_reason"].items())
+      std::printf("  %-3s %3d boxes left: %s\n", name.c_str(), n.get<int>(), why.c_str());
+  }
+}
+
+Options parse(int argc, char** argv) {
+  Options o;
+  bool quick = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const bool has_value = i + 1 < argc;
+    auto number = [&](const char* what) {
+      char* end = nullptr;
+      const double v = std::strtod(argv[++i], &end);
+      if (end == argv[i] || *end != '\0' || !(v > 0))
+        die(fmt::format("{}: not a positive number: '{}'", what, argv[i]));
+      return v;
+    };
+    if (arg == "--quick") {
+      quick = true;
+    } else if (arg == "--json") {
+      o.json = true;
+    } else if (arg == "--seeds" && has_value) {
+      o.seeds = static_cast<std::uint64_t>(number("--seeds"));
+    } else if (arg == "--first" && has_value) {
+      o.first = static_cast<std::uint64_t>(number("--first"));
+    } else if (arg == "--workers" && has_value) {
+      o.workers = static_cast<unsigned>(number("--workers"));
+    } else if (arg == "--timeout" && has_value) {
+      o.timeout_s = number("--timeout");
+    } else if (arg == "--out" && has_value) {
+      o.out = argv[++i];
+    } else if (arg == "--families" && has_value) {
+      std::string list = argv[++i];
+      for (std::size_t at = 0; at <= list.size();) {
+        const std::size_t comma = std::min(list.find(',', at), list.size());
+        const std::string name = list.substr(at, comma - at);
+        const auto f = plr::sim::parse_env_family(name);
+        if (!f) die(fmt::format("--families: unknown family '{}'", name));
+        o.families.push_back(*f);
+        at = comma + 1;
+      }
+    } else {
+      die("usage: bench_unload [--quick] [--json] [--seeds N] [--first S] [--families A1,C] "
+          "[--workers W] [--out DIR] [--timeout S]");
+    }
+  }
+  if (quick) o.seeds = 5;
+  if (o.families.empty()) o.families = plr::sim::all_env_families();
+  if (o.workers == 0) o.workers = std::max(1L, sysconf(_SC_NPROCESSORS_ONLN));
+  return o;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options o = parse(argc, argv);
+  std::error_code ec;
+  fs::create_directories(o.out, ec);
+  if (ec) die(o.out + ": " + ec.message());
+  std::vector<Job> all, missing;
+  for (const EnvFamily f : o.families)
+    for (std::uint64_t s = o.first; s < o.first + o.seeds; ++s) {
+      Job job{f, s, fs::path(o.out) / fmt::format("{}_seed{}.json", to_string(f), s)};
+      all.push_back(job);
+      if (!fs::exists(job.file)) missing.push_back(job);
+    }
+  if (missing.size() < all.size())
+    std::fprintf(stderr, "bench_unload: %zu of %zu runs already in %s\n",
+                 all.size() - missing.size(), all.size(), o.out.c_str());
+  run_all(missing, o);
+
+  std::vector<nlohmann::json> runs;
+  for (const Job& job : all) {
+    std::ifstream in(job.file);
+    const auto j = nlohmann::json::parse(in, nullptr, false);
+    if (j.is_discarded()) die(job.file.string() + ": not a result file");
+    runs.push_back(j);
+  }
+  nlohmann::json families = nlohmann::json::object();
+  for (const EnvFamily f : o.families) families[std::string(to_string(f))] = summarize(runs, f);
+  const nlohmann::json report = {{"families", families}, {"runs", runs}};
+  save(fs::path(o.out) / "report.json", report);
+  if (o.json)
+    std::printf("%s\n", families.dump().c_str());
+  else
+    print_table(families);
+  return 0;
+}

@@ -1,0 +1,150 @@
+// The run's rules (exclusions, stops), the reasons given for boxes left, and
+// strategy H run in process to the end of a small trailer.
+#include "plr/actions/episode.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "scene.hpp"
+
+namespace plr::actions {
+namespace {
+
+using testing::box;
+using testing::Fixture;
+using testing::options;
+using testing::robot;
+using testing::wall;
+
+Outcome moved(std::uint32_t boxes) {
+  Outcome o;
+  o.boxes = boxes;
+  return o;
+}
+
+Outcome not_applicable() {
+  Outcome o;
+  o.applicable = false;
+  return o;
+}
+
+Outcome grip_failed() {
+  Outcome o;
+  o.failed_grasp = true;
+  return o;
+}
+
+TEST(RunRules, AnActionThatMovedNothingIsLeftOutUntilProgress) {
+  RunRules rules;
+  const auto pick = sim::make_pick(sim::Height::kLow, sim::Side::kLeft);
+  rules.record(pick, not_applicable());
+  EXPECT_TRUE(rules.excluded(pick));
+  EXPECT_FALSE(rules.fresh());
+  rules.record(sim::Action::SweepLow, moved(0));
+  EXPECT_TRUE(rules.excluded(sim::Action::SweepLow));
+  // A failed grip is retried: the grip memory makes the next attempt differ.
+  const auto mid = sim::make_pick(sim::Height::kMid, sim::Side::kLeft);
+  rules.record(mid, grip_failed());
+  EXPECT_FALSE(rules.excluded(mid));
+  rules.record(mid, moved(2));
+  EXPECT_TRUE(rules.fresh());
+  EXPECT_FALSE(rules.excluded(pick));
+  EXPECT_EQ(rules.actions(), 4u);
+}
+
+TEST(RunRules, StopsWhenEmptyAllExcludedIdleOrAtTheLimit) {
+  EXPECT_EQ(RunRules().stop(0), "trailer empty");
+  EXPECT_FALSE(RunRules().stop(3).has_value());
+
+  RunRules all;
+  for (int a = 0; a < sim::kNumActions; ++a)
+    all.record(static_cast<sim::Action>(a), not_applicable());
+  EXPECT_EQ(all.stop(3), "no action moves a box: all 12 tried since the last progress");
+
+  RunRules idle({0, 3});
+  const auto pick = sim::make_pick(sim::Height::kLow, sim::Side::kLeft);
+  for (int k = 0; k < 2; ++k) idle.record(pick, grip_failed());
+  EXPECT_FALSE(idle.stop(3).has_value());
+  idle.record(pick, grip_failed());
+  EXPECT_EQ(idle.stop(3), "no progress in 3 actions");
+
+  RunRules limited({2, 0});
+  limited.record(pick, moved(1));
+  limited.record(pick, moved(1));
+  EXPECT_EQ(limited.stop(3), "action limit (2)");
+}
+
+const LeftBox& reason_of(const std::vector<LeftBox>& left, std::uint32_t id) {
+  const auto it =
+      std::find_if(left.begin(), left.end(), [&](const LeftBox& l) { return l.id == id; });
+  EXPECT_NE(it, left.end()) << id;
+  return *it;
+}
+
+sim::JointVector home() {
+  return home_configuration();
+}
+
+TEST(BoxesLeft, EachBoxHasTheReasonItIsLeftFor) {
+  // Two columns of two, two deep: the back ones are behind the front ones.
+  sim::World w = wall(7.0, 2, 2);
+  for (auto b : wall(7.42, 2, 2).boxes) {
+    b.id += 10;
+    w.boxes.push_back(b);
+  }
+  // Tilted on an edge: no face the vertical plate seals on.
+  sim::Box tilted = box(20, 6.0, 0.8, 0.2);
+  tilted.pose.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  w.boxes.push_back(tilted);
+  Memory memory;
+  memory.grips[1].given_up = true;
+  memory.grips[1].why = "too heavy for every grip";
+  memory.unreached[2] = "pre-grasp not planned";
+  const ActionModel model(robot(), options());
+  const auto left = boxes_left(w, home(), memory, model);
+  ASSERT_EQ(left.size(), w.boxes.size());
+  EXPECT_EQ(reason_of(left, 1).reason, LeftReason::kGivenUp);
+  EXPECT_EQ(reason_of(left, 1).detail, "too heavy for every grip");
+  EXPECT_EQ(reason_of(left, 2).reason, LeftReason::kUnplanned);
+  EXPECT_EQ(reason_of(left, 20).reason, LeftReason::kNoFace);
+  // Box 11 stands behind box 1: pickable alone, blocked here.
+  EXPECT_EQ(reason_of(left, 11).reason, LeftReason::kBlocked);
+  EXPECT_EQ(reason_of(left, 11).detail, "in front: 1; resting on it: 12");
+  const auto counts = count_by_reason(left);
+  EXPECT_EQ(counts.at("given up"), 1u);
+  EXPECT_EQ(counts.at("no face the plate seals on"), 1u);
+}
+
+TEST(BoxesLeft, ABoxNoArmPoseReachesIsOutOfReach) {
+  // Wedged against the ceiling of a low container, above the plate's reach.
+  sim::World w;
+  w.trailer = {2.35, 2.39, 8.0};
+  sim::Box high = box(1, 7.0, 0.0, 2.3);
+  high.size = {0.4, 0.4, 0.08};
+  high.pose.translation().z() = 2.34;
+  w.boxes.push_back(high);
+  const ActionModel model(robot(), options());
+  const auto left = boxes_left(w, home(), Memory{}, model);
+  ASSERT_EQ(left.size(), 1u);
+  EXPECT_EQ(left[0].reason, LeftReason::kOutOfReach);
+}
+
+TEST(RunHardcoded, UnloadsASmallWall) {
+  Fixture f(wall(6.0, 3, 1));
+  const ActionModel model(robot(), options());
+  int steps = 0;
+  const auto e = run_hardcoded(model, f.backend, sim::HardcodedParams{}, {},
+                               [&](const EpisodeStep&) { ++steps; });
+  ASSERT_TRUE(e) << e.error().message;
+  EXPECT_EQ(e->boxes_total, 3u);
+  EXPECT_EQ(e->boxes_unloaded, 3u);
+  EXPECT_EQ(e->stop_reason, "trailer empty");
+  EXPECT_TRUE(e->left.empty());
+  EXPECT_EQ(e->robot_trailer_contacts, 0u);
+  EXPECT_EQ(static_cast<std::uint64_t>(steps), e->actions);
+  EXPECT_GT(e->robot_time_s, 0.0);
+}
+
+}  // namespace
+}  // namespace plr::actions
