@@ -495,9 +495,11 @@ class ExecutorNode : public plr::Node {
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec) throw std::runtime_error(dir.string() + ": " + ec.message());
+    auto check = [](const Status& written) {
+      if (!written) throw std::runtime_error(written.error().message);
+    };
     auto write = [&](const std::string& name, const std::string& content) {
-      if (const Status written = write_file_atomically((dir / name).string(), content); !written)
-        throw std::runtime_error(written.error().message);
+      check(write_file_atomically((dir / name).string(), content));
     };
     write("report.json", to_json(stats_).dump(2) + "\n");
     write("unloading.svg", curve_svg(stats_.curve, stats_.boxes_total,
@@ -528,8 +530,8 @@ class ExecutorNode : public plr::Node {
           options.robot.push_back(o);
         }
       }
-      sim::write_svg(dir / "scene_side.svg", w.world, sim::View::kSide, options);
-      sim::write_svg(dir / "scene_top.svg", w.world, sim::View::kTop, options);
+      check(sim::write_svg(dir / "scene_side.svg", w.world, sim::View::kSide, options));
+      check(sim::write_svg(dir / "scene_top.svg", w.world, sim::View::kTop, options));
       // What is left, as a world file another run can start from.
       write("final_world.yaml", sim::format_world(w.world));
     } catch (const SimulatorLost& lost) {
