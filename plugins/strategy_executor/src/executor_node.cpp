@@ -241,10 +241,11 @@ class ExecutorNode : public plr::Node {
       throw std::runtime_error("strategy/next: reply without a strategy");
     ++stats_.strategies_asked;
     auto s = sim::from_message(*r.value()->strategy(), "strategy/next reply");
-    log().info("strategy '{}' from {} ({} nodes) for {}", s.name,
-               r.value()->source() ? r.value()->source()->str() : "?", s.nodes.size(),
+    if (!s) throw std::runtime_error(s.error().message);
+    log().info("strategy '{}' from {} ({} nodes) for {}", s->name,
+               r.value()->source() ? r.value()->source()->str() : "?", s->nodes.size(),
                sim::to_string(observation));
-    return s;
+    return std::move(*s);
   }
 
   void checkpoint() {
