@@ -186,5 +186,21 @@ TEST_F(SimulatorService, RestoreThroughTheServiceGoesBackInTime) {
   EXPECT_EQ(unknown.error().message, "sim/restore: no snapshot named 'never-saved'");
 }
 
+TEST(SimulatorCheckpoint, ADamagedOneFailsConfigureWithTheFilesError) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("plr_sim_checkpoint_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "state.json") << "{}";  // and no world.yaml
+  FakeKernel kernel;
+  auto node = kernel.load_node(
+      SIMULATOR_SO, NodeOptions().with_params(R"({"checkpoint_dir": ")" + dir.string() + "\"}"));
+  ASSERT_TRUE(node) << node.error().message;
+  const Status configured = node->configure();
+  std::filesystem::remove_all(dir);
+  ASSERT_FALSE(configured);
+  EXPECT_EQ(configured.error().message,
+            (dir / "world.yaml").string() + ": cannot read the world: No such file or directory");
+}
+
 }  // namespace
 }  // namespace plr
