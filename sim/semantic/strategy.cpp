@@ -222,13 +222,13 @@ flatbuffers::Offset<plr::msg::Strategy> build(flatbuffers::FlatBufferBuilder& fb
   return plr::msg::CreateStrategyDirect(fbb, s.name.c_str(), s.root, &nodes);
 }
 
-Strategy from_message(const plr::msg::Strategy& m, const std::string& origin) {
+plr::Expected<Strategy> from_message(const plr::msg::Strategy& m, const std::string& origin) {
   Strategy s;
   if (m.name() != nullptr) s.name = m.name()->str();
   s.root = m.root();
   if (m.nodes() != nullptr) {
     for (const auto* n : *m.nodes()) {
-      if (n == nullptr) throw StrategyFileError(origin + ": null node");
+      if (n == nullptr) return plr::make_error(PLR_ERR_INVALID, origin + ": null node");
       StrategyNode node{n->action(), {}};
       if (n->children() != nullptr)
         for (const auto* e : *n->children())
@@ -236,7 +236,8 @@ Strategy from_message(const plr::msg::Strategy& m, const std::string& origin) {
       s.nodes.push_back(std::move(node));
     }
   }
-  if (const auto ok = validate(s); !ok) throw StrategyFileError(origin + ": " + ok.error().message);
+  if (const auto ok = validate(s); !ok)
+    return plr::make_error(PLR_ERR_INVALID, origin + ": " + ok.error().message);
   return s;
 }
 
@@ -246,12 +247,15 @@ std::vector<std::uint8_t> serialize(const Strategy& s) {
   return {fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()};
 }
 
-Strategy deserialize(const std::uint8_t* data, std::size_t size, const std::string& origin) {
+plr::Expected<Strategy> deserialize(const std::uint8_t* data, std::size_t size,
+                                    const std::string& origin) {
   if (size < 8 || !flatbuffers::BufferHasIdentifier(data, plr::msg::StrategyIdentifier()))
-    throw StrategyFileError(origin + ": not a strategy file (no \"PLRS\" identifier)");
+    return plr::make_error(PLR_ERR_INVALID,
+                           origin + ": not a strategy file (no \"PLRS\" identifier)");
   flatbuffers::Verifier verifier(data, size);
   if (!plr::msg::VerifyStrategyBuffer(verifier))
-    throw StrategyFileError(origin + ": corrupt strategy file (verification failed)");
+    return plr::make_error(PLR_ERR_INVALID,
+                           origin + ": corrupt strategy file (verification failed)");
   return from_message(*plr::msg::GetStrategy(data), origin);
 }
 
@@ -311,9 +315,9 @@ std::optional<StrategyNode> read_node(const yaml::Node& item, std::size_t num_no
 
 }  // namespace
 
-Strategy parse_yaml(const std::string& text, const std::string& origin) {
+plr::Expected<Strategy> parse_yaml(const std::string& text, const std::string& origin) {
   auto doc = yaml::Document::parse(text, origin);
-  if (!doc) throw StrategyFileError(doc.error().message);
+  if (!doc) return doc.error();
   const yaml::Map top =
       doc->root().map("a strategy", {"format", "version", "name", "root", "nodes"});
   Strategy s;
@@ -344,8 +348,7 @@ Strategy parse_yaml(const std::string& text, const std::string& origin) {
     if (doc->ok())
       if (const auto valid = validate(s); !valid) nodes_node.error(valid.error().message);
   }
-  if (!doc->ok()) throw StrategyFileError(doc->error().message);
-  return s;
+  return doc->result(std::move(s));
 }
 
 namespace {
@@ -355,10 +358,11 @@ bool is_yaml(const std::filesystem::path& file) {
 }
 }  // namespace
 
-void save_strategy(const Strategy& s, const std::filesystem::path& file) {
+plr::Status save_strategy(const Strategy& s, const std::filesystem::path& file) {
   if (const auto ok = validate(s); !ok)
-    throw StrategyFileError(file.string() +
-                            ": refusing to write an invalid strategy: " + ok.error().message);
+    return plr::make_error(
+        PLR_ERR_INVALID,
+        file.string() + ": refusing to write an invalid strategy: " + ok.error().message);
   std::string content;
   if (is_yaml(file)) {
     content = format_yaml(s);
@@ -366,16 +370,15 @@ void save_strategy(const Strategy& s, const std::filesystem::path& file) {
     const auto bytes = serialize(s);
     content.assign(bytes.begin(), bytes.end());
   }
-  if (const Status written = write_file_atomically(file.string(), content); !written)
-    throw StrategyFileError(written.error().message);
+  return write_file_atomically(file.string(), content);
 }
 
-Strategy load_strategy(const std::filesystem::path& file) {
+plr::Expected<Strategy> load_strategy(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
-  if (!in) throw StrategyFileError(file.string() + ": cannot open");
+  if (!in) return plr::make_error(PLR_ERR_INVALID, file.string() + ": cannot open");
   std::ostringstream ss;
   ss << in.rdbuf();
-  if (in.bad()) throw StrategyFileError(file.string() + ": read error");
+  if (in.bad()) return plr::make_error(PLR_ERR_INVALID, file.string() + ": read error");
   const std::string content = ss.str();
   if (is_yaml(file)) return parse_yaml(content, file.string());
   return deserialize(reinterpret_cast<const std::uint8_t*>(content.data()), content.size(),

@@ -9,8 +9,6 @@
 #include <array>
 #include <cmath>
 
-#include "plr/sim/world_io.hpp"
-
 namespace plr::sim {
 namespace {
 
@@ -129,11 +127,9 @@ std::string render_svg(const World& world, View view, const RenderOptions& o) {
   return svg;
 }
 
-void write_svg(const std::filesystem::path& file, const World& world, View view,
-               const RenderOptions& options) {
-  if (const Status written = write_file_atomically(file.string(), render_svg(world, view, options));
-      !written)
-    throw WorldFileError(written.error().message);
+Status write_svg(const std::filesystem::path& file, const World& world, View view,
+                 const RenderOptions& options) {
+  return write_file_atomically(file.string(), render_svg(world, view, options));
 }
 
 std::string xml_escape(const std::string& text) {

@@ -92,19 +92,14 @@ Expected<World> read_world(Expected<yaml::Document> doc) {
   return doc->result(std::move(world));
 }
 
-World value_or_throw(Expected<World> world) {
-  if (!world) throw WorldFileError(world.error().message);
-  return std::move(*world);
-}
-
 }  // namespace
 
-World parse_world(const std::string& text, const std::string& origin) {
-  return value_or_throw(read_world(yaml::Document::parse(text, origin)));
+Expected<World> parse_world(const std::string& text, const std::string& origin) {
+  return read_world(yaml::Document::parse(text, origin));
 }
 
-World load_world(const std::filesystem::path& file) {
-  return value_or_throw(read_world(yaml::Document::open(file.string(), "the world")));
+Expected<World> load_world(const std::filesystem::path& file) {
+  return read_world(yaml::Document::open(file.string(), "the world"));
 }
 
 std::string format_world(const World& world) {
@@ -137,9 +132,8 @@ std::string format_world(const World& world) {
   return std::string(out.c_str()) + "\n";
 }
 
-void save_world(const World& world, const std::filesystem::path& file) {
-  if (const Status written = write_file_atomically(file.string(), format_world(world)); !written)
-    throw WorldFileError(written.error().message);
+Status save_world(const World& world, const std::filesystem::path& file) {
+  return write_file_atomically(file.string(), format_world(world));
 }
 
 }  // namespace plr::sim

@@ -5,6 +5,7 @@
 
 #include "world_message.hpp"
 
+#include <plr/expected.hpp>
 #include <plr/sim/world.hpp>
 
 #include <filesystem>
@@ -21,8 +22,8 @@ struct Checkpoint {
   std::uint32_t boxes_unloaded = 0;
 };
 
-void save_checkpoint(const std::filesystem::path& dir, const Checkpoint& c);
-// nullopt when the folder holds no checkpoint; throws on a damaged one.
-std::optional<Checkpoint> load_checkpoint(const std::filesystem::path& dir);
+Status save_checkpoint(const std::filesystem::path& dir, const Checkpoint& c);
+// nullopt when the folder holds no checkpoint; an error for a damaged one.
+Expected<std::optional<Checkpoint>> load_checkpoint(const std::filesystem::path& dir);
 
 }  // namespace plr::simulator

@@ -84,10 +84,13 @@ class SimulatorNode : public Node {
 
     // A restarted simulator process picks up the run at its last checkpoint.
     if (!checkpoint_dir_.empty()) {
-      if (auto c = load_checkpoint(checkpoint_dir_)) {
-        start(c->world, c->robot, c->boxes_total, c->boxes_unloaded);
+      auto c = load_checkpoint(checkpoint_dir_);
+      if (!c) return c.error();
+      if (*c) {
+        const Checkpoint& resumed = **c;
+        start(resumed.world, resumed.robot, resumed.boxes_total, resumed.boxes_unloaded);
         log().info("resumed from checkpoint in {} ({} boxes left, {} unloaded)", checkpoint_dir_,
-                   c->world.boxes.size(), c->boxes_unloaded);
+                   resumed.world.boxes.size(), resumed.boxes_unloaded);
       }
     }
     return {};
@@ -123,21 +126,25 @@ class SimulatorNode : public Node {
 
   Status reset(const msg::ResetRequest& r, flatbuffers::FlatBufferBuilder& out) {
     sim::World world;
+    std::optional<sim::EnvFamily> family;
+    if (r.world_file() && r.world_file()->size() > 0) {
+      auto loaded = sim::load_world(r.world_file()->str());
+      if (!loaded) return make_error(PLR_ERR_INVALID, "sim/reset: " + loaded.error().message);
+      world = std::move(*loaded);
+    } else {
+      const std::string env = r.env() ? r.env()->str() : "A1";
+      family = sim::parse_env_family(env);
+      if (!family)
+        return make_error(PLR_ERR_INVALID,
+                          "sim/reset: env '" + env + "': expected A1, A2, B1 or B2");
+    }
+    // The physics throws, on a world it cannot simulate (a box without mass) and from Simbody.
     try {
-      if (r.world_file() && r.world_file()->size() > 0) {
-        world = sim::load_world(r.world_file()->str());
-      } else {
-        const std::string env = r.env() ? r.env()->str() : "A1";
-        auto family = sim::parse_env_family(env);
-        if (!family)
-          return make_error(PLR_ERR_INVALID,
-                            "sim/reset: env '" + env + "': expected A1, A2, B1 or B2");
-        world = sim::make_environment(*family, r.seed(), {}, max_settle_);
-      }
+      if (family) world = sim::make_environment(*family, r.seed(), {}, max_settle_);
+      start(world, {home_configuration(), {}}, static_cast<std::uint32_t>(world.boxes.size()), 0);
     } catch (const std::exception& e) {
       return make_error(PLR_ERR_INVALID, std::string("sim/reset: ") + e.what());
     }
-    start(world, {home_configuration(), {}}, static_cast<std::uint32_t>(world.boxes.size()), 0);
     log().info("reset: {} boxes", world.boxes.size());
     publish_state();
     return observe(false, out);
@@ -181,12 +188,11 @@ class SimulatorNode : public Node {
     if (!sim_) return make_error(PLR_ERR_STATE, "no world yet: call sim/reset first");
     saved_.insert_or_assign(name, sim_->save());
     if (name == "checkpoint" && !checkpoint_dir_.empty()) {
-      try {
-        save_checkpoint(checkpoint_dir_, {sim_->truth(), robot_state(), sim_->time(), boxes_total_,
-                                          boxes_unloaded()});
-      } catch (const std::exception& e) {
-        return make_error(PLR_ERR_INTERNAL, std::string("sim/snapshot: ") + e.what());
-      }
+      if (const Status saved = save_checkpoint(
+              checkpoint_dir_,
+              {sim_->truth(), robot_state(), sim_->time(), boxes_total_, boxes_unloaded()});
+          !saved)
+        return make_error(PLR_ERR_INTERNAL, "sim/snapshot: " + saved.error().message);
     }
     out.Finish(msg::CreateSnapshotReplyDirect(out, true, "", name.c_str()));
     return {};
@@ -197,9 +203,11 @@ class SimulatorNode : public Node {
       sim_->restore(*it->second);
     } else if (name == "checkpoint" && !checkpoint_dir_.empty()) {
       auto c = load_checkpoint(checkpoint_dir_);
-      if (!c)
+      if (!c) return make_error(c.error().code, "sim/restore: " + c.error().message);
+      if (!*c)
         return make_error(PLR_ERR_INVALID, "sim/restore: no checkpoint in " + checkpoint_dir_);
-      start(c->world, c->robot, c->boxes_total, c->boxes_unloaded);
+      const Checkpoint& restored = **c;
+      start(restored.world, restored.robot, restored.boxes_total, restored.boxes_unloaded);
     } else {
       return make_error(PLR_ERR_INVALID, "sim/restore: no snapshot named '" + name + "'");
     }

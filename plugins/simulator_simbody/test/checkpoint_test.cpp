@@ -36,8 +36,10 @@ TEST_F(CheckpointTest, RoundTrip) {
   c.sim_time = 12.25;
   c.boxes_total = 30;
   c.boxes_unloaded = 4;
-  save_checkpoint(dir_, c);
-  const auto back = load_checkpoint(dir_);
+  ASSERT_TRUE(save_checkpoint(dir_, c));
+  const auto loaded = load_checkpoint(dir_);
+  ASSERT_TRUE(loaded) << loaded.error().message;
+  const auto& back = *loaded;
   ASSERT_TRUE(back.has_value());
   EXPECT_EQ(back->robot.q, c.robot.q);
   EXPECT_EQ(back->robot.held, c.robot.held);
@@ -50,18 +52,32 @@ TEST_F(CheckpointTest, RoundTrip) {
 }
 
 TEST_F(CheckpointTest, NoneIsNotAnError) {
-  EXPECT_FALSE(load_checkpoint(dir_).has_value());
+  const auto none = load_checkpoint(dir_);
+  ASSERT_TRUE(none) << none.error().message;
+  EXPECT_FALSE(none->has_value());
 }
 
 TEST_F(CheckpointTest, ADamagedOneIsRefusedByName) {
-  save_checkpoint(dir_, Checkpoint{});
-  std::ofstream(dir_ / "state.json") << "{\"q\": [1, 2]}";
-  try {
-    load_checkpoint(dir_);
-    FAIL() << "a damaged checkpoint was accepted";
-  } catch (const std::runtime_error& e) {
-    EXPECT_EQ(std::string(e.what()), (dir_ / "state.json").string() + ": damaged checkpoint");
+  ASSERT_TRUE(save_checkpoint(dir_, Checkpoint{}));
+  for (const char* state : {"{\"q\": [1, 2]}", "{\"q\": [1, 2, 3, 4, 5, 6, 7, \"8\"]}"}) {
+    std::ofstream(dir_ / "state.json") << state;
+    const auto damaged = load_checkpoint(dir_);
+    ASSERT_FALSE(damaged) << state;
+    EXPECT_EQ(damaged.error().message, (dir_ / "state.json").string() + ": damaged checkpoint");
   }
+  std::ofstream(dir_ / "world.yaml") << "format: plr-world\nversion: 2\n";
+  const auto world = load_checkpoint(dir_);
+  ASSERT_FALSE(world);
+  EXPECT_EQ(world.error().message,
+            (dir_ / "world.yaml").string() +
+                ":2:10: version: unsupported version 2 (this reader knows 1)");
+}
+
+TEST_F(CheckpointTest, SavingWhereNoFolderCanBeMadeNamesIt) {
+  std::ofstream(dir_.string()) << "a file, not a folder";
+  const Status saved = save_checkpoint(dir_ / "sub", Checkpoint{});
+  ASSERT_FALSE(saved);
+  EXPECT_EQ(saved.error().message, (dir_ / "sub").string() + ": Not a directory");
 }
 
 }  // namespace

@@ -2,10 +2,13 @@
 // file, snapshot/restore through the service, and bad requests answered with
 // a clear error.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <plr/messages.hpp>
 #include <plr/testing/fake_kernel.hpp>
 
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -90,9 +93,19 @@ TEST_F(SimulatorService, BadResetRequestsNameTheProblem) {
   EXPECT_EQ(family.error().message, "sim/reset: env 'C7': expected A1, A2, B1 or B2");
   const auto file = reset("", "/nonexistent/world.yaml");
   ASSERT_FALSE(file);
-  EXPECT_EQ(file.error().message.rfind("sim/reset: ", 0), 0u) << file.error().message;
-  EXPECT_NE(file.error().message.find("/nonexistent/world.yaml"), std::string::npos)
-      << file.error().message;
+  EXPECT_EQ(file.error().message,
+            "sim/reset: /nonexistent/world.yaml: cannot read the world: No such file or directory");
+  // A perceived world (masses unknown) is a valid world file, but not one to simulate.
+  const auto perceived =
+      std::filesystem::temp_directory_path() / ("plr_perceived_" + std::to_string(::getpid()));
+  std::ofstream(perceived) << "format: plr-world\nversion: 1\n"
+                              "trailer: {width: 2.5, height: 2.7, depth: 16}\n"
+                              "boxes:\n  - {id: 4, size: [1, 1, 1], position: [4, 0, 0.5]}\n";
+  const auto massless = reset("", perceived.string());
+  std::filesystem::remove(perceived);
+  ASSERT_FALSE(massless);
+  EXPECT_EQ(massless.error().message,
+            "sim/reset: Simulation: box 4 has no mass (the simulator needs the true world)");
 }
 
 TEST_F(SimulatorService, ResetFromAFileThenObservePerceivedAndTrueState) {
@@ -117,10 +130,12 @@ TEST_F(SimulatorService, BadTrajectoriesAreRefusedWithTheReason) {
   ASSERT_TRUE(reset("", SMALL_WORLD));
   const auto short_point = execute({home(), {0.0, 0.0, -1.0}}, {0.0, 0.1});
   ASSERT_FALSE(short_point);
-  EXPECT_EQ(short_point.error().message, "sim/execute: ExecuteRequest.trajectory: every point needs 8 positions");
+  EXPECT_EQ(short_point.error().message,
+            "sim/execute: ExecuteRequest.trajectory: every point needs 8 positions");
   const auto backwards = execute({home(), home()}, {0.5, 0.1});
   ASSERT_FALSE(backwards);
-  EXPECT_EQ(backwards.error().message, "sim/execute: ExecuteRequest.trajectory: times must not decrease");
+  EXPECT_EQ(backwards.error().message,
+            "sim/execute: ExecuteRequest.trajectory: times must not decrease");
   // Planned from another state: the robot would jump to its first point.
   auto elsewhere = home();
   elsewhere[0] += 0.5;
@@ -169,6 +184,22 @@ TEST_F(SimulatorService, RestoreThroughTheServiceGoesBackInTime) {
   const auto unknown = snapshot("sim/restore", "never-saved");
   ASSERT_FALSE(unknown);
   EXPECT_EQ(unknown.error().message, "sim/restore: no snapshot named 'never-saved'");
+}
+
+TEST(SimulatorCheckpoint, ADamagedOneFailsConfigureWithTheFilesError) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("plr_sim_checkpoint_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "state.json") << "{}";  // and no world.yaml
+  FakeKernel kernel;
+  auto node = kernel.load_node(
+      SIMULATOR_SO, NodeOptions().with_params(R"({"checkpoint_dir": ")" + dir.string() + "\"}"));
+  ASSERT_TRUE(node) << node.error().message;
+  const Status configured = node->configure();
+  std::filesystem::remove_all(dir);
+  ASSERT_FALSE(configured);
+  EXPECT_EQ(configured.error().message,
+            (dir / "world.yaml").string() + ": cannot read the world: No such file or directory");
 }
 
 }  // namespace

@@ -243,10 +243,11 @@ class ExecutorNode : public plr::Node {
       throw std::runtime_error("strategy/next: reply without a strategy");
     ++stats_.strategies_asked;
     auto s = sim::from_message(*r.value()->strategy(), "strategy/next reply");
-    log().info("strategy '{}' from {} ({} nodes) for {}", s.name,
-               r.value()->source() ? r.value()->source()->str() : "?", s.nodes.size(),
+    if (!s) throw std::runtime_error(s.error().message);
+    log().info("strategy '{}' from {} ({} nodes) for {}", s->name,
+               r.value()->source() ? r.value()->source()->str() : "?", s->nodes.size(),
                sim::to_string(observation));
-    return s;
+    return std::move(*s);
   }
 
   void checkpoint() {
@@ -489,9 +490,11 @@ class ExecutorNode : public plr::Node {
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec) throw std::runtime_error(dir.string() + ": " + ec.message());
+    auto check = [](const Status& written) {
+      if (!written) throw std::runtime_error(written.error().message);
+    };
     auto write = [&](const std::string& name, const std::string& content) {
-      if (const Status written = write_file_atomically((dir / name).string(), content); !written)
-        throw std::runtime_error(written.error().message);
+      check(write_file_atomically((dir / name).string(), content));
     };
     write("report.json", to_json(stats_).dump(2) + "\n");
     write("unloading.svg", curve_svg(stats_.curve, stats_.boxes_total,
@@ -522,8 +525,8 @@ class ExecutorNode : public plr::Node {
           options.robot.push_back(o);
         }
       }
-      sim::write_svg(dir / "scene_side.svg", w.world, sim::View::kSide, options);
-      sim::write_svg(dir / "scene_top.svg", w.world, sim::View::kTop, options);
+      check(sim::write_svg(dir / "scene_side.svg", w.world, sim::View::kSide, options));
+      check(sim::write_svg(dir / "scene_top.svg", w.world, sim::View::kTop, options));
       // What is left, as a world file another run can start from.
       write("final_world.yaml", sim::format_world(w.world));
     } catch (const SimulatorLost& lost) {

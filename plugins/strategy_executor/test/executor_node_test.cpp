@@ -567,7 +567,9 @@ TEST_F(Executor, RefusesBadParams) {
 // The executor's geometry against the real ARA* planner: every sub-action of
 // every action has to be plannable in the small test world.
 TEST_F(Executor, UnloadsTheSmallWorldWithTheRealPlanner) {
-  FakeSim sim(sim::load_world(SMALL_WORLD));
+  auto world = sim::load_world(SMALL_WORLD);
+  ASSERT_TRUE(world) << world.error().message;
+  FakeSim sim(std::move(*world));
   sim.serve(kernel_);
   auto planner = kernel_.load_node(PLANNER_ARASTAR_SO, NodeOptions().with_name("planner"));
   ASSERT_TRUE(planner) << planner.error().message;

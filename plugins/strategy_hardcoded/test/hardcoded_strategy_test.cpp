@@ -38,9 +38,11 @@ class Hardcoded : public ::testing::Test {
     if (!reply) return Action::PickLowLeft;
     EXPECT_EQ(reply.value()->source()->str(), "hardcoded");
     const auto s = sim::from_message(*reply.value()->strategy(), "reply");
-    EXPECT_EQ(s.nodes.size(), 1u);
-    EXPECT_TRUE(s.nodes[0].children.empty());
-    return s.nodes[0].action;
+    EXPECT_TRUE(s) << s.error().message;
+    if (!s) return Action::PickLowLeft;
+    EXPECT_EQ(s->nodes.size(), 1u);
+    EXPECT_TRUE(s->nodes[0].children.empty());
+    return s->nodes[0].action;
   }
 
   FakeKernel kernel_;

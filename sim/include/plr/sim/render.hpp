@@ -3,6 +3,8 @@
 // the mass is unknown), optional robot shapes drawn on top.
 #pragma once
 
+#include <plr/expected.hpp>
+
 #include <Eigen/Geometry>
 #include <filesystem>
 #include <string>
@@ -28,9 +30,9 @@ struct RenderOptions {
 };
 
 std::string render_svg(const World& world, View view, const RenderOptions& options = {});
-// Atomic write (plr::write_file_atomically); throws WorldFileError naming the file.
-void write_svg(const std::filesystem::path& file, const World& world, View view,
-               const RenderOptions& options = {});
+// Atomic write (plr::write_file_atomically); the error names the file.
+Status write_svg(const std::filesystem::path& file, const World& world, View view,
+                 const RenderOptions& options = {});
 
 // Text made safe inside an SVG/XML element or attribute (&, <, >, ").
 std::string xml_escape(const std::string& text);

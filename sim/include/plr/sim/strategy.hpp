@@ -23,7 +23,6 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
-#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -91,30 +90,26 @@ plr::Status validate(const Strategy& strategy);
 // FlatBuffers conversion (plr.msg.Strategy).
 flatbuffers::Offset<plr::msg::Strategy> build(flatbuffers::FlatBufferBuilder& fbb,
                                               const Strategy& strategy);
-// Throws StrategyFileError("<origin>: <cause>") if the tree is not valid.
-Strategy from_message(const plr::msg::Strategy& message, const std::string& origin);
-
-class StrategyFileError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+// The error is "<origin>: <cause>" if the tree is not valid.
+plr::Expected<Strategy> from_message(const plr::msg::Strategy& message, const std::string& origin);
 
 // The binary file image (identifier "PLRS").
 std::vector<std::uint8_t> serialize(const Strategy& strategy);
 // Verifies untrusted bytes before reading them.
-Strategy deserialize(const std::uint8_t* data, std::size_t size, const std::string& origin);
+plr::Expected<Strategy> deserialize(const std::uint8_t* data, std::size_t size,
+                                    const std::string& origin);
 
 std::string format_yaml(const Strategy& strategy);
 // Read with plr/yaml_reader.hpp: unknown keys are errors, child and root
-// indices must name a node. Throws StrategyFileError with the first problem as
-// one line, "<origin>:line:col: key: cause"; what only the whole tree shows
+// indices must name a node. The error is the first problem as one line,
+// "<origin>:line:col: key: cause"; what only the whole tree shows
 // (validate()) is located at the list of nodes.
-Strategy parse_yaml(const std::string& text, const std::string& origin);
+plr::Expected<Strategy> parse_yaml(const std::string& text, const std::string& origin);
 
 // By extension: .yaml/.yml as YAML, anything else as the binary form. Writes
-// are atomic (plr::write_file_atomically); errors throw StrategyFileError
-// with one line "<file>[:line:col]: <cause>".
-void save_strategy(const Strategy& strategy, const std::filesystem::path& file);
-Strategy load_strategy(const std::filesystem::path& file);
+// are atomic (plr::write_file_atomically); an error is one line
+// "<file>[:line:col]: <cause>".
+plr::Status save_strategy(const Strategy& strategy, const std::filesystem::path& file);
+plr::Expected<Strategy> load_strategy(const std::filesystem::path& file);
 
 }  // namespace plr::sim

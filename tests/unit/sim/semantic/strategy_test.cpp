@@ -129,12 +129,14 @@ void expect_same(const Strategy& a, const Strategy& b) {
 TEST(StrategyFile, BinaryRoundTripWithIdentifier) {
   TempDir dir;
   const auto file = dir.path() / "s.plrs";
-  save_strategy(example(), file);
+  ASSERT_TRUE(save_strategy(example(), file));
   std::ifstream in(file, std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), {});
   ASSERT_GE(bytes.size(), 8u);
   EXPECT_EQ(bytes.substr(4, 4), "PLRS");
-  expect_same(load_strategy(file), example());
+  const auto loaded = load_strategy(file);
+  ASSERT_TRUE(loaded) << loaded.error().message;
+  expect_same(*loaded, example());
   // Nothing but the file itself is left behind.
   EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator{}), 1);
 }
@@ -142,17 +144,15 @@ TEST(StrategyFile, BinaryRoundTripWithIdentifier) {
 TEST(StrategyFile, YamlRoundTrip) {
   TempDir dir;
   const auto file = dir.path() / "s.yaml";
-  save_strategy(example(), file);
-  expect_same(load_strategy(file), example());
+  ASSERT_TRUE(save_strategy(example(), file));
+  const auto loaded = load_strategy(file);
+  ASSERT_TRUE(loaded) << loaded.error().message;
+  expect_same(*loaded, example());
 }
 
 std::string load_error(const fs::path& file) {
-  try {
-    load_strategy(file);
-  } catch (const StrategyFileError& e) {
-    return e.what();
-  }
-  return "no error";
+  const auto loaded = load_strategy(file);
+  return loaded ? "no error" : loaded.error().message;
 }
 
 TEST(StrategyFile, BadFilesGiveOneLineErrors) {
@@ -194,12 +194,9 @@ TEST(StrategyFile, BadFilesGiveOneLineErrors) {
 }
 
 std::string yaml_error(const std::string& nodes) {
-  try {
-    parse_yaml("format: plr-strategy\nversion: 1\nroot: 0\nnodes:\n" + nodes, "s.yaml");
-  } catch (const StrategyFileError& e) {
-    return e.what();
-  }
-  return "no error";
+  const auto parsed =
+      parse_yaml("format: plr-strategy\nversion: 1\nroot: 0\nnodes:\n" + nodes, "s.yaml");
+  return parsed ? "no error" : parsed.error().message;
 }
 
 TEST(StrategyFile, YamlErrorsAreLocated) {
@@ -229,17 +226,17 @@ TEST(StrategyFile, RefusesToWriteInvalidTreesAndReportsIoErrors) {
   Strategy bad = example();
   bad.root = 5;
   const auto file = dir.path() / "x.plrs";
-  EXPECT_THROW(save_strategy(bad, file), StrategyFileError);
+  const Status invalid = save_strategy(bad, file);
+  ASSERT_FALSE(invalid);
+  EXPECT_EQ(
+      invalid.error().message,
+      file.string() + ": refusing to write an invalid strategy: root 5 out of range (3 nodes)");
   EXPECT_FALSE(fs::exists(file));
   const auto nowhere = dir.path() / "no" / "such" / "dir.plrs";
-  try {
-    save_strategy(example(), nowhere);
-    FAIL() << "saved into a missing folder";
-  } catch (const StrategyFileError& e) {
-    EXPECT_EQ(std::string(e.what()).rfind(nowhere.string() + ": cannot create a temporary file", 0),
-              0u)
-        << e.what();
-  }
+  const Status missing = save_strategy(example(), nowhere);
+  ASSERT_FALSE(missing) << "saved into a missing folder";
+  EXPECT_EQ(missing.error().message,
+            nowhere.string() + ": cannot create a temporary file: No such file or directory");
 }
 
 }  // namespace

@@ -46,12 +46,20 @@ TEST(Render, HeavierBoxesAreDarker) {
 
 TEST(Render, WritesAFile) {
   const auto p = std::filesystem::temp_directory_path() / "plr_render_test.svg";
-  write_svg(p, generate_world(EnvFamily::kB1, 1), View::kTop);
+  ASSERT_TRUE(write_svg(p, generate_world(EnvFamily::kB1, 1), View::kTop));
   std::ifstream in(p);
   std::stringstream text;
   text << in.rdbuf();
   EXPECT_EQ(text.str().rfind("<svg", 0), 0u);
   std::filesystem::remove(p);
+}
+
+TEST(Render, AFileThatCannotBeWrittenIsNamed) {
+  const auto p = std::filesystem::temp_directory_path() / "plr_no_such_folder" / "scene.svg";
+  const Status written = write_svg(p, World{}, View::kSide);
+  ASSERT_FALSE(written);
+  EXPECT_EQ(written.error().message,
+            p.string() + ": cannot create a temporary file: No such file or directory");
 }
 
 TEST(Render, TextIsEscaped) {

@@ -29,16 +29,15 @@ class WorldIo : public ::testing::Test {
 
   std::string error_of(const std::string& text) {
     const fs::path p = write("bad.yaml", text);
-    try {
-      load_world(p);
-    } catch (const WorldFileError& e) {
-      const std::string msg = e.what();
-      const std::string prefix = p.string() + ":";
-      EXPECT_EQ(msg.rfind(prefix, 0), 0u) << msg;
-      return msg.substr(prefix.size());
+    const auto world = load_world(p);
+    if (world) {
+      ADD_FAILURE() << "no error for:\n" << text;
+      return {};
     }
-    ADD_FAILURE() << "no error for:\n" << text;
-    return {};
+    const std::string& msg = world.error().message;
+    const std::string prefix = p.string() + ":";
+    EXPECT_EQ(msg.rfind(prefix, 0), 0u) << msg;
+    return msg.substr(prefix.size());
   }
 
   fs::path dir_;
@@ -50,8 +49,10 @@ const char* kHeader =
 TEST_F(WorldIo, RoundTripIsExact) {
   const World w = generate_world(EnvFamily::kA2, 42);
   const fs::path p = dir_ / "w.yaml";
-  save_world(w, p);
-  const World r = load_world(p);
+  ASSERT_TRUE(save_world(w, p));
+  const auto loaded = load_world(p);
+  ASSERT_TRUE(loaded) << loaded.error().message;
+  const World& r = *loaded;
   ASSERT_EQ(r.boxes.size(), w.boxes.size());
   EXPECT_EQ(r.trailer.depth, w.trailer.depth);
   for (std::size_t i = 0; i < w.boxes.size(); ++i) {
@@ -68,7 +69,9 @@ TEST_F(WorldIo, OrientationIsOptionalAndMassMayBeZero) {
   const fs::path p =
       write("w.yaml",
             std::string(kHeader) + "boxes:\n  - {id: 3, size: [1, 2, 3], position: [4, 0, 1.5]}\n");
-  const World w = load_world(p);
+  const auto loaded = load_world(p);
+  ASSERT_TRUE(loaded) << loaded.error().message;
+  const World& w = *loaded;
   ASSERT_EQ(w.boxes.size(), 1u);
   EXPECT_EQ(w.boxes[0].id, 3u);
   EXPECT_EQ(w.boxes[0].mass, 0.0);
@@ -133,24 +136,25 @@ TEST_F(WorldIo, BadTypesUnknownKeysAndRangesAreLocated) {
 }
 
 TEST_F(WorldIo, MissingFileIsReported) {
-  try {
-    load_world(dir_ / "nope.yaml");
-    FAIL();
-  } catch (const WorldFileError& e) {
-    EXPECT_EQ(std::string(e.what()),
-              (dir_ / "nope.yaml").string() + ": cannot read the world: No such file or directory");
-  }
+  const auto world = load_world(dir_ / "nope.yaml");
+  ASSERT_FALSE(world);
+  EXPECT_EQ(world.error().message,
+            (dir_ / "nope.yaml").string() + ": cannot read the world: No such file or directory");
+}
+
+TEST_F(WorldIo, ParsedTextIsNamedByItsOrigin) {
+  const auto world = parse_world("format: plr-world\nversion: 2\n", "--world");
+  ASSERT_FALSE(world);
+  EXPECT_EQ(world.error().message,
+            "--world:2:10: version: unsupported version 2 (this reader knows 1)");
 }
 
 TEST_F(WorldIo, SaveIntoMissingDirectoryFailsCleanly) {
   const fs::path p = dir_ / "no" / "such" / "w.yaml";
-  try {
-    save_world(World{}, p);
-    FAIL();
-  } catch (const WorldFileError& e) {
-    EXPECT_EQ(std::string(e.what()),
-              p.string() + ": cannot create a temporary file: No such file or directory");
-  }
+  const Status saved = save_world(World{}, p);
+  ASSERT_FALSE(saved);
+  EXPECT_EQ(saved.error().message,
+            p.string() + ": cannot create a temporary file: No such file or directory");
 }
 
 }  // namespace
