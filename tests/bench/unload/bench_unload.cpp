@@ -93,7 +93,10 @@ nlohmann::json run(const Job& job) {
       value_or_die(plr::actions::run_hardcoded(model, backend, plr::sim::HardcodedParams{}, {}));
   if (!episode.final_world.boxes.empty()) {
     auto world = job.file;
-    plr::sim::save_world(episode.final_world, world.replace_extension(".final.yaml"));
+    if (auto saved =
+            plr::sim::save_world(episode.final_world, world.replace_extension(".final.yaml"));
+        !saved)
+      die(saved.error().message);
   }
   nlohmann::json left = nlohmann::json::array();
   for (const auto& l : episode.left)

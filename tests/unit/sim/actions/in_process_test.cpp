@@ -82,7 +82,9 @@ TEST(InProcessBackend, PlansOnChangedWorldsAsAFreshChecker) {
     }
     const auto a = kept.plan(q, world), b = fresh.plan(q, world);
     ASSERT_TRUE(a && b);
-    if (round % 2 == 0) EXPECT_EQ(a->status, planning::PlanStatus::kSolved) << a->message;
+    if (round % 2 == 0) {
+      EXPECT_EQ(a->status, planning::PlanStatus::kSolved) << a->message;
+    }
     EXPECT_EQ(a->status, b->status);
     EXPECT_EQ(a->stats.expansions, b->stats.expansions);
     if (round % 2 == 1) searched += a->stats.expansions;
