@@ -196,12 +196,38 @@ struct Simulation::Impl {
   // a box lying on a belt whose trailing edge reaches that end has left the
   // trailer. Lying on it: its lowest point near the belt's surface (a box
   // pushed along the floor in front of the base is not on the belt).
+  static constexpr double kHandover = 0.05;  // m; the base's face stops a box this short of the end
+  static constexpr double kOnBelt = 0.03;    // m between the box's lowest point and the belt
+  // The shapes whose belt hands boxes on, with their inverse poses: the
+  // shapes stand still for the fixed steps of a step() call, so they are
+  // set once per call (set_belt_ends), not per box and step.
+  struct BeltEnd {
+    std::size_t link;  // in state.links
+    Eigen::Isometry3d to_local;
+  };
+  std::vector<BeltEnd> belt_ends;
+
+  void set_belt_ends() {
+    belt_ends.clear();
+    for (std::size_t l = 0; l < state.links.size(); ++l) {
+      const LinkGeometry& g = state.links[l];
+      if (g.belt_speed > 0.0 && !g.feeds_belt) belt_ends.push_back({l, g.pose.inverse()});
+    }
+  }
+
   bool unloaded_by_belt(const Body& b) const {
-    constexpr double kHandover = 0.05;  // m; the base's face stops a box this short of the end
-    constexpr double kOnBelt = 0.03;    // m between the box's lowest point and the belt
-    for (const LinkGeometry& l : state.links) {
-      if (l.belt_speed <= 0.0 || l.feeds_belt) continue;
-      const Eigen::Vector3d local = l.pose.inverse() * b.box.pose.translation();
+    for (const BeltEnd& end : belt_ends) {
+      const LinkGeometry& l = state.links[end.link];
+      const Eigen::Vector3d local = end.to_local * b.box.pose.translation();
+      // Quick reject on the centre alone: no part of the box reaches further
+      // from it than its half diagonal (the margin covers rounding).
+      const double reach_max = b.radius + 1e-6;
+      if (std::abs(local.y()) >= 0.5 * l.size.y() ||
+          local.z() <= 0.5 * l.size.z() - kOnBelt - 1e-6 ||
+          local.z() >= 0.5 * l.size.z() + kOnBelt + reach_max ||
+          local.x() - reach_max >= -0.5 * l.size.x() + kHandover + 1e-6) {
+        continue;
+      }
       const Eigen::Matrix3d r = l.pose.linear().transpose() * b.box.pose.linear();
       const Eigen::Vector3d reach = r.cwiseAbs() * (0.5 * b.box.size);
       const double above_belt = local.z() - reach.z() - 0.5 * l.size.z();
@@ -425,10 +451,14 @@ struct Simulation::Impl {
       state.suction_events.push_back(
           {b.box.id, state.time, SuctionEvent::Kind::kDropped, b.load, share * b.capacity});
     }
+    // A sleeping box has not moved, and the belts stand still within a
+    // step() call: after the call's first fixed step (fraction 0) it stays
+    // where it was found not to be unloaded.
+    const bool belts_moved = fraction == 0.0;
     for (std::size_t i = 0; i < state.bodies.size(); ++i) {
       Body& b = state.bodies[i];
-      if (b.mode == Mode::kHeld) continue;
-      if (b.mode == Mode::kGone) continue;
+      if (b.mode == Mode::kHeld || b.mode == Mode::kGone) continue;
+      if (b.mode == Mode::kAsleep && !belts_moved) continue;
       if (b.box.pose.translation().x() < 0.0 || unloaded_by_belt(b)) {
         state.unloaded.push_back({b.box.id, state.time});
         remove(static_cast<int>(i));
@@ -493,6 +523,7 @@ void Simulation::step(double duration) {
   }
   const Eigen::Vector3d plate_a = (plate_v - s.plate_velocity) / total;
   m.prepare_loads();
+  m.set_belt_ends();
   for (long k = 0; k < n; ++k) {
     m.fixed_step(m.options.step, static_cast<double>(k) / static_cast<double>(n), total, from_links,
                  from_plate, plate_a);
