@@ -9,22 +9,16 @@ namespace {
 constexpr std::uint8_t kBoxBox = 0, kBoxLink = 1, kBoxPlane = 2;
 constexpr double kWakeMargin = 0.01;  // m around a moving box within which sleepers wake
 
-bool disjoint(const Eigen::Vector3d& lo1, const Eigen::Vector3d& hi1, const Eigen::Vector3d& lo2,
-              const Eigen::Vector3d& hi2) {
-  return (lo1.array() > hi2.array()).any() || (lo2.array() > hi1.array()).any();
-}
-
 }  // namespace
 
 Contacts::Contacts(const PhysicsOptions& options, const Trailer& trailer)
-    : options_(options), trailer_(trailer), request_(8, true) {}
+    : options_(options), trailer_(trailer), broad_(trailer), request_(8, true) {}
 
 void Contacts::set_boxes(const std::vector<Body>& bodies) {
   box_shapes_.clear();
   box_shapes_.reserve(bodies.size());
   for (const Body& b : bodies) box_shapes_.emplace_back(b.box.size);
-  lo_.resize(bodies.size());
-  hi_.resize(bodies.size());
+  broad_ = BroadPhase(trailer_);
 }
 
 void Contacts::set_links(const std::vector<LinkGeometry>& links) {
@@ -188,13 +182,7 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
   dampers_.clear();
   link_force_.assign(links.size(), Eigen::Vector3d::Zero());
   belt_force_.assign(links.size(), 0.0);
-  for (int i = 0; i < n; ++i) {
-    const Body& b = bodies[static_cast<std::size_t>(i)];
-    if (b.mode == Mode::kGone) continue;
-    const Eigen::Vector3d e = b.box.pose.linear().cwiseAbs() * (0.5 * b.box.size);
-    lo_[static_cast<std::size_t>(i)] = b.box.pose.translation() - e;
-    hi_[static_cast<std::size_t>(i)] = b.box.pose.translation() + e;
-  }
+  broad_.update(bodies);
   const auto corner_speed = [](const Body& b) { return b.v.norm() + b.w.norm() * b.radius; };
   const auto deepest = [&]() {
     double depth = 0.0;
@@ -214,14 +202,16 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
   const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
   const Other ground{0.0, zero, zero, zero, zero, zero};
 
+  const Eigen::Vector3d margin = Eigen::Vector3d::Constant(kWakeMargin);
   for (int i = 0; i < n; ++i) {
     Body& a = bodies[static_cast<std::size_t>(i)];
     if (a.mode != Mode::kAwake) continue;
     const std::size_t ai = static_cast<std::size_t>(i);
+    const Eigen::Vector3d &alo = broad_.lo(ai), &ahi = broad_.hi(ai);
     for (std::size_t p = 0; p < planes.size(); ++p) {
       const auto& [normal, offset] = planes[p];
       // Quick reject: the AABB is on the inner side.
-      const Eigen::Vector3d probe = (normal.array() > 0).select(lo_[ai], hi_[ai]);
+      const Eigen::Vector3d probe = (normal.array() > 0).select(alo, ahi);
       if (normal.dot(probe) >= offset) continue;
       box_plane_patch(a.box.size, a.box.pose, normal, offset, patch_);
       if (take(patch_)) {
@@ -232,16 +222,16 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
     // A box moving fast wakes the sleeping boxes next to it even without
     // contact: a support falling away leaves the box above it hanging.
     const bool fast = corner_speed(a) > options_.wake_speed;
-    const Eigen::Vector3d margin = Eigen::Vector3d::Constant(kWakeMargin);
-    for (int j = 0; j < n; ++j) {
+    broad_.query(alo - margin, ahi + margin, BroadPhase::kSleeping | BroadPhase::kMoving, near_);
+    for (const int j : near_) {
       const std::size_t bj = static_cast<std::size_t>(j);
       const Body& b = bodies[bj];
-      if (j == i || b.mode == Mode::kGone || (b.mode == Mode::kAwake && j < i)) continue;
+      if (j == i || (b.mode == Mode::kAwake && j < i)) continue;
       if (fast && b.mode == Mode::kAsleep &&
-          !disjoint(lo_[ai] - margin, hi_[ai] + margin, lo_[bj], hi_[bj])) {
+          !disjoint(alo - margin, ahi + margin, broad_.lo(bj), broad_.hi(bj))) {
         wake.push_back(j);
       }
-      if (disjoint(lo_[ai], hi_[ai], lo_[bj], hi_[bj])) continue;
+      if (disjoint(alo, ahi, broad_.lo(bj), broad_.hi(bj))) continue;
       box_box_patch(a.box.size, a.box.pose, b.box.size, b.box.pose, patch_);
       if (!take(patch_)) continue;
       // Pressed into hard by a slow box (e.g. a growing load): wake up too.
@@ -260,12 +250,12 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
     const Eigen::Vector3d e = link.pose.linear().cwiseAbs() * link_half_[l];
     const Eigen::Vector3d llo = link.pose.translation() - e, lhi = link.pose.translation() + e;
     const bool moving = link.speed > 1e-6 || link.belt_dir.squaredNorm() > 0.0;
-    for (int j = 0; j < n; ++j) {
+    // Sleeping boxes only notice a shape that moves.
+    broad_.query(llo, lhi, BroadPhase::kMoving | (moving ? BroadPhase::kSleeping : 0u), near_);
+    for (const int j : near_) {
       const std::size_t bj = static_cast<std::size_t>(j);
       const Body& b = bodies[bj];
-      if (b.mode == Mode::kGone || b.mode == Mode::kHeld) continue;
-      if (b.mode == Mode::kAsleep && !moving) continue;
-      if (disjoint(llo, lhi, lo_[bj], hi_[bj])) continue;
+      if (b.mode == Mode::kHeld) continue;
       if (!collide(box_shapes_[bj], b.box.pose, *link_shapes_[l], link.pose)) continue;
       if (b.mode == Mode::kAsleep) {
         wake.push_back(j);
@@ -279,18 +269,11 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
 
   // Held boxes that move wake the sleeping boxes next to them.
   for (int i = 0; i < n; ++i) {
-    const Body& h = bodies[static_cast<std::size_t>(i)];
+    const std::size_t k = static_cast<std::size_t>(i);
+    const Body& h = bodies[k];
     if (h.mode != Mode::kHeld || corner_speed(h) <= 1e-6) continue;
-    for (int j = 0; j < n; ++j) {
-      const std::size_t bj = static_cast<std::size_t>(j);
-      const Body& b = bodies[bj];
-      if (b.mode != Mode::kAsleep) continue;
-      const Eigen::Vector3d margin = Eigen::Vector3d::Constant(kWakeMargin);
-      if (!disjoint(lo_[static_cast<std::size_t>(i)] - margin,
-                    hi_[static_cast<std::size_t>(i)] + margin, lo_[bj], hi_[bj])) {
-        wake.push_back(j);
-      }
-    }
+    broad_.query(broad_.lo(k) - margin, broad_.hi(k) + margin, BroadPhase::kSleeping, near_);
+    wake.insert(wake.end(), near_.begin(), near_.end());
   }
   std::sort(state.pairs.begin(), state.pairs.end(),
             [](const PairState& x, const PairState& y) { return x.key < y.key; });

@@ -8,6 +8,7 @@
 #include <memory>
 #include <vector>
 
+#include "broad_phase.hpp"
 #include "patch.hpp"
 #include "state.hpp"
 
@@ -70,7 +71,8 @@ class Contacts {
   std::vector<fcl::Boxd> box_shapes_;
   std::vector<std::unique_ptr<fcl::CollisionGeometryd>> link_shapes_;
   std::vector<Eigen::Vector3d> link_half_;  // bounding half extents in the link frame
-  std::vector<Eigen::Vector3d> lo_, hi_;    // world AABBs of the bodies this step
+  BroadPhase broad_;
+  std::vector<int> near_;  // a query's answer
   std::vector<Point> points_;
   Patch patch_;
   std::vector<PairState> old_pairs_;
