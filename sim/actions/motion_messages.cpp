@@ -95,9 +95,10 @@ void encode_execute_outcome(const Executed& e, std::uint32_t boxes_remaining,
   for (const auto& s : e.suction)
     suction.emplace_back(s.box_id, static_cast<plr::msg::SuctionEventKind>(s.kind), s.time, s.load,
                          s.capacity);
-  out.Finish(plr::msg::CreateExecuteOutcomeDirect(out, true, "", e.sim_time_s, &e.moved,
-                                                  &e.unloaded, &e.held, e.robot_trailer_contacts,
-                                                  boxes_remaining, &e.unloaded_after_s, &suction));
+  out.Finish(plr::msg::CreateExecuteOutcomeDirect(
+      out, true, "", e.sim_time_s, &e.moved, &e.unloaded, &e.held, e.robot_trailer_contacts,
+      boxes_remaining, &e.unloaded_after_s, &suction, e.stalled, e.stall_force, e.stall_after_s,
+      e.peak_push_force));
 }
 
 plr::Expected<Executed> decode_execute_outcome(const plr::msg::ExecuteOutcome& o) {
@@ -115,6 +116,10 @@ plr::Expected<Executed> decode_execute_outcome(const plr::msg::ExecuteOutcome& o
                            "ExecuteOutcome.unloaded_after_s: one time per unloaded box");
   e.robot_trailer_contacts = o.robot_trailer_contacts();
   e.sim_time_s = o.sim_time_s();
+  e.stalled = o.stalled();
+  e.stall_force = o.stall_force_n();
+  e.stall_after_s = o.stall_after_s();
+  e.peak_push_force = o.peak_push_force_n();
   if (const auto* events = o.suction_events()) {
     for (const auto* s : *events) {
       const int kind = static_cast<int>(s->kind());

@@ -174,6 +174,9 @@ class SimulatorNode : public Node {
       log().info("box {} {} at t={:.2f} s: the cups had to hold {:.0f} N, can hold {:.0f} N",
                  e.box_id, e.kind == sim::SuctionEvent::Kind::kDropped ? "dropped" : "not gripped",
                  e.time, e.load, e.capacity);
+    if (done->stalled)
+      log().info("the base stalled {:.2f} s into the motion: the boxes pushed back with {:.0f} N",
+                 done->stall_after_s, done->stall_force);
     log().debug(
         "execute: {} points, {:.2f} s simulated in {:.2f} s, {} unloaded", motion->points.size(),
         motion->points.empty() ? 0.0 : motion->points.back().time_s,
