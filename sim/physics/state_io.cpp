@@ -66,10 +66,8 @@ msg::SimLink to_msg(const LinkGeometry& l) {
       l.feeds_belt, l.belt_drive, to_msg(l.size), to_msg(l.pose), l.belt_speed, l.belt_max_force);
 }
 msg::SimPlate to_msg(const SuctionPlate& p) {
-  // The schema's SimPlate is a fixed struct whose extent.z is unused: it
-  // carries pump_max_force until the schema gets a field of its own.
-  return msg::SimPlate(to_msg(p.pose), msg::Vec3(p.extent.x(), p.extent.y(), p.pump_max_force),
-                       p.cups_x, p.cups_y, p.cup_radius, p.cup_force, p.reach, p.max_tilt);
+  return msg::SimPlate(to_msg(p.pose), msg::Vec3(p.extent.x(), p.extent.y(), 0.0), p.cups_x,
+                       p.cups_y, p.cup_radius, p.cup_force, p.reach, p.max_tilt);
 }
 
 flatbuffers::Offset<msg::SimOptions> to_msg(flatbuffers::FlatBufferBuilder& fbb,
@@ -259,7 +257,8 @@ bool read_links(Reader& r, const flatbuffers::Vector<const msg::SimLink*>* v, co
   return true;
 }
 
-bool read_plate(Reader& r, const msg::SimPlate* m, const char* field,
+// `pump`: the state's pump_max_force field for this plate (0: absent).
+bool read_plate(Reader& r, const msg::SimPlate* m, double pump, const char* field,
                 std::optional<SuctionPlate>& out) {
   if (m == nullptr) return true;
   const std::string f = field;
@@ -284,10 +283,15 @@ bool read_plate(Reader& r, const msg::SimPlate* m, const char* field,
     return false;
   }
   p.extent = extent.head<2>();
-  // extent.z: the pump's limit (0 in bytes written before it existed: the default).
-  if (extent.z() != 0.0 && !r.positive(f + ".extent.z (pump_max_force)", extent.z(), 1e9))
-    return false;
-  if (extent.z() != 0.0) p.pump_max_force = extent.z();
+  // Bytes written before the state had the field carry the pump's limit in
+  // extent.z; 0 in both: the default.
+  const bool legacy = pump == 0.0;
+  if (legacy) pump = extent.z();
+  if (pump != 0.0) {
+    if (!r.positive(legacy ? f + ".extent.z (pump_max_force)" : f + "_pump_max_force", pump, 1e9))
+      return false;
+    p.pump_max_force = pump;
+  }
   out = p;
   return true;
 }
@@ -336,8 +340,9 @@ bool read_state(Reader& r, const msg::SimulationState& m, Trailer& trailer, Phys
     return r.fail("links", std::to_string(s.links.size()) + " shapes but " +
                                std::to_string(s.link_targets.size()) + " link_targets");
   }
-  if (!read_plate(r, m.plate(), "plate", s.plate) ||
-      !read_plate(r, m.plate_target(), "plate_target", s.plate_target)) {
+  if (!read_plate(r, m.plate(), m.plate_pump_max_force(), "plate", s.plate) ||
+      !read_plate(r, m.plate_target(), m.plate_target_pump_max_force(), "plate_target",
+                  s.plate_target)) {
     return false;
   }
   if (s.plate.has_value() != s.plate_target.has_value()) {
@@ -495,7 +500,8 @@ std::vector<std::uint8_t> Snapshot::to_bytes() const {
   const auto root = msg::CreateSimulationStateDirect(
       fbb, &trailer, options, s.time, &bodies, &pairs, &links, &targets, plate ? &*plate : nullptr,
       plate_target ? &*plate_target : nullptr, &plate_velocity, &unloaded, &suction, &belts,
-      &forces, &s.slots, &s.q, &s.u, s.rebuild);
+      &forces, &s.slots, &s.q, &s.u, s.rebuild, s.plate ? s.plate->pump_max_force : 0.0,
+      s.plate_target ? s.plate_target->pump_max_force : 0.0);
   msg::FinishSimulationStateBuffer(fbb, root);
   return std::vector<std::uint8_t>(fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize());
 }

@@ -320,5 +320,35 @@ TEST_F(FieldErrors, CountsAndOrder) {
   EXPECT_EQ(message_of(*t), "sim state: plate: plate and plate_target come together");
 }
 
+// The pump's limit has a field of its own; bytes written before it carry
+// the limit in the plates' extent.z, and still load with it.
+TEST_F(FieldErrors, PumpLimit) {
+  auto t = state();
+  ASSERT_TRUE(t->plate && t->plate_target);
+  EXPECT_EQ(t->plate->extent().z(), 0.0);
+  EXPECT_EQ(t->plate_pump_max_force, SuctionPlate{}.pump_max_force);
+  EXPECT_EQ(t->plate_target_pump_max_force, SuctionPlate{}.pump_max_force);
+  t->plate_target_pump_max_force = -1.0;
+  EXPECT_EQ(message_of(*t),
+            "sim state: plate_target_pump_max_force: must be finite, > 0 and <= 1e+09");
+
+  t = state();
+  t->plate_pump_max_force = t->plate_target_pump_max_force = 0.0;
+  for (auto* plate : {t->plate.get(), t->plate_target.get()}) {
+    *plate = msg::SimPlate(plate->pose(), msg::Vec3(plate->extent().x(), plate->extent().y(), 700),
+                           plate->cups_x(), plate->cups_y(), plate->cup_radius(),
+                           plate->cup_force(), plate->reach(), plate->max_tilt());
+  }
+  flatbuffers::FlatBufferBuilder fbb;
+  msg::FinishSimulationStateBuffer(fbb, msg::SimulationState::Pack(fbb, t.get()));
+  const auto old = Snapshot::from_bytes(fbb.GetBufferPointer(), fbb.GetSize());
+  ASSERT_TRUE(old) << old.error().message;
+  const Bytes now = old->to_bytes();
+  const auto back = msg::UnPackSimulationState(now.data());
+  EXPECT_EQ(back->plate_pump_max_force, 700.0);
+  EXPECT_EQ(back->plate_target_pump_max_force, 700.0);
+  EXPECT_EQ(back->plate->extent().z(), 0.0);
+}
+
 }  // namespace
 }  // namespace plr::sim
