@@ -102,7 +102,9 @@ TEST(PlannerSwap, RequestsFromFourThreadsAcrossSwapsAreEachSolvedOnce) {
   // Each caller stops after its own last send: the sent ids are a prefix
   // per caller, so check every id that went out.
   for (std::size_t i = 0; i < kMaxRequests; ++i)
-    if (ctx[i].ledger != nullptr) EXPECT_EQ(ledger.answers[i], 1) << "request " << i;
+    if (ctx[i].ledger != nullptr) {
+      EXPECT_EQ(ledger.answers[i], 1) << "request " << i;
+    }
   EXPECT_TRUE(ledger.errors.empty())
       << ledger.errors.size() << " failed, first: " << ledger.errors.front();
   // The load really spanned the swaps: both planners answered.
