@@ -244,10 +244,12 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       if (own == 0) continue;
       grip.group.push_back(i);
       grip.cups.push_back(own);
-      // Every other box of the region whose face the cups reach (with a
-      // margin: a settled box may lean) and that whole cups cover. Cups over
-      // a box of another region stay closed.
-      for (std::size_t j = 0; j < count; ++j) {
+      // Every other box whose face the cups reach (with a margin: a settled
+      // box may lean) and that whole cups cover; it must be of the region.
+      // Its cups could stay closed (cups_open), but poses over a box that
+      // stays lost boxes in the benchmark (docs/executor.md).
+      bool foreign = false;
+      for (std::size_t j = 0; j < count && !foreign; ++j) {
         if (j == i || !near(p.y() - pw, p.y() + pw, b[j].y0, b[j].y1) ||
             !near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1))
           continue;
@@ -258,10 +260,12 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
         const double gap = (faces[j]->centre - surface).dot(n);
         if (std::abs(gap) > g.cups.reach + kSealMargin) continue;
         const int k = cups_on(j, p);
-        if (k == 0 || !in_region[j]) continue;
+        if (k == 0) continue;
+        if (!in_region[j]) foreign = true;
         grip.group.push_back(j);
         grip.cups.push_back(k);
       }
+      if (foreign) continue;
       // The group is lifted off what it rests on (and over the lowered
       // nose) before it comes out: nothing but its own boxes may rest on it.
       double z0 = b[i].z0, depth = 0;
