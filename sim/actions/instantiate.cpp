@@ -246,8 +246,8 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       grip.cups.push_back(own);
       // Every other box whose face the cups reach (with a margin: a settled
       // box may lean) and that whole cups cover; it must be of the region.
-      // Its cups could stay closed (cups_open), but poses over a box that
-      // stays lost boxes in the benchmark (docs/executor.md).
+      // Its cups could stay closed (cups_open); whether such poses help is
+      // not settled (docs/executor.md).
       bool foreign = false;
       for (std::size_t j = 0; j < count && !foreign; ++j) {
         if (j == i || !near(p.y() - pw, p.y() + pw, b[j].y0, b[j].y1) ||
