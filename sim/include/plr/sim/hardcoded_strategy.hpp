@@ -1,7 +1,8 @@
 // Strategy H, the paper's hardcoded strategy: boxes below h_pile are pile,
 // above it wall (ObservationParams). A pile deeper than d_min is swept along
-// the floor (Sweep(low): H has one sweep, as in the paper); else, if the first wall is higher than h_min, a box is picked from
-// it, near the robot and high up first. The strategy_hardcoded plug-in serves
+// the floor (Sweep(low): H has one sweep, as in the paper); else, if the
+// first wall is higher than h_min, a box is picked from it, near the robot
+// and high up first. The strategy_hardcoded plug-in serves
 // it over the bus; offline tools call it directly.
 #pragma once
 
