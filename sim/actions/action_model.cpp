@@ -290,35 +290,9 @@ class Run {
     return true;
   }
 
-  // Boxes touching the conveyor or the scoop (within 2 cm of their shapes' bounds).
+  // Boxes touching the conveyor or the scoop.
   std::vector<std::uint32_t> boxes_on_nose(const Perceived& w) const {
-    constexpr double kTouch = 0.02;
-    std::vector<Eigen::Isometry3d> poses;
-    robot_.forward_kinematics(w.q, poses);
-    std::vector<sim::Bounds> nose;
-    for (const char* name : {"nose_conveyor", "nose_scoop"}) {
-      const int l = robot_.link_index(name);
-      if (l < 0) continue;
-      for (const auto& shape : robot_.links()[static_cast<std::size_t>(l)].shapes) {
-        if (shape.type != sim::CollisionShape::Type::kBox) continue;
-        const Eigen::Isometry3d pose = poses[static_cast<std::size_t>(l)] * shape.origin;
-        const Eigen::Vector3d e = pose.linear().cwiseAbs() * (shape.size / 2);
-        const Eigen::Vector3d lo = pose.translation() - e, hi = pose.translation() + e;
-        nose.push_back({lo.x(), hi.x(), lo.y(), hi.y(), lo.z(), hi.z()});
-      }
-    }
-    std::vector<std::uint32_t> out;
-    for (const auto& box : w.world.boxes) {
-      const auto b = sim::bounds(box);
-      for (const auto& n : nose) {
-        if (b.x0 < n.x1 + kTouch && n.x0 < b.x1 + kTouch && b.y0 < n.y1 + kTouch &&
-            n.y0 < b.y1 + kTouch && b.z0 < n.z1 + kTouch && n.z0 < b.z1 + kTouch) {
-          out.push_back(box.id);
-          break;
-        }
-      }
-    }
-    return out;
+    return boxes_touching(w.world, robot_, w.q, {"nose_conveyor", "nose_scoop"});
   }
 
   static Goal joints(std::initializer_list<std::pair<int, double>> j) {

@@ -57,29 +57,12 @@ const char* to_string(LeftReason reason) {
 
 namespace {
 
-constexpr double kTouch = 0.02;  // m: closer than this to a robot link is touching it
-constexpr double kOffFloor = 0.02;
-constexpr double kInFront = 1.0;  // m: boxes further before a box are not named as in its way
+constexpr double kTouch = 0.02;     // m: a box this close above another rests on it
+constexpr double kOffFloor = 0.02;  // m: a box touching the robot this high lies on it
+constexpr double kInFront = 1.0;    // m: boxes further before a box are not named as in its way
 
-bool overlap(double a0, double a1, double b0, double b1, double margin = 0.0) {
-  return a0 < b1 + margin && b0 < a1 + margin;
-}
-
-// The robot's links as axis-aligned boxes at q.
-std::vector<sim::Bounds> robot_bounds(const sim::RobotModel& robot, const sim::JointVector& q) {
-  std::vector<Eigen::Isometry3d> poses;
-  robot.forward_kinematics(q, poses);
-  std::vector<sim::Bounds> out;
-  for (std::size_t i = 0; i < robot.links().size(); ++i) {
-    for (const auto& shape : robot.links()[i].shapes) {
-      if (shape.type != sim::CollisionShape::Type::kBox) continue;
-      const Eigen::Isometry3d pose = poses[i] * shape.origin;
-      const Eigen::Vector3d e = pose.linear().cwiseAbs() * (shape.size / 2);
-      const Eigen::Vector3d lo = pose.translation() - e, hi = pose.translation() + e;
-      out.push_back({lo.x(), hi.x(), lo.y(), hi.y(), lo.z(), hi.z()});
-    }
-  }
-  return out;
+bool overlap(double a0, double a1, double b0, double b1) {
+  return a0 < b1 && b0 < a1;
 }
 
 bool pickable_alone(const sim::World& world, const sim::Box& box, const sim::JointVector& q,
@@ -125,16 +108,12 @@ std::string in_the_way(const sim::World& world, const sim::Box& box) {
 
 std::vector<LeftBox> boxes_left(const sim::World& world, const sim::JointVector& q,
                                 const Memory& memory, const ActionModel& model) {
-  const std::vector<sim::Bounds> robot = robot_bounds(model.robot(), q);
+  const std::vector<std::uint32_t> touching = boxes_touching(world, model.robot(), q);
   std::vector<LeftBox> out;
   for (const auto& box : world.boxes) {
     LeftBox left{box.id, LeftReason::kBlocked, {}};
-    const sim::Bounds b = sim::bounds(box);
-    const bool on_robot =
-        b.z0 > kOffFloor && std::any_of(robot.begin(), robot.end(), [&](const sim::Bounds& r) {
-          return overlap(b.x0, b.x1, r.x0, r.x1, kTouch) &&
-                 overlap(b.y0, b.y1, r.y0, r.y1, kTouch) && overlap(b.z0, b.z1, r.z0, r.z1, kTouch);
-        });
+    const bool on_robot = sim::bounds(box).z0 > kOffFloor &&
+                          std::find(touching.begin(), touching.end(), box.id) != touching.end();
     if (const auto g = memory.grips.find(box.id); g != memory.grips.end() && g->second.given_up) {
       left.reason = LeftReason::kGivenUp;
       left.detail = g->second.why;

@@ -56,6 +56,36 @@ int covered_cups(const Geometry& g, double half_across, double half_up, double a
          on_face(g.cups.cups_x, g.cups.extent.x(), up, half_up);
 }
 
+std::vector<std::uint32_t> boxes_touching(const sim::World& world, const sim::RobotModel& robot,
+                                          const sim::JointVector& q,
+                                          const std::vector<std::string>& links) {
+  constexpr double kTouch = 0.02;
+  std::vector<Eigen::Isometry3d> poses;
+  robot.forward_kinematics(q, poses);
+  std::vector<sim::Bounds> shapes;
+  for (std::size_t l = 0; l < robot.links().size(); ++l) {
+    const auto& link = robot.links()[l];
+    if (!links.empty() && std::find(links.begin(), links.end(), link.name) == links.end()) continue;
+    for (const auto& shape : link.shapes) {
+      if (shape.type != sim::CollisionShape::Type::kBox) continue;
+      const Eigen::Isometry3d pose = poses[l] * shape.origin;
+      const Eigen::Vector3d e = pose.linear().cwiseAbs() * (shape.size / 2);
+      const Eigen::Vector3d lo = pose.translation() - e, hi = pose.translation() + e;
+      shapes.push_back({lo.x(), hi.x(), lo.y(), hi.y(), lo.z(), hi.z()});
+    }
+  }
+  std::vector<std::uint32_t> out;
+  for (const auto& box : world.boxes) {
+    const auto b = sim::bounds(box);
+    if (std::any_of(shapes.begin(), shapes.end(), [&](const sim::Bounds& n) {
+          return b.x0 < n.x1 + kTouch && n.x0 < b.x1 + kTouch && b.y0 < n.y1 + kTouch &&
+                 n.y0 < b.y1 + kTouch && b.z0 < n.z1 + kTouch && n.z0 < b.z1 + kTouch;
+        }))
+      out.push_back(box.id);
+  }
+  return out;
+}
+
 bool has_sealable_face(const sim::Box& box) {
   const Eigen::Matrix3d R = box.pose.linear();
   int up_axis = 0;

@@ -585,9 +585,7 @@ class ExecutorNode : public plr::Node {
   std::unique_ptr<BusBackend> backend_;
   RunStats stats_, checkpoint_stats_;
   actions::Memory memory_, checkpoint_memory_;
-  // Actions tried since the last box left that moved nothing and have
-  // nothing new to try (as uint8_t values of sim::Action, as they travel in
-  // NextStrategyRequest).
+  // Which actions are left out until progress, and when the run stops.
   actions::RunRules rules_, checkpoint_rules_;
   std::uint32_t unloaded_at_start_ = 0;
   std::string action_name_;

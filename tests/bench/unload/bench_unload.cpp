@@ -135,6 +135,7 @@ void run_all(const std::vector<Job>& jobs, const Options& o) {
   struct Running {
     Job job;
     Clock::time_point start;
+    bool killed = false;
   };
   std::map<pid_t, Running> running;
   plr::bench::Progress progress("bench_unload", jobs.size());
@@ -173,9 +174,10 @@ void run_all(const std::vector<Job>& jobs, const Options& o) {
     }
     for (auto& [pid, r] : running) {
       const double s = std::chrono::duration<double>(Clock::now() - r.start).count();
-      if (s > o.timeout_s) {
+      if (!r.killed && s > o.timeout_s) {
         kill(pid, SIGKILL);
         save(r.job.file, timed_out(r.job, s));
+        r.killed = true;
       }
     }
     usleep(50'000);

@@ -46,6 +46,12 @@ struct Geometry {
 // face's centre.
 int covered_cups(const Geometry& g, double half_across, double half_up, double across, double up);
 
+// Ids of the boxes within 2 cm of the box shapes' bounds of the robot's links
+// at q: of the links named, or of all when `links` is empty.
+std::vector<std::uint32_t> boxes_touching(const sim::World& world, const sim::RobotModel& robot,
+                                          const sim::JointVector& q,
+                                          const std::vector<std::string>& links = {});
+
 // Whether the vertical plate can seal on a side face of the box: it stands
 // on a face, not tilted on an edge.
 bool has_sealable_face(const sim::Box& box);
