@@ -1,6 +1,7 @@
 #include "plr/actions/action_model.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <chrono>
@@ -95,8 +96,12 @@ class Run {
         action_(action) {}
 
   Outcome go() {
-    const Perceived w0 = observe();
+    Perceived w0 = observe();
     unloaded_at_start_ = w0.unloaded;
+    if (const auto riding = on_robot(w0); !riding.empty()) {
+      clear_robot(riding);
+      w0 = observe();
+    }
     if (sim::kind(action_) == sim::ActionKind::kPick)
       pick(w0);
     else
@@ -261,9 +266,12 @@ class Run {
       for (auto [j, v] : goal.joints) there = there && std::abs(w.q[j] - v) < 0.01;
       if (there && before == Suction::kKeep && after == Suction::kKeep) return true;
     }
-    // Boxes lying on the nose ride along with nose and base moves (or are
-    // carried off by the belt): they are not obstacles to them.
+    // Boxes lying on the robot ride along with it (or fall off it): they are
+    // not obstacles to its moves, nor, to nose and base moves, are those
+    // the nose pushes.
     std::vector<std::uint32_t> ignored = leave_out;
+    for (auto id : on_robot(w))
+      if (std::find(ignored.begin(), ignored.end(), id) == ignored.end()) ignored.push_back(id);
     if (mode == PlanMode::kNose || mode == PlanMode::kBaseLine) {
       for (auto id : boxes_on_nose(w))
         if (std::find(ignored.begin(), ignored.end(), id) == ignored.end()) ignored.push_back(id);
@@ -295,6 +303,23 @@ class Run {
     return boxes_touching(w.world, robot_, w.q, {"nose_conveyor", "nose_scoop"});
   }
 
+  std::vector<std::uint32_t> on_robot(const Perceived& w) const {
+    return boxes_on_robot(w.world, robot_, w.q, w.held);
+  }
+
+  // Boxes lying on the robot (fallen onto the arm, or onto the nose and not
+  // carried off) hide what is in front and keep its moves from being
+  // planned: they are shaken off first. The arm folds, so that what lies on
+  // it falls; the nose tips its scoop up, so that what lies on it slides
+  // onto the belt, and goes home.
+  void clear_robot(const std::vector<std::uint32_t>& riding) {
+    note(fmt::format("{} on the robot: shaking {} off", fmt::join(riding, ", "),
+                     riding.size() == 1 ? "it" : "them"));
+    step("arm clear", PlanMode::kArm, arm_clear(), Suction::kKeep, Suction::kKeep);
+    step("nose up", PlanMode::kNose, nose(o_.nose_shake), Suction::kKeep, Suction::kKeep);
+    step("nose home", PlanMode::kNose, nose(o_.nose_home), Suction::kKeep, Suction::kKeep);
+  }
+
   static Goal joints(std::initializer_list<std::pair<int, double>> j) {
     return Goal{j, std::nullopt, {}};
   }
@@ -312,7 +337,9 @@ class Run {
 
   // ---- Pick ----------------------------------------------------------------
 
-  void pick(const Perceived& w0) {
+  void pick(const Perceived& seen) {
+    Perceived w0 = seen;
+    w0.world = without(seen.world, on_robot(seen));
     const auto scene = sim::analyse(w0.world, o_.observation);
     std::unordered_set<std::uint32_t> failed;
     std::size_t given_up = 0;
@@ -511,9 +538,11 @@ class Run {
 
   // ---- Sweep ---------------------------------------------------------------
 
-  void sweep(const Perceived& w0) {
+  void sweep(const Perceived& seen) {
+    Perceived w0 = seen;
+    w0.world = without(seen.world, on_robot(seen));
     const auto scene = sim::analyse(w0.world, o_.observation);
-    const auto plan = sweep_plan(w0.world, scene, action_, g_, o_.nose_sweep[2], w0.q);
+    const auto plan = sweep_plan(w0.world, scene, action_, g_, o_.nose_sweep[2]);
     if (!plan) {
       not_applicable(
           fmt::format("nothing in front for a {} sweep", sim::to_string(sim::height(action_))));
@@ -522,7 +551,7 @@ class Run {
     // A pick may have left the arm over the belt: fold it before the scoop
     // brings boxes up.
     step("arm clear", PlanMode::kArm, arm_clear(), Suction::kKeep, Suction::kKeep);
-    if (step("back up", PlanMode::kBaseLine, joints({{sim::kBaseX, plan->start_base_x}}),
+    if (step("approach", PlanMode::kBaseLine, joints({{sim::kBaseX, plan->start_base_x}}),
              Suction::kKeep, Suction::kKeep) &&
         step("nose to sweep", PlanMode::kNose, nose(o_.nose_sweep, plan->lift), Suction::kKeep,
              Suction::kKeep)) {
@@ -559,6 +588,12 @@ class Run {
 
 ActionModel::ActionModel(const sim::RobotModel& robot, ActionOptions options)
     : robot_(&robot), options_(std::move(options)) {}
+
+sim::SceneAnalysis ActionModel::scene(const Perceived& w) const {
+  auto a = sim::analyse(without(w.world, boxes_on_robot(w.world, *robot_, w.q, w.held)),
+                        options_.observation);
+  return a.observation || w.world.boxes.empty() ? a : sim::analyse(w.world, options_.observation);
+}
 
 plr::Expected<Outcome> ActionModel::run(sim::Action action, Backend& backend, Memory& memory,
                                         const Reporter& reporter) const {

@@ -57,9 +57,8 @@ const char* to_string(LeftReason reason) {
 
 namespace {
 
-constexpr double kTouch = 0.02;     // m: a box this close above another rests on it
-constexpr double kOffFloor = 0.02;  // m: a box touching the robot this high lies on it
-constexpr double kInFront = 1.0;    // m: boxes further before a box are not named as in its way
+constexpr double kTouch = 0.02;   // m: a box this close above another rests on it
+constexpr double kInFront = 1.0;  // m: boxes further before a box are not named as in its way
 
 bool overlap(double a0, double a1, double b0, double b1) {
   return a0 < b1 && b0 < a1;
@@ -104,21 +103,31 @@ std::string in_the_way(const sim::World& world, const sim::Box& box) {
   return out.empty() ? "no pick region takes it" : out;
 }
 
+// The robot's links a box lying on the robot touches.
+std::string links_under(const sim::World& world, std::uint32_t id, const sim::RobotModel& robot,
+                        const sim::JointVector& q) {
+  std::vector<std::string> names;
+  for (const auto& link : robot.links()) {
+    const auto on = boxes_touching(world, robot, q, {link.name});
+    if (std::find(on.begin(), on.end(), id) != on.end()) names.push_back(link.name);
+  }
+  return fmt::format("on {}", fmt::join(names, ", "));
+}
+
 }  // namespace
 
 std::vector<LeftBox> boxes_left(const sim::World& world, const sim::JointVector& q,
                                 const Memory& memory, const ActionModel& model) {
-  const std::vector<std::uint32_t> touching = boxes_touching(world, model.robot(), q);
+  const std::vector<std::uint32_t> on_robot = boxes_on_robot(world, model.robot(), q);
   std::vector<LeftBox> out;
   for (const auto& box : world.boxes) {
     LeftBox left{box.id, LeftReason::kBlocked, {}};
-    const bool on_robot = sim::bounds(box).z0 > kOffFloor &&
-                          std::find(touching.begin(), touching.end(), box.id) != touching.end();
     if (const auto g = memory.grips.find(box.id); g != memory.grips.end() && g->second.given_up) {
       left.reason = LeftReason::kGivenUp;
       left.detail = g->second.why;
-    } else if (on_robot) {
+    } else if (std::find(on_robot.begin(), on_robot.end(), box.id) != on_robot.end()) {
       left.reason = LeftReason::kOnRobot;
+      left.detail = links_under(world, box.id, model.robot(), q);
     } else if (const auto u = memory.unreached.find(box.id); u != memory.unreached.end()) {
       left.reason = LeftReason::kUnplanned;
       left.detail = u->second;
@@ -161,7 +170,7 @@ plr::Expected<Episode> run_hardcoded(const ActionModel& model, Backend& backend,
       e.final_world = std::move(seen->world);
       return e;
     }
-    const sim::SceneAnalysis scene = sim::analyse(seen->world, model.options().observation);
+    const sim::SceneAnalysis scene = model.scene(*seen);
     std::optional<sim::Action> action;
     for (const sim::Action a : sim::hardcoded_ranking(scene, h)) {
       if (!rules.excluded(a)) {
@@ -169,14 +178,17 @@ plr::Expected<Episode> run_hardcoded(const ActionModel& model, Backend& backend,
         break;
       }
     }
-    auto out = model.run(*action, backend, memory);
+    std::vector<std::string> notes;
+    Reporter reporter;
+    if (on_step) reporter.note = [&notes](const std::string& line) { notes.push_back(line); };
+    auto out = model.run(*action, backend, memory, reporter);
     if (!out) return out.error();
     rules.record(*action, *out);
     ++e.actions;
     e.robot_time_s += out->robot_time_s;
     e.robot_trailer_contacts += out->robot_trailer_contacts;
     e.failed_grasps += out->failed_grasp ? 1 : 0;
-    if (on_step) on_step(EpisodeStep{*action, *scene.observation, *out});
+    if (on_step) on_step(EpisodeStep{*action, *scene.observation, *out, std::move(notes)});
   }
 }
 

@@ -86,6 +86,39 @@ std::vector<std::uint32_t> boxes_touching(const sim::World& world, const sim::Ro
   return out;
 }
 
+std::vector<std::uint32_t> boxes_on_robot(const sim::World& world, const sim::RobotModel& robot,
+                                          const sim::JointVector& q,
+                                          const std::vector<std::uint32_t>& held) {
+  constexpr double kOffFloor = 0.02;  // m: a box touching the robot this high lies on it
+  constexpr double kUnder = 0.03;     // m: a box whose top is this close under another carries it
+  std::vector<std::uint32_t> out;
+  const auto touching = boxes_touching(world, robot, q);
+  for (const auto& box : world.boxes) {
+    const sim::Bounds b = sim::bounds(box);
+    if (b.z0 <= kOffFloor ||
+        std::find(touching.begin(), touching.end(), box.id) == touching.end() ||
+        std::find(held.begin(), held.end(), box.id) != held.end())
+      continue;
+    // A box standing on other boxes (a wall box beside the plate) is the
+    // trailer's, not the robot's.
+    const bool on_boxes = std::any_of(world.boxes.begin(), world.boxes.end(), [&](const auto& o) {
+      const sim::Bounds u = sim::bounds(o);
+      return o.id != box.id && u.z1 < b.z0 + kUnder && u.z1 > b.z0 - kUnder && u.x0 < b.x1 &&
+             b.x0 < u.x1 && u.y0 < b.y1 && b.y0 < u.y1;
+    });
+    if (!on_boxes) out.push_back(box.id);
+  }
+  return out;
+}
+
+sim::World without(const sim::World& world, const std::vector<std::uint32_t>& ids) {
+  sim::World out = world;
+  std::erase_if(out.boxes, [&](const sim::Box& b) {
+    return std::find(ids.begin(), ids.end(), b.id) != ids.end();
+  });
+  return out;
+}
+
 bool has_sealable_face(const sim::Box& box) {
   const Eigen::Matrix3d R = box.pose.linear();
   int up_axis = 0;
@@ -475,8 +508,7 @@ bool follows_lines(const sim::RobotModel& robot, const sim::JointVector& from,
 }
 
 std::optional<SweepPlan> sweep_plan(const sim::World& world, const sim::SceneAnalysis& scene,
-                                    sim::Action action, const Geometry& g, double scoop_extension,
-                                    const sim::JointVector& current) {
+                                    sim::Action action, const Geometry& g, double scoop_extension) {
   constexpr double kOnFloor = 0.05;  // m, a box bottom this low lies on the floor
   const double tip = g.conveyor_length + scoop_extension + g.scoop_lip;  // ahead of base_x
   const double deepest = world.trailer.depth - kMargin;
@@ -520,7 +552,10 @@ std::optional<SweepPlan> sweep_plan(const sim::World& world, const sim::SceneAna
       far = near + g.sweep_high_in;
       break;
   }
-  p.start_base_x = std::min(current[sim::kBaseX], near - tip - g.nose_clearance);
+  // The sweep starts just short of what it sweeps, wherever the base stands:
+  // what rides out on the scoop is carried back that far, not across the
+  // trailer.
+  p.start_base_x = near - tip - g.nose_clearance;
   p.end_base_x = std::max(p.start_base_x, std::min(far, deepest) - tip);
   return p;
 }

@@ -360,7 +360,7 @@ class ExecutorNode : public plr::Node {
         break;
       }
       sim::Action action{};
-      const sim::SceneAnalysis scene = sim::analyse(w.world, options_.observation);
+      const sim::SceneAnalysis scene = model_->scene(w);
       const sim::Observation observation = *scene.observation;
       if (repeating) {
         action = repeat;

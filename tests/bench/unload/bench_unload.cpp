@@ -9,7 +9,8 @@
 //                [--workers W] [--out DIR] [--timeout S]
 // Defaults: seeds 1-20 of every family, one worker per core, results in
 // ./bench_unload. --quick: seeds 1-5. Each run's result is written to DIR as
-// it finishes (atomically), with the world it left (F_seedS.final.yaml) when
+// it finishes (atomically), with each action it took, the settled start
+// (F_seedS.start.yaml) and the world it left (F_seedS.final.yaml) when
 // boxes remain; a stopped benchmark started again with the same DIR runs
 // only what is missing. A run past --timeout (wall seconds, default
 // 3600) is killed and counted as such.
@@ -84,13 +85,31 @@ nlohmann::json run(const Job& job) {
   plr::actions::UnloaderSimulation simulation(robot,
                                               plr::sim::make_environment(job.family, job.seed));
   plr::actions::InProcessBackend backend(simulation, planner);
+  // The settled start, beside the world the run leaves: a run can be replayed
+  // or drawn from the two.
+  auto start_world = job.file;
+  if (auto saved =
+          plr::sim::save_world(simulation.truth(), start_world.replace_extension(".start.yaml"));
+      !saved)
+    die(saved.error().message);
   // As configs/unload_sim.yaml: plans are bounded by expansions; the time
   // limit is a safety net for a machine loaded by the other workers.
   plr::actions::ActionOptions options;
   options.plan_timeout_s = 30.0;
   const plr::actions::ActionModel model(robot, options);
-  const auto episode =
-      value_or_die(plr::actions::run_hardcoded(model, backend, plr::sim::HardcodedParams{}, {}));
+  // Each action as it went, so that a run that stopped early can be read.
+  nlohmann::json steps = nlohmann::json::array();
+  const auto episode = value_or_die(plr::actions::run_hardcoded(
+      model, backend, plr::sim::HardcodedParams{}, {}, [&](const plr::actions::EpisodeStep& s) {
+        steps.push_back({{"action", plr::sim::to_string(s.action)},
+                         {"observation", plr::sim::to_string(s.observation)},
+                         {"applicable", s.outcome.applicable},
+                         {"why", s.outcome.why},
+                         {"boxes", s.outcome.boxes},
+                         {"robot_time_s", s.outcome.robot_time_s},
+                         {"failed_grasp", s.outcome.failed_grasp},
+                         {"notes", s.notes}});
+      }));
   if (!episode.final_world.boxes.empty()) {
     auto world = job.file;
     if (auto saved =
@@ -112,6 +131,7 @@ nlohmann::json run(const Job& job) {
           {"stop_reason", episode.stop_reason},
           {"left", left},
           {"left_by_reason", plr::actions::count_by_reason(episode.left)},
+          {"steps", steps},
           {"wall_s", std::chrono::duration<double>(Clock::now() - start).count()}};
 }
 

@@ -59,6 +59,9 @@ struct ActionOptions {
   std::array<double, 3> nose_home{0.5, 0.0, 0.0};
   std::array<double, 3> nose_down{0.0, 0.05, 0.0};
   std::array<double, 3> nose_sweep{0.0, 0.05, 0.3};
+  // Raised, its tip up: what lies on the scoop or beside the belt slides
+  // onto the belt, which carries it off.
+  std::array<double, 3> nose_shake{0.3, -0.5, 0.0};
   // Arm folded over the base: out of the way of boxes leaving on the belt.
   std::array<double, 4> arm_clear{0.0, -1.0, 2.0, 0.0};
   double retreat_m = 0.3;          // base backs off after an action that ends stowed
@@ -140,6 +143,11 @@ class ActionModel {
   // the action did until then is lost with them.
   plr::Expected<Outcome> run(sim::Action action, Backend& backend, Memory& memory,
                              const Reporter& reporter = {}) const;
+
+  // What stands in front of the robot, as the strategy sees it: the boxes
+  // lying on the robot are not part of it (an action shakes them off first),
+  // unless nothing else is left.
+  sim::SceneAnalysis scene(const Perceived& w) const;
 
   const ActionOptions& options() const { return options_; }
   const sim::RobotModel& robot() const { return *robot_; }

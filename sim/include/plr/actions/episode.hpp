@@ -76,6 +76,7 @@ struct EpisodeStep {
   sim::Action action{};
   sim::Observation observation{};
   Outcome outcome;
+  std::vector<std::string> notes;  // the action's log lines (Reporter::note)
 };
 
 struct Episode {

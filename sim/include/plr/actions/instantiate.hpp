@@ -52,6 +52,17 @@ std::vector<std::uint32_t> boxes_touching(const sim::World& world, const sim::Ro
                                           const sim::JointVector& q,
                                           const std::vector<std::string>& links = {});
 
+// Boxes lying on the robot: touching one of its links, off the trailer's
+// floor, not held (fallen onto the arm, or onto the nose and not carried
+// off). They ride along with the robot and are not part of what stands in
+// front of it.
+std::vector<std::uint32_t> boxes_on_robot(const sim::World& world, const sim::RobotModel& robot,
+                                          const sim::JointVector& q,
+                                          const std::vector<std::uint32_t>& held = {});
+
+// `world` without the boxes named.
+sim::World without(const sim::World& world, const std::vector<std::uint32_t>& ids);
+
 // Whether the vertical plate can seal on a side face of the box: it stands
 // on a face, not tilted on an edge.
 bool has_sealable_face(const sim::Box& box);
@@ -133,7 +144,6 @@ struct SweepPlan {
 // in front higher than `high_min`). The scoop stops short of the trailer's
 // front wall.
 std::optional<SweepPlan> sweep_plan(const sim::World& world, const sim::SceneAnalysis& scene,
-                                    sim::Action action, const Geometry& g, double scoop_extension,
-                                    const sim::JointVector& current);
+                                    sim::Action action, const Geometry& g, double scoop_extension);
 
 }  // namespace plr::actions

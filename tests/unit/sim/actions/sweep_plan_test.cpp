@@ -18,16 +18,10 @@ sim::World trailer() {
   return w;
 }
 
-sim::JointVector at(double base_x) {
-  sim::JointVector q = sim::JointVector::Zero();
-  q[sim::kBaseX] = base_x;
-  return q;
-}
-
 std::optional<SweepPlan> plan(const sim::World& w, Height h, const Geometry& g = {}) {
   sim::ObservationParams obs;
   obs.h_pile = 1.35;
-  return sweep_plan(w, sim::analyse(w, obs), sim::make_sweep(h), g, 0.3, at(5.0));
+  return sweep_plan(w, sim::analyse(w, obs), sim::make_sweep(h), g, 0.3);
 }
 
 // A floor layer two boxes deep and three wide, front face at x = 10.
@@ -59,8 +53,10 @@ TEST(SweepPlan, LowSweepsTheFloorLayerAndMidGoesDeeper) {
   EXPECT_EQ(low->lift, 0.0);
   EXPECT_EQ(mid->lift, 0.0);
   EXPECT_FALSE(low->lower_at_end);
-  // Both start behind the pile, the nose tip clear of it.
-  EXPECT_LE(low->start_base_x + tip, 10.0 - g.nose_clearance + 1e-9);
+  // Both start just behind the pile, the nose tip clear of it: what rides
+  // out on the scoop comes back that far, not across the trailer.
+  EXPECT_NEAR(low->start_base_x + tip, 10.0 - g.nose_clearance, 1e-9);
+  EXPECT_NEAR(mid->start_base_x + tip, 10.0 - g.nose_clearance, 1e-9);
   EXPECT_EQ(low->swept.size(), 6u);
   // Nothing stands high enough for the raised nose.
   EXPECT_FALSE(plan(w, Height::kHigh));
