@@ -1,5 +1,7 @@
 #include "plr/actions/instantiate.hpp"
 
+#include "footprint.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -15,6 +17,9 @@ constexpr double kMargin = 0.03;     // m, footprint shrink and clearances
 constexpr double kClearance = 0.02;  // m, the plate's distance to boxes it must not touch
 constexpr double kSlide = 0.05;      // m, steps of the plate off the face's centre
 constexpr double kCovered = 0.1;     // m, the plate's centre stays this far inside the face
+// m, the nearest pre-grasp: the plate comes down between the face and
+// what stands in front of it.
+constexpr double kMinPregrasp = 0.08;
 constexpr double kProud = 0.015;  // m a neighbour may stand out of the face (the cups reach 2 cm)
 // rad: a face tilted further than this from the vertical is not taken (the
 // cups seal up to about 0.26 rad).
@@ -196,13 +201,20 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
   auto near = [](double a0, double a1, double b0, double b1) {
     return a0 - kClearance < b1 && b0 < a1 + kClearance;
   };
-  // Whether the region is free of every box but those of `group`.
-  auto clear = [&](const std::vector<std::size_t>& group, double x0, double x1, double y0,
-                   double y1, double z0, double z1) {
+  std::vector<Polygon> outline(count);
+  for (std::size_t i = 0; i < count; ++i) outline[i] = footprint(world.boxes[i]);
+  // Whether the space over `area` from z0 to z1 is free of every box but
+  // those of `group`. Outlines that only touch (flush neighbours) do not
+  // count: kMargin of overlap does.
+  // Unless `leaning_too`, a box tilted on an edge (no face the plate seals
+  // on) does not count: nothing can pick it, and it slides off what comes
+  // out under it.
+  auto clear = [&](const std::vector<std::size_t>& group, const Polygon& area, double z0, double z1,
+                   bool leaning_too) {
     for (std::size_t j = 0; j < count; ++j) {
       if (std::find(group.begin(), group.end(), j) == group.end() &&
-          near(x0, x1, b[j].x0, b[j].x1) && near(y0, y1, b[j].y0, b[j].y1) &&
-          near(z0, z1, b[j].z0, b[j].z1))
+          (leaning_too || has_sealable_face(world.boxes[j])) && near(z0, z1, b[j].z0, b[j].z1) &&
+          separation(area, outline[j]) < -kMargin)
         return false;
     }
     return true;
@@ -242,14 +254,12 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       }
       return out;
     };
-    // The plate moves in to the face through a corridor that must be free.
-    // It stops grasp_gap short of the face; a settled wall is not flush, so
-    // also grasp_gap short of any neighbour under its outline that stands
-    // out (by its leading corner, if the plate is turned off the trailer's
-    // axis). The cups reach the face across kProud of extra gap.
+    // The plate moves in to the face through a corridor (its outline along
+    // the face's normal) that must be free. It stops grasp_gap short of the
+    // face; a settled wall is not flush, so also grasp_gap short of any
+    // neighbour in the corridor that stands out. The cups reach the face
+    // across kProud of extra gap.
     const double half_h = (b[i].z1 - b[i].z0) / 2;
-    const double reach_y = pw * std::abs(n.x());
-    const double lead = pw * std::abs(n.y());
     auto plate_at = [&](double dy, double dz) {
       Eigen::Vector3d p = face + dy * lateral;
       p.y() = std::clamp(p.y(), -ylim, ylim);
@@ -285,24 +295,33 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       std::vector<std::size_t> group;  // the box first
       std::vector<int> cups;
       Eigen::Vector3d at_face;
-      double stop_x = 0, lift = 0, out_depth = 0;
+      double back = 0;      // plate surface to the face at the grasp
+      double pregrasp = 0;  // plate to the face before the approach
+      double lift = 0, out_depth = 0;
     };
     std::optional<Grip> best;
     for (const auto& [dy, dz] : offsets) {
       const Eigen::Vector3d p = plate_at(dy, dz);
-      const double at_target = p.x() - g.grasp_gap * n.x();
-      double stop = at_target;
+      // In the plate's corridor, what reaches the face stops the plate short
+      // of it (by more than the cups reach, the pose is not taken); what
+      // stands further out leaves the plate less room before the face (a
+      // nearer pre-grasp; too little room, and the pose is not taken).
+      double back = g.grasp_gap, room = g.pregrasp_distance;
       for (std::size_t j = 0; j < count; ++j) {
-        if (j != i && near(b[i].x0 - g.pregrasp_distance, b[i].x0, b[j].x0, b[j].x1) &&
-            near(p.y() - reach_y - lead, p.y() + reach_y + lead, b[j].y0, b[j].y1) &&
-            near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1))
-          stop = std::min(stop, b[j].x0 - g.grasp_gap - lead);
+        if (j == i || !near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1)) continue;
+        const auto span = span_in_band(outline[j], p.head<2>(), n.head<2>(), pw);
+        if (!span || span->min >= 0.0) continue;
+        if (span->max > -kProud - kClearance)
+          back = std::max(back, g.grasp_gap - span->min);
+        else
+          room = std::min(room, -span->max - kClearance);
       }
-      if (at_target - stop > kProud) continue;
+      if (back - g.grasp_gap > kProud || room < kMinPregrasp) continue;
       Grip grip;
       grip.at_face = p;
-      grip.stop_x = stop;
-      const Eigen::Vector3d surface = p - (p.x() - stop) / n.x() * n;
+      grip.back = back;
+      grip.pregrasp = room;
+      const Eigen::Vector3d surface = p - back * n;
       const int own = cups_on(i, p);
       if (own == 0) continue;
       grip.group.push_back(i);
@@ -340,14 +359,12 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       grip.out_depth = std::max(2 * f.half_d, depth) + kMargin;
       bool free = true;
       for (auto j : grip.group) {
-        // Pulled out, each box (it may be wider than the plate) passes over
-        // what stands in front of it; neighbours beside it, flush with its
-        // face (clear() adds kClearance), are not in the way.
-        free = free &&
-               clear(grip.group, b[j].x0 + kMargin, b[j].x1 - kMargin, b[j].y0 + kMargin,
-                     b[j].y1 - kMargin, b[j].z1, b[j].z1 + grip.lift) &&
-               clear(grip.group, b[j].x0 - grip.out_depth, b[j].x0 - 2 * kClearance, b[j].y0,
-                     b[j].y1, b[j].z0 + grip.lift, b[j].z1 + grip.lift);
+        // Lifted, nothing may stand over it; pulled out, each box (it may be
+        // wider than the plate) passes over what stands in front of it.
+        // Neighbours beside it, flush with it, are not in the way.
+        free = free && clear(grip.group, outline[j], b[j].z1, b[j].z1 + grip.lift, false) &&
+               clear(grip.group, swept(outline[j], -grip.out_depth * n.head<2>()),
+                     b[j].z0 + grip.lift, b[j].z1 + grip.lift, true);
       }
       if (!free) continue;
       // More boxes at once first, then more cups on the box that has the
@@ -373,8 +390,8 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     c.box_cups = best->cups;
     c.cups = best->cups.front();
     const Eigen::Vector3d& at_face = best->at_face;
-    c.grasp = {at_face - (at_face.x() - best->stop_x) / n.x() * n, plate_yaw};
-    c.pregrasp = {at_face - g.pregrasp_distance * n, plate_yaw};
+    c.grasp = {at_face - best->back * n, plate_yaw};
+    c.pregrasp = {at_face - best->pregrasp * n, plate_yaw};
     // The valves: the cup grid runs down the plate by rows, across by columns.
     const sim::SuctionPlate& grid = g.cups;
     c.cups_open.assign(static_cast<std::size_t>(grid.cups_x * grid.cups_y), false);

@@ -14,6 +14,7 @@ namespace {
 using testing::box;
 using testing::Fixture;
 using testing::options;
+using testing::planner;
 using testing::robot;
 using testing::wall;
 
@@ -144,6 +145,34 @@ TEST(RunHardcoded, UnloadsASmallWall) {
   EXPECT_EQ(e->robot_trailer_contacts, 0u);
   EXPECT_EQ(static_cast<std::uint64_t>(steps), e->actions);
   EXPECT_GT(e->robot_time_s, 0.0);
+}
+
+// A box too heavy for the belt lies on the raised nose (as after a sweep
+// that scooped a whole column): it hides the wall from the pick regions and
+// keeps the nose's moves from being planned. The run shakes it off first,
+// then unloads the wall.
+TEST(RunHardcoded, ABoxLyingOnTheNoseIsShakenOffAndTheWallUnloaded) {
+  sim::World w = wall(6.0, 3, 1);
+  sim::JointVector q = home();
+  q[sim::kBaseX] = 2.5;
+  sim::Box heavy = box(9, 2.5 + 0.35, 0.5, 0.62, 200.0);
+  heavy.size = {0.5, 0.6, 0.3};
+  heavy.pose.translation().z() = 0.62 + 0.15;
+  w.boxes.push_back(heavy);
+  UnloaderSimulation simulation(robot(), w, q);
+  InProcessBackend backend(simulation, planner());
+  const ActionModel model(robot(), options());
+  ASSERT_EQ(boxes_on_robot(simulation.perceived(), robot(), q), std::vector<std::uint32_t>{9});
+  std::vector<std::string> notes;
+  const auto e = run_hardcoded(
+      model, backend, sim::HardcodedParams{}, {},
+      [&](const EpisodeStep& s) { notes.insert(notes.end(), s.notes.begin(), s.notes.end()); });
+  ASSERT_TRUE(e) << e.error().message;
+  EXPECT_EQ(e->boxes_unloaded, 4u) << e->stop_reason;
+  EXPECT_EQ(e->robot_trailer_contacts, 0u);
+  EXPECT_TRUE(std::any_of(notes.begin(), notes.end(), [](const std::string& n) {
+    return n.find("9 on the robot: shaking it off") != std::string::npos;
+  }));
 }
 
 }  // namespace

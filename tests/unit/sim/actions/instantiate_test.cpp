@@ -164,10 +164,43 @@ TEST(PickCandidates, ALowTurnedBoxKeepsThePlatesCornerAheadOfTheNose) {
   b.pose.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   w.boxes.push_back(b);
   const Geometry g;
-  const PickCandidate* k = find(candidates(w), 1);
+  const std::vector<PickCandidate> c = candidates(w);
+  const PickCandidate* k = find(c, 1);
   ASSERT_NE(k, nullptr);
   const double corner_x = k->pregrasp.position.x() - g.plate_half_width() * std::sin(yaw);
   EXPECT_GE(corner_x, k->base_x + g.conveyor_length + g.nose_clearance - 1e-9);
+}
+
+// A neighbour turned 45 degrees stands in the plate's corridor only by its
+// axis-aligned bounds (they reach 8 cm out of the face); its outline stays
+// behind the face there. A narrow box gives the plate no room to slide away.
+TEST(PickCandidates, ATurnedNeighbourOnlyItsBoundsReachIsNotInTheWay) {
+  sim::World w = trailer_world();
+  w.boxes.push_back(sim::testing::make_box(1, 10.2, 0.0, 0.0, {0.4, 0.3, 0.4}));
+  sim::Box turned = sim::testing::make_box(2, 10.2, 0.45, 0.0);
+  turned.pose.linear() = Eigen::AngleAxisd(M_PI / 4, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  w.boxes.push_back(turned);
+  const std::vector<PickCandidate> c = candidates(w);
+  const PickCandidate* k = find(c, 1);
+  ASSERT_NE(k, nullptr);
+  EXPECT_EQ(k->boxes, std::vector<std::uint32_t>{1});
+  EXPECT_NEAR(k->grasp.position.x(), 10.0 - Geometry{}.grasp_gap, 1e-9);
+}
+
+// A low box standing 20 cm in front of the face, inside the plate's
+// outline, leaves less room than the usual pre-grasp distance: the plate
+// comes down nearer the face.
+TEST(PickCandidates, ABoxInFrontLeavesANearerPreGrasp) {
+  sim::World w = trailer_world();
+  w.boxes.push_back(sim::testing::make_box(1, 10.2, 0.0, 0.0));
+  w.boxes.push_back(sim::testing::make_box(2, 9.65, 0.2, 0.0, {0.3, 0.4, 0.2}));
+  const std::vector<PickCandidate> c = candidates(w);
+  const PickCandidate* k = find(c, 1);
+  ASSERT_NE(k, nullptr);
+  const double approach = (k->grasp.position - k->pregrasp.position).norm();
+  EXPECT_LT(approach, Geometry{}.pregrasp_distance);
+  EXPECT_LE(k->pregrasp.position.x(), 10.0 - 0.08 + 1e-9);
+  EXPECT_GE(k->pregrasp.position.x(), 9.8);
 }
 
 TEST(CoveredCups, CountsTheCupsWhoseRimLiesOnTheFace) {
