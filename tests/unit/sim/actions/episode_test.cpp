@@ -147,6 +147,21 @@ TEST(RunHardcoded, UnloadsASmallWall) {
   EXPECT_GT(e->robot_time_s, 0.0);
 }
 
+// A 40 ft ISO container is 2.35 m wide inside and 2.39 m high: the nose
+// (2.2 m wide) is lowered between its walls, and the wall is unloaded
+// without touching them.
+TEST(RunHardcoded, UnloadsAWallInANarrowContainer) {
+  sim::World w = wall(6.0, 5, 3);
+  w.trailer.width = 2.35;
+  w.trailer.height = 2.39;
+  Fixture f(w);
+  const ActionModel model(robot(), options());
+  const auto e = run_hardcoded(model, f.backend, sim::HardcodedParams{}, {});
+  ASSERT_TRUE(e) << e.error().message;
+  EXPECT_EQ(e->boxes_unloaded, 15u) << e->stop_reason;
+  EXPECT_EQ(e->robot_trailer_contacts, 0u);
+}
+
 // A box too heavy for the belt lies on the raised nose (as after a sweep
 // that scooped a whole column): it hides the wall from the pick regions and
 // keeps the nose's moves from being planned. The run shakes it off first,
