@@ -98,8 +98,15 @@ class Run {
   Outcome go() {
     Perceived w0 = observe();
     unloaded_at_start_ = w0.unloaded;
-    if (const auto riding = on_robot(w0); !riding.empty()) {
+    if (!w0.held.empty()) {
+      let_go();
+      w0 = observe();
+    }
+    if (const auto riding = on_robot(w0);
+        std::any_of(riding.begin(), riding.end(),
+                    [&](std::uint32_t id) { return !memory_.shaken.count(id); })) {
       clear_robot(riding);
+      memory_.shaken.insert(riding.begin(), riding.end());
       w0 = observe();
     }
     if (sim::kind(action_) == sim::ActionKind::kPick)
@@ -446,6 +453,7 @@ class Run {
           ++out_.drops;
           grip_failed(*chosen, true, "dropped while carried to the nose");
         }
+        if (d == Delivery::kNoPlace) let_go();
       }
     }
     // After a delivered box the robot stays as it is, nose down and the arm
@@ -494,6 +502,16 @@ class Run {
     h.given_up = true;
     note(fmt::format("box {} given up: {}", c.box, h.why));
     return false;
+  }
+
+  // A load the plate could not bring to the nose is let go where it is (it
+  // falls onto the nose or the floor in front): held on, it would ride into
+  // every later action.
+  void let_go() {
+    const Perceived w = observe();
+    if (w.held.empty()) return;
+    note(fmt::format("letting go of {}", fmt::join(w.held, ", ")));
+    execute({}, Suction::kKeep, Suction::kOff);
   }
 
   // The folded arm leaves the belt free, and the nose room to rise.

@@ -19,7 +19,7 @@ constexpr double kScoopOut = 0.1;    // m; and the scoop is out this far (not a 
 constexpr double kLipSlope = 0.45;   // rad below horizontal
 constexpr double kLipThick = 0.004;  // m
 constexpr double kLipEdge = 0.001;   // m below the floor plane
-constexpr int kConveyorDrive = 0, kScoopDrive = 1;
+constexpr int kConveyorDrive = 0, kScoopDrive = 1, kBodyDrive = 2;
 
 std::optional<LinkGeometry> scoop_lip(const LinkGeometry& scoop) {
   const Eigen::Vector3d edge =
@@ -41,11 +41,13 @@ std::optional<LinkGeometry> scoop_lip(const LinkGeometry& scoop) {
 
 std::vector<LinkGeometry> robot_link_geometry(const RobotModel& model, const JointVector& q,
                                               double belt_speed, const std::string& conveyor_link,
-                                              const std::string& feeder_link) {
+                                              const std::string& feeder_link,
+                                              const std::string& body_link) {
   std::vector<Eigen::Isometry3d> poses;
   model.forward_kinematics(q, poses);
   const int conveyor = model.link_index(conveyor_link);
   const int feeder = model.link_index(feeder_link);
+  const int body = model.link_index(body_link);
   std::vector<LinkGeometry> out;
   for (std::size_t i = 0; i < model.links().size(); ++i) {
     for (const CollisionShape& s : model.links()[i].shapes) {
@@ -63,11 +65,12 @@ std::vector<LinkGeometry> robot_link_geometry(const RobotModel& model, const Joi
           g.size = Eigen::Vector3d::Constant(2.0 * s.size.x());
           break;
       }
-      if (static_cast<int>(i) == conveyor || static_cast<int>(i) == feeder)
-        g.belt_speed = belt_speed;
-      g.feeds_belt = static_cast<int>(i) == feeder;
-      // Two motors: the nose conveyor's, and the scoop's (its lip included).
-      g.belt_drive = g.feeds_belt ? kScoopDrive : kConveyorDrive;
+      const int link = static_cast<int>(i);
+      if (link == conveyor || link == feeder || link == body) g.belt_speed = belt_speed;
+      g.feeds_belt = link == feeder;
+      // Three motors: the nose conveyor's, the scoop's (its lip included)
+      // and the body's.
+      g.belt_drive = g.feeds_belt ? kScoopDrive : (link == body ? kBodyDrive : kConveyorDrive);
       out.push_back(g);
       if (g.feeds_belt && q[kNose3] > kScoopOut)
         if (auto lip = scoop_lip(g)) out.push_back(*lip);

@@ -91,6 +91,8 @@ struct Memory {
   std::set<std::uint32_t> ungripped;  // grasps that failed since the last unloaded box
   // Why the last pick of a box stopped before its grasp.
   std::map<std::uint32_t, std::string> unreached;
+  // Boxes lying on the robot that it tried to shake off: not tried again.
+  std::set<std::uint32_t> shaken;
 };
 
 // One planning query of an action, for the planner statistics.

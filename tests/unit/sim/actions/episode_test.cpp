@@ -162,6 +162,26 @@ TEST(RunHardcoded, UnloadsAWallInANarrowContainer) {
   EXPECT_EQ(e->robot_trailer_contacts, 0u);
 }
 
+// A box fell onto the robot's body beside the arm's turret (as boxes do
+// from a sweep): the body conveyor carries it out, and the wall is unloaded.
+// (Before: it stood for the front of the scene, the base kept back from it,
+// out of the wall's reach.)
+TEST(RunHardcoded, ABoxOnTheTurretIsCarriedOff) {
+  sim::World w = wall(6.0, 3, 1);
+  sim::JointVector q = home();
+  q[sim::kBaseX] = 2.5;
+  w.boxes.push_back(box(9, 2.5 - 1.3, 0.35, 0.55));
+  UnloaderSimulation simulation(robot(), w, q);
+  InProcessBackend backend(simulation, planner());
+  const ActionModel model(robot(), options());
+  ASSERT_EQ(boxes_on_robot(simulation.perceived(), robot(), q), std::vector<std::uint32_t>{9});
+  const auto e = run_hardcoded(model, backend, sim::HardcodedParams{}, {});
+  ASSERT_TRUE(e) << e.error().message;
+  EXPECT_EQ(e->boxes_unloaded, 4u) << e->stop_reason;
+  EXPECT_TRUE(e->left.empty());
+  EXPECT_EQ(e->robot_trailer_contacts, 0u);
+}
+
 // A box too heavy for the belt lies on the raised nose (as after a sweep
 // that scooped a whole column): it hides the wall from the pick regions and
 // keeps the nose's moves from being planned. The run shakes it off first,

@@ -20,7 +20,7 @@ TEST(RobotLinks, ShapesFollowTheModel) {
     belts += g.belt_speed > 0.0;
     feeders += g.feeds_belt;
   }
-  EXPECT_EQ(belts, 2);  // the nose conveyor, and the scoop's feeding it
+  EXPECT_EQ(belts, 3);  // the nose conveyor, the scoop's feeding it, and the body's
   EXPECT_EQ(feeders, 1);
   // The physics plate's normal (+z) is the model's plate normal (+x).
   const SuctionPlate plate = suction_plate_at(model, q);
