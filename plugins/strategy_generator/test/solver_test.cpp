@@ -186,6 +186,62 @@ TEST(Pomhdp, UnvisitedChildrenAreNotNodes) {
   EXPECT_EQ(solver.num_nodes(), 3u);
 }
 
+// A child made when a trial first enters it (from the parent, by the same
+// expansion) holds the belief an exact Bayes update gives: along the policy
+// tree of RockSample(4,4), advancing to each exact belief finds the node the
+// tree made, so the graph does not grow.
+TEST(Pomhdp, LazyChildIsTheExactUpdate) {
+  const auto file = std::filesystem::path(PLR_POMDP_BENCHMARKS) / "RockSample_4_4.pomdp";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "no " << file;
+  auto m = load_model(file);
+  ASSERT_TRUE(m) << m.error().message;
+  const TabularHeuristics h = make_tabular_heuristics(*m);
+  Pomhdp solver(*m, *h.upper, *h.lower, h.inadmissible());
+  solver.solve(trials(2000));
+  const PolicyTree tree = solver.policy_tree(12);
+  const std::size_t nodes = solver.num_nodes();
+  ASSERT_GT(tree.nodes.size(), 6u);
+  Rng rng(1);
+  std::vector<std::pair<std::uint32_t, Belief>> stack{{tree.root, m->initial_belief()}};
+  int checked = 0;
+  while (!stack.empty()) {
+    auto [k, belief] = std::move(stack.back());
+    stack.pop_back();
+    for (const auto& [o, child] : tree.nodes[k].children) {
+      Belief next = update_belief(*m, belief, tree.nodes[k].action, o, rng);
+      solver.advance(tree.nodes[k].action, o, next);
+      EXPECT_EQ(solver.num_nodes(), nodes);
+      ++checked;
+      stack.emplace_back(child, std::move(next));
+    }
+  }
+  EXPECT_EQ(checked + 1, static_cast<int>(tree.nodes.size()));
+}
+
+// Online, a step's search stops once the root's bounds are within the
+// target gap, long before its trial budget; a smaller target takes more.
+TEST(Pomhdp, PlanStopsAtTheTargetGap) {
+  const auto file = std::filesystem::path(PLR_POMDP_BENCHMARKS) / "Tiger.pomdp";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "no " << file;
+  auto m = load_model(file);
+  ASSERT_TRUE(m) << m.error().message;
+  const TabularHeuristics h = make_tabular_heuristics(*m);
+  std::uint64_t previous = 0;
+  for (const double gap : {1.0, 1e-3}) {
+    PomhdpOptions o;
+    o.target_gap = gap;
+    o.settle_tolerance = -1.0;  // the gap alone stops it
+    Pomhdp solver(*m, *h.upper, *h.lower, h.inadmissible(), o);
+    EXPECT_EQ(solver.plan(trials(1'000'000)), 0);  // listen
+    const PlanStats& s = solver.last_stats();
+    EXPECT_LT(s.iterations, 1'000'000u);
+    EXPECT_LE(s.upper - s.lower, gap);
+    EXPECT_GT(s.upper - s.lower, 0.0);
+    EXPECT_GT(s.iterations, previous);
+    previous = s.iterations;
+  }
+}
+
 // At the node limit the older half of the graph goes back to unvisited
 // branches (bounds kept) and the search goes on: on Tiger with room for 16
 // nodes (the whole graph has 27) the bounds still close on 19.37, in order and
@@ -357,6 +413,35 @@ TEST(Pomhdp, WarmStartKeepsTheGraph) {
     solver.reset(m.initial_belief());
     EXPECT_NEAR(solver.lower(), warm ? 1.0 : 0.0, 1e-5);
   }
+}
+
+// Episodes on two workers are the episodes one worker runs: each has its own
+// random stream, and a trial budget makes each search deterministic.
+TEST(Evaluate, WorkersDoNotChangeEpisodes) {
+  const auto file = std::filesystem::path(PLR_POMDP_BENCHMARKS) / "Tiger.pomdp";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "no " << file;
+  auto m = load_model(file);
+  ASSERT_TRUE(m) << m.error().message;
+  const TabularHeuristics h = make_tabular_heuristics(*m);
+  const auto make = [&](int) {
+    return std::make_unique<Pomhdp>(*m, *h.upper, *h.lower, h.inadmissible());
+  };
+  EvaluationOptions eo;
+  eo.episodes = 24;
+  eo.max_steps = 30;
+  eo.per_step = trials(50);
+  const Evaluation one = evaluate(*m, make, eo);
+  eo.workers = 2;
+  int calls = 0;
+  eo.progress = [&](int done, int total) {
+    EXPECT_EQ(done, ++calls);
+    EXPECT_EQ(total, 24);
+  };
+  const Evaluation two = evaluate(*m, make, eo);
+  EXPECT_EQ(calls, 24);
+  ASSERT_EQ(one.returns.size(), 24u);
+  EXPECT_EQ(one.returns, two.returns);
+  EXPECT_DOUBLE_EQ(one.mean, two.mean);
 }
 
 TEST(Evaluate, ConfidenceIntervalByHand) {

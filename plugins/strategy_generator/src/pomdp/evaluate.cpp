@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <mutex>
+#include <optional>
+#include <thread>
 
 namespace plr::pomdp {
 namespace {
@@ -52,56 +55,124 @@ int default_max_steps(const GenerativeModel& model) {
   return static_cast<int>(std::clamp(std::ceil(steps), 1.0, 100000.0));
 }
 
-Evaluation evaluate(const GenerativeModel& model, OnlinePlanner& planner,
-                    const EvaluationOptions& options) {
-  using Clock = std::chrono::steady_clock;
-  const auto t0 = Clock::now();
-  Evaluation out;
-  Rng rng(options.seed);
-  const int max_steps = options.max_steps > 0 ? options.max_steps : default_max_steps(model);
+namespace {
+
+// What one worker saw over its episodes.
+struct Tally {
   std::vector<double> step_seconds;
   double iterations = 0.0, steps = 0.0;
-  for (int ep = 0; ep < options.episodes; ++ep) {
-    if (ep > 0 && std::chrono::duration<double>(Clock::now() - t0).count() > options.max_seconds) {
+  std::size_t max_nodes = 0, max_memory_bytes = 0;
+  int lost_beliefs = 0;
+  std::optional<PlanStats> first_step;  // episode 0's, if this worker ran it
+};
+
+double run_episode(const GenerativeModel& model, OnlinePlanner& planner,
+                   const EvaluationOptions& options, int max_steps, int ep, Tally& tally) {
+  std::seed_seq seq{static_cast<std::uint32_t>(options.seed),
+                    static_cast<std::uint32_t>(options.seed >> 32), static_cast<std::uint32_t>(ep)};
+  Rng rng(seq);
+  Belief belief = model.initial_belief();
+  StateId s = sample_state(belief, rng);
+  planner.reset(belief);
+  double ret = 0.0, g = 1.0;
+  for (int t = 0; t < max_steps && !model.is_terminal(s); ++t) {
+    const ActionId a = planner.plan(options.per_step);
+    const PlanStats& st = planner.last_stats();
+    if (ep == 0 && t == 0) tally.first_step = st;
+    tally.step_seconds.push_back(st.seconds);
+    tally.iterations += static_cast<double>(st.iterations);
+    tally.max_nodes = std::max(tally.max_nodes, st.nodes);
+    tally.max_memory_bytes = std::max(tally.max_memory_bytes, st.memory_bytes);
+    const Step step = model.step(s, a, rng);
+    ret += g * step.reward;
+    g *= model.discount();
+    s = step.next;
+    tally.steps += 1.0;
+    if (step.terminal) break;
+    Belief next = update_belief(model, belief, a, step.observation, rng);
+    if (next.empty()) {
+      ++tally.lost_beliefs;
       break;
     }
-    Belief belief = model.initial_belief();
-    StateId s = sample_state(belief, rng);
-    planner.reset(belief);
-    double ret = 0.0, g = 1.0;
-    for (int t = 0; t < max_steps && !model.is_terminal(s); ++t) {
-      const ActionId a = planner.plan(options.per_step);
-      const PlanStats& st = planner.last_stats();
-      if (ep == 0 && t == 0) out.first_step = st;
-      step_seconds.push_back(st.seconds);
-      iterations += static_cast<double>(st.iterations);
-      out.max_nodes = std::max(out.max_nodes, st.nodes);
-      out.max_memory_bytes = std::max(out.max_memory_bytes, st.memory_bytes);
-      const Step step = model.step(s, a, rng);
-      ret += g * step.reward;
-      g *= model.discount();
-      s = step.next;
-      steps += 1.0;
-      if (step.terminal) break;
-      Belief next = update_belief(model, belief, a, step.observation, rng);
-      if (next.empty()) {
-        ++out.lost_beliefs;
-        break;
-      }
-      belief = std::move(next);
-      planner.advance(a, step.observation, belief);
-    }
-    out.returns.push_back(ret);
-    if (options.progress) options.progress(ep + 1, options.episodes);
+    belief = std::move(next);
+    planner.advance(a, step.observation, belief);
   }
+  return ret;
+}
+
+Evaluation evaluate_on(const GenerativeModel& model, const std::vector<OnlinePlanner*>& planners,
+                       const EvaluationOptions& options) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  const int max_steps = options.max_steps > 0 ? options.max_steps : default_max_steps(model);
+  const int total = std::max(0, options.episodes);
+  std::vector<double> returns(static_cast<std::size_t>(total));
+  std::vector<Tally> tallies(planners.size());
+  std::mutex mutex;
+  int next = 0, done = 0;
+  const auto work = [&](std::size_t w) {
+    for (;;) {
+      int ep = 0;
+      {
+        const std::lock_guard<std::mutex> lock(mutex);
+        if (next >= total || (next > 0 && std::chrono::duration<double>(Clock::now() - t0).count() >
+                                              options.max_seconds)) {
+          return;
+        }
+        ep = next++;
+      }
+      const double ret = run_episode(model, *planners[w], options, max_steps, ep, tallies[w]);
+      const std::lock_guard<std::mutex> lock(mutex);
+      returns[static_cast<std::size_t>(ep)] = ret;
+      if (options.progress) options.progress(++done, total);
+    }
+  };
+  std::vector<std::thread> threads;
+  for (std::size_t w = 1; w < planners.size(); ++w) threads.emplace_back(work, w);
+  work(0);
+  for (std::thread& t : threads) t.join();
+
+  // Every episode handed out has finished, so the first `next` are all there.
+  Evaluation out;
+  returns.resize(static_cast<std::size_t>(next));
+  out.returns = std::move(returns);
   summarize(out);
+  std::vector<double> step_seconds;
+  double iterations = 0.0, steps = 0.0;
+  for (const Tally& t : tallies) {
+    step_seconds.insert(step_seconds.end(), t.step_seconds.begin(), t.step_seconds.end());
+    iterations += t.iterations;
+    steps += t.steps;
+    out.max_nodes = std::max(out.max_nodes, t.max_nodes);
+    out.max_memory_bytes = std::max(out.max_memory_bytes, t.max_memory_bytes);
+    out.lost_beliefs += t.lost_beliefs;
+    if (t.first_step) out.first_step = *t.first_step;
+  }
   out.mean_steps = out.returns.empty() ? 0.0 : steps / static_cast<double>(out.returns.size());
-  out.median_step_seconds = median(step_seconds);
   out.max_step_seconds =
       step_seconds.empty() ? 0.0 : *std::max_element(step_seconds.begin(), step_seconds.end());
+  out.median_step_seconds = median(std::move(step_seconds));
   out.mean_iterations_per_step = steps > 0 ? iterations / steps : 0.0;
   out.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   return out;
+}
+
+}  // namespace
+
+Evaluation evaluate(const GenerativeModel& model, const PlannerFactory& make_planner,
+                    const EvaluationOptions& options) {
+  std::vector<std::unique_ptr<OnlinePlanner>> owned;
+  std::vector<OnlinePlanner*> planners;
+  for (int w = 0; w < std::max(1, options.workers); ++w) {
+    owned.push_back(make_planner(w));
+    planners.push_back(owned.back().get());
+  }
+  return evaluate_on(model, planners, options);
+}
+
+Evaluation evaluate(const GenerativeModel& model, OnlinePlanner& planner,
+                    const EvaluationOptions& options) {
+  return evaluate_on(model, {&planner}, options);
 }
 
 Evaluation evaluate_tree(const GenerativeModel& model, const PolicyTree& tree,

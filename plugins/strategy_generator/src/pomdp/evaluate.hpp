@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "pomdp/model.hpp"
@@ -23,7 +24,10 @@ struct EvaluationOptions {
   std::uint64_t seed = 1;
   // No episode starts after this many seconds (at least one runs).
   double max_seconds = std::numeric_limits<double>::infinity();
-  // Called after every episode with (done, total).
+  // Episodes run side by side on this many threads, each with its own
+  // planner (evaluate() with a factory; one planner means one worker).
+  int workers = 1;
+  // Called after every episode with (done, total), one call at a time.
   std::function<void(int, int)> progress;
 };
 
@@ -49,6 +53,16 @@ struct Evaluation {
 void summarize(Evaluation& e);
 int default_max_steps(const GenerativeModel& model);
 
+// Makes the planner of one worker (0, 1, ...); each episode starts it from
+// the initial belief with reset(), so every episode is a fresh search.
+using PlannerFactory = std::function<std::unique_ptr<OnlinePlanner>(int worker)>;
+
+// Episode i draws its states and observations from a generator seeded by
+// (seed, i), so which worker runs it does not change what happens in it
+// (only the wall-clock budget of its searches).
+Evaluation evaluate(const GenerativeModel& model, const PlannerFactory& make_planner,
+                    const EvaluationOptions& options);
+// One worker, on the given planner.
 Evaluation evaluate(const GenerativeModel& model, OnlinePlanner& planner,
                     const EvaluationOptions& options);
 
