@@ -453,5 +453,19 @@ TEST(Evaluate, ConfidenceIntervalByHand) {
   EXPECT_NEAR(e.ci95, 3.182 * std::sqrt(5.0 / 3.0) / 2.0, 1e-9);
 }
 
+// Control variate by hand: X = 0..4 (mean 2, known mean 2.5), Y = 1 4 4 8 9
+// (mean 5.2): beta = Sxy / Sxx = 20 / 10 = 2, estimate 5.2 - 2 (2 - 2.5) = 6.2;
+// residuals -0.2 0.8 -1.2 0.8 -0.2, s^2 = 2.8 / 3, standard error
+// sqrt(s^2 (1/5 + 0.25/10)) = sqrt(0.21), t(3) = 3.182.
+TEST(Evaluate, ControlVariateByHand) {
+  Evaluation e;
+  e.returns = {1.0, 4.0, 4.0, 8.0, 9.0};
+  e.controls = {0.0, 1.0, 2.0, 3.0, 4.0};
+  summarize_with_control(e, 2.5);
+  EXPECT_NEAR(e.cv_beta, 2.0, 1e-12);
+  EXPECT_NEAR(e.cv_mean, 6.2, 1e-12);
+  EXPECT_NEAR(e.cv_ci95, 3.182 * std::sqrt(0.21), 1e-9);
+}
+
 }  // namespace
 }  // namespace plr::pomdp

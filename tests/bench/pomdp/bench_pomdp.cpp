@@ -105,6 +105,9 @@ nlohmann::json to_json(const Evaluation& e, double budget) {
           {"max_nodes", e.max_nodes},
           {"max_memory_bytes", e.max_memory_bytes},
           {"lost_beliefs", e.lost_beliefs},
+          {"cv_value", e.cv_mean},
+          {"cv_ci95", e.cv_ci95},
+          {"cv_beta", e.cv_beta},
           {"seconds", e.seconds}};
 }
 
@@ -128,9 +131,9 @@ int main(int argc, char** argv) {
   app.add_option("--offline", offline, "POMHDP offline solve seconds (default 60, quick 5)");
   app.add_option("--episodes", episodes, "episodes per solver at most (default 2000, quick 100)");
   app.add_option("--time-limit", time_limit,
-                 "POMHDP: no new episode after this many seconds (default 480, quick 15)");
+                 "POMHDP: no new episode after this many seconds (default 540, quick 15)");
   app.add_option("--pomcp-time-limit", pomcp_time_limit,
-                 "POMCP: no new episode after this many seconds (default 240, quick 10)");
+                 "POMCP: no new episode after this many seconds (default 180, quick 10)");
   app.add_option("--pomcp-sims", pomcp_sims, "POMCP simulations per step at most");
   app.add_option("--epsilon1", options.epsilon1, "POMHDP inflation of inadmissible heuristics");
   app.add_option("--epsilon2", options.epsilon2, "POMHDP bound of searches by the anchor");
@@ -155,8 +158,8 @@ int main(int argc, char** argv) {
   if (pomcp_budget < 0) pomcp_budget = quick ? 0.02 : budget;
   if (offline < 0) offline = quick ? 5.0 : 60.0;
   if (episodes < 0) episodes = quick ? 100 : 2000;
-  if (time_limit < 0) time_limit = quick ? 15.0 : 480.0;
-  if (pomcp_time_limit < 0) pomcp_time_limit = quick ? 10.0 : 240.0;
+  if (time_limit < 0) time_limit = quick ? 15.0 : 540.0;
+  if (pomcp_time_limit < 0) pomcp_time_limit = quick ? 10.0 : 180.0;
 
   const double load_at_start = load_average();
   auto t0 = Clock::now();
@@ -188,6 +191,9 @@ int main(int argc, char** argv) {
 
   const double offline_rss_mb = peak_rss_mb();
   eval.workers = workers;
+  // The control variate: the MDP value of the episode's start state (its
+  // mean over the initial belief is known exactly).
+  eval.control = [&h](StateId s) { return h.most_likely->value(Belief({{s, 1.0}})); };
 
   eval.per_step = {budget, std::numeric_limits<std::uint64_t>::max()};
   PomhdpOptions online_options = options;
@@ -273,20 +279,22 @@ int main(int argc, char** argv) {
       warm ? "searches kept between episodes (warm starts)"
            : "an empty search at the start of every episode",
       online_gap);
-  std::printf("%-7s %9s %8s %18s %9s %9s %10s %10s %12s %10s %9s %8s\n", "solver", "budget_s",
-              "episodes", "value +- ci95", "lower_0", "upper_0", "med_step_s", "max_step_s",
-              "iter/step", "max_nodes", "max_MB", "total_s");
+  std::printf("%-7s %9s %8s %18s %18s %9s %9s %10s %10s %12s %10s %9s %8s\n", "solver", "budget_s",
+              "episodes", "value +- ci95", "cv value +- ci95", "lower_0", "upper_0", "med_step_s",
+              "max_step_s", "iter/step", "max_nodes", "max_MB", "total_s");
   for (const auto& [name, e, b] :
        {std::tuple{"POMHDP", &pomhdp, budget}, std::tuple{"POMCP", &pomcp, pomcp_budget}}) {
     std::printf(
-        "%-7s %9.3g %8zu %10.3f +- %5.3f %9.3f %9.3f %10.4f %10.4f %12.1f %10zu %9.1f %8.1f\n",
-        name, b, e->returns.size(), e->mean, e->ci95, e->first_step.lower, e->first_step.upper,
-        e->median_step_seconds, e->max_step_seconds, e->mean_iterations_per_step, e->max_nodes,
-        e->max_memory_bytes / 1e6, e->seconds);
+        "%-7s %9.3g %8zu %10.3f +- %5.3f %10.3f +- %5.3f %9.3f %9.3f %10.4f %10.4f %12.1f %10zu "
+        "%9.1f %8.1f\n",
+        name, b, e->returns.size(), e->mean, e->ci95, e->cv_mean, e->cv_ci95, e->first_step.lower,
+        e->first_step.upper, e->median_step_seconds, e->max_step_seconds,
+        e->mean_iterations_per_step, e->max_nodes, e->max_memory_bytes / 1e6, e->seconds);
   }
   std::printf(
-      "(lower_0/upper_0: root bounds after the first step's search; POMCP's are its value "
-      "estimate)\n");
+      "(cv value: the same mean estimated with the start state's MDP value as a control "
+      "variate;\n lower_0/upper_0: root bounds after the first step's search; POMCP's are its "
+      "value estimate)\n");
   std::printf("load average %.1f at the start, %.1f at the end; peak resident memory %.0f MB\n",
               load_at_start, load_average(), total_rss_mb);
   if (pomhdp.lost_beliefs + pomcp.lost_beliefs > 0) {

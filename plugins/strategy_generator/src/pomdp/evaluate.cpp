@@ -46,6 +46,36 @@ void summarize(Evaluation& e) {
   e.ci95 = t_quantile_975(n - 1) * e.stddev / std::sqrt(static_cast<double>(n));
 }
 
+void summarize_with_control(Evaluation& e, double control_mean) {
+  // Linear-regression estimator: Y = a + beta (X - mean X); the estimate is
+  // the line at the known mean of X, its standard error the line's there.
+  const std::size_t n = e.returns.size();
+  if (n < 3 || e.controls.size() != n) return;
+  const auto count = static_cast<double>(n);
+  double mx = 0.0, my = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    mx += e.controls[i];
+    my += e.returns[i];
+  }
+  mx /= count;
+  my /= count;
+  double sxx = 0.0, sxy = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    sxx += (e.controls[i] - mx) * (e.controls[i] - mx);
+    sxy += (e.controls[i] - mx) * (e.returns[i] - my);
+  }
+  e.cv_beta = sxx > 0.0 ? sxy / sxx : 0.0;
+  e.cv_mean = my - e.cv_beta * (mx - control_mean);
+  double sse = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double r = e.returns[i] - my - e.cv_beta * (e.controls[i] - mx);
+    sse += r * r;
+  }
+  const double s2 = sse / (count - 2.0);
+  const double leverage = sxx > 0.0 ? (mx - control_mean) * (mx - control_mean) / sxx : 0.0;
+  e.cv_ci95 = t_quantile_975(n - 2) * std::sqrt(s2 * (1.0 / count + leverage));
+}
+
 int default_max_steps(const GenerativeModel& model) {
   const double g = model.discount();
   if (g >= 1.0) return 200;
@@ -64,6 +94,7 @@ struct Tally {
   std::size_t max_nodes = 0, max_memory_bytes = 0;
   int lost_beliefs = 0;
   std::optional<PlanStats> first_step;  // episode 0's, if this worker ran it
+  double control = 0.0;                 // of the last episode's start state
 };
 
 double run_episode(const GenerativeModel& model, OnlinePlanner& planner,
@@ -73,6 +104,7 @@ double run_episode(const GenerativeModel& model, OnlinePlanner& planner,
   Rng rng(seq);
   Belief belief = model.initial_belief();
   StateId s = sample_state(belief, rng);
+  if (options.control) tally.control = options.control(s);
   planner.reset(belief);
   double ret = 0.0, g = 1.0;
   for (int t = 0; t < max_steps && !model.is_terminal(s); ++t) {
@@ -107,6 +139,7 @@ Evaluation evaluate_on(const GenerativeModel& model, const std::vector<OnlinePla
   const int max_steps = options.max_steps > 0 ? options.max_steps : default_max_steps(model);
   const int total = std::max(0, options.episodes);
   std::vector<double> returns(static_cast<std::size_t>(total));
+  std::vector<double> controls(options.control ? returns.size() : 0);
   std::vector<Tally> tallies(planners.size());
   std::mutex mutex;
   int next = 0, done = 0;
@@ -124,6 +157,7 @@ Evaluation evaluate_on(const GenerativeModel& model, const std::vector<OnlinePla
       const double ret = run_episode(model, *planners[w], options, max_steps, ep, tallies[w]);
       const std::lock_guard<std::mutex> lock(mutex);
       returns[static_cast<std::size_t>(ep)] = ret;
+      if (options.control) controls[static_cast<std::size_t>(ep)] = tallies[w].control;
       if (options.progress) options.progress(++done, total);
     }
   };
@@ -137,6 +171,16 @@ Evaluation evaluate_on(const GenerativeModel& model, const std::vector<OnlinePla
   returns.resize(static_cast<std::size_t>(next));
   out.returns = std::move(returns);
   summarize(out);
+  if (options.control) {
+    controls.resize(out.returns.size());
+    out.controls = std::move(controls);
+    double mean = 0.0;
+    const Belief initial = model.initial_belief();
+    for (const Particle& p : initial.particles()) {
+      mean += p.weight * options.control(p.state);
+    }
+    summarize_with_control(out, mean);
+  }
   std::vector<double> step_seconds;
   double iterations = 0.0, steps = 0.0;
   for (const Tally& t : tallies) {

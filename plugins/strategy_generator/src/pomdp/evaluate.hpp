@@ -24,6 +24,11 @@ struct EvaluationOptions {
   std::uint64_t seed = 1;
   // No episode starts after this many seconds (at least one runs).
   double max_seconds = std::numeric_limits<double>::infinity();
+  // A control variate: a number for every start state whose mean under the
+  // initial belief is known exactly (the state's MDP value, say). Returns
+  // that follow it vary less around the regression line than around their
+  // mean, so the same episodes give a narrower interval. Empty: none.
+  std::function<double(StateId)> control;
   // Episodes run side by side on this many threads, each with its own
   // planner (evaluate() with a factory; one planner means one worker).
   int workers = 1;
@@ -45,12 +50,20 @@ struct Evaluation {
   std::size_t max_memory_bytes = 0;
   // The first plan() call of the first episode: the root's bounds and effort.
   PlanStats first_step;
+  // With a control: its value per episode, and the regression estimate of
+  // the same mean (returns adjusted by beta times the control's deviation
+  // from its known mean) with its 95 % half-width.
+  std::vector<double> controls;
+  double cv_mean = 0.0, cv_ci95 = 0.0, cv_beta = 0.0;
   int lost_beliefs = 0;  // episodes cut short: an observation the belief ruled out
   double seconds = 0.0;
 };
 
 // Mean and 95 % half-width (Student's t for small samples).
 void summarize(Evaluation& e);
+// The control-variate estimate from e.returns and e.controls, whose mean
+// over the initial belief is `control_mean`.
+void summarize_with_control(Evaluation& e, double control_mean);
 int default_max_steps(const GenerativeModel& model);
 
 // Makes the planner of one worker (0, 1, ...); each episode starts it from
