@@ -465,6 +465,13 @@ TEST(Evaluate, ControlVariateByHand) {
   EXPECT_NEAR(e.cv_beta, 2.0, 1e-12);
   EXPECT_NEAR(e.cv_mean, 6.2, 1e-12);
   EXPECT_NEAR(e.cv_ci95, 3.182 * std::sqrt(0.21), 1e-9);
+  // A control that differs only by rounding leaves the plain estimate.
+  e.controls = {1.0, 1.0 + 1e-15, 1.0, 1.0 - 1e-15, 1.0};
+  summarize(e);
+  summarize_with_control(e, 1.0);
+  EXPECT_EQ(e.cv_beta, 0.0);
+  EXPECT_EQ(e.cv_mean, e.mean);
+  EXPECT_EQ(e.cv_ci95, e.ci95);
 }
 
 }  // namespace

@@ -129,7 +129,7 @@ int main(int argc, char** argv) {
   app.add_option("--pomcp-budget", pomcp_budget,
                  "POMCP seconds per step (default: --budget, quick 0.02)");
   app.add_option("--offline", offline, "POMHDP offline solve seconds (default 60, quick 5)");
-  app.add_option("--episodes", episodes, "episodes per solver at most (default 2000, quick 100)");
+  app.add_option("--episodes", episodes, "episodes per solver at most (default 20000, quick 100)");
   app.add_option("--time-limit", time_limit,
                  "POMHDP: no new episode after this many seconds (default 540, quick 15)");
   app.add_option("--pomcp-time-limit", pomcp_time_limit,
@@ -157,7 +157,7 @@ int main(int argc, char** argv) {
   if (budget < 0) budget = quick ? 0.1 : 1.0;
   if (pomcp_budget < 0) pomcp_budget = quick ? 0.02 : budget;
   if (offline < 0) offline = quick ? 5.0 : 60.0;
-  if (episodes < 0) episodes = quick ? 100 : 2000;
+  if (episodes < 0) episodes = quick ? 100 : 20000;
   if (time_limit < 0) time_limit = quick ? 15.0 : 540.0;
   if (pomcp_time_limit < 0) pomcp_time_limit = quick ? 10.0 : 180.0;
 

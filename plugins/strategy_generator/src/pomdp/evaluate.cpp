@@ -64,7 +64,15 @@ void summarize_with_control(Evaluation& e, double control_mean) {
     sxx += (e.controls[i] - mx) * (e.controls[i] - mx);
     sxy += (e.controls[i] - mx) * (e.returns[i] - my);
   }
-  e.cv_beta = sxx > 0.0 ? sxy / sxx : 0.0;
+  // A control that (up to rounding) does not vary carries no information:
+  // the plain estimate stands (in Tiger both states have the same MDP value).
+  if (sxx <= 1e-18 * count * (1.0 + mx * mx)) {
+    e.cv_beta = 0.0;
+    e.cv_mean = e.mean;
+    e.cv_ci95 = e.ci95;
+    return;
+  }
+  e.cv_beta = sxy / sxx;
   e.cv_mean = my - e.cv_beta * (mx - control_mean);
   double sse = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -72,7 +80,7 @@ void summarize_with_control(Evaluation& e, double control_mean) {
     sse += r * r;
   }
   const double s2 = sse / (count - 2.0);
-  const double leverage = sxx > 0.0 ? (mx - control_mean) * (mx - control_mean) / sxx : 0.0;
+  const double leverage = (mx - control_mean) * (mx - control_mean) / sxx;
   e.cv_ci95 = t_quantile_975(n - 2) * std::sqrt(s2 * (1.0 / count + leverage));
 }
 
