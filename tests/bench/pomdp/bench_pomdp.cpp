@@ -1,7 +1,8 @@
 // POMDP solver benchmark: POMHDP and POMCP side by side on one model file
 // (.pomdp or .pomdpx).
 //   bench_pomdp MODEL [--budget S] [--pomcp-budget S] [--offline S]
-//               [--episodes N] [--time-limit S] [--seed N] [--json] [--quick]
+//               [--episodes N] [--time-limit S] [--workers N] [--online-gap G]
+//               [--seed N] [--json] [--quick]
 // POMHDP first solves offline from the initial belief (root bounds), then
 // both solvers are evaluated online, replanning from the exact belief at every
 // step within the per-step budget. Every episode starts from an empty search
@@ -80,12 +81,19 @@ class Progress {
                  std::string(static_cast<std::size_t>(filled), '#').c_str(),
                  std::string(static_cast<std::size_t>(kWidth - filled), '.').c_str(), done, total,
                  since(start_));
-    if (done == total) std::fprintf(stderr, "\n");
     std::fflush(stderr);
+    drawn_ = true;
+  }
+  // Ends the bar's line (a run that stops on its time limit ends short of
+  // the total).
+  void finish() {
+    if (drawn_) std::fprintf(stderr, "\n");
+    drawn_ = false;
   }
 
  private:
   std::string label_;
+  bool drawn_ = false;
   Clock::time_point start_ = Clock::now(), last_ = Clock::time_point{};
 };
 
@@ -209,6 +217,7 @@ int main(int argc, char** argv) {
         return std::make_unique<Pomhdp>(model, *h.upper, *h.lower, inadmissible, o);
       },
       eval);
+  p1.finish();
 
   eval.per_step = {pomcp_budget, pomcp_sims};
   eval.max_seconds = pomcp_time_limit;
@@ -225,6 +234,7 @@ int main(int argc, char** argv) {
         return std::make_unique<Pomcp>(model, o);
       },
       eval);
+  p2.finish();
   const double total_rss_mb = peak_rss_mb();
 
   if (json) {

@@ -49,8 +49,13 @@ void summarize(Evaluation& e) {
 void summarize_with_control(Evaluation& e, double control_mean) {
   // Linear-regression estimator: Y = a + beta (X - mean X); the estimate is
   // the line at the known mean of X, its standard error the line's there.
+  const auto plain = [&e] {
+    e.cv_beta = 0.0;
+    e.cv_mean = e.mean;
+    e.cv_ci95 = e.ci95;
+  };
   const std::size_t n = e.returns.size();
-  if (n < 3 || e.controls.size() != n) return;
+  if (n < 3 || e.controls.size() != n) return plain();
   const auto count = static_cast<double>(n);
   double mx = 0.0, my = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -66,12 +71,7 @@ void summarize_with_control(Evaluation& e, double control_mean) {
   }
   // A control that (up to rounding) does not vary carries no information:
   // the plain estimate stands (in Tiger both states have the same MDP value).
-  if (sxx <= 1e-18 * count * (1.0 + mx * mx)) {
-    e.cv_beta = 0.0;
-    e.cv_mean = e.mean;
-    e.cv_ci95 = e.ci95;
-    return;
-  }
+  if (sxx <= 1e-18 * count * (1.0 + mx * mx)) return plain();
   e.cv_beta = sxy / sxx;
   e.cv_mean = my - e.cv_beta * (mx - control_mean);
   double sse = 0.0;
@@ -102,19 +102,24 @@ struct Tally {
   std::size_t max_nodes = 0, max_memory_bytes = 0;
   int lost_beliefs = 0;
   std::optional<PlanStats> first_step;  // episode 0's, if this worker ran it
-  double control = 0.0;                 // of the last episode's start state
 };
 
-double run_episode(const GenerativeModel& model, OnlinePlanner& planner,
-                   const EvaluationOptions& options, int max_steps, int ep, Tally& tally) {
+struct Episode {
+  double ret = 0.0;      // discounted return
+  double control = 0.0;  // the control's value at the start state
+};
+
+Episode run_episode(const GenerativeModel& model, OnlinePlanner& planner,
+                    const EvaluationOptions& options, int max_steps, int ep, Tally& tally) {
   std::seed_seq seq{static_cast<std::uint32_t>(options.seed),
                     static_cast<std::uint32_t>(options.seed >> 32), static_cast<std::uint32_t>(ep)};
   Rng rng(seq);
   Belief belief = model.initial_belief();
   StateId s = sample_state(belief, rng);
-  if (options.control) tally.control = options.control(s);
+  Episode out;
+  if (options.control) out.control = options.control(s);
   planner.reset(belief);
-  double ret = 0.0, g = 1.0;
+  double g = 1.0;
   for (int t = 0; t < max_steps && !model.is_terminal(s); ++t) {
     const ActionId a = planner.plan(options.per_step);
     const PlanStats& st = planner.last_stats();
@@ -124,7 +129,7 @@ double run_episode(const GenerativeModel& model, OnlinePlanner& planner,
     tally.max_nodes = std::max(tally.max_nodes, st.nodes);
     tally.max_memory_bytes = std::max(tally.max_memory_bytes, st.memory_bytes);
     const Step step = model.step(s, a, rng);
-    ret += g * step.reward;
+    out.ret += g * step.reward;
     g *= model.discount();
     s = step.next;
     tally.steps += 1.0;
@@ -137,7 +142,7 @@ double run_episode(const GenerativeModel& model, OnlinePlanner& planner,
     belief = std::move(next);
     planner.advance(a, step.observation, belief);
   }
-  return ret;
+  return out;
 }
 
 Evaluation evaluate_on(const GenerativeModel& model, const std::vector<OnlinePlanner*>& planners,
@@ -162,10 +167,10 @@ Evaluation evaluate_on(const GenerativeModel& model, const std::vector<OnlinePla
         }
         ep = next++;
       }
-      const double ret = run_episode(model, *planners[w], options, max_steps, ep, tallies[w]);
+      const Episode e = run_episode(model, *planners[w], options, max_steps, ep, tallies[w]);
       const std::lock_guard<std::mutex> lock(mutex);
-      returns[static_cast<std::size_t>(ep)] = ret;
-      if (options.control) controls[static_cast<std::size_t>(ep)] = tallies[w].control;
+      returns[static_cast<std::size_t>(ep)] = e.ret;
+      if (options.control) controls[static_cast<std::size_t>(ep)] = e.control;
       if (options.progress) options.progress(++done, total);
     }
   };

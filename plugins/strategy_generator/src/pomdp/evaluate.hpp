@@ -62,7 +62,9 @@ struct Evaluation {
 // Mean and 95 % half-width (Student's t for small samples).
 void summarize(Evaluation& e);
 // The control-variate estimate from e.returns and e.controls, whose mean
-// over the initial belief is `control_mean`.
+// over the initial belief is `control_mean`; after summarize(e), whose
+// estimate it keeps when there is nothing to regress on (fewer than three
+// episodes, or a control that does not vary).
 void summarize_with_control(Evaluation& e, double control_mean);
 int default_max_steps(const GenerativeModel& model);
 
