@@ -186,6 +186,62 @@ TEST(Pomhdp, UnvisitedChildrenAreNotNodes) {
   EXPECT_EQ(solver.num_nodes(), 3u);
 }
 
+// A child made when a trial first enters it (from the parent, by the same
+// expansion) holds the belief an exact Bayes update gives: along the policy
+// tree of RockSample(4,4), advancing to each exact belief finds the node the
+// tree made, so the graph does not grow.
+TEST(Pomhdp, LazyChildIsTheExactUpdate) {
+  const auto file = std::filesystem::path(PLR_POMDP_BENCHMARKS) / "RockSample_4_4.pomdp";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "no " << file;
+  auto m = load_model(file);
+  ASSERT_TRUE(m) << m.error().message;
+  const TabularHeuristics h = make_tabular_heuristics(*m);
+  Pomhdp solver(*m, *h.upper, *h.lower, h.inadmissible());
+  solver.solve(trials(2000));
+  const PolicyTree tree = solver.policy_tree(12);
+  const std::size_t nodes = solver.num_nodes();
+  ASSERT_GT(tree.nodes.size(), 6u);
+  Rng rng(1);
+  std::vector<std::pair<std::uint32_t, Belief>> stack{{tree.root, m->initial_belief()}};
+  int checked = 0;
+  while (!stack.empty()) {
+    auto [k, belief] = std::move(stack.back());
+    stack.pop_back();
+    for (const auto& [o, child] : tree.nodes[k].children) {
+      Belief next = update_belief(*m, belief, tree.nodes[k].action, o, rng);
+      solver.advance(tree.nodes[k].action, o, next);
+      EXPECT_EQ(solver.num_nodes(), nodes);
+      ++checked;
+      stack.emplace_back(child, std::move(next));
+    }
+  }
+  EXPECT_EQ(checked + 1, static_cast<int>(tree.nodes.size()));
+}
+
+// Online, a step's search stops once the root's bounds are within the
+// target gap, long before its trial budget; a smaller target takes more.
+TEST(Pomhdp, PlanStopsAtTheTargetGap) {
+  const auto file = std::filesystem::path(PLR_POMDP_BENCHMARKS) / "Tiger.pomdp";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "no " << file;
+  auto m = load_model(file);
+  ASSERT_TRUE(m) << m.error().message;
+  const TabularHeuristics h = make_tabular_heuristics(*m);
+  std::uint64_t previous = 0;
+  for (const double gap : {1.0, 1e-3}) {
+    PomhdpOptions o;
+    o.target_gap = gap;
+    o.settle_tolerance = -1.0;  // the gap alone stops it
+    Pomhdp solver(*m, *h.upper, *h.lower, h.inadmissible(), o);
+    EXPECT_EQ(solver.plan(trials(1'000'000)), 0);  // listen
+    const PlanStats& s = solver.last_stats();
+    EXPECT_LT(s.iterations, 1'000'000u);
+    EXPECT_LE(s.upper - s.lower, gap);
+    EXPECT_GT(s.upper - s.lower, 0.0);
+    EXPECT_GT(s.iterations, previous);
+    previous = s.iterations;
+  }
+}
+
 // At the node limit the older half of the graph goes back to unvisited
 // branches (bounds kept) and the search goes on: on Tiger with room for 16
 // nodes (the whole graph has 27) the bounds still close on 19.37, in order and
@@ -359,6 +415,35 @@ TEST(Pomhdp, WarmStartKeepsTheGraph) {
   }
 }
 
+// Episodes on two workers are the episodes one worker runs: each has its own
+// random stream, and a trial budget makes each search deterministic.
+TEST(Evaluate, WorkersDoNotChangeEpisodes) {
+  const auto file = std::filesystem::path(PLR_POMDP_BENCHMARKS) / "Tiger.pomdp";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "no " << file;
+  auto m = load_model(file);
+  ASSERT_TRUE(m) << m.error().message;
+  const TabularHeuristics h = make_tabular_heuristics(*m);
+  const auto make = [&](int) {
+    return std::make_unique<Pomhdp>(*m, *h.upper, *h.lower, h.inadmissible());
+  };
+  EvaluationOptions eo;
+  eo.episodes = 24;
+  eo.max_steps = 30;
+  eo.per_step = trials(50);
+  const Evaluation one = evaluate(*m, make, eo);
+  eo.workers = 2;
+  int calls = 0;
+  eo.progress = [&](int done, int total) {
+    EXPECT_EQ(done, ++calls);
+    EXPECT_EQ(total, 24);
+  };
+  const Evaluation two = evaluate(*m, make, eo);
+  EXPECT_EQ(calls, 24);
+  ASSERT_EQ(one.returns.size(), 24u);
+  EXPECT_EQ(one.returns, two.returns);
+  EXPECT_DOUBLE_EQ(one.mean, two.mean);
+}
+
 TEST(Evaluate, ConfidenceIntervalByHand) {
   Evaluation e;
   e.returns = {1.0, 2.0, 3.0, 4.0};
@@ -366,6 +451,27 @@ TEST(Evaluate, ConfidenceIntervalByHand) {
   EXPECT_DOUBLE_EQ(e.mean, 2.5);
   // sd = sqrt(5/3), t(3) = 3.182.
   EXPECT_NEAR(e.ci95, 3.182 * std::sqrt(5.0 / 3.0) / 2.0, 1e-9);
+}
+
+// Control variate by hand: X = 0..4 (mean 2, known mean 2.5), Y = 1 4 4 8 9
+// (mean 5.2): beta = Sxy / Sxx = 20 / 10 = 2, estimate 5.2 - 2 (2 - 2.5) = 6.2;
+// residuals -0.2 0.8 -1.2 0.8 -0.2, s^2 = 2.8 / 3, standard error
+// sqrt(s^2 (1/5 + 0.25/10)) = sqrt(0.21), t(3) = 3.182.
+TEST(Evaluate, ControlVariateByHand) {
+  Evaluation e;
+  e.returns = {1.0, 4.0, 4.0, 8.0, 9.0};
+  e.controls = {0.0, 1.0, 2.0, 3.0, 4.0};
+  summarize_with_control(e, 2.5);
+  EXPECT_NEAR(e.cv_beta, 2.0, 1e-12);
+  EXPECT_NEAR(e.cv_mean, 6.2, 1e-12);
+  EXPECT_NEAR(e.cv_ci95, 3.182 * std::sqrt(0.21), 1e-9);
+  // A control that differs only by rounding leaves the plain estimate.
+  e.controls = {1.0, 1.0 + 1e-15, 1.0, 1.0 - 1e-15, 1.0};
+  summarize(e);
+  summarize_with_control(e, 1.0);
+  EXPECT_EQ(e.cv_beta, 0.0);
+  EXPECT_EQ(e.cv_mean, e.mean);
+  EXPECT_EQ(e.cv_ci95, e.ci95);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "pomdp/model.hpp"
@@ -23,7 +24,15 @@ struct EvaluationOptions {
   std::uint64_t seed = 1;
   // No episode starts after this many seconds (at least one runs).
   double max_seconds = std::numeric_limits<double>::infinity();
-  // Called after every episode with (done, total).
+  // A control variate: a number for every start state whose mean under the
+  // initial belief is known exactly (the state's MDP value, say). Returns
+  // that follow it vary less around the regression line than around their
+  // mean, so the same episodes give a narrower interval. Empty: none.
+  std::function<double(StateId)> control;
+  // Episodes run side by side on this many threads, each with its own
+  // planner (evaluate() with a factory; one planner means one worker).
+  int workers = 1;
+  // Called after every episode with (done, total), one call at a time.
   std::function<void(int, int)> progress;
 };
 
@@ -41,14 +50,34 @@ struct Evaluation {
   std::size_t max_memory_bytes = 0;
   // The first plan() call of the first episode: the root's bounds and effort.
   PlanStats first_step;
+  // With a control: its value per episode, and the regression estimate of
+  // the same mean (returns adjusted by beta times the control's deviation
+  // from its known mean) with its 95 % half-width.
+  std::vector<double> controls;
+  double cv_mean = 0.0, cv_ci95 = 0.0, cv_beta = 0.0;
   int lost_beliefs = 0;  // episodes cut short: an observation the belief ruled out
   double seconds = 0.0;
 };
 
 // Mean and 95 % half-width (Student's t for small samples).
 void summarize(Evaluation& e);
+// The control-variate estimate from e.returns and e.controls, whose mean
+// over the initial belief is `control_mean`; after summarize(e), whose
+// estimate it keeps when there is nothing to regress on (fewer than three
+// episodes, or a control that does not vary).
+void summarize_with_control(Evaluation& e, double control_mean);
 int default_max_steps(const GenerativeModel& model);
 
+// Makes the planner of one worker (0, 1, ...); each episode starts it from
+// the initial belief with reset(), so every episode is a fresh search.
+using PlannerFactory = std::function<std::unique_ptr<OnlinePlanner>(int worker)>;
+
+// Episode i draws its states and observations from a generator seeded by
+// (seed, i), so which worker runs it does not change what happens in it
+// (only the wall-clock budget of its searches).
+Evaluation evaluate(const GenerativeModel& model, const PlannerFactory& make_planner,
+                    const EvaluationOptions& options);
+// One worker, on the given planner.
 Evaluation evaluate(const GenerativeModel& model, OnlinePlanner& planner,
                     const EvaluationOptions& options);
 
