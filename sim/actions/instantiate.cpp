@@ -423,7 +423,17 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     at[sim::kBaseX] = c.base_x;
     // Lifted, then pulled out until clear of what it rested on: the
     // drop-off move after that swings freely.
-    c.lift = {c.grasp.position + Eigen::Vector3d(0, 0, best->lift), plate_yaw};
+    // A group against a side wall is lifted away from it too: dragged along
+    // it, the held boxes would press into it.
+    double y0 = b[i].y0, y1 = b[i].y1;
+    for (auto j : best->group) {
+      y0 = std::min(y0, b[j].y0);
+      y1 = std::max(y1, b[j].y1);
+    }
+    const double half = world.trailer.width / 2;
+    const double off_wall =
+        std::max(0.0, kMargin - (half + y0)) - std::max(0.0, kMargin - (half - y1));
+    c.lift = {c.grasp.position + Eigen::Vector3d(0, off_wall, best->lift), plate_yaw};
     c.retract = {c.lift.position - best->out_depth * n, plate_yaw};
     if (!reachable(robot, c.grasp, at) || !reachable(robot, c.pregrasp, at)) continue;
     ranked.push_back({c, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
