@@ -264,7 +264,9 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
     const Eigen::Vector3d llo = link.pose.translation() - e, lhi = link.pose.translation() + e;
     const bool moving = link.speed > 1e-6 || link.belt_dir.squaredNorm() > 0.0;
     // Sleeping boxes only notice a shape that moves.
-    broad_.query(llo, lhi, BroadPhase::kMoving | (moving ? BroadPhase::kSleeping : 0u), near_);
+    const unsigned which = moving ? BroadPhase::kMoving | BroadPhase::kSleeping
+                                  : static_cast<unsigned>(BroadPhase::kMoving);
+    broad_.query(llo, lhi, which, near_);
     for (const int j : near_) {
       const std::size_t bj = static_cast<std::size_t>(j);
       const Body& b = bodies[bj];
