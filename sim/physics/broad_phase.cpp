@@ -19,17 +19,14 @@ int cells_along(double length) {
 BroadPhase::BroadPhase(const Trailer& trailer)
     : origin_(0.0, -0.5 * trailer.width, 0.0),
       count_{cells_along(trailer.depth), cells_along(trailer.width), cells_along(trailer.height)},
+      last_(count_[0] - 1, count_[1] - 1, count_[2] - 1),
       cells_(static_cast<std::size_t>(count_[0] * count_[1] * count_[2])) {}
 
 BroadPhase::Cell BroadPhase::cell_of(const Eigen::Vector3d& p) const {
   // Monotonic in p, so the cells of overlapping boxes overlap; what lies
   // outside the trailer falls into its border cells.
-  Cell c{};
-  for (std::size_t k = 0; k < 3; ++k) {
-    const double at = (p[static_cast<long>(k)] - origin_[static_cast<long>(k)]) / kCellSize;
-    c[k] = at <= 0.0 ? 0 : at >= count_[k] - 1 ? count_[k] - 1 : static_cast<int>(at);
-  }
-  return c;
+  const Eigen::Array3d at = ((p - origin_).array() / kCellSize).max(0.0).min(last_);
+  return {static_cast<int>(at[0]), static_cast<int>(at[1]), static_cast<int>(at[2])};
 }
 
 void BroadPhase::insert(int body, const Range& r) {

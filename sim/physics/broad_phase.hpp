@@ -54,6 +54,7 @@ class BroadPhase {
 
   Eigen::Vector3d origin_;
   Cell count_;
+  Eigen::Array3d last_;                  // count_ - 1
   std::vector<std::vector<int>> cells_;  // bodies overlapping each cell
   std::vector<Eigen::Vector3d> lo_, hi_;
   std::vector<Range> range_;        // a box's cells
