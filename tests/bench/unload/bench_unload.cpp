@@ -86,9 +86,7 @@ nlohmann::json run(const Job& job) {
   plr::actions::InProcessBackend backend(simulation, planner);
   // As configs/unload_sim.yaml: plans are bounded by expansions; the time
   // limit is a safety net for a machine loaded by the other workers.
-  plr::actions::ActionOptions options;
-  options.plan_timeout_s = 30.0;
-  const plr::actions::ActionModel model(robot, options);
+  const plr::actions::ActionModel model(robot, plr::actions::ActionOptions{});
   const auto episode =
       value_or_die(plr::actions::run_hardcoded(model, backend, plr::sim::HardcodedParams{}, {}));
   if (!episode.final_world.boxes.empty()) {
