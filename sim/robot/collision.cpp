@@ -10,6 +10,7 @@
 #include <array>
 #include <atomic>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <unordered_map>
 #include <unordered_set>
@@ -58,6 +59,7 @@ struct WorldBox {
   std::uint32_t id = 0;
   std::shared_ptr<fcl::Boxd> shape;  // resized in place when the box is reused
   std::unique_ptr<fcl::CollisionObjectd> obj;
+  fcl::OBBd obb;  // obj's enclosing box (itself), kept with it: a planner meets a box many times
 };
 
 // Occupied octree leaves counted in a 3-D prefix-sum table at the octree's
@@ -304,16 +306,22 @@ fcl::OBBd enclosing_box(const fcl::CollisionObjectd& o) {
   return box;
 }
 
-bool collide(const fcl::CollisionObjectd* a, const fcl::CollisionObjectd* b) {
-  if (!a->getAABB().overlap(b->getAABB())) return false;
+// A pair whose world-aligned boxes overlap, with their enclosing boxes.
+bool collide_enclosed(const fcl::CollisionObjectd* a, const fcl::OBBd& a_box,
+                      const fcl::CollisionObjectd* b, const fcl::OBBd& b_box) {
   // FCL's 15-axis box test settles most near pairs before the narrow phase,
   // and every pair of boxes (it is exact for them, up to 1e-6 m of slack).
-  if (!enclosing_box(*a).overlap(enclosing_box(*b))) return false;
+  if (!a_box.overlap(b_box)) return false;
   if (a->getNodeType() == fcl::GEOM_BOX && b->getNodeType() == fcl::GEOM_BOX) return true;
   fcl::CollisionRequestd req;
   fcl::CollisionResultd res;
   fcl::collide(a, b, req, res);
   return res.isCollision();
+}
+
+bool collide(const fcl::CollisionObjectd* a, const fcl::CollisionObjectd* b) {
+  if (!a->getAABB().overlap(b->getAABB())) return false;
+  return collide_enclosed(a, enclosing_box(*a), b, enclosing_box(*b));
 }
 
 }  // namespace
@@ -406,11 +414,14 @@ struct CollisionChecker::Impl {
     const fcl::AABBd& a = o->getAABB();
     auto i = std::lower_bound(box_min_x.begin(), box_min_x.end(), a.min_.x() - box_max_len_x) -
              box_min_x.begin();
+    std::optional<fcl::OBBd> o_box;  // at the first box near enough to need it
     for (; i < static_cast<long>(boxes.size()) &&
            box_min_x[static_cast<std::size_t>(i)] <= a.max_.x();
          ++i) {
       const WorldBox& b = boxes[static_cast<std::size_t>(i)];
-      if (collide(o, b.obj.get()) && ignored.count(b.id) == 0) return i;
+      if (!a.overlap(b.obj->getAABB())) continue;
+      if (!o_box) o_box = enclosing_box(*o);
+      if (collide_enclosed(o, *o_box, b.obj.get(), b.obb) && ignored.count(b.id) == 0) return i;
     }
     return -1;
   }
@@ -643,6 +654,7 @@ void CollisionChecker::set_boxes(const std::vector<Box>& boxes) {
       wb.obj = std::make_unique<fcl::CollisionObjectd>(wb.shape, to_fcl(b.pose));
     }
     wb.obj->computeAABB();
+    wb.obb = enclosing_box(*wb.obj);
     next.push_back(std::move(wb));
   }
   // Sorted from the list as given, as in a fresh checker: boxes with equal
