@@ -169,9 +169,10 @@ class Run {
     }
     if (r->stats.time_limit_hit) {
       // Fewer expansions on a busier machine: the outcome and its modelled
-      // planning time would depend on the load.
+      // planning time would depend on the load. Not PLR_ERR_TIMEOUT: the
+      // executor takes that for a lost simulator and repeats the action.
       throw Aborted{plr::make_error(
-          PLR_ERR_TIMEOUT,
+          PLR_ERR_INVALID,
           fmt::format("plan: {} ended by the {} s safety net before its budget of {} expansions "
                       "({} done); raise plan_timeout_s",
                       planning::to_string(mode), o_.plan_timeout_s, o_.plan_expansions,

@@ -48,7 +48,7 @@ struct ActionOptions {
   // (and so each outcome) the same whatever the machine's load. The time
   // limit is a safety net far above what the budget takes (5000 M2
   // expansions that find nothing take ~20 s on the 2-core machine); a search
-  // it ends fails the action (PLR_ERR_TIMEOUT) instead of letting the load
+  // it ends fails the action (PLR_ERR_INVALID) instead of letting the load
   // decide the outcome. ARA* spends a whole budget lowering ε, so by default
   // it stops at its first solution (ε = 5).
   double plan_timeout_s = 120.0;
