@@ -25,6 +25,7 @@ plr::Status ActionOptions::check() const {
   if (auto ok = observation.check(); !ok) return ok;
   auto bad = [](const char* what) { return plr::make_error(PLR_ERR_INVALID, what); };
   if (!(plan_timeout_s > 0)) return bad("param 'plan_timeout_s': must be > 0");
+  if (plan_expansions == 0) return bad("param 'plan_expansions': must be >= 1");
   for (double e : plan_epsilons)
     if (!(e >= 1.0)) return bad("param 'plan_epsilons': each must be >= 1");
   if (plan_epsilons.empty()) return bad("param 'plan_epsilons': needs at least one value");
@@ -177,6 +178,17 @@ class Run {
       p.message = "plan: " + r.error().message;
       p.status = PlanStatus::kTimeout;
       return p;
+    }
+    if (r->stats.time_limit_hit) {
+      // Fewer expansions on a busier machine: the outcome and its modelled
+      // planning time would depend on the load. Not PLR_ERR_TIMEOUT: the
+      // executor takes that for a lost simulator and repeats the action.
+      throw Aborted{plr::make_error(
+          PLR_ERR_INVALID,
+          fmt::format("plan: {} ended by the {} s safety net before its budget of {} expansions "
+                      "({} done); raise plan_timeout_s",
+                      planning::to_string(mode), o_.plan_timeout_s, o_.plan_expansions,
+                      r->stats.expansions))};
     }
     rec.answered = true;
     rec.status = r->status;

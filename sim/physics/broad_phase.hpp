@@ -1,13 +1,15 @@
 // Internal: which boxes may touch a given box or robot shape (the broad
-// phase of contact). Sleeping boxes do not move, so they sit in a uniform
-// grid over the trailer that changes only when a box falls asleep or wakes;
-// the few that move (awake, held) are tested against a query directly.
-// Queries list body indices in ascending order, so contacts are visited in
-// the same order as by testing every pair, and give the same results.
+// phase of contact): every box in a uniform grid over the trailer by its
+// world-aligned bounding box. A box changes cells only when its bounding box
+// crosses a cell border, and a sleeping box does not move at all, so the
+// grid is updated, not rebuilt, every step. Queries list body indices in
+// ascending order, so contacts are visited in the same order as by testing
+// every pair, and give the same results.
 #pragma once
 
 #include <Eigen/Geometry>
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include "state.hpp"
@@ -22,34 +24,44 @@ inline bool disjoint(const Eigen::Vector3d& lo1, const Eigen::Vector3d& hi1,
 
 class BroadPhase {
  public:
-  enum Which : unsigned { kSleeping = 1, kMoving = 2 };
+  enum Which : std::uint8_t { kSleeping = 1, kMoving = 2 };  // moving: awake or held
 
   explicit BroadPhase(const Trailer& trailer);
 
-  // Every box's world-aligned bounding box for the step starting now (a
-  // sleeping box keeps the one it fell asleep with: it has not moved).
+  // Every box's bounding box for the step starting now (a sleeping box keeps
+  // the one it fell asleep with: it has not moved).
   void update(const std::vector<Body>& bodies);
   const Eigen::Vector3d& lo(std::size_t body) const { return lo_[body]; }
   const Eigen::Vector3d& hi(std::size_t body) const { return hi_[body]; }
 
-  // Into `out`, ascending: the boxes (of `which` kind, none gone) whose
+  // Into `out`, ascending: the boxes of kind `which` (a Which or both) whose
   // bounding boxes overlap [lo, hi] (touching counts).
   void query(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, unsigned which,
              std::vector<int>& out) const;
 
  private:
   using Cell = std::array<int, 3>;
+  struct Range {
+    Cell lo, hi;
+    bool operator!=(const Range& o) const { return lo != o.lo || hi != o.hi; }
+  };
   Cell cell_of(const Eigen::Vector3d& p) const;  // clamped to the grid
-  std::vector<int>& cell(const Cell& c) { return cells_[index(c)]; }
-  std::size_t index(const Cell& c) const;
+  std::size_t index(int x, int y, int z) const {
+    return static_cast<std::size_t>((x * count_[1] + y) * count_[2] + z);
+  }
+  void insert(int body, const Range& r);
+  void erase(int body, const Range& r);
 
   Eigen::Vector3d origin_;
   Cell count_;
-  std::vector<std::vector<int>> cells_;  // sleeping bodies overlapping each cell
+  Eigen::Array3d last_;                  // count_ - 1
+  std::vector<std::vector<int>> cells_;  // bodies overlapping each cell
   std::vector<Eigen::Vector3d> lo_, hi_;
-  std::vector<Cell> cell_lo_, cell_hi_;  // a sleeping body's cells
-  std::vector<bool> in_grid_;
-  std::vector<int> moving_;  // awake and held bodies, ascending
+  std::vector<Range> range_;        // a box's cells
+  std::vector<std::uint8_t> kind_;  // a Which; 0: not in the grid (gone)
+  // A query's scratch, one bit per body: met in a cell, and an answer (read
+  // in index order, which sorts the answers).
+  mutable std::vector<std::uint64_t> met_, hit_;
 };
 
 }  // namespace plr::sim::detail

@@ -9,6 +9,19 @@ namespace {
 constexpr std::uint8_t kBoxBox = 0, kBoxLink = 1, kBoxPlane = 2;
 constexpr double kWakeMargin = 0.01;  // m around a moving box within which sleepers wake
 
+// Two oriented boxes (poses, half extents) apart by more than `margin` along
+// one of their face normals: a cheap test before FCL's, which finds no
+// contact for them (separating axis theorem; the margin is far beyond
+// rounding, and beyond FCL's tolerance for a cylinder inside the box).
+bool separated(const Eigen::Isometry3d& pa, const Eigen::Vector3d& ha, const Eigen::Isometry3d& pb,
+               const Eigen::Vector3d& hb, double margin) {
+  const Eigen::Matrix3d abs_c = (pa.linear().transpose() * pb.linear()).cwiseAbs();
+  const Eigen::Vector3d d = pb.translation() - pa.translation();
+  const Eigen::Vector3d da = pa.linear().transpose() * d, db = pb.linear().transpose() * d;
+  return (da.cwiseAbs().array() > (ha + abs_c * hb).array() + margin).any() ||
+         (db.cwiseAbs().array() > (hb + abs_c.transpose() * ha).array() + margin).any();
+}
+
 }  // namespace
 
 Contacts::Contacts(const PhysicsOptions& options, const Trailer& trailer)
@@ -251,11 +264,14 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
     const Eigen::Vector3d llo = link.pose.translation() - e, lhi = link.pose.translation() + e;
     const bool moving = link.speed > 1e-6 || link.belt_dir.squaredNorm() > 0.0;
     // Sleeping boxes only notice a shape that moves.
-    broad_.query(llo, lhi, BroadPhase::kMoving | (moving ? BroadPhase::kSleeping : 0u), near_);
+    const unsigned which = moving ? BroadPhase::kMoving | BroadPhase::kSleeping
+                                  : static_cast<unsigned>(BroadPhase::kMoving);
+    broad_.query(llo, lhi, which, near_);
     for (const int j : near_) {
       const std::size_t bj = static_cast<std::size_t>(j);
       const Body& b = bodies[bj];
       if (b.mode == Mode::kHeld) continue;
+      if (separated(b.box.pose, 0.5 * b.box.size, link.pose, link_half_[l], 1e-3)) continue;
       if (!collide(box_shapes_[bj], b.box.pose, *link_shapes_[l], link.pose)) continue;
       if (b.mode == Mode::kAsleep) {
         wake.push_back(j);

@@ -4,7 +4,9 @@
 
 #include <Simbody.h>
 
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace plr::sim::detail {
 namespace {
@@ -45,8 +47,26 @@ struct Multibody::Impl {
   std::vector<SimTK::SpatialVec> wrench;
   SimTK::State state;
   SimTK::Vector qdot;
-  SimTK::Vector kick;  // velocity changes for the next step
+  // Each body's first q and u in the state's coordinates.
+  std::vector<int> q0, u0;
+  std::vector<double> u_next;
+  std::vector<double> kick;  // velocity changes for the next step
+  bool kicked = false;       // kick holds something other than zeros
 };
+
+namespace {
+
+// The state's coordinates are Simbody vectors; the step works on their
+// storage directly (SimTK's vector expressions allocate a temporary per
+// operator and index through a helper).
+const double* data(const SimTK::Vector& v) {
+  return v.getContiguousScalarData();
+}
+double* data(SimTK::Vector& v) {
+  return v.updContiguousScalarData();
+}
+
+}  // namespace
 
 Multibody::Multibody() : impl_(std::make_unique<Impl>()) {}
 Multibody::~Multibody() = default;
@@ -90,8 +110,14 @@ void Multibody::build(const std::vector<FreeBody>& bodies, double gravity, doubl
     }
   }
   m.system->realize(m.state, SimTK::Stage::Velocity);
-  m.kick.resize(m.state.getNU());
-  m.kick = 0.0;
+  if (!m.state.getQ().hasContiguousData() || !m.state.getU().hasContiguousData())
+    throw std::logic_error("Multibody: Simbody's q and u are not contiguous");
+  for (const auto& mb : m.bodies) {
+    m.q0.push_back(mb.getFirstQIndex(m.state));
+    m.u0.push_back(mb.getFirstUIndex(m.state));
+  }
+  m.u_next.resize(static_cast<std::size_t>(m.state.getNU()));
+  m.kick.assign(static_cast<std::size_t>(m.state.getNU()), 0.0);
   impl_ = std::move(next);
 }
 
@@ -128,11 +154,12 @@ void Multibody::set_wrench(int i, const Eigen::Vector3d& force, const Eigen::Vec
 void Multibody::add_velocity(int i, const Eigen::Vector3d& dv, const Eigen::Vector3d& dw) {
   // A free mobilizer's u is (angular, linear) velocity in the ground frame.
   Impl& m = *impl_;
-  const int u0 = m.bodies[static_cast<std::size_t>(i)].getFirstUIndex(m.state);
+  const auto u0 = static_cast<std::size_t>(m.u0[static_cast<std::size_t>(i)]);
   for (int k = 0; k < 3; ++k) {
-    m.kick[u0 + k] += dw[k];
-    m.kick[u0 + 3 + k] += dv[k];
+    m.kick[u0 + static_cast<std::size_t>(k)] += dw[k];
+    m.kick[u0 + 3 + static_cast<std::size_t>(k)] += dv[k];
   }
+  m.kicked = true;
 }
 
 void Multibody::step(double dt) {
@@ -141,19 +168,29 @@ void Multibody::step(double dt) {
   m.system->realize(s, SimTK::Stage::Acceleration);
   // Adding the kick here rather than to the state keeps the state realized
   // to Velocity between steps (no second velocity realization per step).
-  const SimTK::Vector u = s.getU() + m.kick + dt * s.getUDot();
-  m.kick = 0.0;
-  s.updU() = u;
-  m.matter->multiplyByN(s, false, u, m.qdot);
-  SimTK::Vector& q = s.updQ();
-  q += dt * m.qdot;
+  const std::size_t nu = m.u_next.size();
+  {
+    const double* u = data(s.getU());
+    const double* udot = data(s.getUDot());
+    for (std::size_t i = 0; i < nu; ++i) m.u_next[i] = u[i] + m.kick[i] + dt * udot[i];
+  }
+  if (m.kicked) {
+    std::fill(m.kick.begin(), m.kick.end(), 0.0);
+    m.kicked = false;
+  }
+  std::copy(m.u_next.begin(), m.u_next.end(), data(s.updU()));
+  m.matter->multiplyByN(s, false, s.getU(), m.qdot);
+  double* q = data(s.updQ());
+  const double* qdot = data(m.qdot);
+  const auto nq = static_cast<std::size_t>(s.getNQ());
+  for (std::size_t i = 0; i < nq; ++i) q[i] += dt * qdot[i];
   // Free mobilizers use quaternions (first 4 q); keep them unit length.
-  for (const auto& mb : m.bodies) {
-    const int q0 = mb.getFirstQIndex(s);
+  for (const int q0 : m.q0) {
+    double* quat = q + q0;
     double n = 0.0;
-    for (int k = 0; k < 4; ++k) n += q[q0 + k] * q[q0 + k];
+    for (int k = 0; k < 4; ++k) n += quat[k] * quat[k];
     n = 1.0 / std::sqrt(n);
-    for (int k = 0; k < 4; ++k) q[q0 + k] *= n;
+    for (int k = 0; k < 4; ++k) quat[k] *= n;
   }
   s.updTime() += dt;
   m.system->realize(s, SimTK::Stage::Velocity);

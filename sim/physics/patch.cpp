@@ -120,12 +120,10 @@ void box_box_patch(const Eigen::Vector3d& size_a, const Eigen::Isometry3d& pose_
       // Nearly along a face normal (e.g. the horizontal edges of two upright
       // boxes with different yaw): the face patch is the contact, and a
       // one-point edge contact winning by rounding makes the pair chatter.
-      if (std::max((ra.transpose() * axis).cwiseAbs().maxCoeff(),
-                   (rb.transpose() * axis).cwiseAbs().maxCoeff()) > kFaceLike) {
-        continue;
-      }
-      const double depth = (ra.transpose() * axis).cwiseAbs().dot(ha) +
-                           (rb.transpose() * axis).cwiseAbs().dot(hb) - std::abs(axis.dot(d));
+      const Eigen::Vector3d along_a = (ra.transpose() * axis).cwiseAbs();
+      const Eigen::Vector3d along_b = (rb.transpose() * axis).cwiseAbs();
+      if (std::max(along_a.maxCoeff(), along_b.maxCoeff()) > kFaceLike) continue;
+      const double depth = along_a.dot(ha) + along_b.dot(hb) - std::abs(axis.dot(d));
       if (depth < 0.0) return;
       if (depth < edge_depth) {
         edge_depth = depth;

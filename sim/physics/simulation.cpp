@@ -47,22 +47,25 @@ namespace {
 
 constexpr double kLoadFilter = 0.02;  // s; cups are compliant, contact spikes are not felt
 
-Eigen::Isometry3d interpolate(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double s) {
-  Eigen::Isometry3d x = Eigen::Isometry3d::Identity();
-  x.linear() = Eigen::Quaterniond(a.rotation())
-                   .slerp(s, Eigen::Quaterniond(b.rotation()))
-                   .toRotationMatrix();
-  x.translation() = (1.0 - s) * a.translation() + s * b.translation();
-  return x;
-}
-
-// Constant twist that carries pose a to pose b in `duration`.
-void twist(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double duration,
-           Eigen::Vector3d& v, Eigen::Vector3d& w) {
-  v = (b.translation() - a.translation()) / duration;
-  const Eigen::AngleAxisd r(b.rotation() * a.rotation().transpose());
-  w = r.axis() * r.angle() / duration;
-}
+// A pose carried from `a` to `b` over a step() call at constant twist (v,
+// w): what does not depend on how far into the call is computed once.
+struct Path {
+  Path(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double duration)
+      : qa(a.rotation()), qb(b.rotation()), pa(a.translation()), pb(b.translation()) {
+    v = (b.translation() - a.translation()) / duration;
+    const Eigen::AngleAxisd r(b.rotation() * a.rotation().transpose());
+    w = r.axis() * r.angle() / duration;
+  }
+  // The pose a fraction `s` into the call.
+  Eigen::Isometry3d at(double s) const {
+    Eigen::Isometry3d x = Eigen::Isometry3d::Identity();
+    x.linear() = qa.slerp(s, qb).toRotationMatrix();
+    x.translation() = (1.0 - s) * pa + s * pb;
+    return x;
+  }
+  Eigen::Quaterniond qa, qb;
+  Eigen::Vector3d pa, pb, v, w;
+};
 
 double bounding_radius(const LinkGeometry& l) {
   return l.shape == LinkGeometry::Shape::kCylinder ? std::hypot(l.size.x(), 0.5 * l.size.z())
@@ -338,18 +341,21 @@ struct Simulation::Impl {
     return sealed > state.plate->pump_max_force ? state.plate->pump_max_force / sealed : 1.0;
   }
 
-  void fixed_step(double dt, double fraction, double duration,
-                  const std::vector<LinkGeometry>& from_links,
-                  const std::optional<SuctionPlate>& from_plate, const Eigen::Vector3d& plate_a) {
+  // How the robot shapes and the plate move during the current step()
+  // call: empty (no plate path) while they stand still.
+  std::vector<Path> link_paths;
+  std::optional<Path> plate_path;
+
+  void fixed_step(double dt, double fraction, const Eigen::Vector3d& plate_a) {
     // Robot shapes and plate at the start of this step, moving at constant twist.
-    const bool links_move = !from_links.empty();
     movers.resize(state.links.size());
     for (std::size_t l = 0; l < state.links.size(); ++l) {
       Mover& m = movers[l];
       const LinkGeometry& target = state.links[l];
-      if (links_move) {
-        m.pose = interpolate(from_links[l].pose, target.pose, fraction);
-        twist(from_links[l].pose, target.pose, duration, m.v, m.w);
+      if (!link_paths.empty()) {
+        m.pose = link_paths[l].at(fraction);
+        m.v = link_paths[l].v;
+        m.w = link_paths[l].w;
       } else {
         m.pose = target.pose;
         m.v.setZero();
@@ -367,9 +373,10 @@ struct Simulation::Impl {
     if (state.plate) {
       Eigen::Isometry3d plate = state.plate->pose;
       Eigen::Vector3d v = Eigen::Vector3d::Zero(), w = Eigen::Vector3d::Zero();
-      if (from_plate) {
-        plate = interpolate(from_plate->pose, state.plate->pose, fraction);
-        twist(from_plate->pose, state.plate->pose, duration, v, w);
+      if (plate_path) {
+        plate = plate_path->at(fraction);
+        v = plate_path->v;
+        w = plate_path->w;
       }
       place_held(plate, v, w);
       anything_moves = v.squaredNorm() + w.squaredNorm() > 0.0;
@@ -510,23 +517,24 @@ void Simulation::step(double duration) {
   const double total = static_cast<double>(n) * m.options.step;
   State& s = m.state;
   // Poses at the start of this call; the targets were set by the caller.
-  std::vector<LinkGeometry> from_links;
+  m.link_paths.clear();
   if (s.links.size() == s.link_targets.size() && !s.links.empty()) {
-    from_links = s.links;
+    for (std::size_t l = 0; l < s.links.size(); ++l)
+      m.link_paths.emplace_back(s.links[l].pose, s.link_targets[l].pose, total);
   }
   s.links = s.link_targets;
-  std::optional<SuctionPlate> from_plate = s.plate;
-  s.plate = s.plate_target;
+  m.plate_path.reset();
   Eigen::Vector3d plate_v = Eigen::Vector3d::Zero();
-  if (from_plate && s.plate) {
-    plate_v = (s.plate->pose.translation() - from_plate->pose.translation()) / total;
+  if (s.plate && s.plate_target) {
+    m.plate_path.emplace(s.plate->pose, s.plate_target->pose, total);
+    plate_v = (s.plate_target->pose.translation() - s.plate->pose.translation()) / total;
   }
+  s.plate = s.plate_target;
   const Eigen::Vector3d plate_a = (plate_v - s.plate_velocity) / total;
   m.prepare_loads();
   m.set_belt_ends();
   for (long k = 0; k < n; ++k) {
-    m.fixed_step(m.options.step, static_cast<double>(k) / static_cast<double>(n), total, from_links,
-                 from_plate, plate_a);
+    m.fixed_step(m.options.step, static_cast<double>(k) / static_cast<double>(n), plate_a);
   }
   s.plate_velocity = plate_v;
   for (RobotContactForce& f : s.robot_forces) f.mean /= static_cast<double>(n);

@@ -35,6 +35,8 @@ struct RobotShape {
   std::unique_ptr<fcl::CollisionObjectd> exact;
   std::shared_ptr<fcl::Boxd> swept_box;
   std::unique_ptr<fcl::CollisionObjectd> swept;
+  // Their enclosing boxes, set with their AABBs (placed()).
+  fcl::OBBd exact_obb, swept_obb;
   // Links a mode does not move keep their pose from check to check: their
   // last collision-free placement is remembered and not checked again.
   // Epochs change whenever the placement does; self pairs remember the
@@ -58,6 +60,7 @@ struct WorldBox {
   std::uint32_t id = 0;
   std::shared_ptr<fcl::Boxd> shape;  // resized in place when the box is reused
   std::unique_ptr<fcl::CollisionObjectd> obj;
+  fcl::OBBd obb;  // obj's enclosing box (itself), kept with it: a planner meets a box many times
 };
 
 // Occupied octree leaves counted in a 3-D prefix-sum table at the octree's
@@ -304,16 +307,34 @@ fcl::OBBd enclosing_box(const fcl::CollisionObjectd& o) {
   return box;
 }
 
-bool collide(const fcl::CollisionObjectd* a, const fcl::CollisionObjectd* b) {
-  if (!a->getAABB().overlap(b->getAABB())) return false;
+// A pair whose world-aligned boxes overlap, with their enclosing boxes.
+bool collide_enclosed(const fcl::CollisionObjectd* a, const fcl::OBBd& a_box,
+                      const fcl::CollisionObjectd* b, const fcl::OBBd& b_box) {
   // FCL's 15-axis box test settles most near pairs before the narrow phase,
   // and every pair of boxes (it is exact for them, up to 1e-6 m of slack).
-  if (!enclosing_box(*a).overlap(enclosing_box(*b))) return false;
+  if (!a_box.overlap(b_box)) return false;
   if (a->getNodeType() == fcl::GEOM_BOX && b->getNodeType() == fcl::GEOM_BOX) return true;
   fcl::CollisionRequestd req;
   fcl::CollisionResultd res;
   fcl::collide(a, b, req, res);
   return res.isCollision();
+}
+
+bool collide(const fcl::CollisionObjectd* a, const fcl::CollisionObjectd* b) {
+  if (!a->getAABB().overlap(b->getAABB())) return false;
+  return collide_enclosed(a, enclosing_box(*a), b, enclosing_box(*b));
+}
+
+// An object moved or resized: its AABB and enclosing box follow.
+void placed(fcl::CollisionObjectd& o, fcl::OBBd& box) {
+  o.computeAABB();
+  box = enclosing_box(o);
+}
+
+// collide() with both enclosing boxes at hand.
+bool collide(const fcl::CollisionObjectd* a, const fcl::OBBd& a_box, const fcl::CollisionObjectd* b,
+             const fcl::OBBd& b_box) {
+  return a->getAABB().overlap(b->getAABB()) && collide_enclosed(a, a_box, b, b_box);
 }
 
 }  // namespace
@@ -389,12 +410,13 @@ struct CollisionChecker::Impl {
       s.exact_epoch = next_epoch++;
       s.exact_world_free = false;
       s.exact->setTransform(to_fcl(pose));
-      s.exact->computeAABB();
+      placed(*s.exact, s.exact_obb);
     }
   }
 
-  bool hits_octree(const fcl::CollisionObjectd* o) const {
-    if (!trailer->grid.may_hit(enclosing_box(*o), o->getAABB())) return false;
+  // `box`: o's enclosing box.
+  bool hits_octree(const fcl::CollisionObjectd* o, const fcl::OBBd& box) const {
+    if (!trailer->grid.may_hit(box, o->getAABB())) return false;
     // With voxel-sized cells that was the exact test for a box; other
     // shapes, only enclosed by their box, go on to FCL's octree test.
     return (o->getNodeType() == fcl::GEOM_BOX && trailer->grid.voxel_sized()) ||
@@ -402,7 +424,7 @@ struct CollisionChecker::Impl {
   }
 
   // World box hit by `o` (not ignored), or -1.
-  long hit_box(const fcl::CollisionObjectd* o) const {
+  long hit_box(const fcl::CollisionObjectd* o, const fcl::OBBd& box) const {
     const fcl::AABBd& a = o->getAABB();
     auto i = std::lower_bound(box_min_x.begin(), box_min_x.end(), a.min_.x() - box_max_len_x) -
              box_min_x.begin();
@@ -410,7 +432,7 @@ struct CollisionChecker::Impl {
            box_min_x[static_cast<std::size_t>(i)] <= a.max_.x();
          ++i) {
       const WorldBox& b = boxes[static_cast<std::size_t>(i)];
-      if (collide(o, b.obj.get()) && ignored.count(b.id) == 0) return i;
+      if (collide(o, box, b.obj.get(), b.obb) && ignored.count(b.id) == 0) return i;
     }
     return -1;
   }
@@ -419,13 +441,14 @@ struct CollisionChecker::Impl {
   // ("plate - box 12"), or empty.
   std::string first_hit() const {
     for (const auto& s : shapes) {
-      if (hits_octree(s.exact.get())) return s.label + " - trailer";
-      const long b = hit_box(s.exact.get());
+      if (hits_octree(s.exact.get(), s.exact_obb)) return s.label + " - trailer";
+      const long b = hit_box(s.exact.get(), s.exact_obb);
       if (b >= 0)
         return s.label + " - box " + std::to_string(boxes[static_cast<std::size_t>(b)].id);
     }
     for (const auto& [i, j] : self_pairs) {
-      if (collide(shapes[i].exact.get(), shapes[j].exact.get())) {
+      if (collide(shapes[i].exact.get(), shapes[i].exact_obb, shapes[j].exact.get(),
+                  shapes[j].exact_obb)) {
         return shapes[i].label + " - " + shapes[j].label;
       }
     }
@@ -436,7 +459,7 @@ struct CollisionChecker::Impl {
   bool any_hit() const {
     for (auto& s : const_cast<std::vector<RobotShape>&>(shapes)) {
       if (s.exact_world_free) continue;
-      if (hits_octree(s.exact.get()) || hit_box(s.exact.get()) >= 0) return true;
+      if (hits_world(s.exact.get(), s.exact_obb)) return true;
       s.exact_world_free = true;
     }
     for (std::size_t k = 0; k < self_pairs.size(); ++k) {
@@ -444,7 +467,7 @@ struct CollisionChecker::Impl {
       const RobotShape& b = shapes[self_pairs[k].second];
       const std::pair<std::uint64_t, std::uint64_t> epochs{a.exact_epoch, b.exact_epoch};
       if (pair_free_exact[k] == epochs) continue;
-      if (collide(a.exact.get(), b.exact.get())) return true;
+      if (collide(a.exact.get(), a.exact_obb, b.exact.get(), b.exact_obb)) return true;
       pair_free_exact[k] = epochs;
     }
     return false;
@@ -496,8 +519,8 @@ struct CollisionChecker::Impl {
     return worst + std::abs(half_step[kBaseX]);
   }
 
-  bool hits_world(const fcl::CollisionObjectd* o) const {
-    return hits_octree(o) || hit_box(o) >= 0;
+  bool hits_world(const fcl::CollisionObjectd* o, const fcl::OBBd& box) const {
+    return hits_octree(o, box) || hit_box(o, box) >= 0;
   }
 
   // Stretching a shape's box along its own axes covers a base translation
@@ -512,8 +535,8 @@ struct CollisionChecker::Impl {
     s.swept_box->side = 2.0 * half;
     s.swept_box->computeLocalAABB();
     s.swept->setTransform(to_fcl(Eigen::Isometry3d(Eigen::Translation3d(pose.translation()))));
-    s.swept->computeAABB();
-    return !hits_world(s.swept.get());
+    placed(*s.swept, s.swept_obb);
+    return !hits_world(s.swept.get(), s.swept_obb);
   }
 
   bool sweep_free(const JointVector& half_step) const {
@@ -534,10 +557,10 @@ struct CollisionChecker::Impl {
         s.swept_box->side = world_side;
         s.swept_box->computeLocalAABB();
         s.swept->setTransform(to_fcl(pose));
-        s.swept->computeAABB();
+        placed(*s.swept, s.swept_obb);
         s.swept_at =
             RobotShape::Placement::Constant(std::nan(""));  // object now differs from swept_at
-        if (hits_world(s.swept.get()) &&
+        if (hits_world(s.swept.get(), s.swept_obb) &&
             !(half_step[kBaseX] != 0.0 && aligned_sweep_free(s, pose, d, half_step))) {
           return false;
         }
@@ -552,7 +575,7 @@ struct CollisionChecker::Impl {
         s.swept_box->side = self_side;
         s.swept_box->computeLocalAABB();
         s.swept->setTransform(to_fcl(pose));
-        s.swept->computeAABB();
+        placed(*s.swept, s.swept_obb);
       }
     }
     for (std::size_t k = 0; k < self_pairs.size(); ++k) {
@@ -560,7 +583,7 @@ struct CollisionChecker::Impl {
       const RobotShape& b = shapes[self_pairs[k].second];
       const std::pair<std::uint64_t, std::uint64_t> epochs{a.swept_epoch, b.swept_epoch};
       if (pair_free_swept[k] == epochs) continue;
-      if (collide(a.swept.get(), b.swept.get())) return false;
+      if (collide(a.swept.get(), a.swept_obb, b.swept.get(), b.swept_obb)) return false;
       pair_free_swept[k] = epochs;
     }
     return true;
@@ -643,6 +666,7 @@ void CollisionChecker::set_boxes(const std::vector<Box>& boxes) {
       wb.obj = std::make_unique<fcl::CollisionObjectd>(wb.shape, to_fcl(b.pose));
     }
     wb.obj->computeAABB();
+    wb.obb = enclosing_box(*wb.obj);
     next.push_back(std::move(wb));
   }
   // Sorted from the list as given, as in a fresh checker: boxes with equal

@@ -157,7 +157,7 @@ struct Options {
   std::vector<EnvFamily> families{EnvFamily::kA1, EnvFamily::kA2, EnvFamily::kB1, EnvFamily::kB2};
   bool fresh_checker = false;
   // As configs/unload_sim.yaml runs H.
-  double h_pile = 1.35, h_min = 0.5, d_min = 0.6, plan_timeout_s = 30.0;
+  double h_pile = 1.35, h_min = 0.5, d_min = 0.6;
 };
 
 struct Context {
@@ -449,7 +449,6 @@ int main(int argc, char** argv) {
   plr::planning::LatticePlanner planner(std::move(*lattice));
   ActionOptions options;
   options.observation.h_pile = o.h_pile;
-  options.plan_timeout_s = o.plan_timeout_s;
   plr::sim::HardcodedParams h;
   h.h_min = o.h_min;
   h.d_min = o.d_min;

@@ -94,9 +94,7 @@ nlohmann::json run(const Job& job) {
     die(saved.error().message);
   // As configs/unload_sim.yaml: plans are bounded by expansions; the time
   // limit is a safety net for a machine loaded by the other workers.
-  plr::actions::ActionOptions options;
-  options.plan_timeout_s = 30.0;
-  const plr::actions::ActionModel model(robot, options);
+  const plr::actions::ActionModel model(robot, plr::actions::ActionOptions{});
   // Each action as it went, so that a run that stopped early can be read.
   nlohmann::json steps = nlohmann::json::array();
   const auto episode = value_or_die(plr::actions::run_hardcoded(

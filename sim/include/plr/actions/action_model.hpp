@@ -45,10 +45,13 @@ struct ActionOptions {
   Geometry geometry;
   PlanTimeModel plan_time;
   // Planning: a budget of search expansions, not of time, makes each plan
-  // (and so each outcome) the same whatever the machine's load; the time
-  // limit is a safety net. ARA* spends a whole budget lowering ε, so by
-  // default it stops at its first solution (ε = 5).
-  double plan_timeout_s = 5.0;
+  // (and so each outcome) the same whatever the machine's load. The time
+  // limit is a safety net far above what the budget takes (5000 M2
+  // expansions that find nothing take ~20 s on the 2-core machine); a search
+  // it ends fails the action (PLR_ERR_INVALID) instead of letting the load
+  // decide the outcome. ARA* spends a whole budget lowering ε, so by default
+  // it stops at its first solution (ε = 5).
+  double plan_timeout_s = 120.0;
   std::uint64_t plan_expansions = 5000;
   std::vector<double> plan_epsilons{5.0};
   // Pick candidates tried per action, and different grips tried per box

@@ -2,8 +2,6 @@
 // real physics, the real lattice planner, hand-made worlds.
 #include <gtest/gtest.h>
 
-#include <atomic>
-#include <thread>
 #include <vector>
 
 #include "plr/sim/generators.hpp"
@@ -74,16 +72,11 @@ TEST(ActionModel, TheSameRunUnderCpuLoadGivesTheSameCurve) {
     return times;
   };
   const auto idle = curve();
-  std::atomic<bool> stop{false};
-  std::vector<std::thread> burners;
-  for (unsigned i = 0; i < std::max(2u, std::thread::hardware_concurrency()); ++i)
-    burners.emplace_back([&] {
-      volatile double x = 1;
-      while (!stop.load(std::memory_order_relaxed)) x = x * 1.0000001 + 1e-9;
-    });
-  const auto busy = curve();
-  stop = true;
-  for (auto& b : burners) b.join();
+  std::vector<double> busy;
+  {
+    const CpuLoad load;
+    busy = curve();
+  }
   EXPECT_GE(idle.size(), 2u);
   EXPECT_EQ(idle, busy);
 }

@@ -5,6 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
+
+#include "plr/sim/generators.hpp"
 
 #include "scene.hpp"
 
@@ -12,6 +15,7 @@ namespace plr::actions {
 namespace {
 
 using testing::box;
+using testing::CpuLoad;
 using testing::Fixture;
 using testing::options;
 using testing::planner;
@@ -208,6 +212,58 @@ TEST(RunHardcoded, ABoxLyingOnTheNoseIsShakenOffAndTheWallUnloaded) {
   EXPECT_TRUE(std::any_of(notes.begin(), notes.end(), [](const std::string& n) {
     return n.find("9 on the robot: shaking it off") != std::string::npos;
   }));
+}
+
+// H's first actions on A1 seed 1, once on an idle machine and once with every
+// core kept busy: the same curve (each box's and each action's end in robot
+// time) and the same search work, to the bit. One of the M2 queries spends
+// its whole budget (seconds of wall time): with a time limit below what the
+// budget takes, the busy run's search was cut shorter (A1 seed 1 gave 28.9 s
+// and 35.2 s for H's second pick).
+TEST(RunHardcoded, TheSameRunOnA1UnderCpuLoadGivesTheSameCurve) {
+  ActionOptions o;
+  o.plan_expansions = 1500;  // a shorter test; still spent whole by that query
+  const ActionModel model(robot(), o);
+  const sim::World truth = sim::make_environment(sim::EnvFamily::kA1, 1);
+  struct Trace {
+    std::vector<double> curve;
+    std::vector<std::uint64_t> expansions;
+    double plan_model_s = 0, plan_wall_s = 0;
+  };
+  auto run = [&] {
+    UnloaderSimulation simulation(robot(), truth);
+    InProcessBackend backend(simulation, planner());
+    Trace r;
+    double t = 0;
+    const auto e = run_hardcoded(model, backend, sim::HardcodedParams{}, RunLimits{3},
+                                 [&](const EpisodeStep& s) {
+                                   for (double at : s.outcome.unloaded_at_s)
+                                     r.curve.push_back(t + at);
+                                   t += s.outcome.robot_time_s;
+                                   r.curve.push_back(t);
+                                   r.plan_model_s += s.outcome.plan_model_s;
+                                   r.plan_wall_s += s.outcome.plan_wall_s;
+                                   for (const auto& q : s.outcome.queries)
+                                     r.expansions.push_back(q.expansions);
+                                 });
+    EXPECT_TRUE(e) << e.error().message;
+    return r;
+  };
+  const Trace idle = run();
+  Trace busy;
+  {
+    const CpuLoad load;
+    busy = run();
+  }
+  std::printf("planning: modelled %.2f s; measured %.2f s idle, %.2f s busy\n", idle.plan_model_s,
+              idle.plan_wall_s, busy.plan_wall_s);
+  EXPECT_GE(idle.curve.size(), 3u);
+  EXPECT_EQ(idle.curve, busy.curve);
+  EXPECT_EQ(idle.expansions, busy.expansions);
+  EXPECT_EQ(idle.plan_model_s, busy.plan_model_s);
+  EXPECT_TRUE(std::any_of(idle.expansions.begin(), idle.expansions.end(), [&](std::uint64_t n) {
+    return n >= o.plan_expansions;
+  })) << "no query spent its budget: the test no longer covers the case";
 }
 
 }  // namespace

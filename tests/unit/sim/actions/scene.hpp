@@ -3,6 +3,11 @@
 // with its in-process backend.
 #pragma once
 
+#include <algorithm>
+#include <atomic>
+#include <thread>
+#include <vector>
+
 #include "plr/actions/action_model.hpp"
 #include "plr/actions/in_process.hpp"
 #include "plr/planning/lattice_planner.hpp"
@@ -56,6 +61,29 @@ struct Fixture {
   UnloaderSimulation simulation;
   InProcessBackend backend;
   Memory memory;
+};
+
+// Every core kept busy while it lives (at least two threads): what planning
+// and physics must not notice.
+class CpuLoad {
+ public:
+  CpuLoad() {
+    for (unsigned i = 0; i < std::max(2u, std::thread::hardware_concurrency()); ++i)
+      burners_.emplace_back([this] {
+        volatile double x = 1;
+        while (!stop_.load(std::memory_order_relaxed)) x = x * 1.0000001 + 1e-9;
+      });
+  }
+  ~CpuLoad() {
+    stop_ = true;
+    for (auto& b : burners_) b.join();
+  }
+  CpuLoad(const CpuLoad&) = delete;
+  CpuLoad& operator=(const CpuLoad&) = delete;
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::vector<std::thread> burners_;
 };
 
 }  // namespace plr::actions::testing
