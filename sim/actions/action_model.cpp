@@ -83,6 +83,16 @@ class Slowed {
 
 enum class Delivery { kDelivered, kNoPlace, kLost };
 
+// Boxes lying on the robot that are not part of the scene: those a shake
+// has not been tried for yet. One that a shake left where it was is most
+// likely leaning on the robot from the pile it belongs to.
+std::vector<std::uint32_t> riding(const Perceived& w, const Memory& memory,
+                                  const sim::RobotModel& robot) {
+  auto out = boxes_on_robot(w.world, robot, w.q, w.held);
+  std::erase_if(out, [&](std::uint32_t id) { return memory.shaken.count(id) > 0; });
+  return out;
+}
+
 // One action being run: its backend, memory and what it has cost so far.
 class Run {
  public:
@@ -325,6 +335,9 @@ class Run {
   std::vector<std::uint32_t> on_robot(const Perceived& w) const {
     return boxes_on_robot(w.world, robot_, w.q, w.held);
   }
+  std::vector<std::uint32_t> riding(const Perceived& w, const Memory& memory) const {
+    return actions::riding(w, memory, robot_);
+  }
 
   // Boxes lying on the robot (fallen onto the arm, or onto the nose and not
   // carried off) hide what is in front and keep its moves from being
@@ -358,7 +371,7 @@ class Run {
 
   void pick(const Perceived& seen) {
     Perceived w0 = seen;
-    w0.world = without(seen.world, on_robot(seen));
+    w0.world = without(seen.world, riding(seen, memory_));
     const auto scene = sim::analyse(w0.world, o_.observation);
     std::unordered_set<std::uint32_t> failed;
     std::size_t given_up = 0;
@@ -570,7 +583,7 @@ class Run {
 
   void sweep(const Perceived& seen) {
     Perceived w0 = seen;
-    w0.world = without(seen.world, on_robot(seen));
+    w0.world = without(seen.world, riding(seen, memory_));
     const auto scene = sim::analyse(w0.world, o_.observation);
     const auto plan = sweep_plan(w0.world, scene, action_, g_, o_.nose_sweep[2]);
     if (!plan) {
@@ -619,9 +632,8 @@ class Run {
 ActionModel::ActionModel(const sim::RobotModel& robot, ActionOptions options)
     : robot_(&robot), options_(std::move(options)) {}
 
-sim::SceneAnalysis ActionModel::scene(const Perceived& w) const {
-  auto a = sim::analyse(without(w.world, boxes_on_robot(w.world, *robot_, w.q, w.held)),
-                        options_.observation);
+sim::SceneAnalysis ActionModel::scene(const Perceived& w, const Memory& memory) const {
+  auto a = sim::analyse(without(w.world, riding(w, memory, *robot_)), options_.observation);
   return a.observation || w.world.boxes.empty() ? a : sim::analyse(w.world, options_.observation);
 }
 

@@ -170,7 +170,7 @@ plr::Expected<Episode> run_hardcoded(const ActionModel& model, Backend& backend,
       e.final_world = std::move(seen->world);
       return e;
     }
-    const sim::SceneAnalysis scene = model.scene(*seen);
+    const sim::SceneAnalysis scene = model.scene(*seen, memory);
     std::optional<sim::Action> action;
     for (const sim::Action a : sim::hardcoded_ranking(scene, h)) {
       if (!rules.excluded(a)) {

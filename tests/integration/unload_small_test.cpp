@@ -133,7 +133,7 @@ TEST(UnloadSmall, SurvivesTheSimulatorBeingKilled) {
   // that no pick region takes, issue 18), so the count asked for here is
   // only that the run went on after the restart; how much H unloads is the
   // first test's to check.
-  const Outcome run = unload(6.0, [](pid_t pid) {
+  const Outcome run = unload(2.0, [](pid_t pid) {
     // The supervisor's child that runs host 'sim'.
     const std::string cmd = "pkill -KILL -P " + std::to_string(pid) + " -f -- '--host sim'";
     EXPECT_EQ(std::system(cmd.c_str()), 0) << "no simulator host to kill";
@@ -145,16 +145,16 @@ TEST(UnloadSmall, SurvivesTheSimulatorBeingKilled) {
 
 // RRTConnect has no M6: a start in collision (a box resting on the nose)
 // stalls it, so the planner goes back to ARA* after a while. Both swaps fall
-// well inside the run (about 8.5 s on the 2-core VM with nothing else running).
+// well inside the run (about 5 s on the 2-core VM with nothing else running).
 TEST(UnloadSmall, FinishesWhenThePlannerIsSwappedMidRun) {
-  const Outcome run = unload(3.0, [](pid_t) {
+  const Outcome run = unload(1.5, [](pid_t) {
     const auto swap = [](const char* plugin) {
       const std::string cmd =
           std::string(PLR_BIN) + " swap planner " + plugin + " --pipeline " + pipeline_name();
       EXPECT_EQ(std::system(cmd.c_str()), 0) << "plr swap planner " << plugin << " failed";
     };
     swap("planner_ompl");
-    std::this_thread::sleep_for(std::chrono::seconds(3));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));
     swap("planner_arastar");
   });
   expect_unloaded(run, 20);

@@ -360,7 +360,7 @@ class ExecutorNode : public plr::Node {
         break;
       }
       sim::Action action{};
-      const sim::SceneAnalysis scene = model_->scene(w);
+      const sim::SceneAnalysis scene = model_->scene(w, memory_);
       const sim::Observation observation = *scene.observation;
       if (repeating) {
         action = repeat;

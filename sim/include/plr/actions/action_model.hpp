@@ -150,9 +150,9 @@ class ActionModel {
                              const Reporter& reporter = {}) const;
 
   // What stands in front of the robot, as the strategy sees it: the boxes
-  // lying on the robot are not part of it (an action shakes them off first),
-  // unless nothing else is left.
-  sim::SceneAnalysis scene(const Perceived& w) const;
+  // lying on the robot are not part of it (an action shakes them off
+  // first), unless nothing else is left or a shake left them there.
+  sim::SceneAnalysis scene(const Perceived& w, const Memory& memory) const;
 
   const ActionOptions& options() const { return options_; }
   const sim::RobotModel& robot() const { return *robot_; }
