@@ -267,6 +267,10 @@ class Run {
       note("execute: " + r.error().message);
       return std::nullopt;
     }
+    if (r->stalled)
+      note(fmt::format(
+          "the base stalled {:.1f} s into the move: the boxes pushed back with {:.0f} N",
+          r->stall_after_s, r->stall_force));
     const double duration = (m.points.empty() ? 0.0 : m.points.back().time_s) + m.settle_s;
     // A box the belt carries out after the robot stopped is counted by the
     // time the robot goes on.
@@ -324,7 +328,24 @@ class Run {
       return false;
     }
     last_held_ = done->held;
+    // Backing away, the base is held only by what the nose pins to the
+    // floor (a box wedged under it): lifted, the nose lets go, and the base
+    // tries once more.
+    if (done->stalled && mode == PlanMode::kBaseLine && !freeing_ && backwards(goal, w)) {
+      freeing_ = true;
+      const bool freed = step("nose up to free the base", PlanMode::kNose,
+                              nose({g_.nose_lift_max, 0.0, 0.0}), Suction::kKeep, Suction::kKeep) &&
+                         step(what, mode, goal, Suction::kKeep, Suction::kKeep, leave_out);
+      freeing_ = false;
+      return freed;
+    }
     return true;
+  }
+
+  static bool backwards(const Goal& goal, const Perceived& from) {
+    for (auto [j, v] : goal.joints)
+      if (j == sim::kBaseX) return v < from.q[sim::kBaseX];
+    return false;
   }
 
   // Boxes touching the conveyor or the scoop.
@@ -381,17 +402,23 @@ class Run {
     }
     // Boxes given up still come out of pick_candidates: ask for as many more.
     std::vector<PickCandidate> candidates;
+    std::vector<PickRejection> rejected;
     for (auto& c : pick_candidates(w0.world, scene, action_, o_.observation, robot_, g_, w0.q,
-                                   o_.pick_candidates + given_up, failed))
+                                   o_.pick_candidates + given_up, failed, &rejected))
       if (candidates.size() < o_.pick_candidates && worth_another_grip(c))
         candidates.push_back(std::move(c));
     // A box the cups did not hold is tried again only after the others.
     std::stable_partition(candidates.begin(), candidates.end(),
                           [&](const PickCandidate& c) { return !memory_.ungripped.count(c.box); });
     if (candidates.empty()) {
-      not_applicable(fmt::format("no box {} {} in front can be picked",
+      // The first few boxes of the region, and what keeps each in place.
+      std::string why;
+      for (std::size_t k = 0; k < std::min<std::size_t>(rejected.size(), 3); ++k)
+        why += fmt::format("{} {}: {}", k == 0 ? ":" : ";", rejected[k].box, rejected[k].why);
+      if (rejected.size() > 3) why += fmt::format("; {} more", rejected.size() - 3);
+      not_applicable(fmt::format("no box {} {} in front can be picked{}",
                                  sim::to_string(sim::height(action_)),
-                                 sim::to_string(sim::side(action_))));
+                                 sim::to_string(sim::side(action_)), why));
       return;
     }
     const PickCandidate* chosen = nullptr;
@@ -624,6 +651,7 @@ class Run {
   std::uint32_t unloaded_at_start_ = 0;
   std::vector<std::uint32_t> last_held_;
   std::string step_failure_;  // why the last step that failed did
+  bool freeing_ = false;      // lifting the nose to free a stalled base
   double time_scale_ = 1.0;   // of the trajectories executed: > 1 carries a dropped box slower
 };
 

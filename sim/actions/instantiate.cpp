@@ -9,6 +9,8 @@
 #include <tuple>
 #include <unordered_set>
 
+#include <fmt/format.h>
+
 namespace plr::actions {
 
 namespace {
@@ -139,7 +141,8 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
                                            sim::Action action, const sim::ObservationParams& obs,
                                            const sim::RobotModel& robot, const Geometry& g,
                                            const sim::JointVector& current, std::size_t max_count,
-                                           const std::unordered_set<std::uint32_t>& most_cups) {
+                                           const std::unordered_set<std::uint32_t>& most_cups,
+                                           std::vector<PickRejection>* rejected) {
   std::unordered_set<std::uint32_t> wall(scene.first_wall.begin(), scene.first_wall.end());
   std::unordered_set<std::uint32_t> front(scene.front_pile.begin(), scene.front_pile.end());
   const std::size_t count = world.boxes.size();
@@ -209,15 +212,16 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
   // Unless `leaning_too`, a box tilted on an edge (no face the plate seals
   // on) does not count: nothing can pick it, and it slides off what comes
   // out under it.
-  auto clear = [&](const std::vector<std::size_t>& group, const Polygon& area, double z0, double z1,
-                   bool leaning_too) {
+  // Returns the first box in the way.
+  auto in_the_way = [&](const std::vector<std::size_t>& group, const Polygon& area, double z0,
+                        double z1, bool leaning_too) -> std::optional<std::size_t> {
     for (std::size_t j = 0; j < count; ++j) {
       if (std::find(group.begin(), group.end(), j) == group.end() &&
           (leaning_too || has_sealable_face(world.boxes[j])) && near(z0, z1, b[j].z0, b[j].z1) &&
           separation(area, outline[j]) < -kMargin)
-        return false;
+        return j;
     }
-    return true;
+    return std::nullopt;
   };
   const double pw = g.plate_half_width(), ph = g.plate_half_height();
 
@@ -227,8 +231,12 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
   };
   std::vector<Ranked> ranked;
   for (std::size_t i = 0; i < count; ++i) {
-    if (!in_region[i] || !faces[i]) continue;
+    if (!in_region[i]) continue;
     const auto& box = world.boxes[i];
+    if (!faces[i]) {
+      if (rejected) rejected->push_back({box.id, "no face the plate seals on"});
+      continue;
+    }
     const Face& f = *faces[i];
     const Eigen::Vector3d& n = f.n;
     const Eigen::Vector3d& lateral = f.lateral;
@@ -300,6 +308,12 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       double lift = 0, out_depth = 0;
     };
     std::optional<Grip> best;
+    // Why the plate centred on the face was not taken: what the caller is
+    // told if no other pose is taken either.
+    std::string refused;
+    auto refuse = [&](const std::string& why) {
+      if (refused.empty()) refused = why;
+    };
     for (const auto& [dy, dz] : offsets) {
       const Eigen::Vector3d p = plate_at(dy, dz);
       // In the plate's corridor, what reaches the face stops the plate short
@@ -307,47 +321,54 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       // stands further out leaves the plate less room before the face (a
       // nearer pre-grasp; too little room, and the pose is not taken).
       double back = g.grasp_gap, room = g.pregrasp_distance;
+      std::size_t proud = count, before = count;
       for (std::size_t j = 0; j < count; ++j) {
         if (j == i || !near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1)) continue;
         const auto span = span_in_band(outline[j], p.head<2>(), n.head<2>(), pw);
         if (!span || span->min >= 0.0) continue;
-        if (span->max > -kProud - kClearance)
+        if (span->max > -kProud - kClearance) {
+          if (g.grasp_gap - span->min > back) proud = j;
           back = std::max(back, g.grasp_gap - span->min);
-        else
-          room = std::min(room, -span->max - kClearance);
+        } else if (-span->max - kClearance < room) {
+          before = j;
+          room = -span->max - kClearance;
+        }
       }
-      if (back - g.grasp_gap > kProud || room < kMinPregrasp) continue;
+      if (back - g.grasp_gap > kProud) {
+        refuse(fmt::format("box {} stands out before its face", world.boxes[proud].id));
+        continue;
+      }
+      if (room < kMinPregrasp) {
+        refuse(fmt::format("box {} leaves the plate no room before it", world.boxes[before].id));
+        continue;
+      }
       Grip grip;
       grip.at_face = p;
       grip.back = back;
       grip.pregrasp = room;
       const Eigen::Vector3d surface = p - back * n;
       const int own = cups_on(i, p);
-      if (own == 0) continue;
+      if (own == 0) {
+        refuse("no whole cup on its face");
+        continue;
+      }
       grip.group.push_back(i);
       grip.cups.push_back(own);
-      // Every other box whose face the cups reach (with a margin: a settled
-      // box may lean) and that whole cups cover; it must be of the region.
-      // Its cups could stay closed (cups_open); whether such poses help is
-      // not settled (docs/executor.md).
-      bool foreign = false;
-      for (std::size_t j = 0; j < count && !foreign; ++j) {
-        if (j == i || !near(p.y() - pw, p.y() + pw, b[j].y0, b[j].y1) ||
+      // Every other box of the region whose face the cups reach (with a
+      // margin: a settled box may lean) and that whole cups cover. The cups
+      // over a box of another region stay closed (cups_open): it stays.
+      for (std::size_t j = 0; j < count; ++j) {
+        if (j == i || !in_region[j] || !faces[j] ||
+            !near(p.y() - pw, p.y() + pw, b[j].y0, b[j].y1) ||
             !near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1))
           continue;
-        if (!faces[j]) {
-          // Not in the structure, or no face the plate seals on: only in the way if at the face.
-          continue;
-        }
         const double gap = (faces[j]->centre - surface).dot(n);
         if (std::abs(gap) > g.cups.reach + kSealMargin) continue;
         const int k = cups_on(j, p);
         if (k == 0) continue;
-        if (!in_region[j]) foreign = true;
         grip.group.push_back(j);
         grip.cups.push_back(k);
       }
-      if (foreign) continue;
       // The group is lifted off what it rests on (and over the lowered
       // nose) before it comes out: nothing but its own boxes may rest on it.
       double z0 = b[i].z0, depth = 0;
@@ -357,16 +378,27 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       }
       grip.lift = std::max(g.retract_lift, g.nose_top + kMargin - z0);
       grip.out_depth = std::max(2 * f.half_d, depth) + kMargin;
-      bool free = true;
+      std::string blocked;
       for (auto j : grip.group) {
         // Lifted, nothing may stand over it; pulled out, each box (it may be
         // wider than the plate) passes over what stands in front of it.
         // Neighbours beside it, flush with it, are not in the way.
-        free = free && clear(grip.group, outline[j], b[j].z1, b[j].z1 + grip.lift, false) &&
-               clear(grip.group, swept(outline[j], -grip.out_depth * n.head<2>()),
-                     b[j].z0 + grip.lift, b[j].z1 + grip.lift, true);
+        if (const auto k =
+                in_the_way(grip.group, outline[j], b[j].z1, b[j].z1 + grip.lift, false)) {
+          blocked = fmt::format("box {} rests on box {}", world.boxes[*k].id, world.boxes[j].id);
+          break;
+        }
+        if (const auto k = in_the_way(grip.group, swept(outline[j], -grip.out_depth * n.head<2>()),
+                                      b[j].z0 + grip.lift, b[j].z1 + grip.lift, true)) {
+          blocked = fmt::format("box {} is in the way out of box {}", world.boxes[*k].id,
+                                world.boxes[j].id);
+          break;
+        }
       }
-      if (!free) continue;
+      if (!blocked.empty()) {
+        refuse(blocked);
+        continue;
+      }
       // More boxes at once first, then more cups on the box that has the
       // fewest (the cups' force is shared by cups), then more in all; after
       // a failed grip, fewer boxes and more cups on the box itself.
@@ -383,7 +415,10 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       };
       if (!best || rank(grip) > rank(*best)) best = std::move(grip);
     }
-    if (!best) continue;
+    if (!best) {
+      if (rejected) rejected->push_back({box.id, refused});
+      continue;
+    }
     PickCandidate c;
     c.box = box.id;
     for (auto j : best->group) c.boxes.push_back(world.boxes[j].id);
@@ -434,8 +469,20 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     const double off_wall =
         std::max(0.0, kMargin - (half + y0)) - std::max(0.0, kMargin - (half - y1));
     c.lift = {c.grasp.position + Eigen::Vector3d(0, off_wall, best->lift), plate_yaw};
-    c.retract = {c.lift.position - best->out_depth * n, plate_yaw};
-    if (!reachable(robot, c.grasp, at) || !reachable(robot, c.pregrasp, at)) continue;
+    // Pulled out along a turned face's normal, the load also moves sideways:
+    // no further than the side walls let it and the plate.
+    Eigen::Vector3d retract = c.lift.position - best->out_depth * n;
+    const double lo = std::max(-half + kMargin - y0, -ylim - c.grasp.position.y());
+    const double hi = std::min(half - kMargin - y1, ylim - c.grasp.position.y());
+    if (lo <= hi)
+      retract.y() = c.grasp.position.y() + std::clamp(retract.y() - c.grasp.position.y(), lo, hi);
+    c.retract = {retract, plate_yaw};
+    if (!reachable(robot, c.grasp, at) || !reachable(robot, c.pregrasp, at)) {
+      if (rejected)
+        rejected->push_back(
+            {box.id, fmt::format("no arm pose reaches its face from base x {:.2f} m", c.base_x)});
+      continue;
+    }
     ranked.push_back({c, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
   }
   // Nearest first: a box behind others is reached over them, which the arm

@@ -92,7 +92,7 @@ struct PickCandidate {
 // bins), then high up. Empty: the action is not applicable here.
 // The plate goes on a box's face, or on its edges where it seals on the
 // neighbours there too: a candidate takes every box the plate seals on, and
-// a plate pose that would seal on a box outside the region is not taken.
+// the cups over a box outside the region stay closed.
 // Nothing but the group may rest on the group, and the group comes out over
 // what stands in front of it. Of the poses the corridor allows, the one
 // that takes the most boxes; for the boxes in `most_cups` (a grip failed)
@@ -100,11 +100,19 @@ struct PickCandidate {
 // Candidates whose plate poses the arm cannot reach from their base
 // position are left out; a group found from several of its boxes is one
 // candidate.
+// A box of the region that gives no candidate, and why (the plate centred
+// on its face: what is in the way, or that the arm cannot reach it).
+struct PickRejection {
+  std::uint32_t box = 0;
+  std::string why;
+};
+
 std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::SceneAnalysis& scene,
                                            sim::Action action, const sim::ObservationParams& obs,
                                            const sim::RobotModel& robot, const Geometry& g,
                                            const sim::JointVector& current, std::size_t max_count,
-                                           const std::unordered_set<std::uint32_t>& most_cups = {});
+                                           const std::unordered_set<std::uint32_t>& most_cups = {},
+                                           std::vector<PickRejection>* rejected = nullptr);
 
 // Where the plate may release held boxes over the nose, for a base at
 // base_x, the plate facing forward: reachable places, best first, at most

@@ -214,6 +214,39 @@ TEST(RunHardcoded, ABoxLyingOnTheNoseIsShakenOffAndTheWallUnloaded) {
   }));
 }
 
+// A box wedged under the raised nose (as a shake can leave one) holds the
+// base when it backs away to start a sweep: the drive stalls at once. The
+// nose lifts off the box and the base backs away; the sweep then takes it.
+TEST(ActionModel, ABaseHeldByABoxWedgedUnderTheNoseLiftsTheNoseAndBacksAway) {
+  sim::World w = wall(6.0, 3, 1);
+  sim::JointVector q = home();
+  q[sim::kBaseX] = 2.5;
+  sim::Box wedged = box(9, 2.6, 0.3, 0.0, 20.0);
+  wedged.size = {0.5, 0.5, 0.6};
+  wedged.pose.translation().z() = 0.3;
+  w.boxes.push_back(wedged);
+  UnloaderSimulation simulation(robot(), w, q);
+  InProcessBackend backend(simulation, planner());
+  // Thresholds for full-size boxes: the 0.6 m box is a pile.
+  const ActionModel model(robot(), ActionOptions{});
+  Memory memory;
+  std::vector<std::string> notes;
+  Reporter reporter;
+  reporter.note = [&](const std::string& n) { notes.push_back(n); };
+  const auto out = model.run(sim::make_sweep(sim::Height::kLow), backend, memory, reporter);
+  ASSERT_TRUE(out) << out.error().message;
+  // Held once, then free: the sweep started short of the box and came back there.
+  EXPECT_EQ(std::count_if(notes.begin(), notes.end(),
+                          [](const std::string& n) {
+                            return n.find("the base stalled") != std::string::npos;
+                          }),
+            1)
+      << ::testing::PrintToString(notes);
+  EXPECT_LT(simulation.q()[sim::kBaseX], 1.5);
+  EXPECT_EQ(out->boxes, 1u);
+  EXPECT_EQ(out->robot_trailer_contacts, 0u);
+}
+
 // H's first actions on A1 seed 1, once on an idle machine and once with every
 // core kept busy: the same curve (each box's and each action's end in robot
 // time) and the same search work, to the bit. One of the M2 queries spends

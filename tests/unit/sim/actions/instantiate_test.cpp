@@ -323,6 +323,67 @@ TEST(PickCandidates, TwoStackedBoxesOfOneClassComeOutTogether) {
   EXPECT_GT(c.front().lift.position.z(), c.front().grasp.position.z());
 }
 
+TEST(PickCandidates, ANarrowBoxIsTakenWithTheCupsOverItsNeighboursClosed) {
+  // A 0.3 m box in the centre third between wide boxes of the side thirds:
+  // the 0.5 m plate cannot keep off them. Its cups over them stay closed,
+  // so that only the centre box comes out.
+  sim::World w = trailer_world();
+  w.boxes.push_back(sim::testing::make_box(1, 6.2, 0.0, 0.0, {0.4, 0.3, 0.35}));
+  w.boxes.push_back(sim::testing::make_box(2, 6.2, 0.45, 0.0, {0.4, 0.6, 0.35}));
+  w.boxes.push_back(sim::testing::make_box(3, 6.2, -0.45, 0.0, {0.4, 0.6, 0.35}));
+  // The boxes are 0.35 m high: a pile of class mid.
+  const auto c = candidates(w, sim::make_pick(sim::Height::kMid, sim::Side::kCenter));
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(c.front().boxes, std::vector<std::uint32_t>{1});
+  const Geometry g;
+  const auto& cups = g.cups;
+  int open = 0;
+  for (int r = 0; r < cups.cups_x; ++r)
+    for (int k = 0; k < cups.cups_y; ++k) {
+      // Across the plate from its centre (the plate faces +x: across is y).
+      const double y =
+          c.front().grasp.position.y() + ((k + 0.5) / cups.cups_y - 0.5) * cups.extent.y();
+      if (!c.front().cups_open[static_cast<std::size_t>(r * cups.cups_y + k)]) continue;
+      ++open;
+      EXPECT_LE(std::abs(y), 0.15) << "an open cup over a neighbour, row " << r << " column " << k;
+    }
+  EXPECT_EQ(open, c.front().cups);
+}
+
+TEST(PickCandidates, EachBoxOfARegionWithoutCandidatesSaysWhatHoldsIt) {
+  // Pick(mid, right): its one box has a low box standing before its face.
+  sim::World w = trailer_world();
+  w.boxes.push_back(sim::testing::make_box(3, 6.2, -0.8, 0.0, {0.4, 0.4, 0.35}));
+  w.boxes.push_back(sim::testing::make_box(4, 5.95, -0.8, 0.0, {0.1, 0.4, 0.2}));
+  const auto obs = sim::testing::small_scene_observation();
+  std::vector<PickRejection> rejected;
+  const auto c =
+      pick_candidates(w, sim::analyse(w, obs), sim::make_pick(sim::Height::kMid, sim::Side::kRight),
+                      obs, robot(), Geometry{}, home(8.0), 10, {}, &rejected);
+  EXPECT_TRUE(c.empty());
+  ASSERT_FALSE(rejected.empty());
+  EXPECT_EQ(rejected.front().box, 3u);
+  EXPECT_NE(rejected.front().why.find("box 4"), std::string::npos) << rejected.front().why;
+}
+
+TEST(PickCandidates, ATurnedBoxAgainstASideWallIsPulledOutInsideTheTrailer) {
+  // Turned 0.25 rad, its face towards the wall: pulled straight back along its face's
+  // normal, the load would go into the wall.
+  sim::World w = trailer_world();
+  for (const double sign : {1.0, -1.0}) {
+    w.boxes = {sim::testing::make_box(1, 6.2, sign * 0.9, 0.0, {0.5, 0.5, 0.35})};
+    w.boxes[0].pose.linear() = Eigen::AngleAxisd(-sign * 0.25, Eigen::Vector3d::UnitZ()).matrix();
+    const auto c = candidates(
+        w, sim::make_pick(sim::Height::kMid, sign > 0 ? sim::Side::kLeft : sim::Side::kRight));
+    ASSERT_EQ(c.size(), 1u);
+    const auto b = sim::bounds(w.boxes[0]);
+    const double moved = c.front().retract.position.y() - c.front().grasp.position.y();
+    EXPECT_LE(b.y1 + moved, w.trailer.width / 2) << sign;
+    EXPECT_GE(b.y0 + moved, -w.trailer.width / 2) << sign;
+    EXPECT_LT(c.front().retract.position.x(), c.front().lift.position.x() - 0.4);
+  }
+}
+
 TEST(DropOff, PlacesHoldTheBoxOverTheConveyorAndTurnTheWristSideways) {
   sim::World w = trailer_world();
   w.boxes.push_back(sim::testing::make_box(7, 6.0, 0.0, 1.0, {0.45, 0.55, 0.35}));
