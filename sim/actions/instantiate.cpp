@@ -584,6 +584,7 @@ bool follows_lines(const sim::RobotModel& robot, const sim::JointVector& from,
 std::optional<SweepPlan> sweep_plan(const sim::World& world, const sim::SceneAnalysis& scene,
                                     sim::Action action, const Geometry& g, double scoop_extension) {
   constexpr double kOnFloor = 0.05;  // m, a box bottom this low lies on the floor
+  constexpr double kStrayGap = 0.5;  // m of bare floor that ends a low sweep's stretch
   const double tip = g.conveyor_length + scoop_extension + g.scoop_lip;  // ahead of base_x
   const double deepest = world.trailer.depth - kMargin;
   std::unordered_set<std::uint32_t> front(scene.front_pile.begin(), scene.front_pile.end());
@@ -591,19 +592,29 @@ std::optional<SweepPlan> sweep_plan(const sim::World& world, const sim::SceneAna
   SweepPlan p;
   double near = std::numeric_limits<double>::infinity(), far = -near, top = 0.0;
   switch (sim::height(action)) {
-    case sim::Height::kLow:
+    case sim::Height::kLow: {
+      // The floor layer's nearest stretch: boxes strayed towards the door
+      // are swept on their own, not driven through to the pile beyond them
+      // (where the base would stall with them on the scoop).
+      std::vector<std::pair<double, double>> floor;
       for (const auto& box : world.boxes) {
         const auto b = sim::bounds(box);
-        if (!front.count(box.id) || b.z0 > kOnFloor) continue;
-        near = std::min(near, b.x0);
-        far = std::max(far, b.x1);
+        if (front.count(box.id) && b.z0 <= kOnFloor) floor.emplace_back(b.x0, b.x1);
       }
-      if (far < near) return std::nullopt;
+      if (floor.empty()) return std::nullopt;
+      std::sort(floor.begin(), floor.end());
+      near = floor.front().first;
+      far = floor.front().second;
+      for (const auto& [x0, x1] : floor) {
+        if (x0 > far + kStrayGap) break;
+        far = std::max(far, x1);
+      }
       // What lies on the floor layer rides up with it.
       p.swept = scene.front_pile;
       far += g.sweep_overshoot;
       if (!scene.first_wall.empty()) far = std::min(far, scene.wall_near_x - kMargin);
       break;
+    }
     case sim::Height::kMid:
       if (scene.front_pile.empty() && scene.first_wall.empty()) return std::nullopt;
       p.swept = scene.front_pile;
