@@ -480,6 +480,7 @@ class Run {
       const bool out = step("retract", PlanMode::kArmCartesian, pose(chosen->retract),
                             Suction::kKeep, Suction::kKeep);
       if (!out) {
+        const std::string why = "not pulled out: " + step_failure_;
         // Still in the wall: no drop-off can be planned from here. Set the
         // box down where it was and withdraw; it is tried after the others.
         step("put back", PlanMode::kArmCartesian, pose(chosen->grasp), Suction::kKeep,
@@ -487,6 +488,14 @@ class Run {
         step("withdraw", PlanMode::kArmCartesian, pose(chosen->pregrasp), Suction::kKeep,
              Suction::kKeep, chosen->boxes);
         memory_.ungripped.insert(chosen->boxes.begin(), chosen->boxes.end());
+        // The same pull would fail the same way: it counts as an attempt
+        // (after grip_attempts the box is given up), and the next one takes
+        // the box alone.
+        for (auto id : chosen->boxes) {
+          auto& h = memory_.grips[id];
+          ++h.failures;
+          h.last = why;
+        }
       }
       const Perceived w = observe();
       if (!w.held.empty() && last_held_.empty()) out_.failed_grasp = false;

@@ -605,13 +605,19 @@ std::optional<SweepPlan> sweep_plan(const sim::World& world, const sim::SceneAna
       std::sort(floor.begin(), floor.end());
       near = floor.front().first;
       far = floor.front().second;
+      double next = std::numeric_limits<double>::infinity();
       for (const auto& [x0, x1] : floor) {
-        if (x0 > far + kStrayGap) break;
+        if (x0 > far + kStrayGap) {
+          next = x0;
+          break;
+        }
         far = std::max(far, x1);
       }
+      // What the scoop pushes ahead gets all the room there is to climb
+      // onto it: up to just short of the next stretch.
+      far = std::isfinite(next) ? next - g.nose_clearance : far + g.sweep_overshoot;
       // What lies on the floor layer rides up with it.
       p.swept = scene.front_pile;
-      far += g.sweep_overshoot;
       if (!scene.first_wall.empty()) far = std::min(far, scene.wall_near_x - kMargin);
       break;
     }

@@ -106,6 +106,7 @@ nlohmann::json run(const Job& job) {
                          {"boxes", s.outcome.boxes},
                          {"robot_time_s", s.outcome.robot_time_s},
                          {"failed_grasp", s.outcome.failed_grasp},
+                         {"robot_trailer_contacts", s.outcome.robot_trailer_contacts},
                          {"notes", s.notes}});
       }));
   if (!episode.final_world.boxes.empty()) {

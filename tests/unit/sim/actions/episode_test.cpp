@@ -216,7 +216,7 @@ TEST(RunHardcoded, ABoxLyingOnTheNoseIsShakenOffAndTheWallUnloaded) {
 
 // A box wedged under the raised nose (as a shake can leave one) holds the
 // base when it backs away to start a sweep: the drive stalls at once. The
-// nose lifts off the box and the base backs away; the sweep then takes it.
+// nose lifts off the box and the base backs away to start the sweep.
 TEST(ActionModel, ABaseHeldByABoxWedgedUnderTheNoseLiftsTheNoseAndBacksAway) {
   sim::World w = wall(6.0, 3, 1);
   sim::JointVector q = home();
@@ -243,8 +243,35 @@ TEST(ActionModel, ABaseHeldByABoxWedgedUnderTheNoseLiftsTheNoseAndBacksAway) {
             1)
       << ::testing::PrintToString(notes);
   EXPECT_LT(simulation.q()[sim::kBaseX], 1.5);
-  EXPECT_EQ(out->boxes, 1u);
   EXPECT_EQ(out->robot_trailer_contacts, 0u);
+}
+
+// The top box of a column that reaches under the ceiling cannot be lifted
+// off it, so it cannot be pulled out: each attempt puts it back. After
+// grip_attempts such attempts it is given up, not tried again and again.
+TEST(ActionModel, ABoxThatCannotBePulledOutIsGivenUp) {
+  sim::World w;
+  w.trailer.depth = 8.0;
+  for (std::uint32_t r = 0; r < 6; ++r) w.boxes.push_back(box(r + 1, 6.0, 0.0, 0.4 * r));
+  w.boxes.push_back(box(7, 6.0, 0.0, 2.4));
+  w.boxes.back().size.z() = 0.28;
+  w.boxes.back().pose.translation().z() = 2.4 + 0.14;
+  Fixture f(w);
+  const ActionModel model(robot(), options());
+  std::vector<std::string> notes;
+  Reporter reporter;
+  reporter.note = [&](const std::string& n) { notes.push_back(n); };
+  int tried = 0;
+  for (int k = 0; k < 5; ++k) {
+    const auto out = model.run(sim::make_pick(sim::Height::kHigh, sim::Side::kCenter), f.backend,
+                               f.memory, reporter);
+    ASSERT_TRUE(out) << out.error().message;
+    EXPECT_EQ(out->boxes, 0u);
+    tried += out->applicable ? 1 : 0;
+  }
+  EXPECT_EQ(tried, options().grip_attempts);
+  ASSERT_TRUE(f.memory.grips.count(7));
+  EXPECT_TRUE(f.memory.grips.at(7).given_up);
 }
 
 // H's first actions on A1 seed 1, once on an idle machine and once with every

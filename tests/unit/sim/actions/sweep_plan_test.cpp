@@ -96,7 +96,8 @@ TEST(SweepPlan, TheLowSweepStopsAtTheWallBehindThePile) {
 
 TEST(SweepPlan, ABoxStrayedTowardsTheDoorIsLowSweptOnItsOwn) {
   // A box 4 m short of the floor layer: the low sweep takes it alone,
-  // instead of pushing it on into the layer beyond.
+  // instead of pushing it on into the layer beyond; it stops just short of
+  // the layer.
   sim::World w = floor_pile();
   w.boxes.push_back(make_box(7, 6.2, 0.8, 0));
   const auto low = plan(w, Height::kLow);
@@ -104,7 +105,7 @@ TEST(SweepPlan, ABoxStrayedTowardsTheDoorIsLowSweptOnItsOwn) {
   const Geometry g;
   const double tip = g.conveyor_length + 0.3 + g.scoop_lip;
   EXPECT_NEAR(low->start_base_x + tip, 6.0 - g.nose_clearance, 1e-9);
-  EXPECT_NEAR(low->end_base_x + tip, 6.4 + g.sweep_overshoot, 1e-9);
+  EXPECT_NEAR(low->end_base_x + tip, 10.0 - g.nose_clearance, 1e-9);
 }
 
 TEST(SweepPlan, NeverPastTheTrailersFrontWall) {
