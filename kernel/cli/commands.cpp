@@ -18,6 +18,8 @@
 #include <nlohmann/json.hpp>
 
 #include <dirent.h>
+#include <fcntl.h>
+#include <sys/wait.h>
 #include <unistd.h>
 #include <atomic>
 #include <cerrno>
@@ -152,6 +154,61 @@ Expected<std::string> find_socket(const std::string& pipeline) {
   return make_error(PLR_ERR_INVALID, "several pipelines are running; name one with --pipeline");
 }
 
+// A process of its own that removes the run's shared memory when the main
+// process dies, whatever kills it (kill -9 of main and hosts together left
+// every segment behind until the next run). It waits on a pipe only main
+// writes to: a byte means main cleaned up itself, end-of-file that it died.
+// Forked while main has one thread, so the child may run ordinary code.
+class SegmentWatchdog {
+ public:
+  explicit SegmentWatchdog(const std::string& run_id) {
+    int fds[2];
+    if (::pipe2(fds, O_CLOEXEC) != 0) return;
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      ::close(fds[1]);
+      // Not the terminal's nor a caller's pipe: whoever reads main's output
+      // sees its end when main ends.
+      if (const int null = ::open("/dev/null", O_RDWR); null >= 0)
+        for (int fd : {0, 1, 2}) ::dup2(null, fd);
+      ::setsid();  // Ctrl-C of the terminal is for main, not for this
+      for (int s : {SIGINT, SIGTERM, SIGHUP, SIGPIPE}) std::signal(s, SIG_IGN);
+      char c = 0;
+      ssize_t n = 0;
+      while ((n = ::read(fds[0], &c, 1)) < 0 && errno == EINTR) {
+      }
+      if (n == 0) {
+        // Hosts die with main (PR_SET_PDEATHSIG); one may still be making a segment.
+        (void)shm::remove_run_segments(run_id);
+        ::sleep(1);
+        (void)shm::remove_run_segments(run_id);
+      }
+      ::_exit(0);
+    }
+    ::close(fds[0]);
+    if (pid < 0) {
+      ::close(fds[1]);
+      return;
+    }
+    fd_ = fds[1];
+    pid_ = pid;
+  }
+  // Main removed the segments: the watchdog ends at once.
+  ~SegmentWatchdog() {
+    if (fd_ < 0) return;
+    const char done = 1;
+    (void)!::write(fd_, &done, 1);
+    ::close(fd_);
+    ::waitpid(pid_, nullptr, 0);
+  }
+  SegmentWatchdog(const SegmentWatchdog&) = delete;
+  SegmentWatchdog& operator=(const SegmentWatchdog&) = delete;
+
+ private:
+  int fd_ = -1;
+  pid_t pid_ = -1;
+};
+
 }  // namespace
 
 int exit_code(plr_status code) {
@@ -261,6 +318,10 @@ int run_pipeline(const RunOptions& options) {
   std::vector<HostConfig> children;
   for (const auto& h : hosts_with_nodes(*config))
     if (h != "main") children.push_back(*config->host(h));
+  // Before any thread starts (see SegmentWatchdog); only runs across hosts
+  // have segments. Destroyed after the segments are removed below.
+  std::optional<SegmentWatchdog> watchdog;
+  if (main_host && !children.empty()) watchdog.emplace(run_id);
   // The request is machine-wide: the main host holds it for every host.
   std::optional<shm::WakeLatencyRequest> wake_latency;
   if (main_host) {
@@ -351,7 +412,12 @@ int run_pipeline(const RunOptions& options) {
     if (main_host) (void)shm::remove_run_segments(run_id);
     return not_started(s.error());
   }
-  kernel.sync_transports();
+  if (auto s = kernel.sync_transports(); !s) {
+    kernel.stop();
+    supervisor.reset();
+    if (main_host) (void)shm::remove_run_segments(run_id);
+    return not_started(s.error());
+  }
   if (!main_host) report_ready();
   spdlog::info("pipeline '{}' running ({} nodes); Ctrl-C stops it", config->pipeline,
                kernel.nodes().size());

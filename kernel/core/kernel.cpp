@@ -171,9 +171,13 @@ void Kernel::stop() {
   started_ = false;
 }
 
-void Kernel::sync_transports() {
+Status Kernel::sync_transports() {
   if (bridge_) bridge_->node_thread().drain();
   if (dds_) dds_->node_thread().drain();
+  if (bridge_)
+    if (auto e = bridge_->first_error(); !e.empty())
+      return make_error(PLR_ERR_UNAVAILABLE, fmt::format("host '{}': {}", host_, e));
+  return {};
 }
 
 Kernel::Slot* Kernel::slot(const std::string& name) {

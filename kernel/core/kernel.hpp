@@ -63,8 +63,9 @@ class Kernel {
   // Calls `fn(ok, reason)` when a node announces on `pipeline/done` that the job is over.
   Status on_pipeline_done(std::function<void(bool, std::string)> fn);
 
-  // Waits until the transports have set up what the started nodes registered.
-  void sync_transports();
+  // Waits until the transports have set up what the started nodes
+  // registered; an error names what other hosts cannot reach.
+  Status sync_transports();
 
   Bus& bus() { return bus_; }
   const PipelineConfig& config() const { return config_; }
