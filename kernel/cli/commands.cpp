@@ -38,7 +38,15 @@ namespace {
 int fail(const std::string& message, int code = 1) {
   // Messages quote config text, names from requests and file names: never
   // let their control bytes reach the terminal.
-  std::cerr << "plr: " << printable(message) << "\n";
+  // A config's error lists one problem a line.
+  std::string shown;
+  for (std::size_t start = 0; start <= message.size();) {
+    const auto end = std::min(message.find('\n', start), message.size());
+    shown +=
+        (start == 0 ? "" : "\n") + printable(std::string_view(message).substr(start, end - start));
+    start = end + 1;
+  }
+  std::cerr << "plr: " << shown << "\n";
   return code;
 }
 
@@ -277,8 +285,11 @@ int run_pipeline(const RunOptions& options) {
   if (!main_host) spdlog::set_pattern(fmt::format("[%H:%M:%S.%e] [%l] [host {}] %v", options.host));
   auto config = load(options.config, options.overrides);
   if (!config) return fail(config.error());
-  if (!options.run_id.empty())
-    if (auto s = check_name(options.run_id, "--run-id"); !s) return fail(s.error());
+  // It names the run's segments.
+  if (!options.run_id.empty() && !shm::valid_run_id(options.run_id))
+    return fail(fmt::format("--run-id: '{}' is not a run id: 1 to 48 letters, digits, '_' and '-'",
+                            options.run_id),
+                2);
   const std::string run_id = options.run_id.empty() ? new_run_id() : options.run_id;
   namespace fs = std::filesystem;
   const auto report_dir = fs::absolute(options.report_dir.empty() ? "report" : options.report_dir);

@@ -142,6 +142,26 @@ TEST(Cli, SighupReloadsTheConfigAndSwapsChangedPlugins) {
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 130);
 }
 
+// `validate` said 2 and `run` 1 for the same missing plug-in.
+TEST(Cli, AMissingPluginHasTheSameExitCodeInEveryCommand) {
+  const auto path = temp_config("cli_missing.yaml", "nodes:\n  x: {plugin: nope}\n");
+  std::string out;
+  EXPECT_EQ(run_command(kPlr + " validate " + path, &out), 2) << out;
+  EXPECT_EQ(
+      run_command(
+          kPlr + " run " + path + " --report " + ::testing::TempDir() + "cli_missing_report", &out),
+      2)
+      << out;
+}
+
+// Errors quoted terminal escapes from names in requests as raw bytes.
+TEST(Cli, ErrorsShowControlBytesEscaped) {
+  std::string out;
+  EXPECT_EQ(run_command(kPlr + " status --pipeline $(printf 'a\\033[2Jb')", &out), 2) << out;
+  EXPECT_EQ(out.find('\033'), std::string::npos) << out;
+  EXPECT_NE(out.find("'a\\x1b[2Jb' is not a name"), std::string::npos) << out;
+}
+
 // `pipeline: ../victims/victim` made `plr run` delete victims/victim.sock and
 // bind its control socket in its place.
 TEST(Cli, APipelineNameCannotReachOutOfTheControlFolder) {
