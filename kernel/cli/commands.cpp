@@ -11,12 +11,15 @@
 #include <plr/shm/wake_latency.hpp>
 
 #include <plr/plugin_abi.h>
+#include <plr/atomic_file.hpp>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 #include <nlohmann/json.hpp>
 
 #include <dirent.h>
+#include <fcntl.h>
+#include <sys/wait.h>
 #include <unistd.h>
 #include <atomic>
 #include <cerrno>
@@ -24,6 +27,7 @@
 #include <csignal>
 #include <ctime>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <optional>
 
@@ -32,8 +36,89 @@ namespace plr::kernel {
 namespace {
 
 int fail(const std::string& message, int code = 1) {
-  std::cerr << "plr: " << message << "\n";
+  // Messages quote config text, names from requests and file names: never
+  // let their control bytes reach the terminal.
+  // A config's error lists one problem a line.
+  std::string shown;
+  for (std::size_t start = 0; start <= message.size();) {
+    const auto end = std::min(message.find('\n', start), message.size());
+    shown +=
+        (start == 0 ? "" : "\n") + printable(std::string_view(message).substr(start, end - start));
+    start = end + 1;
+  }
+  std::cerr << "plr: " << shown << "\n";
   return code;
+}
+
+int fail(const Error& e) {
+  return fail(e.message, exit_code(e.code));
+}
+
+// How a run ended, as report.json's `run.ended` says it.
+enum class Ending {
+  Finished,
+  Failed,
+  Interrupted,
+  Terminated,
+  Duration,
+  Stopped,
+  HostLost,
+  NotStarted
+};
+
+const char* to_string(Ending e) {
+  switch (e) {
+    case Ending::Finished:
+      return "finished";
+    case Ending::Failed:
+      return "failed";
+    case Ending::Interrupted:
+      return "interrupted";
+    case Ending::Terminated:
+      return "terminated";
+    case Ending::Duration:
+      return "duration";
+    case Ending::Stopped:
+      return "stopped";
+    case Ending::HostLost:
+      return "host_lost";
+    case Ending::NotStarted:
+      return "not_started";
+  }
+  return "?";
+}
+
+struct RunEnd {
+  Ending ending = Ending::Finished;
+  std::string reason;
+  int exit_code = 0;
+};
+
+// report.json in the report folder says how the run ended, whatever ended
+// it: nodes that write their figures there (the executor) wrote them while
+// they stopped, and this adds `run`; a file older than the run is a previous
+// run's and is replaced.
+void write_run_report(const std::filesystem::path& dir, const RunEnd& end,
+                      const PipelineConfig& config, const std::string& run_id,
+                      std::filesystem::file_time_type started, double wall_s, int restarts) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  const fs::path file = dir / "report.json";
+  nlohmann::json report = nlohmann::json::object();
+  if (fs::exists(file, ec) && fs::last_write_time(file, ec) >= started && !ec) {
+    std::ifstream in(file);
+    auto parsed = nlohmann::json::parse(in, nullptr, false);
+    if (parsed.is_object()) report = std::move(parsed);
+  }
+  report["run"] = {{"pipeline", config.pipeline},    {"run_id", run_id},
+                   {"ended", to_string(end.ending)}, {"reason", end.reason},
+                   {"exit_code", end.exit_code},     {"wall_s", wall_s},
+                   {"host_restarts", restarts}};
+  if (auto s = write_file_atomically(file.string(), report.dump(2) + "\n"); !s)
+    spdlog::error("report: {}", s.error().message);
+  else
+    spdlog::info("report: {} (run {})", file.string(), to_string(end.ending));
 }
 
 Expected<PipelineConfig> load(const std::string& file, const std::vector<std::string>& overrides) {
@@ -44,6 +129,16 @@ Expected<PipelineConfig> load(const std::string& file, const std::vector<std::st
     parsed.push_back(*p);
   }
   return load_pipeline_config(file, parsed);
+}
+
+// A request the running pipeline refused: its reason, and the exit code of
+// its kind of error.
+int refused(const nlohmann::json& reply, const std::string& fallback) {
+  const auto code = reply.contains("code") && reply["code"].is_number_integer()
+                        ? static_cast<plr_status>(reply["code"].get<int>())
+                        : PLR_ERR_INTERNAL;
+  const auto& e = reply.contains("error") ? reply["error"] : nlohmann::json();
+  return fail(e.is_string() ? e.get<std::string>() : fallback, exit_code(code));
 }
 
 // The pipeline to talk to: the named one, or the only one running.
@@ -67,7 +162,82 @@ Expected<std::string> find_socket(const std::string& pipeline) {
   return make_error(PLR_ERR_INVALID, "several pipelines are running; name one with --pipeline");
 }
 
+// A process of its own that removes the run's shared memory when the main
+// process dies, whatever kills it (kill -9 of main and hosts together left
+// every segment behind until the next run). It waits on a pipe only main
+// writes to: a byte means main cleaned up itself, end-of-file that it died.
+// Forked while main has one thread, so the child may run ordinary code.
+class SegmentWatchdog {
+ public:
+  explicit SegmentWatchdog(const std::string& run_id) {
+    int fds[2];
+    if (::pipe2(fds, O_CLOEXEC) != 0) return;
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      ::close(fds[1]);
+      // Not the terminal's nor a caller's pipe: whoever reads main's output
+      // sees its end when main ends.
+      if (const int null = ::open("/dev/null", O_RDWR); null >= 0)
+        for (int fd : {0, 1, 2}) ::dup2(null, fd);
+      ::setsid();  // Ctrl-C of the terminal is for main, not for this
+      for (int s : {SIGINT, SIGTERM, SIGHUP, SIGPIPE}) std::signal(s, SIG_IGN);
+      char c = 0;
+      ssize_t n = 0;
+      while ((n = ::read(fds[0], &c, 1)) < 0 && errno == EINTR) {
+      }
+      if (n == 0) {
+        // Hosts die with main (PR_SET_PDEATHSIG); one may still be making a segment.
+        (void)shm::remove_run_segments(run_id);
+        ::sleep(1);
+        (void)shm::remove_run_segments(run_id);
+      }
+      ::_exit(0);
+    }
+    ::close(fds[0]);
+    if (pid < 0) {
+      ::close(fds[1]);
+      return;
+    }
+    fd_ = fds[1];
+    pid_ = pid;
+  }
+  // Main removed the segments: the watchdog ends at once.
+  ~SegmentWatchdog() {
+    if (fd_ < 0) return;
+    const char done = 1;
+    (void)!::write(fd_, &done, 1);
+    ::close(fd_);
+    ::waitpid(pid_, nullptr, 0);
+  }
+  SegmentWatchdog(const SegmentWatchdog&) = delete;
+  SegmentWatchdog& operator=(const SegmentWatchdog&) = delete;
+
+ private:
+  int fd_ = -1;
+  pid_t pid_ = -1;
+};
+
 }  // namespace
+
+int exit_code(plr_status code) {
+  switch (code) {
+    case PLR_OK:
+      return 0;
+    case PLR_ERR_INVALID:
+      return 2;
+    case PLR_ERR_TIMEOUT:
+      return 3;
+    case PLR_ERR_UNAVAILABLE:
+      return 4;
+    case PLR_ERR_CANCELLED:
+      return 5;
+    case PLR_ERR_STATE:
+      return 6;
+    case PLR_ERR_INTERNAL:
+      return 1;
+  }
+  return 1;
+}
 
 std::string new_run_id() {
   return fmt::format("{}-{:x}", ::getpid(), static_cast<std::uint32_t>(wall_now_ns() / 1000));
@@ -114,7 +284,12 @@ int run_pipeline(const RunOptions& options) {
   std::signal(SIGPIPE, SIG_IGN);
   if (!main_host) spdlog::set_pattern(fmt::format("[%H:%M:%S.%e] [%l] [host {}] %v", options.host));
   auto config = load(options.config, options.overrides);
-  if (!config) return fail(config.error().message, 2);
+  if (!config) return fail(config.error());
+  // It names the run's segments.
+  if (!options.run_id.empty() && !shm::valid_run_id(options.run_id))
+    return fail(fmt::format("--run-id: '{}' is not a run id: 1 to 48 letters, digits, '_' and '-'",
+                            options.run_id),
+                2);
   const std::string run_id = options.run_id.empty() ? new_run_id() : options.run_id;
   namespace fs = std::filesystem;
   const auto report_dir = fs::absolute(options.report_dir.empty() ? "report" : options.report_dir);
@@ -123,7 +298,7 @@ int run_pipeline(const RunOptions& options) {
                                      {"config_dir", fs::path(config->file).parent_path().string()},
                                      {"run_id", run_id}});
       !s)
-    return fail(s.error().message, 2);
+    return fail(s.error());
 
   // Signals are taken synchronously by this thread only; every thread started
   // from here on inherits the mask.
@@ -132,11 +307,32 @@ int run_pipeline(const RunOptions& options) {
   for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&signals, s);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
-  // Host processes: started and watched from the main one.
+  const auto started = std::chrono::steady_clock::now();
+  // Files written from here on are this run's (report.json, see write_run_report).
+  const auto started_file_time = fs::file_time_type::clock::now() - std::chrono::seconds(1);
   std::unique_ptr<Supervisor> supervisor;
+  // The main host writes report.json however the run ends; the others leave it to it.
+  const auto end_run = [&](RunEnd end) {
+    if (main_host)
+      write_run_report(
+          report_dir, end, *config, run_id, started_file_time,
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(),
+          supervisor ? supervisor->restarts() : 0);
+    return end.exit_code;
+  };
+  const auto not_started = [&](const Error& e) {
+    fail(e.message);
+    return end_run({Ending::NotStarted, e.message, exit_code(e.code)});
+  };
+
+  // Host processes: started and watched from the main one.
   std::vector<HostConfig> children;
   for (const auto& h : hosts_with_nodes(*config))
     if (h != "main") children.push_back(*config->host(h));
+  // Before any thread starts (see SegmentWatchdog); only runs across hosts
+  // have segments. Destroyed after the segments are removed below.
+  std::optional<SegmentWatchdog> watchdog;
+  if (main_host && !children.empty()) watchdog.emplace(run_id);
   // The request is machine-wide: the main host holds it for every host.
   std::optional<shm::WakeLatencyRequest> wake_latency;
   if (main_host) {
@@ -182,13 +378,13 @@ int run_pipeline(const RunOptions& options) {
           finished = true;
         });
         !s)
-      return fail(s.error().message);
+      return not_started(s.error());
 
   std::atomic<bool> stop_requested{false};
   std::unique_ptr<ControlServer> control;
   if (options.host == "main") {
     auto path = control_socket_path(config->pipeline);
-    if (!path) return fail(path.error().message);
+    if (!path) return not_started(path.error());
     control =
         std::make_unique<ControlServer>(*path, [&](const nlohmann::json& req) -> nlohmann::json {
           const auto cmd = req.value("cmd", "");
@@ -204,12 +400,14 @@ int run_pipeline(const RunOptions& options) {
             auto s = cmd == "swap"    ? kernel.swap(node, req.value("plugin", ""))
                      : cmd == "pause" ? kernel.pause(node)
                                       : kernel.resume(node);
-            if (!s) return {{"ok", false}, {"error", s.error().message}};
+            if (!s) return {{"ok", false}, {"error", s.error().message}, {"code", s.error().code}};
             return {{"ok", true}};
           }
-          return {{"ok", false}, {"error", "unknown command '" + cmd + "'"}};
+          return {{"ok", false},
+                  {"error", "unknown command '" + printable(cmd) + "'"},
+                  {"code", PLR_ERR_INVALID}};
         });
-    if (auto s = control->start(); !s) return fail(s.error().message);
+    if (auto s = control->start(); !s) return not_started(s.error());
   }
 
   // Hosts first: their services must be there when the main nodes start.
@@ -217,21 +415,25 @@ int run_pipeline(const RunOptions& options) {
     if (auto s = supervisor->start(std::chrono::seconds(60)); !s) {
       supervisor.reset();
       (void)shm::remove_run_segments(run_id);
-      return fail(s.error().message);
+      return not_started(s.error());
     }
   }
   if (auto s = kernel.start(); !s) {
     supervisor.reset();
     if (main_host) (void)shm::remove_run_segments(run_id);
-    return fail(s.error().message);
+    return not_started(s.error());
   }
-  kernel.sync_transports();
+  if (auto s = kernel.sync_transports(); !s) {
+    kernel.stop();
+    supervisor.reset();
+    if (main_host) (void)shm::remove_run_segments(run_id);
+    return not_started(s.error());
+  }
   if (!main_host) report_ready();
   spdlog::info("pipeline '{}' running ({} nodes); Ctrl-C stops it", config->pipeline,
                kernel.nodes().size());
 
-  const auto started = std::chrono::steady_clock::now();
-  int exit_code = 0;
+  RunEnd end;
   for (;;) {
     timespec tick{0, 50'000'000};
     const int sig = sigtimedwait(&signals, nullptr, &tick);
@@ -241,50 +443,67 @@ int run_pipeline(const RunOptions& options) {
     }
     if (sig > 0) {
       spdlog::info("signal {}: stopping", sig);
+      // 128 + signal, as a shell reports a process the signal ended.
+      end = {sig == SIGINT ? Ending::Interrupted : Ending::Terminated,
+             fmt::format("signal {} ({})", sig, sigabbrev_np(sig)), 128 + sig};
       break;
     }
     if (finished) {
       std::lock_guard lock(reason_mutex);
       spdlog::info("pipeline done: {}", finish_reason);
-      exit_code = finished_ok ? 0 : 1;
+      end = {finished_ok ? Ending::Finished : Ending::Failed, finish_reason, finished_ok ? 0 : 1};
       break;
     }
-    if (stop_requested) break;
+    if (stop_requested) {
+      end = {Ending::Stopped, "stop requested on the control socket", exit_code(PLR_ERR_CANCELLED)};
+      break;
+    }
     if (supervisor) {
       if (auto s = supervisor->poll(); !s) {
         spdlog::error("{}", s.error().message);
-        exit_code = 1;
+        end = {Ending::HostLost, s.error().message, exit_code(s.error().code)};
         break;
       }
     }
     if (options.duration_s > 0 && std::chrono::steady_clock::now() - started >
-                                      std::chrono::duration<double>(options.duration_s))
+                                      std::chrono::duration<double>(options.duration_s)) {
+      spdlog::info("--duration {} s reached: stopping", options.duration_s);
+      end = {Ending::Duration, fmt::format("--duration {} s reached", options.duration_s),
+             exit_code(PLR_ERR_TIMEOUT)};
       break;
+    }
   }
   kernel.stop();
   control.reset();
   // Hosts stop after the main nodes, so nothing waits on a vanished service.
+  const int restarts = supervisor ? supervisor->restarts() : 0;
   supervisor.reset();
   // The main host clears the run's shared memory; a host whose supervisor
   // died (kill -9) does it instead.
   if (main_host || !parent.alive()) (void)shm::remove_run_segments(run_id);
-  return exit_code;
+  // The supervisor stops a host with SIGTERM: that is its normal end.
+  if (!main_host) return 0;
+  write_run_report(
+      report_dir, end, *config, run_id, started_file_time,
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), restarts);
+  return end.exit_code;
 }
 
 int validate(const std::string& file, const std::vector<std::string>& overrides) {
   auto config = load(file, overrides);
-  if (!config) return fail(config.error().message, 2);
+  if (!config) return fail(config.error());
   PluginLoader loader(plugin_search_paths(*config));
-  int bad = 0;
+  int code = 0;
   for (const auto& n : config->nodes) {
     auto lib = loader.load(n.plugin);
     if (!lib) {
-      std::cerr << "plr: " << n.where.str() << ": nodes." << n.name
-                << ".plugin: " << lib.error().message << "\n";
-      ++bad;
+      const int c =
+          fail(fmt::format("{}: nodes.{}.plugin: {}", n.where.str(), n.name, lib.error().message),
+               exit_code(lib.error().code));
+      if (code == 0) code = c;
     }
   }
-  if (bad) return 2;
+  if (code != 0) return code;
   std::cout << fmt::format("{}: ok ({} nodes, {} hosts)\n", file, config->nodes.size(),
                            config->hosts.size());
   return 0;
@@ -294,7 +513,7 @@ int list_plugins(const PluginsOptions& options) {
   std::vector<std::string> paths{default_plugin_path()};
   if (!options.config.empty()) {
     auto config = load(options.config, {});
-    if (!config) return fail(config.error().message, 2);
+    if (!config) return fail(config.error());
     paths = plugin_search_paths(*config);
   }
   PluginLoader loader(paths);
@@ -316,36 +535,36 @@ int list_plugins(const PluginsOptions& options) {
       std::cout << fmt::format("{:<22} {:<10} {:<10} {}\n", p.name, p.version, p.kind,
                                p.description);
   }
-  for (const auto& e : errors) std::cerr << "plr: " << e << "\n";
+  for (const auto& e : errors) fail(e);
   return 0;
 }
 
 int swap_plugin(const SwapOptions& options) {
   auto path = find_socket(options.pipeline);
-  if (!path) return fail(path.error().message);
+  if (!path) return fail(path.error());
   auto reply = control_request(
       *path, {{"cmd", "swap"}, {"node", options.node}, {"plugin", options.plugin}}, 60000);
-  if (!reply) return fail(reply.error().message);
-  if (!reply->value("ok", false)) return fail(reply->value("error", "swap failed"));
+  if (!reply) return fail(reply.error());
+  if (!reply->value("ok", false)) return refused(*reply, "swap failed");
   std::cout << fmt::format("node '{}' now runs '{}'\n", options.node, options.plugin);
   return 0;
 }
 
 int pause_resume(const std::string& cmd, const std::string& node, const std::string& pipeline) {
   auto path = find_socket(pipeline);
-  if (!path) return fail(path.error().message);
+  if (!path) return fail(path.error());
   auto reply = control_request(*path, {{"cmd", cmd}, {"node", node}}, 60000);
-  if (!reply) return fail(reply.error().message);
-  if (!reply->value("ok", false)) return fail(reply->value("error", cmd + " failed"));
+  if (!reply) return fail(reply.error());
+  if (!reply->value("ok", false)) return refused(*reply, cmd + " failed");
   std::cout << fmt::format("node '{}' {}\n", node, cmd == "pause" ? "paused" : "resumed");
   return 0;
 }
 
 int status(const std::string& pipeline) {
   auto path = find_socket(pipeline);
-  if (!path) return fail(path.error().message);
+  if (!path) return fail(path.error());
   auto reply = control_request(*path, {{"cmd", "status"}}, 5000);
-  if (!reply) return fail(reply.error().message);
+  if (!reply) return fail(reply.error());
   std::cout << (*reply)["telemetry"].dump(2) << "\n";
   return 0;
 }

@@ -1,6 +1,8 @@
 // The subcommands of `plr`; each returns the process exit code.
 #pragma once
 
+#include <plr/plugin_abi.h>
+
 #include <string>
 #include <vector>
 
@@ -26,6 +28,11 @@ struct SwapOptions {
   std::string plugin;
   std::string pipeline;
 };
+
+// The exit code of every command for an error of this kind (docs/errors.md):
+// 2 invalid input, 3 timeout, 4 unavailable, 5 cancelled, 6 wrong state,
+// 1 internal; `plr run` adds 1 (the job failed) and 128 + signal.
+int exit_code(plr_status code);
 
 int run_pipeline(const RunOptions& options);
 int validate(const std::string& config, const std::vector<std::string>& overrides);

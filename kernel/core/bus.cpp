@@ -578,4 +578,16 @@ std::vector<ServiceInfo> Bus::services() const {
   return out;
 }
 
+std::vector<std::string> Bus::services_of(const Endpoint* provider) const {
+  std::lock_guard lock(m_);
+  std::vector<std::string> out;
+  for (const auto& [name, providers] : services_)
+    for (const auto& p : providers)
+      if (p.owner == provider) {
+        out.push_back(name);
+        break;
+      }
+  return out;
+}
+
 }  // namespace plr::kernel

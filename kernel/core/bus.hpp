@@ -132,6 +132,8 @@ class Bus {
   void count_invalid(const plr_msg* msg);
   std::vector<TopicStatsSnapshot> topic_stats();
   std::vector<ServiceInfo> services() const;
+  // The services `provider` offers, by name.
+  std::vector<std::string> services_of(const Endpoint* provider) const;
   std::uint64_t invalid_total() const { return invalid_total_.load(); }
 
   static constexpr std::chrono::milliseconds reliable_wait{1000};

@@ -1,5 +1,7 @@
 #include "control.hpp"
 
+#include "pipeline_config.hpp"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -12,6 +14,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 
 namespace plr::kernel {
 
@@ -54,21 +57,42 @@ bool write_all(int fd, const std::string& s) {
 
 }  // namespace
 
-Expected<std::string> control_dir() {
-  const char* runtime = std::getenv("XDG_RUNTIME_DIR");
-  const std::string dir =
-      runtime && *runtime ? std::string(runtime) + "/plr" : fmt::format("/tmp/plr-{}", getuid());
+namespace {
+
+// `dir` (and its missing parents) created private; an existing one must be
+// a real folder of ours that only we can use, else a socket in it could be
+// replaced by someone else's.
+Expected<std::string> private_dir(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(std::filesystem::path(dir).parent_path(), ec);
   if (::mkdir(dir.c_str(), 0700) != 0 && errno != EEXIST) return sys_error("mkdir " + dir);
   struct stat st {};
   if (::lstat(dir.c_str(), &st) != 0) return sys_error("stat " + dir);
-  // Someone else's folder, or one others can write to, could hijack the socket.
-  if (!S_ISDIR(st.st_mode) || st.st_uid != getuid() || (st.st_mode & 0077) != 0)
-    return make_error(PLR_ERR_INVALID,
-                      fmt::format("{}: control folder must be ours with mode 0700", dir));
+  if (!S_ISDIR(st.st_mode) || st.st_uid != ::geteuid() || (st.st_mode & 0077) != 0)
+    return make_error(
+        PLR_ERR_INVALID,
+        fmt::format("{}: refused as control folder: it must be a folder of ours (uid {}) with "
+                    "mode 0700, it is {} of uid {} with mode {:04o}",
+                    dir, ::geteuid(), S_ISDIR(st.st_mode) ? "a folder" : "not a folder", st.st_uid,
+                    st.st_mode & 07777));
   return dir;
 }
 
+}  // namespace
+
+Expected<std::string> control_dir() {
+  const char* runtime = std::getenv("XDG_RUNTIME_DIR");
+  if (runtime != nullptr && *runtime == '/') return private_dir(std::string(runtime) + "/plr");
+  // Not a fixed name in a shared folder such as /tmp: another user could
+  // create it first and stop every run.
+  const char* home = std::getenv("HOME");
+  if (home != nullptr && *home == '/') return private_dir(std::string(home) + "/.local/state/plr");
+  return make_error(PLR_ERR_UNAVAILABLE,
+                    "no private folder for the control socket: set XDG_RUNTIME_DIR or HOME");
+}
+
 Expected<std::string> control_socket_path(const std::string& pipeline) {
+  if (auto ok = check_name(pipeline, "pipeline"); !ok) return ok.error();
   auto dir = control_dir();
   if (!dir) return dir.error();
   return *dir + "/" + pipeline + ".sock";
@@ -97,7 +121,10 @@ Status ControlServer::start() {
     return make_error(PLR_ERR_INVALID, fmt::format("{}: socket path too long", path_));
   // A socket left by a run that no longer answers is stale; a live one means
   // the same pipeline is already running.
-  if (::access(path_.c_str(), F_OK) == 0) {
+  struct stat st {};
+  if (::lstat(path_.c_str(), &st) == 0) {
+    if (!S_ISSOCK(st.st_mode))
+      return make_error(PLR_ERR_INVALID, fmt::format("{}: exists and is not a socket", path_));
     if (control_request(path_, {{"cmd", "ping"}}, 500))
       return make_error(PLR_ERR_STATE,
                         fmt::format("{}: a pipeline with this name is already running", path_));
@@ -149,7 +176,8 @@ Expected<nlohmann::json> control_request(const std::string& path, const nlohmann
   const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
   if (fd < 0) return sys_error("socket");
   if (::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
-    auto e = sys_error("connect " + path);
+    auto e =
+        make_error(PLR_ERR_UNAVAILABLE, fmt::format("connect {}: {}", path, std::strerror(errno)));
     ::close(fd);
     return e;
   }

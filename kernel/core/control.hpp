@@ -14,8 +14,10 @@
 
 namespace plr::kernel {
 
-// $XDG_RUNTIME_DIR/plr or /tmp/plr-<uid>, created 0700 and checked to be ours.
+// $XDG_RUNTIME_DIR/plr, else $HOME/.local/state/plr: created 0700 and
+// checked to be ours with that mode (refused otherwise).
 Expected<std::string> control_dir();
+// Refuses a pipeline name that is not a name (check_name).
 Expected<std::string> control_socket_path(const std::string& pipeline);
 
 class ControlServer {

@@ -8,9 +8,11 @@
 #include <plr/messages.hpp>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <thread>
 
@@ -70,17 +72,36 @@ Kernel::~Kernel() {
   internal_->node_thread().drain();
 }
 
-Expected<std::unique_ptr<NodeInstance>> Kernel::bring_up(const NodeConfig& config) {
+Expected<std::unique_ptr<NodeInstance>> Kernel::configured(const NodeConfig& config) {
   auto lib = loader_.load(config.plugin);
   if (!lib)
     return make_error(lib.error().code, fmt::format("{}: node '{}': {}", config.where.str(),
                                                     config.name, lib.error().message));
   auto inst = std::make_unique<NodeInstance>(bus_, config, *lib, clock_);
-  for (auto step : {&NodeInstance::create, &NodeInstance::configure, &NodeInstance::activate}) {
+  for (auto step : {&NodeInstance::create, &NodeInstance::configure}) {
     if (auto s = (inst.get()->*step)(); !s) return s.error();
   }
   return inst;
 }
+
+Expected<std::unique_ptr<NodeInstance>> Kernel::bring_up(const NodeConfig& config) {
+  auto inst = configured(config);
+  if (!inst) return inst;
+  if (auto s = (*inst)->activate(); !s) return s.error();
+  return inst;
+}
+
+namespace {
+
+// Nodes of these kinds hold what the run has done so far (the world acted
+// on, the search, the robot's motion); the plug-in ABI has no way to hand it
+// to another plug-in, and starting afresh would lie about the run.
+bool holds_run_state(plr_kind kind) {
+  return kind == PLR_KIND_EXECUTOR || kind == PLR_KIND_GENERATOR || kind == PLR_KIND_SIMULATOR ||
+         kind == PLR_KIND_DRIVER;
+}
+
+}  // namespace
 
 Status Kernel::start() {
   const auto hosts = hosts_with_nodes(config_);
@@ -150,9 +171,13 @@ void Kernel::stop() {
   started_ = false;
 }
 
-void Kernel::sync_transports() {
+Status Kernel::sync_transports() {
   if (bridge_) bridge_->node_thread().drain();
   if (dds_) dds_->node_thread().drain();
+  if (bridge_)
+    if (auto e = bridge_->first_error(); !e.empty())
+      return make_error(PLR_ERR_UNAVAILABLE, fmt::format("host '{}': {}", host_, e));
+  return {};
 }
 
 Kernel::Slot* Kernel::slot(const std::string& name) {
@@ -169,13 +194,46 @@ Status Kernel::swap(const std::string& node, const std::string& plugin) {
   if (!s->instance)
     return make_error(PLR_ERR_STATE, fmt::format("swap: node '{}' is not running", node));
 
+  const auto refused = [&](plr_status code, const std::string& why) {
+    return make_error(code, fmt::format("swap of '{}' to '{}' refused, '{}' keeps running: {}",
+                                        node, plugin, s->config.plugin, why));
+  };
+  const auto& running = s->instance->library().descriptor();
+  if (holds_run_state(running.kind))
+    return refused(PLR_ERR_STATE,
+                   fmt::format("a {} node holds the run's state, which plug-ins cannot hand over "
+                               "(stop the run and start it with the new plug-in)",
+                               plr_kind_name(running.kind)));
+  const auto failed = [&](const Error& e) {
+    return make_error(e.code, fmt::format("swap of '{}' to '{}' failed, '{}' keeps running: {}",
+                                          node, plugin, s->config.plugin, e.message));
+  };
+  // The kind first, from the descriptor: nothing of a wrong plug-in runs.
+  auto library = loader_.load(plugin);
+  if (!library) return failed(library.error());
+  const auto kind = (*library)->descriptor().kind;
+  if (kind != running.kind)
+    return refused(PLR_ERR_INVALID, fmt::format("'{}' is a {} plug-in, the node's is a {}", plugin,
+                                                plr_kind_name(kind), plr_kind_name(running.kind)));
   NodeConfig next = s->config;
   next.plugin = plugin;
-  auto fresh = bring_up(next);
-  if (!fresh)
-    return make_error(fresh.error().code,
-                      fmt::format("swap of '{}' to '{}' failed, '{}' keeps running: {}", node,
-                                  plugin, s->config.plugin, fresh.error().message));
+  auto fresh = configured(next);
+  if (!fresh) return failed(fresh.error());
+  // Callers of a service the new plug-in lacks would wait for it forever.
+  const auto offered = bus_.services_of(s->instance.get());
+  const auto offers = bus_.services_of(fresh->get());
+  std::vector<std::string> missing;
+  for (const auto& name : offered)
+    if (std::find(offers.begin(), offers.end(), name) == offers.end()) missing.push_back(name);
+  std::string problem;
+  if (!missing.empty())
+    problem = fmt::format("'{}' would not offer {} (the node's callers need {})", plugin,
+                          fmt::join(missing, ", "), missing.size() == 1 ? "it" : "them");
+  if (!problem.empty()) {
+    if (auto r = (*fresh)->cleanup(); !r) spdlog::warn("swap: {}", r.error().message);
+    return refused(PLR_ERR_INVALID, problem);
+  }
+  if (auto r = (*fresh)->activate(); !r) return failed(r.error());
 
   std::unique_ptr<NodeInstance> old;
   {

@@ -47,7 +47,11 @@ class Kernel {
   // configured and activated beside the old; then the node's topics and
   // services move to it in one step; the old one answers what it already
   // accepted, and is then deactivated and unloaded. On failure the old one
-  // keeps running and the error says why.
+  // keeps running and the error says why. Refused before anything changes:
+  // a plug-in of another kind, one that would not offer every service the
+  // node offers, and any swap of a node that holds the run's state
+  // (executor, generator, simulator, driver), which plug-ins cannot hand over.
+
   Status swap(const std::string& node, const std::string& plugin);
   // Pauses a running node: it stops receiving topics and new calls and is
   // deactivated (the plug-in's deactivate hook). Resume activates it again.
@@ -59,8 +63,9 @@ class Kernel {
   // Calls `fn(ok, reason)` when a node announces on `pipeline/done` that the job is over.
   Status on_pipeline_done(std::function<void(bool, std::string)> fn);
 
-  // Waits until the transports have set up what the started nodes registered.
-  void sync_transports();
+  // Waits until the transports have set up what the started nodes
+  // registered; an error names what other hosts cannot reach.
+  Status sync_transports();
 
   Bus& bus() { return bus_; }
   const PipelineConfig& config() const { return config_; }
@@ -82,6 +87,8 @@ class Kernel {
   };
   class Internal;
 
+  // Loaded, created and configured; bring_up() also activates it.
+  Expected<std::unique_ptr<NodeInstance>> configured(const NodeConfig& config);
   Expected<std::unique_ptr<NodeInstance>> bring_up(const NodeConfig& config);
   template <class T>
   Status listen(const std::string& topic, std::function<void(const T&)> fn);

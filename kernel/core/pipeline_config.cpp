@@ -1,5 +1,7 @@
 #include "pipeline_config.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cstdint>
 #include <filesystem>
@@ -42,7 +44,8 @@ using yaml::Node;
 const std::vector<std::string> kTopKeys = {
     "pipeline", "plugin_paths", "clock", "cpu_wake_latency_us", "hosts", "nodes",
     "topics",   "remote",       "shared"};
-const std::vector<std::string> kHostKeys = {"restart", "max_restarts", "backoff_ms"};
+const std::vector<std::string> kHostKeys = {"restart", "max_restarts", "restart_window_s",
+                                            "backoff_ms"};
 const std::vector<std::string> kNodeKeys = {"plugin", "host", "params", "remap"};
 const std::vector<std::string> kTopicKeys = {"policy", "depth", "slot_size", "busy_poll",
                                              "spin_us"};
@@ -57,7 +60,10 @@ const std::vector<std::string> kDdsKeys = {"domain",
 
 constexpr std::string_view kNodeNameChars = "_";
 constexpr std::string_view kBusNameChars = "_/";
-constexpr auto kMaxSize = std::numeric_limits<std::int64_t>::max();
+// A message of the largest kind (a world state with its octree) is tens of
+// MiB; a topic's segment holds `depth` slots of this size.
+constexpr std::int64_t kMaxSlotSize = std::int64_t{256} << 20;
+constexpr std::int64_t kMaxTopicDepth = 4096;
 
 bool only_chars(const std::string& s, std::string_view extra) {
   if (s.empty()) return false;
@@ -134,7 +140,10 @@ bool parse_hosts(const Node& section, PipelineConfig& config) {
       host.restart = *v == "never" ? RestartPolicy::Never : RestartPolicy::OnFailure;
     if (auto v = settings.find("max_restarts").integer(0, std::numeric_limits<int>::max()))
       host.max_restarts = static_cast<int>(*v);
-    if (auto v = settings.find("backoff_ms").integer(0, std::numeric_limits<int>::max()))
+    // A day: longer would count a crash of yesterday against today's run.
+    if (auto v = settings.find("restart_window_s").number(0.001, 86400)) host.restart_window_s = *v;
+    // A minute at most between a crash and its restart, however many.
+    if (auto v = settings.find("backoff_ms").integer(0, 60'000))
       host.backoff_ms = static_cast<int>(*v);
     config.hosts.push_back(std::move(host));
   }
@@ -203,9 +212,11 @@ void parse_topics(const Node& section, PipelineConfig& config) {
     const Map settings = t.map("a map of topic settings", kTopicKeys);
     if (auto v = settings.find("policy").one_of({"keep_last", "reliable"}))
       topic.policy = *v == "keep_last" ? TopicPolicy::KeepLast : TopicPolicy::Reliable;
-    if (auto v = settings.find("depth").integer(1, kMaxSize))
+    if (auto v = settings.find("depth").integer(1, kMaxTopicDepth))
       topic.depth = static_cast<std::size_t>(*v);
-    if (auto v = settings.find("slot_size").integer(1, kMaxSize))
+    // Shared memory holds a slot size in 32 bits; 4294967297 was cut to 1
+    // and the topic silently delivered nothing.
+    if (auto v = settings.find("slot_size").integer(1, kMaxSlotSize))
       topic.slot_size = static_cast<std::size_t>(*v);
     if (auto v = settings.find("busy_poll").boolean()) topic.busy_poll = *v;
     if (auto v = settings.find("spin_us").integer(0, 10'000))
@@ -222,8 +233,16 @@ void parse_remote(const Node& section, const fs::path& folder, PipelineConfig& c
   dds.enabled = true;
   // Cyclone DDS maps domains 0..232 onto UDP ports; higher ones overflow.
   if (auto v = settings.find("domain").integer(0, 232)) dds.domain = static_cast<int>(*v);
-  if (auto v = string_list(settings.find("interfaces"), std::nullopt, "interface names"))
-    dds.interfaces = *v;
+  const Node interfaces = settings.find("interfaces");
+  if (auto v = string_list(interfaces, std::nullopt, "interface names")) {
+    // Cyclone reads no interface as "pick one": the first real one.
+    if (v->empty() && interfaces.present() && !interfaces.is_null())
+      interfaces.error(
+          "an empty list would let DDS choose a network interface; name at least "
+          "one ('lo': this machine only)");
+    else if (!v->empty())
+      dds.interfaces = *v;
+  }
   if (auto v = string_list(settings.find("export"), "_/*", "topic or service patterns"))
     dds.export_patterns = *v;
   if (auto v = string_list(settings.find("import"), "_/*", "topic or service patterns"))
@@ -250,7 +269,15 @@ PipelineConfig build(const Node& root, const std::string& file_name) {
   config.file = file.string();
   config.pipeline = file.stem().string();
   const Map top = root.map("a map with a 'nodes' key", kTopKeys);
-  if (auto v = top.find("pipeline").string()) config.pipeline = *v;
+  const Node name = top.find("pipeline");
+  if (auto v = name.string()) config.pipeline = *v;
+  // The name becomes the control socket's file name.
+  if (auto ok = check_name(config.pipeline, "pipeline"); !ok) {
+    if (name.present())
+      name.error(ok.error().message.substr(std::string("pipeline: ").size()));
+    else
+      root.error(ok.error().message + " (the file's name; set 'pipeline')");
+  }
   if (auto v = string_list(top.find("plugin_paths"), std::nullopt, "folder paths")) {
     for (const auto& p : *v) config.plugin_paths.push_back(resolve_path(file.parent_path(), p));
   }
@@ -309,6 +336,27 @@ Expected<PipelineConfig> read(Expected<yaml::Document> doc, const std::string& f
 }
 
 }  // namespace
+
+Status check_name(const std::string& name, const std::string& what) {
+  if (!name.empty() && name.size() <= 64 && name.front() != '.' && only_chars(name, "_-."))
+    return {};
+  return make_error(PLR_ERR_INVALID,
+                    fmt::format("{}: '{}' is not a name: 1 to 64 letters, digits, '_', '-' and "
+                                "'.', not starting with '.'",
+                                what, printable(name.substr(0, 80))));
+}
+
+std::string printable(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const unsigned char c : text) {
+    if (c >= 0x20 && c < 0x7f)
+      out += static_cast<char>(c);
+    else
+      out += fmt::format("\\x{:02x}", c);
+  }
+  return out;
+}
 
 Expected<Override> parse_override(const std::string& text) {
   const std::size_t eq = text.find('=');

@@ -11,6 +11,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace plr::kernel {
@@ -20,8 +21,12 @@ enum class RestartPolicy { Never, OnFailure };
 struct HostConfig {
   std::string name;
   RestartPolicy restart = RestartPolicy::OnFailure;
+  // Given up once a host crashed more than max_restarts times within the
+  // last restart_window_s seconds (as supervisors do): rare crashes spread
+  // over a long run are each restarted.
   int max_restarts = 5;
-  int backoff_ms = 200;  // doubles after each restart
+  double restart_window_s = 60;
+  int backoff_ms = 200;  // doubles with each crash in the window
   yaml::Location where;  // of its key, for error messages
 };
 
@@ -96,5 +101,14 @@ Expected<PipelineConfig> parse_pipeline_config(const std::string& yaml_text,
                                                const std::string& file_name,
                                                const std::vector<Override>& overrides = {});
 Expected<Override> parse_override(const std::string& text);  // "a.b.c=value"
+
+// A name that becomes part of a file or segment name (pipeline, run id):
+// letters, digits, '_', '-' and '.', not starting with '.', at most 64
+// characters, so it can never name another folder ("../x") or file.
+Status check_name(const std::string& name, const std::string& what);
+
+// `text` with every byte that is not printable ASCII shown as \xNN, for
+// messages that quote input.
+std::string printable(std::string_view text);
 
 }  // namespace plr::kernel

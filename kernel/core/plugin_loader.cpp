@@ -37,16 +37,33 @@ Error refuse(const std::string& file, const std::string& cause, plr_status code 
   return make_error(code, file + ": refused: " + cause);
 }
 
-// Anyone but the owner who can write the file or replace it in its folder
-// could run code inside the kernel.
-std::optional<std::string> writable_by_others(const fs::path& path, const std::string& what) {
+// Anyone but root and us who can write the file, or replace it or any folder
+// on its way from the root, could run code inside the kernel: each must be
+// owned by root or us and writable by no one else, as sudo and ssh check
+// theirs. A sticky folder (/tmp) is fine: others cannot rename what is ours.
+std::optional<std::string> unsafe(const fs::path& path, const std::string& what) {
   struct stat st {};
-  if (stat(path.c_str(), &st) != 0)
+  if (lstat(path.c_str(), &st) != 0)
     return "cannot check " + what + " " + path.string() + ": " + std::strerror(errno);
-  if ((st.st_mode & (S_IWGRP | S_IWOTH)) == 0) return std::nullopt;
+  const uid_t me = geteuid();
+  if (st.st_uid != 0 && st.st_uid != me)
+    return what + " " + path.string() + " is owned by uid " + std::to_string(st.st_uid) +
+           " (only root or uid " + std::to_string(me) + " may own it)";
+  if (S_ISLNK(st.st_mode)) return std::nullopt;  // its folder is checked; links cannot change
+  const bool sticky_dir = S_ISDIR(st.st_mode) && (st.st_mode & S_ISVTX) != 0;
+  if ((st.st_mode & (S_IWGRP | S_IWOTH)) == 0 || sticky_dir) return std::nullopt;
   char mode[8];
   std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(st.st_mode & 07777));
   return what + " " + path.string() + " is group- or world-writable (mode " + mode + ")";
+}
+
+// The folder and every folder above it up to the root.
+std::optional<std::string> unsafe_folders(fs::path dir) {
+  for (;;) {
+    if (auto problem = unsafe(dir, "folder")) return problem;
+    if (dir == dir.root_path() || !dir.has_parent_path()) return std::nullopt;
+    dir = dir.parent_path();
+  }
 }
 
 // Closes a library that failed its checks.
@@ -75,9 +92,9 @@ Expected<std::shared_ptr<PluginLibrary>> PluginLoader::load(const std::string& n
     }
   }
   if (found.empty()) {
-    return make_error(PLR_ERR_UNAVAILABLE,
-                      file_name + ": not found in the plug-in search paths: " +
-                          (paths_.empty() ? "(none configured)" : join(paths_)));
+    // A config naming a plug-in that is not there is bad input, in every command.
+    return make_error(PLR_ERR_INVALID, file_name + ": not found in the plug-in search paths: " +
+                                           (paths_.empty() ? "(none configured)" : join(paths_)));
   }
   const std::string file = found.lexically_normal().string();
   std::error_code ec;
@@ -97,12 +114,10 @@ Expected<std::shared_ptr<PluginLibrary>> PluginLoader::load(const std::string& n
   }
 
   if (!fs::is_regular_file(real, ec)) return refuse(file, "not a regular file");
-  // The folder as configured and the real one, which differ for a symlinked file.
-  for (const auto& [path, what] :
-       {std::pair{real, "file"}, std::pair{found.parent_path(), "folder"},
-        std::pair{real.parent_path(), "folder"}}) {
-    if (auto problem = writable_by_others(path, what)) return refuse(file, *problem);
-  }
+  // The folders as configured and the real ones, which differ where a link is on the way.
+  if (auto problem = unsafe(real, "file")) return refuse(file, *problem);
+  for (const auto& dir : {fs::absolute(found).lexically_normal().parent_path(), real.parent_path()})
+    if (auto problem = unsafe_folders(dir)) return refuse(file, *problem);
 
   dlerror();  // clears an earlier error, so the message below is this call's
   std::unique_ptr<void, DlCloser> handle(dlopen(real.c_str(), RTLD_NOW | RTLD_LOCAL));

@@ -26,7 +26,11 @@ std::vector<std::string> hosts_with_nodes(const PipelineConfig& config) {
 Supervisor::Supervisor(std::vector<std::string> command, std::vector<HostConfig> hosts,
                        std::string run_id)
     : command_(std::move(command)), run_id_(std::move(run_id)) {
-  for (auto& h : hosts) hosts_.push_back(Host{std::move(h)});
+  for (auto& h : hosts) {
+    Host host;
+    host.config = std::move(h);
+    hosts_.push_back(std::move(host));
+  }
 }
 
 Supervisor::~Supervisor() {
@@ -111,19 +115,30 @@ Status Supervisor::poll() {
       spdlog::info("host '{}' finished", h.config.name);
       continue;
     }
-    if (h.config.restart == RestartPolicy::Never || h.restarts >= h.config.max_restarts)
+    const auto window = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+        std::chrono::duration<double>(h.config.restart_window_s));
+    while (!h.crashes.empty() && now - h.crashes.front() > window) h.crashes.pop_front();
+    h.crashes.push_back(now);
+    const int in_window = static_cast<int>(h.crashes.size());
+    if (h.config.restart == RestartPolicy::Never)
       return make_error(
           PLR_ERR_UNAVAILABLE,
-          fmt::format("host '{}' {} and is not restarted ({} restarts, policy {})", h.config.name,
-                      how, h.restarts,
-                      h.config.restart == RestartPolicy::Never ? "never" : "on-failure"));
+          fmt::format("host '{}' {} and is not restarted (policy never)", h.config.name, how));
+    if (in_window > h.config.max_restarts)
+      return make_error(
+          PLR_ERR_UNAVAILABLE,
+          fmt::format("host '{}' {} and is not restarted: {} crashes within {} s (max_restarts "
+                      "{}, restart_window_s {}; {} restarts in the run)",
+                      h.config.name, how, in_window, h.config.restart_window_s,
+                      h.config.max_restarts, h.config.restart_window_s, h.restarts));
     const auto backoff =
-        std::chrono::milliseconds(h.config.backoff_ms) * (1 << std::min(h.restarts, 10));
+        std::chrono::milliseconds(h.config.backoff_ms) * (1 << std::min(in_window - 1, 10));
     ++h.restarts;
     h.waiting_restart = true;
     h.restart_at = now + backoff;
-    spdlog::warn("host '{}' {}; restarting in {} ms (restart {} of {})", h.config.name, how,
-                 backoff.count(), h.restarts, h.config.max_restarts);
+    spdlog::warn("host '{}' {}; restarting in {} ms ({} of at most {} crashes within {} s)",
+                 h.config.name, how, backoff.count(), in_window, h.config.max_restarts,
+                 h.config.restart_window_s);
   }
   return {};
 }

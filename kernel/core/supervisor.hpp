@@ -11,6 +11,7 @@
 #include <sys/types.h>
 
 #include <chrono>
+#include <deque>
 #include <string>
 #include <vector>
 
@@ -28,7 +29,8 @@ class Supervisor {
   // Starts every host and waits until each reports its nodes active.
   Status start(std::chrono::milliseconds ready_timeout);
   // Reaps hosts that exited and restarts them per policy. An error once a
-  // host is down for good (policy `never`, or too many restarts).
+  // host is down for good (policy `never`, or more than max_restarts crashes
+  // within restart_window_s).
   Status poll();
   // Asks every host to stop (SIGTERM), then kills what is left after a grace period.
   void stop();
@@ -39,7 +41,8 @@ class Supervisor {
     HostConfig config;
     pid_t pid = -1;
     int ready_fd = -1;
-    int restarts = 0;
+    int restarts = 0;                                           // over the whole run
+    std::deque<std::chrono::steady_clock::time_point> crashes;  // within the window
     std::chrono::steady_clock::time_point restart_at{};
     bool waiting_restart = false;
   };

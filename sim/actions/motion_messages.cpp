@@ -1,6 +1,7 @@
 #include "plr/actions/motion_messages.hpp"
 
 #include <plr/messages.hpp>
+#include <plr/sim/unaligned.hpp>
 
 namespace plr::actions {
 
@@ -63,9 +64,10 @@ plr::Expected<Motion> decode_execute_request(const plr::msg::ExecuteRequest& r) 
         return bad("trajectory: every point needs 8 positions");
       planning::TimedPoint tp;
       tp.time_s = p->time_s();
-      for (int i = 0; i < sim::kNumJoints; ++i) tp.position[i] = p->positions()->Get(i);
+      for (int i = 0; i < sim::kNumJoints; ++i) tp.position[i] = sim::element(*p->positions(), i);
       if (p->velocities() && p->velocities()->size() == sim::kNumJoints)
-        for (int i = 0; i < sim::kNumJoints; ++i) tp.velocity[i] = p->velocities()->Get(i);
+        for (int i = 0; i < sim::kNumJoints; ++i)
+          tp.velocity[i] = sim::element(*p->velocities(), i);
       if (!std::isfinite(tp.time_s) || !tp.position.allFinite())
         return bad("trajectory: non-finite value");
       if (!m.points.empty() && tp.time_s < m.points.back().time_s)
@@ -105,7 +107,9 @@ plr::Expected<Executed> decode_execute_outcome(const plr::msg::ExecuteOutcome& o
   if (!o.ok()) return plr::make_error(PLR_ERR_STATE, o.message() ? o.message()->str() : "refused");
   Executed e;
   auto copy = [](const auto* v, auto& to) {
-    if (v) to.assign(v->begin(), v->end());
+    if (v == nullptr) return;
+    const auto all = sim::elements(*v);
+    to.assign(all.begin(), all.end());
   };
   copy(o.unloaded_box_ids(), e.unloaded);
   copy(o.unloaded_after_s(), e.unloaded_after_s);
@@ -121,7 +125,9 @@ plr::Expected<Executed> decode_execute_outcome(const plr::msg::ExecuteOutcome& o
   e.stall_after_s = o.stall_after_s();
   e.peak_push_force = o.peak_push_force_n();
   if (const auto* events = o.suction_events()) {
-    for (const auto* s : *events) {
+    for (flatbuffers::uoffset_t i = 0; i < events->size(); ++i) {
+      const plr::msg::SuctionEvent event = sim::element(*events, i);
+      const auto* s = &event;
       const int kind = static_cast<int>(s->kind());
       if (kind < 0 || kind > static_cast<int>(sim::SuctionEvent::Kind::kReleased))
         return plr::make_error(PLR_ERR_INVALID, "ExecuteOutcome.suction_events: unknown kind");

@@ -1,4 +1,5 @@
 #include <octomap/octomap.h>
+#include <plr/sim/unaligned.hpp>
 
 #include <cmath>
 #include <mutex>
@@ -32,7 +33,8 @@ JointVector to_joint_vector(const flatbuffers::Vector<double>* v, const char* fi
     bad(field, "needs 8 joint values, got " + std::to_string(v == nullptr ? 0 : v->size()));
   }
   JointVector q;
-  for (int i = 0; i < kNumJoints; ++i) q[i] = v->Get(static_cast<flatbuffers::uoffset_t>(i));
+  for (int i = 0; i < kNumJoints; ++i)
+    q[i] = sim::element(*v, static_cast<flatbuffers::uoffset_t>(i));
   return q;
 }
 
@@ -116,8 +118,8 @@ DecodedPlanRequest decode(const plr::msg::PlanRequest& r) {
   q.time_limit_s = r.timeout_s();
   q.max_expansions = r.max_expansions();
   if (const auto* eps = r.epsilons(); eps != nullptr && eps->size() > 0) {
-    q.eps_initial = eps->Get(0);
-    q.eps_final = eps->Get(eps->size() - 1);
+    q.eps_initial = sim::element(*eps, 0);
+    q.eps_final = sim::element(*eps, eps->size() - 1);
     q.eps_decrement =
         eps->size() > 1 ? std::max(1e-3, (q.eps_initial - q.eps_final) / (eps->size() - 1)) : 1.0;
   }
@@ -127,7 +129,9 @@ DecodedPlanRequest decode(const plr::msg::PlanRequest& r) {
     if (t->x() > 0 && t->y() > 0 && t->z() > 0) d.world.trailer = {t->x(), t->y(), t->z()};
   }
   if (const auto* boxes = w->boxes()) {
-    for (const plr::msg::BoxState* b : *boxes) {
+    for (flatbuffers::uoffset_t i = 0; i < boxes->size(); ++i) {
+      const plr::msg::BoxState state = sim::element(*boxes, i);
+      const plr::msg::BoxState* b = &state;
       Box box;
       box.id = b->id();
       box.size = Eigen::Vector3d(b->size().x(), b->size().y(), b->size().z());
@@ -235,9 +239,9 @@ plr::Expected<DecodedPlanResponse> decode_plan_response(const plr::msg::PlanResp
         return bad("trajectory", "every point needs 8 positions");
       TimedPoint tp;
       tp.time_s = p->time_s();
-      for (int j = 0; j < kNumJoints; ++j) tp.position[j] = p->positions()->Get(j);
+      for (int j = 0; j < kNumJoints; ++j) tp.position[j] = sim::element(*p->positions(), j);
       if (p->velocities() && p->velocities()->size() == kNumJoints)
-        for (int j = 0; j < kNumJoints; ++j) tp.velocity[j] = p->velocities()->Get(j);
+        for (int j = 0; j < kNumJoints; ++j) tp.velocity[j] = sim::element(*p->velocities(), j);
       if (!d.points.empty() && tp.time_s < d.points.back().time_s)
         return bad("trajectory", "times must not decrease");
       d.points.push_back(tp);

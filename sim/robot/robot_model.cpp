@@ -10,12 +10,18 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 
 namespace plr::sim {
 namespace {
 
 // The reader stops at the first error; the public functions return it.
+// Bounds on a URDF: a robot's description is far smaller and flatter.
+constexpr std::size_t kMaxUrdfBytes = 8u << 20;
+constexpr std::size_t kMaxUrdfDepth = 32;
+constexpr std::size_t kMaxLinks = 1000;
+
 struct Failure {
   std::string what;
 };
@@ -75,14 +81,95 @@ double wrap_near(double a, double lo, double hi) {
   return a;
 }
 
+// Joints must make a tree: urdfdom leaks the model it built (shared_ptr
+// cycles) when a link is the child of two joints or the joints loop.
+void check_tree(const TiXmlElement& robot, const std::string& source) {
+  std::map<std::string, std::pair<std::string, std::string>> parent;  // child -> parent, joint
+  for (const TiXmlElement* j = robot.FirstChildElement("joint"); j != nullptr;
+       j = j->NextSiblingElement("joint")) {
+    const char* name = j->Attribute("name");
+    const TiXmlElement* p = j->FirstChildElement("parent");
+    const TiXmlElement* c = j->FirstChildElement("child");
+    const char* pl = p != nullptr ? p->Attribute("link") : nullptr;
+    const char* cl = c != nullptr ? c->Attribute("link") : nullptr;
+    if (name == nullptr || pl == nullptr || cl == nullptr) continue;  // urdfdom names it
+    const auto [it, fresh] = parent.emplace(cl, std::pair{std::string(pl), std::string(name)});
+    if (!fresh)
+      fail(source, "line " + std::to_string(j->Row()) + ": link '" + cl +
+                       "' is the child of joints '" + it->second.second + "' and '" + name + "'");
+  }
+  for (const auto& [link, up] : parent) {
+    std::string at = link;
+    for (std::size_t steps = 0; parent.count(at) != 0; ++steps) {
+      if (steps > parent.size()) fail(source, "the joints make a loop through link '" + link + "'");
+      at = parent.at(at).first;
+    }
+  }
+}
+
+// The line of the first element nested deeper than `max_depth`, if any. A
+// scan of tags only (comments, declarations and quoted attribute values
+// skipped), so nothing recursive runs on the text before it is bounded.
+std::optional<std::size_t> line_nested_deeper(const std::string& xml, std::size_t max_depth) {
+  std::size_t depth = 0, line = 1;
+  const std::size_t n = xml.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (xml[i] == '\n') ++line;
+    if (xml[i] != '<' || i + 1 >= n) continue;
+    const char next = xml[i + 1];
+    if (next == '!' || next == '?') {
+      // <!-- ... -->, <![CDATA[ ... ]]>, <!DOCTYPE ...>, <?xml ...?>: to the end, lines counted.
+      const std::string end = xml.compare(i, 4, "<!--") == 0        ? "-->"
+                              : xml.compare(i, 9, "<![CDATA[") == 0 ? "]]>"
+                                                                    : ">";
+      const std::size_t stop = xml.find(end, i + 2);
+      const std::size_t last = stop == std::string::npos ? n : stop + end.size();
+      line += static_cast<std::size_t>(std::count(xml.begin() + static_cast<std::ptrdiff_t>(i),
+                                                  xml.begin() + static_cast<std::ptrdiff_t>(last),
+                                                  '\n'));
+      i = last - 1;
+      continue;
+    }
+    const bool closing = next == '/';
+    // To the tag's end, past quoted attribute values (which may hold '>').
+    char quote = 0;
+    std::size_t j = i + 1;
+    for (; j < n; ++j) {
+      if (xml[j] == '\n') ++line;
+      if (quote != 0) {
+        if (xml[j] == quote) quote = 0;
+      } else if (xml[j] == '"' || xml[j] == '\'') {
+        quote = xml[j];
+      } else if (xml[j] == '>') {
+        break;
+      }
+    }
+    const bool empty_element = j < n && xml[j - 1] == '/';
+    if (closing) {
+      if (depth > 0) --depth;
+    } else if (!empty_element && ++depth > max_depth) {
+      return line;
+    }
+    i = j;
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 plr::Expected<RobotModel> RobotModel::from_urdf_file(const std::string& path) {
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   if (!in) return plr::make_error(PLR_ERR_INVALID, path + ": cannot open file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return from_urdf_string(ss.str(), path);
+  // Read in bounded pieces: /dev/zero or a FIFO has no size to check first.
+  std::string text;
+  char buf[1 << 16];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+    text.append(buf, static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxUrdfBytes)
+      return plr::make_error(PLR_ERR_INVALID,
+                             path + ": larger than " + std::to_string(kMaxUrdfBytes) + " bytes");
+  }
+  return from_urdf_string(text, path);
 }
 
 plr::Expected<RobotModel> load_robot(const std::string& urdf) {
@@ -102,12 +189,19 @@ plr::Expected<RobotModel> RobotModel::from_urdf_string(const std::string& xml,
 }
 
 RobotModel RobotModel::parse_urdf(const std::string& xml, const std::string& source) {
+  if (xml.size() > kMaxUrdfBytes)
+    fail(source, "larger than " + std::to_string(kMaxUrdfBytes) + " bytes");
+  // TinyXML and urdfdom recurse once per level: 60,000 levels overflowed the stack.
+  if (const auto line = line_nested_deeper(xml, kMaxUrdfDepth))
+    fail(source, "line " + std::to_string(*line) + ": elements nested deeper than " +
+                     std::to_string(kMaxUrdfDepth) + " levels");
   TiXmlDocument doc;
   doc.Parse(xml.c_str());
   if (doc.Error()) {
     fail(source, "XML error at line " + std::to_string(doc.ErrorRow()) + ": " + doc.ErrorDesc());
   }
   if (doc.FirstChildElement("robot") == nullptr) fail(source, "no <robot> element");
+  check_tree(*doc.FirstChildElement("robot"), source);
 
   CaptureErrors capture;
   console_bridge::useOutputHandler(&capture);
@@ -118,6 +212,8 @@ RobotModel RobotModel::parse_urdf(const std::string& xml, const std::string& sou
          "invalid URDF: " + (capture.first_error.empty() ? std::string("rejected by urdfdom")
                                                          : capture.first_error));
   }
+  if (model->links_.size() > kMaxLinks)
+    fail(source, "more than " + std::to_string(kMaxLinks) + " links");
   const auto accel = read_acceleration_limits(doc);
 
   RobotModel m;

@@ -1,4 +1,5 @@
 #include "plr/sim/observation.hpp"
+#include "plr/sim/unaligned.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -190,7 +191,9 @@ World world_from_message(const plr::msg::WorldState& state) {
   }
   if (const auto* boxes = state.boxes()) {
     w.boxes.reserve(boxes->size());
-    for (const auto* m : *boxes) {
+    for (flatbuffers::uoffset_t i = 0; i < boxes->size(); ++i) {
+      const plr::msg::BoxState b = element(*boxes, i);
+      const auto* m = &b;
       Box box;
       box.id = m->id();
       box.size = {m->size().x(), m->size().y(), m->size().z()};

@@ -19,6 +19,12 @@ constexpr int kVersion = 1;
 
 // A trailer holds a few hundred boxes; this many is a mistake, not a world.
 constexpr std::size_t kMaxBoxes = 100'000;
+// Trailers and containers are at most 2.5 m wide, 2.7 m high and 16 m deep:
+// the bounds leave room, and refuse a size whose octree would not fit in memory.
+constexpr double kMaxTrailerWidth = 4, kMaxTrailerHeight = 4, kMaxTrailerDepth = 20;
+constexpr double kMinBoxSize = 0.01, kMaxBoxSize = 4;  // m
+constexpr double kMaxCoordinate = 100;                 // m from the trailer's origin
+constexpr double kMaxMass = 1000;                      // kg
 
 template <int N>
 std::optional<Eigen::Matrix<double, N, 1>> vector(const yaml::Node& node, std::string_view what) {
@@ -27,7 +33,7 @@ std::optional<Eigen::Matrix<double, N, 1>> vector(const yaml::Node& node, std::s
   Eigen::Matrix<double, N, 1> v;
   bool ok = true;
   for (int i = 0; i < N; ++i) {
-    const auto x = items[static_cast<std::size_t>(i)].number();
+    const auto x = items[static_cast<std::size_t>(i)].number(-kMaxCoordinate, kMaxCoordinate);
     ok = ok && x.has_value();
     v[i] = x.value_or(0.0);
   }
@@ -41,7 +47,7 @@ std::optional<Box> read_box(const yaml::Map& fields) {
   if (id) box.id = static_cast<std::uint32_t>(*id);
   const yaml::List size = fields.required("size").list("3 sizes", 3, 3);
   for (std::size_t i = 0; i < size.size(); ++i)
-    box.size[static_cast<int>(i)] = size[i].positive().value_or(1.0);
+    box.size[static_cast<int>(i)] = size[i].number(kMinBoxSize, kMaxBoxSize).value_or(1.0);
   const auto position = vector<3>(fields.required("position"), "a position x, y, z");
   Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
   const yaml::Node orientation = fields.find("orientation");
@@ -54,7 +60,8 @@ std::optional<Box> read_box(const yaml::Map& fields) {
   box.pose = Eigen::Isometry3d::Identity();
   box.pose.linear() = q.toRotationMatrix();
   box.pose.translation() = position.value_or(Eigen::Vector3d::Zero());
-  box.mass = fields.find("mass").number(0.0).value_or(0.0);
+  // 0 or absent: not known (a perceived world); the simulator needs it.
+  box.mass = fields.find("mass").number(0.0, kMaxMass).value_or(0.0);
   if (!id || !size || !position) return std::nullopt;
   return box;
 }
@@ -73,9 +80,9 @@ Expected<World> read_world(Expected<yaml::Document> doc) {
   if (!doc->ok()) return doc->error();
   World world;
   const yaml::Map trailer = top.required("trailer").map("a trailer", {"width", "height", "depth"});
-  world.trailer.width = trailer.required("width").positive().value_or(1.0);
-  world.trailer.height = trailer.required("height").positive().value_or(1.0);
-  world.trailer.depth = trailer.required("depth").positive().value_or(1.0);
+  world.trailer.width = trailer.required("width").number(0.5, kMaxTrailerWidth).value_or(1.0);
+  world.trailer.height = trailer.required("height").number(0.5, kMaxTrailerHeight).value_or(1.0);
+  world.trailer.depth = trailer.required("depth").number(0.5, kMaxTrailerDepth).value_or(1.0);
 
   std::map<std::uint32_t, std::string> ids;  // id -> the path of the box that has it
   for (const yaml::Node& item : top.required("boxes").list("a list of boxes", 0, kMaxBoxes)) {

@@ -78,6 +78,9 @@ std::string make_kernel_id(const std::string& pipeline) {
 }
 
 Expected<std::string> cyclone_config_xml(const DdsConfig& dds) {
+  if (dds.interfaces.empty())
+    return make_error(PLR_ERR_INVALID,
+                      "remote.dds.interfaces: none named (Cyclone would choose one itself)");
   bool loopback_only = true;
   for (const auto& i : dds.interfaces) loopback_only = loopback_only && i == "lo";
   std::string xml =

@@ -19,6 +19,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <tuple>
 
 namespace plr::simulator {
 namespace {
@@ -42,10 +43,20 @@ class SimulatorNode : public Node {
     checkpoint_dir_ = params().get<std::string>("checkpoint_dir", "");
     max_settle_ = params().get<double>("max_settle_s", 6.0);
     carry_max_ = params().get<double>("carry_max_s", 4.0);
-    if (resolution_ <= 0 || period_ <= 0 || belt_speed_ < 0)
-      return make_error(
-          PLR_ERR_INVALID,
-          "params 'octree_resolution', 'control_period_s' must be > 0, 'belt_speed' >= 0");
+    // Bounds, so no value makes memory or time grow without end: an octree at
+    // 0.1 mm of a trailer does not fit in memory, and at a control period of
+    // 1e-7 s an action never ended.
+    for (const auto& [name, value, lo, hi] :
+         {std::tuple{"octree_resolution", resolution_, 0.01, 0.5},
+          std::tuple{"control_period_s", period_, 0.001, 0.1},
+          std::tuple{"belt_speed", belt_speed_, 0.0, 5.0},
+          std::tuple{"max_settle_s", max_settle_, 0.0, 60.0},
+          std::tuple{"carry_max_s", carry_max_, 0.0, 60.0}}) {
+      if (!(value >= lo && value <= hi))
+        return make_error(
+            PLR_ERR_INVALID,
+            fmt::format("param '{}': must be between {} and {}, got {}", name, lo, hi, value));
+    }
 
     auto world = ctx().advertise<msg::WorldState>("world");
     auto progress = ctx().advertise<msg::Progress>("progress");

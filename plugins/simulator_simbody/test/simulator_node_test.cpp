@@ -186,6 +186,23 @@ TEST_F(SimulatorService, RestoreThroughTheServiceGoesBackInTime) {
   EXPECT_EQ(unknown.error().message, "sim/restore: no snapshot named 'never-saved'");
 }
 
+// control_period_s: 1e-7 made sim/execute never return; an octree at 0.1 mm
+// grew until the process was killed.
+TEST(SimulatorParams, RatesAndResolutionsAreBounded) {
+  for (const auto& [params, message] :
+       {std::pair{R"({"control_period_s": 1e-7})",
+                  "param 'control_period_s': must be between 0.001 and 0.1, got 1e-07"},
+        std::pair{R"({"octree_resolution": 0.0001})",
+                  "param 'octree_resolution': must be between 0.01 and 0.5, got 0.0001"}}) {
+    FakeKernel kernel;
+    auto node = kernel.load_node(SIMULATOR_SO, NodeOptions().with_params(params));
+    ASSERT_TRUE(node) << node.error().message;
+    const Status configured = node->configure();
+    ASSERT_FALSE(configured);
+    EXPECT_EQ(configured.error().message, message);
+  }
+}
+
 TEST(SimulatorCheckpoint, ADamagedOneFailsConfigureWithTheFilesError) {
   const auto dir =
       std::filesystem::temp_directory_path() / ("plr_sim_checkpoint_" + std::to_string(::getpid()));

@@ -3,6 +3,7 @@
 #include <plr/actions/motion_messages.hpp>
 #include <plr/planning/plan_messages.hpp>
 #include <plr/sim/observation.hpp>
+#include <plr/sim/unaligned.hpp>
 
 #include <fmt/format.h>
 
@@ -43,7 +44,7 @@ plr::Expected<actions::Perceived> BusBackend::observe() {
   actions::Perceived p;
   p.world = sim::world_from_message(m);
   if (m.robot() && m.robot()->positions() && m.robot()->positions()->size() == sim::kNumJoints)
-    for (int j = 0; j < sim::kNumJoints; ++j) p.q[j] = m.robot()->positions()->Get(j);
+    for (int j = 0; j < sim::kNumJoints; ++j) p.q[j] = sim::element(*m.robot()->positions(), j);
   if (m.held_box_ids()) p.held.assign(m.held_box_ids()->begin(), m.held_box_ids()->end());
   p.unloaded = m.boxes_unloaded();
   p.sim_time_s = static_cast<double>(m.stamp_ns()) * 1e-9;

@@ -282,7 +282,11 @@ class ExecutorNode : public plr::Node {
       job(t0);
       finish(true, t0);
     } catch (const Stopped&) {
+      // Stopped before the job was done (Ctrl-C, SIGTERM, --duration, a lost
+      // host): the figures so far are the report; the kernel adds why.
       stats_.stop_reason = "stopped";
+      stats_.wall_time_s = seconds_since(t0);
+      save_report();
     } catch (const std::exception& e) {
       stats_.stop_reason = e.what();
       log().error("executor: {}", e.what());
@@ -426,6 +430,9 @@ class ExecutorNode : public plr::Node {
       stats_.wall_time_s = seconds_since(t0);
       report_progress(fmt::format("{}: +{} boxes", action_name_, o.boxes), true);
       publish_status();
+      // After every action, so a run killed at any moment keeps its figures.
+      stats_.stop_reason = "running";
+      save_report();
       try {
         checkpoint();
       } catch (const SimulatorLost& lost) {
@@ -484,7 +491,17 @@ class ExecutorNode : public plr::Node {
     (void)done_.publish(fbb);
   }
 
-  void write_report() {
+  // report.json and the curve only (no final scene: the simulator may be
+  // gone or stopping); a failure is logged, the run goes on.
+  void save_report() {
+    try {
+      write_report(false);
+    } catch (const std::exception& e) {
+      log().error("report: {}", e.what());
+    }
+  }
+
+  void write_report(bool final_scene = true) {
     namespace fs = std::filesystem;
     const fs::path dir(report_dir_);
     std::error_code ec;
@@ -500,6 +517,7 @@ class ExecutorNode : public plr::Node {
     write("unloading.svg", curve_svg(stats_.curve, stats_.boxes_total,
                                      fmt::format("{}: {}/{} boxes unloaded", ctx().name(),
                                                  stats_.boxes_unloaded, stats_.boxes_total)));
+    if (!final_scene) return;
     // The final scene, with the robot's links drawn over it.
     try {
       const actions::Perceived w = observe();
@@ -531,6 +549,8 @@ class ExecutorNode : public plr::Node {
       write("final_world.yaml", sim::format_world(w.world));
     } catch (const SimulatorLost& lost) {
       log().warn("no final scene: {}", lost.what);
+    } catch (const Stopped&) {
+      log().warn("no final scene: stopped");
     } catch (const std::runtime_error& e) {
       log().warn("no final scene: {}", e.what());
     }

@@ -376,6 +376,51 @@ TEST_F(Executor, UnloadsASmallWallWithStrategyH) {
   EXPECT_FALSE(kernel_.published("executor/status").empty());
 }
 
+// Ctrl-C, SIGTERM, --duration or a lost host stop the executor before the
+// job is done: its figures were lost (no report.json). Now the report is
+// rewritten after every action and when it stops.
+TEST_F(Executor, AStoppedRunKeepsItsFiguresInTheReport) {
+  FakeSim sim(small_wall());
+  FakePlanner planner;
+  sim.serve(kernel_);
+  planner.serve(kernel_);
+  auto h =
+      kernel_.load_node(STRATEGY_HARDCODED_SO,
+                        NodeOptions()
+                            .with_name("strategy")
+                            .with_params(R"({"observation": )" + std::string(kObservation) + "}"));
+  ASSERT_TRUE(h) << h.error().message;
+  ASSERT_TRUE(h->configure());
+  ASSERT_TRUE(h->activate());
+  auto n = kernel_.load_node(
+      STRATEGY_EXECUTOR_SO,
+      NodeOptions()
+          .with_name("executor")
+          .with_params(
+              R"({"report_dir": ")" + dir_.string() +
+              R"(", "progress": false, "retry_ms": 1, "service_wait_s": 5, "observation": )" +
+              kObservation + "}"));
+  ASSERT_TRUE(n) << n.error().message;
+  ASSERT_TRUE(n->configure());
+  ASSERT_TRUE(n->activate());
+  // Until the first action is done and reported.
+  for (int i = 0; i < 60000 && !fs::exists(dir_ / "report.json"); ++i) {
+    kernel_.spin();
+    kernel_.wait_published("pipeline/done", 1, std::chrono::milliseconds(1));
+  }
+  ASSERT_TRUE(fs::exists(dir_ / "report.json"));
+  EXPECT_TRUE(n->deactivate());
+  EXPECT_TRUE(kernel_.published("pipeline/done").empty()) << "stopped, not done";
+  std::ifstream in(dir_ / "report.json");
+  const auto report = nlohmann::json::parse(in);
+  EXPECT_EQ(report["stop_reason"], "stopped");
+  EXPECT_EQ(report["boxes_total"], 6);
+  EXPECT_GE(report["actions"]["pick"]["executions"].get<int>() +
+                report["actions"]["sweep"]["executions"].get<int>(),
+            1);
+  EXPECT_GT(report["robot_time_s"].get<double>(), 0.0);
+}
+
 TEST_F(Executor, SweepsADeepPileWithStrategyH) {
   // Three rows of low boxes, 1.2 m deep (> d_min) and nothing behind: H
   // sweeps; the scoop takes what its tip passes.

@@ -190,7 +190,11 @@ void ShmBridge::export_topic(const std::string& topic, std::uint64_t type_id,
                  .config(shm_topic_config(settings))
                  .create();
   if (!pub) {
-    spdlog::error("shm: cannot export topic '{}': {}", topic, shm::to_string(pub.error()));
+    const auto e =
+        fmt::format("shm: cannot export topic '{}': {}", topic, shm::to_string(pub.error()));
+    spdlog::error("{}", e);
+    std::lock_guard lock(m_);
+    if (first_error_.empty()) first_error_ = e;
     return;
   }
   auto out = std::make_unique<Outgoing>(
@@ -299,7 +303,10 @@ void ShmBridge::serve(const std::string& service) {
                          .max_clients = 16})
                      .create();
   if (!created) {
-    spdlog::error("shm: cannot serve '{}': {}", service, shm::to_string(created.error()));
+    const auto e =
+        fmt::format("shm: cannot serve '{}': {}", service, shm::to_string(created.error()));
+    spdlog::error("{}", e);
+    if (first_error_.empty()) first_error_ = e;
     return;
   }
   auto s = std::make_unique<Server>();
@@ -458,6 +465,11 @@ void ShmBridge::reply_loop(Client* client) {
     const auto& ref = *reply;
     (void)bus_.respond(id, PLR_OK, wrap_sample(std::move(*reply), ref, this), "");
   }
+}
+
+std::string ShmBridge::first_error() const {
+  std::lock_guard lock(m_);
+  return first_error_;
 }
 
 nlohmann::json ShmBridge::stats() const {

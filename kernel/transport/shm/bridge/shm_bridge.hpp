@@ -47,6 +47,10 @@ class ShmBridge final : public Endpoint, public Link {
   // Counters for telemetry: messages out (sent_in_place: from a loaned slot,
   // sent_copied: copied into a slot once) and in, invalid ones dropped.
   nlohmann::json stats() const;
+  // The first topic or service of this host that other hosts cannot reach
+  // (its segment could not be made, e.g. /dev/shm full), if any: a host
+  // without it must not run as if it had it.
+  std::string first_error() const;
 
   struct Outgoing;
   struct Incoming;
@@ -70,6 +74,7 @@ class ShmBridge final : public Endpoint, public Link {
   std::string name_;
 
   mutable std::mutex m_;
+  std::string first_error_;  // under m_
   std::map<std::string, std::unique_ptr<Outgoing>> outgoing_;
   std::map<std::string, std::unique_ptr<Incoming>> incoming_;
   std::map<std::string, std::unique_ptr<Server>> servers_;

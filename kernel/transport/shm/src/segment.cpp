@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <cerrno>
+#include <cstddef>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
@@ -50,6 +51,8 @@ const char* to_string(Error e) noexcept {
       return "peer closed";
     case Error::kUnknownClient:
       return "client no longer connected";
+    case Error::kNoSpace:
+      return "no room in /dev/shm (see its size with df /dev/shm)";
   }
   return "unknown error";
 }
@@ -101,7 +104,9 @@ Owner segment_owner(const std::string& shm_name) {
                    ::mmap(nullptr, sizeof(detail::SegmentHeader), PROT_READ, MAP_SHARED, fd, 0);
                p != MAP_FAILED) {
       const auto& h = *static_cast<const detail::SegmentHeader*>(p);
-      if (load_magic(h) == detail::kMagic) {
+      // Stamped with its owner before it has its name (Segment::create),
+      // whether or not the magic is there yet.
+      if (load_magic(h) == detail::kMagic || h.owner_pid != 0) {
         result = ProcessStamp{h.owner_pid, h.owner_start}.alive() ? Owner::kLive : Owner::kDead;
       } else {
         result = old ? Owner::kDead : Owner::kLive;
@@ -211,26 +216,44 @@ Result<Segment> Segment::create(const std::string& name, std::size_t size, Segme
   if (size < sizeof(SegmentHeader) || !valid_endpoint_name(endpoint)) {
     return Error::kInvalidArgument;
   }
-  int fd = -1;
-  for (int attempt = 0; attempt < 2 && fd < 0; ++attempt) {
-    fd = ::shm_open(name.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
-    if (fd >= 0) break;
-    if (errno == EACCES) return Error::kPermission;
-    if (errno != EEXIST) return Error::kOsError;
-    // A crashed previous owner (a restarted host) leaves its segment behind.
-    if (attempt == 1 || segment_owner(name) != Owner::kDead) {
-      return Error::kAlreadyExists;
-    }
-    ::shm_unlink(name.c_str());
-  }
+  // Made under a name of its own and stamped with its owner, then linked to
+  // `name` in one step: `name` never exists without an owner, so a crash at
+  // any instant leaves nothing there, or a dead owner's segment that the
+  // next creator replaces at once (not one "owned by a live process").
+  const std::string temporary = name + ".new" + std::to_string(::getpid());
+  ::shm_unlink(temporary.c_str());  // a dead process's, with our pid
+  const int fd = ::shm_open(temporary.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd < 0) return errno == EACCES ? Error::kPermission : Error::kOsError;
+  const auto fail = [&](Error e) {
+    ::close(fd);
+    ::shm_unlink(temporary.c_str());
+    return e;
+  };
+  const ProcessStamp me = ProcessStamp::self();
+  const std::int32_t pid = me.pid;
+  const std::uint64_t start = me.start_time;
   struct stat st {};
   // fchmod: the umask may have narrowed 0600, and nothing wider is allowed.
-  if (::fchmod(fd, 0600) != 0 || ::ftruncate(fd, static_cast<off_t>(size)) != 0 ||
-      ::fstat(fd, &st) != 0) {
-    ::close(fd);
+  if (::fchmod(fd, 0600) != 0 || ::ftruncate(fd, static_cast<off_t>(size)) != 0)
+    return fail(Error::kOsError);
+  // The pages now, not at first touch: a /dev/shm too small (Docker's 64 MB)
+  // is an error here, where it was a SIGBUS in the middle of a run.
+  if (const int e = ::posix_fallocate(fd, 0, static_cast<off_t>(size)); e != 0)
+    return fail(e == ENOSPC ? Error::kNoSpace : Error::kOsError);
+  if (::fstat(fd, &st) != 0 ||
+      ::pwrite(fd, &pid, sizeof pid, offsetof(SegmentHeader, owner_pid)) != sizeof pid ||
+      ::pwrite(fd, &start, sizeof start, offsetof(SegmentHeader, owner_start)) != sizeof start)
+    return fail(Error::kOsError);
+  const std::string from = kShmDir + temporary.substr(1), to = kShmDir + name.substr(1);
+  for (int attempt = 0;; ++attempt) {
+    if (::link(from.c_str(), to.c_str()) == 0) break;
+    if (errno == EACCES || errno == EPERM) return fail(Error::kPermission);
+    if (errno != EEXIST) return fail(Error::kOsError);
+    // A crashed previous owner (a restarted host) leaves its segment behind.
+    if (attempt == 1 || segment_owner(name) != Owner::kDead) return fail(Error::kAlreadyExists);
     ::shm_unlink(name.c_str());
-    return Error::kOsError;
   }
+  ::shm_unlink(temporary.c_str());
   void* p = ::mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_POPULATE, fd, 0);
   ::close(fd);
   if (p == MAP_FAILED) {
@@ -238,8 +261,12 @@ Result<Segment> Segment::create(const std::string& name, std::size_t size, Segme
     return Error::kOsError;
   }
   Segment s = mapped(name, p, size, st);
-  s.owner_ = ProcessStamp::self();
-  auto* h = new (p) SegmentHeader{};
+  s.owner_ = me;
+  // Default-initialized, not zeroed: the owner stamp written above stays
+  // (the fresh object's other bytes are zero).
+  auto* h = new (p) SegmentHeader;
+  h->magic = 0;
+  h->reserved = 0;
   h->layout_version = kLayoutVersion;
   h->kind = kind;
   h->total_size = size;

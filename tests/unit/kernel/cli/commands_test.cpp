@@ -4,8 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+#include <unistd.h>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <thread>
 
@@ -13,6 +16,7 @@ namespace plr::kernel {
 namespace {
 
 using testing::run_command;
+namespace fs = std::filesystem;
 
 const std::string kPlr = PLR_BINARY;
 
@@ -75,7 +79,7 @@ TEST(Cli, RunRefusesABadOverride) {
       run_command(kPlr + " run " + kDemo +
                       " --set pipeline=cli_bad_override --set nodes.counter.params.period_ms=fast",
                   &out),
-      1);
+      2);
   EXPECT_NE(out.find("param 'period_ms': expected a number"), std::string::npos) << out;
 }
 
@@ -96,7 +100,7 @@ TEST(Cli, CtrlCStopsCleanlyAndSwapWorksOnTheRunningPipeline) {
   EXPECT_EQ(run_command(kPlr + " swap doubler demo_doubler --pipeline cli_swap_test", &out), 0)
       << out;
   out.clear();
-  EXPECT_EQ(run_command(kPlr + " swap doubler nope --pipeline cli_swap_test", &out), 1) << out;
+  EXPECT_EQ(run_command(kPlr + " swap doubler nope --pipeline cli_swap_test", &out), 2) << out;
   EXPECT_NE(out.find("swap of 'doubler' to 'nope' failed, 'demo_doubler' keeps running"),
             std::string::npos)
       << out;
@@ -104,7 +108,7 @@ TEST(Cli, CtrlCStopsCleanlyAndSwapWorksOnTheRunningPipeline) {
   int status = 0;
   waitpid(pid, &status, 0);
   ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_EQ(WEXITSTATUS(status), 130) << "128 + SIGINT, as a shell reports it";
   std::ifstream in(log);
   const std::string text((std::istreambuf_iterator<char>(in)), {});
   EXPECT_NE(text.find("saw "), std::string::npos) << "doubler deactivated cleanly:\n" << text;
@@ -135,7 +139,92 @@ TEST(Cli, SighupReloadsTheConfigAndSwapsChangedPlugins) {
   kill(pid, SIGINT);
   int status = 0;
   waitpid(pid, &status, 0);
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 130);
+}
+
+// `validate` said 2 and `run` 1 for the same missing plug-in.
+TEST(Cli, AMissingPluginHasTheSameExitCodeInEveryCommand) {
+  const auto path = temp_config("cli_missing.yaml", "nodes:\n  x: {plugin: nope}\n");
+  std::string out;
+  EXPECT_EQ(run_command(kPlr + " validate " + path, &out), 2) << out;
+  EXPECT_EQ(
+      run_command(
+          kPlr + " run " + path + " --report " + ::testing::TempDir() + "cli_missing_report", &out),
+      2)
+      << out;
+}
+
+// Errors quoted terminal escapes from names in requests as raw bytes.
+TEST(Cli, ErrorsShowControlBytesEscaped) {
+  std::string out;
+  EXPECT_EQ(run_command(kPlr + " status --pipeline $(printf 'a\\033[2Jb')", &out), 2) << out;
+  EXPECT_EQ(out.find('\033'), std::string::npos) << out;
+  EXPECT_NE(out.find("'a\\x1b[2Jb' is not a name"), std::string::npos) << out;
+}
+
+// `pipeline: ../victims/victim` made `plr run` delete victims/victim.sock and
+// bind its control socket in its place.
+TEST(Cli, APipelineNameCannotReachOutOfTheControlFolder) {
+  const fs::path xdg = fs::path(::testing::TempDir()) / "cli_traversal_xdg";
+  fs::remove_all(xdg);
+  fs::create_directories(xdg / "victims");
+  fs::permissions(xdg, fs::perms::owner_all);
+  std::ofstream(xdg / "victims" / "victim.sock") << "precious";
+  const auto path =
+      temp_config("cli_traversal.yaml",
+                  "pipeline: ../victims/victim\nnodes:\n  counter: {plugin: demo_counter}\n");
+  const std::string env = "XDG_RUNTIME_DIR=" + xdg.string() + " ";
+  std::string out;
+  EXPECT_EQ(run_command(env + kPlr + " validate " + path, &out), 2) << out;
+  EXPECT_NE(out.find(path + ":1:11: pipeline: '../victims/victim' is not a name"),
+            std::string::npos)
+      << out;
+  out.clear();
+  EXPECT_EQ(run_command(env + kPlr + " run " + path + " --duration 0.2 --report " +
+                            (xdg / "report").string(),
+                        &out),
+            2)
+      << out;
+  std::ifstream victim(xdg / "victims" / "victim.sock");
+  const std::string text((std::istreambuf_iterator<char>(victim)), {});
+  EXPECT_EQ(text, "precious");
+  out.clear();
+  EXPECT_EQ(run_command(env + kPlr + " status --pipeline ../victims/victim", &out), 2) << out;
+}
+
+// Without XDG_RUNTIME_DIR the control folder was /tmp/plr-<uid>: another
+// user who made it first stopped every run of that user. Run as `nobody`
+// with /tmp/plr-65534 taken by root.
+TEST(Cli, AControlFolderTakenByAnotherUserDoesNotStopARun) {
+  if (geteuid() != 0) GTEST_SKIP() << "needs root to run as another user";
+  const std::string taken = "/tmp/plr-65534";
+  const bool made = ::mkdir(taken.c_str(), 0777) == 0;
+  struct stat st {};
+  ASSERT_EQ(::lstat(taken.c_str(), &st), 0);
+  ASSERT_NE(st.st_uid, 65534u) << taken << " is nobody's own: cannot show the attack";
+  const fs::path home = fs::path(::testing::TempDir()) / "cli_nobody_home";
+  fs::remove_all(home);
+  fs::create_directories(home);
+  ASSERT_EQ(::chown(home.c_str(), 65534, 65534), 0);
+  const std::string log = (home / "log").string();
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (::setgid(65534) != 0 || ::setuid(65534) != 0) ::_exit(126);
+    ::unsetenv("XDG_RUNTIME_DIR");
+    ::setenv("HOME", home.c_str(), 1);
+    std::freopen(log.c_str(), "w", stdout);
+    std::freopen(log.c_str(), "a", stderr);
+    ::execl(kPlr.c_str(), kPlr.c_str(), "run", kDemo.c_str(), "--set", "pipeline=cli_nobody",
+            "--duration", "0.3", "--report", (home / "report").c_str(), nullptr);
+    ::_exit(127);
+  }
+  const int code = shm::test::wait_child(pid);
+  if (made) ::rmdir(taken.c_str());
+  std::ifstream in(log);
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_EQ(code, 3) << text;
+  EXPECT_TRUE(fs::exists(home / "report" / "report.json")) << text;
+  fs::remove_all(home);
 }
 
 TEST(Cli, PluginsListsTheDemoPluginsAsJson) {

@@ -62,7 +62,10 @@ TEST_F(ControlTest, AFolderOthersCanWriteIsRefused) {
   auto dir = control_dir();
   ASSERT_FALSE(dir);
   EXPECT_EQ(dir.error().message,
-            (runtime_ / "plr").string() + ": control folder must be ours with mode 0700");
+            (runtime_ / "plr").string() +
+                ": refused as control folder: it must be a folder of ours (uid " +
+                std::to_string(::geteuid()) + ") with mode 0700, it is a folder of uid " +
+                std::to_string(::geteuid()) + " with mode 0720");
 }
 
 TEST_F(ControlTest, ARequestGetsItsReplyOverAPrivateSocket) {

@@ -105,6 +105,56 @@ nodes:
   EXPECT_EQ(live_messages(), baseline);
 }
 
+// `plr swap planner demo_doubler` was accepted: the `plan` service vanished
+// and the executor waited for it forever.
+TEST(Swap, AnotherKindOrAPluginLackingAServiceIsRefusedBeforeAnythingChanges) {
+  Kernel kernel(config_from_yaml(R"(
+nodes:
+  planner: {plugin: test_planner}
+  doubler: {plugin: test_probe}
+)"));
+  ASSERT_TRUE(kernel.start());
+  auto kind = kernel.swap("planner", "demo_doubler");
+  ASSERT_FALSE(kind);
+  EXPECT_EQ(kind.error().message,
+            "swap of 'planner' to 'demo_doubler' refused, 'test_planner' keeps running: "
+            "'demo_doubler' is a other plug-in, the node's is a planner");
+  auto missing = kernel.swap("doubler", "demo_counter");
+  ASSERT_FALSE(missing);
+  EXPECT_EQ(missing.error().code, PLR_ERR_INVALID);
+  EXPECT_EQ(missing.error().message,
+            "swap of 'doubler' to 'demo_counter' refused, 'test_probe' keeps running: "
+            "'demo_counter' would not offer double (the node's callers need it)");
+  for (const auto& n : kernel.nodes()) EXPECT_EQ(n.state, "active") << n.name;
+  // The probe still answers.
+  TestEndpoint client;
+  kernel.bus().set_live(&client, true);
+  Ledger ledger(1);
+  CallCtx c{&ledger, 0};
+  ASSERT_TRUE(kernel.bus().call(&client, "double", kDoubleReq, make_double_request(21),
+                                std::chrono::seconds(5), &on_reply, &c, nullptr));
+  std::unique_lock lock(ledger.m);
+  ledger.cv.wait_for(lock, std::chrono::seconds(5), [&] { return ledger.completed == 1; });
+  EXPECT_EQ(ledger.values[0], 42);
+  lock.unlock();
+  kernel.bus().remove_endpoint(&client);
+  client.node_thread().drain();
+}
+
+// Swapping the executor mid-run reset the world, and the report then claimed
+// the whole job.
+TEST(Swap, ANodeHoldingTheRunsStateIsNotSwapped) {
+  Kernel kernel(config_from_yaml("nodes:\n  executor: {plugin: test_executor}\n"));
+  ASSERT_TRUE(kernel.start());
+  auto s = kernel.swap("executor", "test_executor");
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().code, PLR_ERR_STATE);
+  EXPECT_EQ(s.error().message,
+            "swap of 'executor' to 'test_executor' refused, 'test_executor' keeps running: a "
+            "executor node holds the run's state, which plug-ins cannot hand over (stop the run "
+            "and start it with the new plug-in)");
+}
+
 TEST(Swap, FailedSwapKeepsTheOldPluginRunning) {
   Kernel kernel(config_from_yaml(R"(
 nodes:

@@ -136,7 +136,7 @@ TEST(PipelineConfig, UnknownKeyWithoutNearMatchListsKnownKeys) {
             "plugin_paths, clock, cpu_wake_latency_us, hosts, nodes, topics, remote, shared)");
   EXPECT_EQ(error_of("nodes: {a: {plugin: x}}\nhosts: {h: {retries: 1}}\n"),
             "configs/x.yaml:2:13: hosts.h.retries: unknown key 'retries' (known keys: restart, "
-            "max_restarts, backoff_ms)");
+            "max_restarts, restart_window_s, backoff_ms)");
   EXPECT_EQ(error_of("nodes: {a: {plugin: x}}\nremote: {dds: {domian: 1}}\n"),
             "configs/x.yaml:2:16: remote.dds.domian: unknown key 'domian' (did you mean "
             "'domain'?)");
@@ -211,7 +211,7 @@ TEST(PipelineConfig, SizesMustBePositive) {
   EXPECT_EQ(error_of("nodes: {a: {plugin: x}}\nremote: {dds: {domain: 300}}\n"),
             "configs/x.yaml:2:24: remote.dds.domain: must be between 0 and 232, got 300");
   EXPECT_EQ(error_of("nodes: {a: {plugin: x}}\ntopics: {t: {depth: 99999999999999999999}}\n"),
-            "configs/x.yaml:2:21: topics.t.depth: must be between 1 and 9223372036854775807, "
+            "configs/x.yaml:2:21: topics.t.depth: must be between 1 and 4096, "
             "got 99999999999999999999");
   EXPECT_EQ(error_of("cpu_wake_latency_us: -5\nnodes: {a: {plugin: x}}\n"),
             "configs/x.yaml:1:22: cpu_wake_latency_us: must not be negative, got -5");
@@ -308,6 +308,40 @@ TEST(PipelineConfig, OverrideErrorsNameTheOverride) {
   // A problem outside every override still points into the file.
   EXPECT_EQ(error_of("pipeline: p\n", {{"topics.t.depth", "1"}}),
             "configs/x.yaml:1:1: missing required key 'nodes'");
+}
+
+// The name becomes the control socket's file: `plr run` of
+// `pipeline: ../../dir/victim` deleted dir/victim.sock and bound its own there.
+TEST(PipelineConfig, APipelineNameIsANameNotAPath) {
+  EXPECT_EQ(error_of("pipeline: ../../some/dir/victim\nnodes: {a: {plugin: x}}\n"),
+            "configs/x.yaml:1:11: pipeline: '../../some/dir/victim' is not a name: 1 to 64 "
+            "letters, digits, '_', '-' and '.', not starting with '.'");
+  EXPECT_EQ(error_of("pipeline: ..\nnodes: {a: {plugin: x}}\n"),
+            "configs/x.yaml:1:11: pipeline: '..' is not a name: 1 to 64 letters, digits, '_', "
+            "'-' and '.', not starting with '.'");
+  EXPECT_EQ(error_of("pipeline: \"a\\x1b[2Jb\"\nnodes: {a: {plugin: x}}\n"),
+            "configs/x.yaml:1:11: pipeline: 'a\\x1b[2Jb' is not a name: 1 to 64 letters, "
+            "digits, '_', '-' and '.', not starting with '.'");
+  EXPECT_EQ(parse_ok("pipeline: unload-sim.v2_b\nnodes: {a: {plugin: x}}\n").pipeline,
+            "unload-sim.v2_b");
+}
+
+// 4294967297 validated, was cut to 32 bits (1 byte) and delivered nothing.
+TEST(PipelineConfig, SlotSizesAndDepthsAreBounded) {
+  EXPECT_EQ(error_of("nodes: {a: {plugin: x}}\ntopics: {t: {slot_size: 4294967297}}\n"),
+            "configs/x.yaml:2:25: topics.t.slot_size: must be between 1 and 268435456, got "
+            "4294967297");
+  EXPECT_EQ(error_of("nodes: {a: {plugin: x}}\ntopics: {t: {depth: 100000}}\n"),
+            "configs/x.yaml:2:21: topics.t.depth: must be between 1 and 4096, got 100000");
+}
+
+// Cyclone reads no interface as "choose one", and chose the first real one.
+TEST(PipelineConfig, AnEmptyDdsInterfaceListIsRefused) {
+  EXPECT_EQ(error_of("nodes: {a: {plugin: x}}\nremote: {dds: {interfaces: []}}\n"),
+            "configs/x.yaml:2:28: remote.dds.interfaces: an empty list would let DDS choose a "
+            "network interface; name at least one ('lo': this machine only)");
+  EXPECT_EQ(parse_ok("nodes: {a: {plugin: x}}\nremote: {dds: {}}\n").dds.interfaces,
+            std::vector<std::string>{"lo"});
 }
 
 TEST(PipelineConfig, ParseOverride) {

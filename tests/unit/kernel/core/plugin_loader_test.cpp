@@ -192,6 +192,43 @@ TEST(PluginLoader, RefusesGroupOrWorldWritableFolder) {
             file + ": refused: folder " + dir.str() + " is group- or world-writable (mode 0777)");
 }
 
+// A safe folder inside one anybody may write to: whoever can write the outer
+// one can rename the inner one and put their own in its place.
+TEST(PluginLoader, RefusesAFolderInsideAWritableOneUpToTheRoot) {
+  TempDir dir;
+  const fs::path inner = dir.path() / "inner";
+  fs::create_directory(inner);
+  fs::permissions(inner, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
+                             fs::perms::others_read | fs::perms::others_exec);
+  fs::copy_file(fs::path(kBrokenPlugins) / "valid_plugin.so", inner / "valid_plugin.so");
+  PluginLoader loader({inner.string()});
+  fs::permissions(dir.path(), fs::perms::all);
+  const std::string file = (inner / "valid_plugin.so").string();
+  EXPECT_EQ(error_of(loader, "valid_plugin"),
+            file + ": refused: folder " + dir.str() + " is group- or world-writable (mode 0777)");
+  fs::permissions(dir.path(), fs::perms::sticky_bit, fs::perm_options::add);
+  EXPECT_EQ(error_of(loader, "valid_plugin"), "(loaded)") << "a sticky folder, as /tmp";
+}
+
+// Its owner can replace anything in it, whatever the mode says.
+TEST(PluginLoader, RefusesAFolderOwnedByAnotherUser) {
+  if (geteuid() != 0) GTEST_SKIP() << "needs root to give a folder to another user";
+  TempDir dir;
+  const std::string file = dir.add("valid_plugin.so");
+  fs::permissions(dir.path(), fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
+                                  fs::perms::others_read | fs::perms::others_exec);
+  ASSERT_EQ(chown(dir.path().c_str(), 65534, 65534), 0);
+  PluginLoader loader({dir.str()});
+  EXPECT_EQ(error_of(loader, "valid_plugin"),
+            file + ": refused: folder " + dir.str() +
+                " is owned by uid 65534 (only root or uid 0 may own it)");
+  ASSERT_EQ(chown(file.c_str(), 65534, 65534), 0);
+  ASSERT_EQ(chown(dir.path().c_str(), 0, 0), 0);
+  EXPECT_EQ(
+      error_of(loader, "valid_plugin"),
+      file + ": refused: file " + file + " is owned by uid 65534 (only root or uid 0 may own it)");
+}
+
 TEST(PluginLoader, RefusesSameNameFromAnotherFile) {
   TempDir first_path;
   TempDir second_path;

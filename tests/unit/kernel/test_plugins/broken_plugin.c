@@ -6,11 +6,16 @@
  *                            built against an old SDK
  *   TEST_PLUGIN_NO_ENTRY     exports no entry point
  *   TEST_PLUGIN_UNRESOLVED   needs a symbol nothing provides, so dlopen fails
+ *   TEST_PLUGIN_KIND         defaults to PLR_KIND_OTHER
  */
 #include <plr/plugin_abi.h>
 
 #ifndef TEST_PLUGIN_ABI_MAJOR
 #define TEST_PLUGIN_ABI_MAJOR PLR_ABI_MAJOR
+#endif
+
+#ifndef TEST_PLUGIN_KIND
+#define TEST_PLUGIN_KIND PLR_KIND_OTHER
 #endif
 
 #define EXPORT __attribute__((visibility("default")))
@@ -47,7 +52,7 @@ const plr_plugin_descriptor* ENTRY(void) {
                                                    TEST_PLUGIN_NAME,
                                                    "0.1.0",
                                                    "a loader test plug-in",
-                                                   PLR_KIND_OTHER,
+                                                   TEST_PLUGIN_KIND,
                                                    {create, destroy, step, step, step, step}};
   return &descriptor;
 }

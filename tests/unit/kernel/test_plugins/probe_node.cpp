@@ -1,12 +1,14 @@
 // Test plug-in: serves `double` asynchronously (answers from its own thread
 // after a short random delay, so requests are in flight during a swap; one
 // chosen value slowly) and
-// reports each life-cycle hook on the `lifecycle` topic.
+// reports each life-cycle hook on the `lifecycle` topic; with `crash_after_ms`
+// its process dies (SIGKILL) that long after activation, for restart tests.
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
 
 #include <condition_variable>
+#include <csignal>
 #include <deque>
 #include <mutex>
 #include <random>
@@ -20,7 +22,9 @@ class ProbeNode : public plr::Node {
 
  protected:
   plr::Status on_configure() override {
-    params().allow_only({"factor", "max_delay_us", "fail_activate", "slow_value", "slow_ms"});
+    params().allow_only(
+        {"factor", "max_delay_us", "fail_activate", "slow_value", "slow_ms", "crash_after_ms"});
+    crash_after_ms_ = params().get<int>("crash_after_ms", -1);
     factor_ = params().get<std::int64_t>("factor", 2);
     max_delay_us_ = params().get<int>("max_delay_us", 200);
     fail_activate_ = params().get<bool>("fail_activate", false);
@@ -47,6 +51,11 @@ class ProbeNode : public plr::Node {
     if (fail_activate_) return plr::make_error(PLR_ERR_INVALID, "activation refused by test");
     stop_ = false;
     worker_ = std::thread([this] { serve(); });
+    if (crash_after_ms_ >= 0)
+      std::thread([ms = crash_after_ms_] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(ms));
+        std::raise(SIGKILL);
+      }).detach();
     report("activate");
     return {};
   }
@@ -100,6 +109,7 @@ class ProbeNode : public plr::Node {
   bool fail_activate_ = false;
   std::int64_t slow_value_ = -1;  // answered after slow_ms, so a test can act while it is in flight
   int slow_ms_ = 0;
+  int crash_after_ms_ = -1;
   plr::Publisher<plr::msg::Statistics> events_;
   std::mutex m_;
   std::condition_variable cv_;

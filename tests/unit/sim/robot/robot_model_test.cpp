@@ -148,6 +148,40 @@ TEST(RobotModel, XmlSyntaxErrorGivesLine) {
   EXPECT_EQ(msg.rfind("bad.urdf: XML error at line", 0), 0u) << msg;
 }
 
+// 60,000 nested elements overflowed the parser's stack (SIGSEGV).
+TEST(RobotModel, DeepNestingIsRefusedBeforeParsing) {
+  std::string xml = "<robot name='r'>\n<link name='a'>";
+  for (int i = 0; i < 60000; ++i) xml += "<visual a='>'>";
+  for (int i = 0; i < 60000; ++i) xml += "</visual>";
+  xml += "</link></robot>";
+  EXPECT_EQ(error_of(xml), "bad.urdf: line 2: elements nested deeper than 32 levels");
+  // Comments, declarations and empty elements do not count.
+  std::string flat = "<?xml version='1.0'?>\n<!-- <a><b><c> -->\n<robot name='r'>";
+  for (int i = 0; i < 100; ++i) flat += "<link name='l" + std::to_string(i) + "'/>";
+  flat += "</robot>";
+  EXPECT_EQ(error_of(flat).find("nested deeper"), std::string::npos) << error_of(flat);
+}
+
+// urdfdom leaked the model it built for joints that do not make a tree (fuzzing).
+TEST(RobotModel, JointsThatDoNotMakeATreeAreRefused) {
+  const std::string head = "<robot name='r'><link name='a'/><link name='b'/>";
+  const auto joint = [](const char* name, const char* parent, const char* child) {
+    return std::string("<joint name='") + name + "' type='fixed'><parent link='" + parent +
+           "'/><child link='" + child + "'/></joint>";
+  };
+  EXPECT_EQ(error_of(head + joint("j1", "a", "b") + joint("j2", "a", "b") + "</robot>"),
+            "bad.urdf: line 1: link 'b' is the child of joints 'j1' and 'j2'");
+  EXPECT_EQ(error_of(head + joint("j1", "a", "b") + joint("j2", "b", "a") + "</robot>"),
+            "bad.urdf: the joints make a loop through link 'a'");
+}
+
+// /dev/zero as a URDF read until memory ran out.
+TEST(RobotModel, AnEndlessFileIsRefusedAtTheSizeBound) {
+  const auto model = RobotModel::from_urdf_file("/dev/zero");
+  ASSERT_FALSE(model);
+  EXPECT_EQ(model.error().message, "/dev/zero: larger than 8388608 bytes");
+}
+
 TEST(RobotModel, MissingJointIsNamed) {
   const std::string msg = error_of("<robot name='r'><link name='a'/></robot>");
   EXPECT_EQ(msg, "bad.urdf: missing joint 'base_x'");

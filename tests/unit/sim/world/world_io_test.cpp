@@ -78,6 +78,22 @@ TEST_F(WorldIo, OrientationIsOptionalAndMassMayBeZero) {
   EXPECT_TRUE(w.boxes[0].pose.linear().isIdentity());
 }
 
+// A 1e4 m trailer or a 1e6 m box grew memory until the process was killed.
+TEST_F(WorldIo, SizesArePhysicallyBounded) {
+  EXPECT_EQ(error_of("format: plr-world\nversion: 1\ntrailer: {width: 2.5, height: 2.7, depth: "
+                     "1e4}\nboxes: []\n"),
+            "3:43: trailer.depth: must be between 0.5 and 20, got 1e4");
+  EXPECT_EQ(error_of(std::string(kHeader) +
+                     "boxes:\n  - {id: 1, size: [1e6, 1, 1], position: [1, 0, 0.5]}\n"),
+            "5:20: boxes[0].size[0]: must be between 0.01 and 4, got 1e6");
+  EXPECT_EQ(error_of(std::string(kHeader) +
+                     "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1e300, 0, 0.5]}\n"),
+            "5:41: boxes[0].position[0]: must be between -100 and 100, got 1e300");
+  EXPECT_EQ(error_of(std::string(kHeader) +
+                     "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5], mass: 1e9}\n"),
+            "5:59: boxes[0].mass: must be between 0 and 1000, got 1e9");
+}
+
 TEST_F(WorldIo, ErrorsNameLineAndKey) {
   EXPECT_EQ(error_of(std::string(kHeader) +
                      "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5]}\n"
@@ -92,14 +108,14 @@ TEST_F(WorldIo, ErrorsNameLineAndKey) {
             "8:11: boxes[0].mass: expected a number, got 'heavy'");
   EXPECT_EQ(error_of(std::string(kHeader) +
                      "boxes:\n  - {id: 1, size: [1, -1, 1], position: [1, 0, 0.5]}\n"),
-            "5:23: boxes[0].size[1]: must be positive, got -1");
+            "5:23: boxes[0].size[1]: must be between 0.01 and 4, got -1");
   EXPECT_EQ(error_of(std::string(kHeader) +
                      "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5]}\n"
                      "  - {id: 1, size: [1, 1, 1], position: [3, 0, 0.5]}\n"),
             "6:10: boxes[1].id: duplicate id 1 (also boxes[0].id)");
   EXPECT_EQ(error_of("format: plr-world\nversion: 1\ntrailer: {width: 2.5, height: 0, depth: 16}\n"
                      "boxes: []\n"),
-            "3:31: trailer.height: must be positive, got 0");
+            "3:31: trailer.height: must be between 0.5 and 4, got 0");
   EXPECT_EQ(error_of("format: plr-world\nversion: 2\n"),
             "2:10: version: unsupported version 2 (this reader knows 1)");
   EXPECT_EQ(error_of("format: something\nversion: 1\n"),
@@ -128,7 +144,7 @@ TEST_F(WorldIo, BadTypesUnknownKeysAndRangesAreLocated) {
             "5:10: boxes[0].id: must not be negative, got -1");
   EXPECT_EQ(error_of(std::string(kHeader) +
                      "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5], mass: -2}\n"),
-            "5:59: boxes[0].mass: must not be negative, got -2");
+            "5:59: boxes[0].mass: must be between 0 and 1000, got -2");
   EXPECT_EQ(
       error_of(std::string(kHeader) + "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5],"
                                       " orientation: [0, 0, 0, 0]}\n"),

@@ -116,7 +116,7 @@ TEST(RemoteEnvelope, GarbageIsCountedGoodRequestsAnsweredCommandsRefused) {
   ASSERT_TRUE(config) << config.error().message;
   Kernel kernel(*config);
   ASSERT_TRUE(kernel.start());
-  kernel.sync_transports();
+  ASSERT_TRUE(kernel.sync_transports());
   const auto telemetry = [&] { return nlohmann::json::parse(kernel.telemetry_json()); };
   const std::string id = telemetry()["dds"]["kernel"];
 

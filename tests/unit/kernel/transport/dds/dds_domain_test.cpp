@@ -67,6 +67,15 @@ TEST(DdsDomain, OtherInterfacesAndPeersAreAddedEscaped) {
   EXPECT_TRUE(has(*xml, R"(<Peer Address="10.0.0.2"/><Peer Address="10.0.0.3"/>)"));
 }
 
+TEST(DdsDomain, NoInterfaceIsRefusedNotLeftToCyclone) {
+  DdsConfig c = loopback();
+  c.interfaces.clear();
+  const auto xml = cyclone_config_xml(c);
+  ASSERT_FALSE(xml);
+  EXPECT_EQ(xml.error().message,
+            "remote.dds.interfaces: none named (Cyclone would choose one itself)");
+}
+
 TEST(DdsDomain, SecurityNeedsEveryFileAndSaysWhichIsMissing) {
   const auto dir = std::filesystem::temp_directory_path() /
                    ("plr_dds_domain_test_" + std::to_string(::getpid()));

@@ -65,6 +65,19 @@ TEST_F(SegmentTest, ALiveOwnersSegmentIsKeptADeadOnesReplaced) {
   ASSERT_TRUE(taken_over) << to_string(taken_over.error());
 }
 
+// A host killed while it made its segment (before the magic) left one that
+// counted as "owned by a live process" for 5 s; its restart then ran without it.
+TEST_F(SegmentTest, ACreatorKilledBeforePublishingLeavesNothingThatBlocks) {
+  const pid_t child = test::fork_child([&] {
+    auto half = Segment::create(name_, 1 << 20, SegmentKind::kTopic, "camera");
+    return half ? 0 : 1;  // exits before publish_header()
+  });
+  ASSERT_EQ(test::wait_child(child), 0);
+  auto taken_over = Segment::create(name_, 1 << 20, SegmentKind::kTopic, "camera");
+  ASSERT_TRUE(taken_over) << to_string(taken_over.error());
+  EXPECT_EQ(test::run_segments(run_).size(), 1u) << "no temporary name is left";
+}
+
 TEST_F(SegmentTest, UnlinkRemovesOnlyItsOwnObject) {
   auto s = Segment::create(name_, 4096, SegmentKind::kTopic, "camera");
   ASSERT_TRUE(s);

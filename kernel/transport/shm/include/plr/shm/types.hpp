@@ -26,6 +26,7 @@ enum class Error : std::uint8_t {
   kPeerDead,            // owner / server / client process is gone
   kClosed,              // the owner closed the segment cleanly
   kUnknownClient,       // reply to a client channel that is no longer ours
+  kNoSpace,             // /dev/shm has no room for the segment
 };
 
 const char* to_string(Error e) noexcept;
