@@ -18,6 +18,8 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
+#include <mutex>
 #include <cstdio>
 #include <filesystem>
 #include <thread>
@@ -206,11 +208,30 @@ class GeneratorNode : public Node {
                    (*journal)->loaded_count(),
                    (*journal)->dropped_bytes() ? " (a torn record dropped)" : "");
       const auto t0 = Clock::now();
+      // The line is drawn again every second, also while a batch of
+      // simulations runs (workers busy, ETA), from the last trial's figures.
+      std::mutex m;
+      std::condition_variable cv;
+      bool finished = false;
+      generator::GenerateProgress last;
+      std::thread ticker([&] {
+        std::unique_lock lock(m);
+        while (!cv.wait_for(lock, std::chrono::seconds(1), [&] { return finished; })) {
+          show(problem.name, i, last, *simulator, t0);
+        }
+      });
       auto result = generator::generate(problem, options_, **runner, *simulator, journal->get(),
                                         [&](const generator::GenerateProgress& p) {
-                                          show(problem.name, i, p, *simulator, t0);
+                                          std::lock_guard lock(m);
+                                          last = p;
                                           return !stop_.load();
                                         });
+      {
+        std::lock_guard lock(m);
+        finished = true;
+      }
+      cv.notify_all();
+      ticker.join();
       if (!result) {
         why = result.error().message;
         return false;
@@ -259,7 +280,7 @@ class GeneratorNode : public Node {
     if (tty_) {
       std::fprintf(stderr, "\r\033[K%s", line.c_str());
       std::fflush(stderr);
-    } else if (now - last_line_ > std::chrono::seconds(10) || p.unrolling) {
+    } else if (now - last_line_ > std::chrono::seconds(10)) {
       std::fprintf(stderr, "%s\n", line.c_str());
       last_line_ = now;
     }

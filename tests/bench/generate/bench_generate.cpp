@@ -176,16 +176,18 @@ int main(int argc, char** argv) {
                              {"actions_per_s", r->simulated / wall},
                              {"simulated_robot_s", r->simulated_robot_s},
                              {"real_time_factor", r->simulated_robot_s / wall},
+                             {"worker_s_per_action", r->simulated_wall_s / std::max<double>(1, r->simulated)},
                              {"lower", e.lower},
                              {"upper", e.upper},
                              {"same_strategy_as_first", yaml == first_strategy}});
       if (!json) {
         std::printf(
             "%-6s %d worker(s): %6.1f s, %llu trials, %zu tree nodes (depth %zu), %llu simulated "
-            "actions (%.2f/s, %.0fx real time), root [%.1f, %.1f]%s\n",
+            "actions (%.2f/s, %.0fx real time, %.2f s each in a worker), root [%.1f, %.1f]%s\n",
             problem.name.c_str(), workers, wall, (unsigned long long)e.provenance.trials,
             e.strategy.nodes.size(), e.strategy.depth(), (unsigned long long)r->simulated,
-            r->simulated / wall, r->simulated_robot_s / wall, e.lower, e.upper,
+            r->simulated / wall, r->simulated_robot_s / wall,
+            r->simulated_wall_s / std::max<double>(1, r->simulated), e.lower, e.upper,
             yaml == first_strategy ? "" : "  DIFFERENT STRATEGY");
         std::fflush(stdout);
       }

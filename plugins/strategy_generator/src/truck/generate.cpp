@@ -151,6 +151,7 @@ plr::Expected<GenerateResult> generate(
   p.created = utc_now();
   out.simulated = model.simulated();
   out.simulated_robot_s = model.simulated_robot_s();
+  out.simulated_wall_s = model.simulated_wall_s();
   return out;
 }
 

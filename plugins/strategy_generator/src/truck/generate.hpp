@@ -70,6 +70,7 @@ struct GenerateResult {
   pomdp::PolicyTree tree;
   std::uint64_t simulated = 0;  // by this run (the rest came from the journal)
   double simulated_robot_s = 0.0;
+  double simulated_wall_s = 0.0;  // inside the workers
 };
 
 // `runner` makes the particles' starting states; `simulator` runs the

@@ -18,7 +18,7 @@ double TruckHeuristic::value(pomdp::StateId id) const {
   const double beyond = o.seconds_per_box * std::max(0.0, n - k);
   switch (kind_) {
     case Kind::kAnchor:
-      return -o.min_action_s;
+      return -(o.min_action_s + o.seconds_per_box * std::max(0.0, n - o.max_boxes_per_action * k));
     case Kind::kLower:
       return -(k * o.min_action_s + o.seconds_per_box * n);
     case Kind::kAnyBoxLeft:

@@ -3,7 +3,8 @@
 // estimate. With k actions left before the horizon, n boxes left, T the
 // terminal seconds per box and a a typical action's time:
 //   anchor (admissible): a non-goal state needs one more action, which
-//     takes at least min_action_s: -min_action_s, 0 at the goal;
+//     takes at least min_action_s, and no action unloads more than m =
+//     max_boxes_per_action boxes: -(min_action_s + T * max(0, n - m * k));
 //   lower (an estimate of a lower bound): every remaining action wasted,
 //     -(k * min_action_s + T * n);
 // and the paper's three, inadmissible:

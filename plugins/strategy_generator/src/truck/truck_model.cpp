@@ -72,6 +72,7 @@ void TruckModel::fill(const std::vector<SimRequest>& requests) const {
     if (!out[i]) throw SimulationError(out[i].error().message);
     ++simulated_;
     simulated_robot_s_ += out[i]->robot_time_s;
+    simulated_wall_s_ += out[i]->wall_s;
     if (journal_) {
       if (auto s = journal_->append(keys[i], *out[i]); !s) throw SimulationError(s.error().message);
     }

@@ -35,6 +35,10 @@ struct TruckOptions {
   // The least robot time any action takes (finding it not applicable):
   // what the admissible anchor charges a non-goal state.
   double min_action_s = 0.5;
+  // The most boxes one action unloads: the anchor assumes each action left
+  // before the horizon unloads this many (it stays admissible while no
+  // action unloads more).
+  double max_boxes_per_action = 15.0;
 };
 
 // A simulation the generator cannot do without failed (the message says which).
@@ -78,6 +82,8 @@ class TruckModel final : public pomdp::GenerativeModel {
   std::uint64_t results() const { return results_.size(); }
   std::uint64_t simulated() const { return simulated_; }
   double simulated_robot_s() const { return simulated_robot_s_; }
+  // What simulating them took the workers (wall time inside the workers).
+  double simulated_wall_s() const { return simulated_wall_s_; }
 
  private:
   pomdp::StateId intern(const SimOutcome& o, int depth) const;
@@ -94,6 +100,7 @@ class TruckModel final : public pomdp::GenerativeModel {
   mutable std::map<std::pair<pomdp::StateId, pomdp::ActionId>, pomdp::Step> steps_;
   mutable std::uint64_t simulated_ = 0;
   mutable double simulated_robot_s_ = 0.0;
+  mutable double simulated_wall_s_ = 0.0;
 };
 
 }  // namespace plr::generator
