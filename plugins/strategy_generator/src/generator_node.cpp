@@ -25,6 +25,7 @@
 #include <thread>
 
 #include "plr/sim/library.hpp"
+#include "plr/sim/world_io.hpp"
 #include "truck/generate.hpp"
 #include "truck/svg.hpp"
 #include "truck/worker_pool.hpp"
@@ -36,9 +37,11 @@ using namespace plr;
 using generator::GenerateOptions;
 using Clock = std::chrono::steady_clock;
 
+// A family's world by seed, or a world file with a family's mass prior.
 struct WorldSpec {
   sim::EnvFamily family = sim::EnvFamily::kA1;
   std::uint64_t seed = 1;
+  std::string file;
 };
 
 std::string duration(double s) {
@@ -109,14 +112,23 @@ class GeneratorNode : public Node {
     for (std::size_t i = 0; i < worlds.size(); ++i) {
       const auto& w = worlds[i];
       const auto where = fmt::format("param 'worlds[{}]'", i);
+      const bool has_file = w.is_object() && w.contains("world_file");
       if (!w.is_object() || !w.contains("family") || !w["family"].is_string() ||
-          !w.contains("seed") || !w["seed"].is_number_unsigned())
-        return make_error(PLR_ERR_INVALID, where + ": needs family (A1, B1, ...) and seed (>= 0)");
+          (has_file ? !w["world_file"].is_string()
+                    : !w.contains("seed") || !w["seed"].is_number_unsigned()))
+        return make_error(PLR_ERR_INVALID,
+                          where + ": needs family (A1, B1, ...) and seed (>= 0) or world_file");
       const auto f = sim::parse_env_family(w["family"].get<std::string>());
       if (!f)
         return make_error(PLR_ERR_INVALID,
                           where + ": unknown family '" + w["family"].get<std::string>() + "'");
-      worlds_.push_back({*f, w["seed"].get<std::uint64_t>()});
+      WorldSpec spec{*f, w.value("seed", std::uint64_t{0}), ""};
+      if (has_file) {
+        spec.file = w["world_file"].get<std::string>();
+        if (auto world = sim::load_world(spec.file); !world)
+          return make_error(PLR_ERR_INVALID, where + ": " + world.error().message);
+      }
+      worlds_.push_back(std::move(spec));
     }
     auto done = ctx().advertise<msg::PipelineDone>("pipeline/done");
     if (!done) return done.error();
@@ -187,8 +199,12 @@ class GeneratorNode : public Node {
         why = "stopped";
         return false;
       }
+      const WorldSpec& spec = worlds_[i];
       generator::Problem problem =
-          generator::make_problem(worlds_[i].family, worlds_[i].seed, particles_, seed_);
+          spec.file.empty()
+              ? generator::make_problem(spec.family, spec.seed, particles_, seed_)
+              : generator::make_problem(sim::load_world(spec.file).value(), spec.family,
+                                        fs::path(spec.file).stem().string(), particles_, seed_);
       problem.observation_json = observation_json_;
       const bool have =
           std::any_of(library.entries.begin(), library.entries.end(),
@@ -265,17 +281,19 @@ class GeneratorNode : public Node {
     if (!show_progress_) return;
     const double elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
     const double frac = p.trial_budget ? double(p.trials) / double(p.trial_budget) : 0.0;
-    double eta = frac > 0 ? elapsed / frac - elapsed : NAN;
+    // From the trials' pace; unrolling the policy has no measure of its own
+    // length, so the ETA is unknown then.
+    double eta = frac > 0 && !p.unrolling ? elapsed / frac - elapsed : NAN;
     const double per_world = frac > 0 ? elapsed / frac : NAN;
     eta += per_world * double(worlds_.size() - index - 1);
     constexpr int kBar = 20;
     const int filled = std::clamp(static_cast<int>(frac * kBar), 0, kBar);
     const std::string line = fmt::format(
         "{} ({}/{}) [{}{}] trials {}/{}  nodes {}  root [{:.1f}, {:.1f}]  workers {}/{} busy  "
-        "sims {}  {}ETA {}",
+        "sims {}  {}{} elapsed, ETA {}",
         name, index + 1, worlds_.size(), std::string(filled, '#'), std::string(kBar - filled, '-'),
         p.trials, p.trial_budget, p.nodes, p.lower, p.upper, simulator.busy(), simulator.workers(),
-        p.results, p.unrolling ? "unrolling the policy  " : "", duration(eta));
+        p.results, p.unrolling ? "unrolling the policy  " : "", duration(elapsed), duration(eta));
     const auto now = Clock::now();
     if (tty_) {
       std::fprintf(stderr, "\r\033[K%s", line.c_str());

@@ -33,16 +33,24 @@ std::uint64_t particle_seed(std::uint64_t seed, int particle) {
   return z ^ (z >> 31);
 }
 
-Problem make_problem(sim::EnvFamily family, std::uint64_t world_seed, int particles,
-                     std::uint64_t seed) {
+Problem make_problem(const sim::World& world, sim::EnvFamily family, std::string name,
+                     int particles, std::uint64_t seed) {
   Problem p;
   p.family = std::string(sim::to_string(family));
-  p.world_seed = world_seed;
-  p.name = fmt::format("{}-{}", p.family, world_seed);
-  p.world = sim::without_masses(sim::make_environment(family, world_seed));
+  p.name = std::move(name);
+  p.world = sim::without_masses(world);
   for (int i = 0; i < particles; ++i) {
     p.particles.push_back(sim::sample_masses(p.world, family, particle_seed(seed, i)));
   }
+  return p;
+}
+
+Problem make_problem(sim::EnvFamily family, std::uint64_t world_seed, int particles,
+                     std::uint64_t seed) {
+  Problem p = make_problem(sim::make_environment(family, world_seed), family,
+                           fmt::format("{}-{}", sim::to_string(family), world_seed), particles,
+                           seed);
+  p.world_seed = world_seed;
   return p;
 }
 

@@ -40,6 +40,9 @@ struct Problem {
 // masses from the family's prior (sample_masses, seeds from `seed`).
 Problem make_problem(sim::EnvFamily family, std::uint64_t world_seed, int particles,
                      std::uint64_t seed);
+// A given world W (masses dropped), its masses from `family`'s prior.
+Problem make_problem(const sim::World& world, sim::EnvFamily family, std::string name,
+                     int particles, std::uint64_t seed);
 std::uint64_t particle_seed(std::uint64_t seed, int particle);
 
 struct GenerateOptions {
