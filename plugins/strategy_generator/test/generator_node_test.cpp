@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -37,7 +38,7 @@ class TempDir {
 
 pid_t start(const fs::path& config, const fs::path& report) {
   const std::string cfg = config.string(), rep = report.string();
-  char* argv[] = {const_cast<char*>(PLR_BIN), const_cast<char*>("run"),
+  char* argv[] = {const_cast<char*>(PLR_BIN),     const_cast<char*>("run"),
                   const_cast<char*>(cfg.c_str()), const_cast<char*>("--report"),
                   const_cast<char*>(rep.c_str()), nullptr};
   pid_t pid = -1;
@@ -51,6 +52,16 @@ int wait_exit(pid_t pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
 }
 
+std::string output(const std::string& command) {
+  std::string out;
+  if (std::FILE* p = ::popen(command.c_str(), "r")) {
+    char buf[4096];
+    while (const std::size_t n = std::fread(buf, 1, sizeof buf, p)) out.append(buf, n);
+    ::pclose(p);
+  }
+  return out;
+}
+
 std::string fingerprint(const fs::path& library) {
   const auto lib = plr::sim::load_library(library);
   if (!lib) return "error: " + lib.error().message;
@@ -59,7 +70,8 @@ std::string fingerprint(const fs::path& library) {
     s += fmt::format("{}\n{}[{:.17g}, {:.17g}] trials {} nodes {} simulations {}\n", e.name,
                      plr::sim::format_yaml(e.strategy), e.lower, e.upper, e.provenance.trials,
                      e.provenance.nodes, e.provenance.simulations);
-    for (const auto& p : e.curve) s += fmt::format("{} {:.17g} {:.17g}\n", p.trials, p.lower, p.upper);
+    for (const auto& p : e.curve)
+      s += fmt::format("{} {:.17g} {:.17g}\n", p.trials, p.lower, p.upper);
   }
   return s;
 }
@@ -75,7 +87,8 @@ TEST(GeneratorNode, KilledWithSigkillAndRunAgainGivesTheSameLibrary) {
            "    params:\n"
            "      library: ${report_dir}/library.plrl\n"
            "      checkpoint_dir: ${report_dir}/checkpoint\n"
-           "      worlds: [{family: A1, world_file: " BLOCK_WORLD "}]\n"
+           "      worlds: [{family: A1, world_file: " BLOCK_WORLD
+           "}]\n"
            "      particles: 3\n"
            "      horizon: 3\n"
            "      trials: 6\n"
@@ -104,6 +117,20 @@ TEST(GeneratorNode, KilledWithSigkillAndRunAgainGivesTheSameLibrary) {
   EXPECT_EQ(fingerprint(dir / "killed/library.plrl"), whole);
   EXPECT_TRUE(fs::exists(dir / "killed/block.svg"));
   EXPECT_TRUE(fs::exists(dir / "killed/block-anytime.svg"));
+
+  // `plr library` (the kernel runs plr-library) lists and shows the entry,
+  // and refuses a truncated file with its located error.
+  const std::string lib = (dir / "whole/library.plrl").string();
+  const std::string list = output(std::string(PLR_BIN) + " library list " + lib);
+  EXPECT_NE(list.find("block"), std::string::npos) << list;
+  EXPECT_NE(list.find("root bounds"), std::string::npos) << list;
+  const std::string show = output(std::string(PLR_BIN) + " library show " + lib + " block");
+  EXPECT_NE(show.find("particles: 3, horizon: 3"), std::string::npos) << show;
+  EXPECT_NE(show.find("nodes:"), std::string::npos) << show;
+  fs::resize_file(lib, fs::file_size(lib) - 10);
+  const std::string refused = output(std::string(PLR_BIN) + " library list " + lib + " 2>&1");
+  EXPECT_EQ(refused, fmt::format("plr library: {}: truncated: {} of {} bytes\n", lib,
+                                 fs::file_size(lib), fs::file_size(lib) + 10));
 }
 
 }  // namespace

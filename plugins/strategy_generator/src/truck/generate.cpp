@@ -47,9 +47,9 @@ Problem make_problem(const sim::World& world, sim::EnvFamily family, std::string
 
 Problem make_problem(sim::EnvFamily family, std::uint64_t world_seed, int particles,
                      std::uint64_t seed) {
-  Problem p = make_problem(sim::make_environment(family, world_seed), family,
-                           fmt::format("{}-{}", sim::to_string(family), world_seed), particles,
-                           seed);
+  Problem p =
+      make_problem(sim::make_environment(family, world_seed), family,
+                   fmt::format("{}-{}", sim::to_string(family), world_seed), particles, seed);
   p.world_seed = world_seed;
   return p;
 }
@@ -117,6 +117,7 @@ plr::Expected<GenerateResult> generate(
       if (on_progress && !on_progress(progress)) throw Stopped{};
     };
     report();
+    e.curve.push_back({seconds(), solver.lower(), solver.upper(), 0});
     while (solver.total_trials() < options.trials && seconds() < options.max_wall_s &&
            solver.upper() - solver.lower() > options.target_gap) {
       pomdp::Budget b;

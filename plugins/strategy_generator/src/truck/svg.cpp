@@ -80,7 +80,8 @@ std::string strategy_svg(const sim::Strategy& s) {
       out += fmt::format(
           "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\" fill=\"#246\" "
           "font-size=\"10\">{}</text>\n",
-          (x0 + x1) / 2, (y0 + y1) / 2 + 3, escape(sim::to_string(o)));
+          // Nearer the child than the parent: siblings' labels spread apart.
+          0.3 * x0 + 0.7 * x1, 0.3 * y0 + 0.7 * y1 - 4, escape(sim::to_string(o)));
     }
   }
   for (std::uint32_t n = 0; n < s.nodes.size(); ++n) {
@@ -106,6 +107,10 @@ std::string anytime_svg(const sim::LibraryEntry& e) {
     v_max = std::max(v_max, p.upper);
   }
   if (v_max - v_min < 1e-9) v_max = v_min + 1;
+  // A margin, so that a bound at the range's end does not hide in an axis.
+  const double pad = 0.05 * (v_max - v_min);
+  v_min -= pad;
+  v_max += pad;
   auto px = [&](double t) { return L + (W - L - R) * t / t_max; };
   auto py = [&](double v) { return T + (H - T - B) * (v_max - v) / (v_max - v_min); };
   std::string out = fmt::format(
