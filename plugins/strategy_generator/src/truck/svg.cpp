@@ -134,12 +134,21 @@ std::string anytime_svg(const sim::LibraryEntry& e) {
                   (L + W - R) / 2, H - 12);
   for (const auto& [name, color, upper] :
        {std::tuple{"upper", "#c33", true}, std::tuple{"lower", "#36c", false}}) {
-    std::string pts;
-    for (const sim::BoundPoint& p : e.curve) {
-      pts += fmt::format("{:.1f},{:.1f} ", px(p.wall_s), py(upper ? p.upper : p.lower));
+    // Steps: a bound holds until the trial that moves it; a dot per trial.
+    std::string pts, dots;
+    double last = 0.0;
+    for (std::size_t i = 0; i < e.curve.size(); ++i) {
+      const sim::BoundPoint& p = e.curve[i];
+      const double v = upper ? p.upper : p.lower;
+      if (i > 0) pts += fmt::format("{:.1f},{:.1f} ", px(p.wall_s), py(last));
+      pts += fmt::format("{:.1f},{:.1f} ", px(p.wall_s), py(v));
+      dots += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.5\" fill=\"{}\"/>\n",
+                          px(p.wall_s), py(v), color);
+      last = v;
     }
     out += fmt::format(
         "<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" points=\"{}\"/>\n", color, pts);
+    out += dots;
     out += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" fill=\"{}\">{}</text>\n", W - R - 40,
                        upper ? T + 12 : T + 26, color, name);
   }
