@@ -50,7 +50,7 @@ struct GenerateOptions {
   double epsilon1 = 10.0, epsilon2 = 10.0;
   std::uint64_t seed = 1;
   std::uint64_t trials = 8;  // the budget
-  double target_gap = 0.5;    // s; stop early once the root's bounds are this close
+  double target_gap = 0.5;   // s; stop early once the root's bounds are this close
   // Unroll the policy through beliefs no trial expanded (costs their
   // simulations); off, the strategy ends there and its runner's fallback
   // (strategy H) goes on.
