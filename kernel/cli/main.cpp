@@ -4,12 +4,46 @@
 
 #include <CLI/CLI.hpp>
 
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <iostream>
+#include <string>
+
+namespace {
+
+// `plr NAME ARGS...` for a NAME plr does not know runs the program
+// plr-NAME beside plr with ARGS, as git does: a plug-in's tools (`plr
+// library` of the strategy generator) extend the command line while the
+// kernel knows nothing of them. Returns only if there is no such program.
+void run_external(int argc, char** argv, const CLI::App& app) {
+  if (argc < 2 || argv[1][0] == '-' || std::strchr(argv[1], '/') != nullptr) return;
+  for (const CLI::App* sub : app.get_subcommands({})) {
+    if (sub->get_name() == argv[1]) return;
+  }
+  std::error_code ec;
+  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) return;
+  const std::string tool = (self.parent_path() / ("plr-" + std::string(argv[1]))).string();
+  if (::access(tool.c_str(), X_OK) != 0) return;
+  std::string name = "plr-" + std::string(argv[1]);
+  argv[1] = name.data();
+  ::execv(tool.c_str(), argv + 1);
+  std::fprintf(stderr, "plr: %s: %s\n", tool.c_str(), std::strerror(errno));
+  std::exit(1);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace plr::kernel;
   CLI::App app{"PLR: plans, learns and reasons for a truck-unloading robot"};
   app.require_subcommand(1);
+  app.footer(
+      "Other commands: `plr NAME ...` runs the program plr-NAME beside plr (e.g. plr library).");
 
   RunOptions run;
   auto* run_cmd = app.add_subcommand("run", "Run a pipeline until it finishes or Ctrl-C");
@@ -85,6 +119,7 @@ int main(int argc, char** argv) {
 
   app.add_subcommand("version", "Print the version and the plug-in ABI");
 
+  run_external(argc, argv, app);
   CLI11_PARSE(app, argc, argv);
 
   if (*run_cmd) return run_pipeline(run);

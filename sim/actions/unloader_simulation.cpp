@@ -248,6 +248,20 @@ void UnloaderSimulation::restore(const Saved& saved) {
   m.move_robot(m.q, false);
 }
 
+const sim::Snapshot& UnloaderSimulation::physics_of(const Saved& saved) {
+  return saved.physics;
+}
+const sim::JointVector& UnloaderSimulation::q_of(const Saved& saved) {
+  return saved.q;
+}
+std::uint32_t UnloaderSimulation::unloaded_of(const Saved& saved) {
+  return saved.unloaded;
+}
+std::shared_ptr<const UnloaderSimulation::Saved> UnloaderSimulation::make_saved(
+    sim::Snapshot physics, const sim::JointVector& q, std::uint32_t unloaded) {
+  return std::make_shared<const Saved>(Saved{std::move(physics), q, unloaded});
+}
+
 plr::Status UnloaderSimulation::set_masses(
     const std::vector<std::pair<std::uint32_t, double>>& masses) {
   Impl& m = *impl_;

@@ -12,6 +12,7 @@
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
+#include <plr/sim/library.hpp>
 #include <plr/sim/observation.hpp>
 #include <plr/sim/render.hpp>
 #include <plr/sim/robot_model.hpp>
@@ -92,11 +93,39 @@ class ExecutorNode : public plr::Node {
                          "retreat_m",
                          "dropoff_backoff_m",
                          "carry_height_m",
-                         "progress"});
+                         "progress",
+                         "strategy_file",
+                         "strategy_library",
+                         "strategy_entry"});
     report_dir_ = params().get<std::string>("report_dir", "report");
     env_ = params().get<std::string>("env", "");
     seed_ = params().get<std::uint64_t>("seed", 1);
     world_file_ = params().get<std::string>("world_file", "");
+    // Open loop: the first strategy is a given one (a strategy file, or an
+    // entry of a library L) instead of strategy/next's; once it ends, the
+    // executor asks strategy/next as usual.
+    first_strategy_.reset();
+    const auto strategy_file = params().get<std::string>("strategy_file", "");
+    const auto library = params().get<std::string>("strategy_library", "");
+    if (!strategy_file.empty() && !library.empty())
+      return make_error(PLR_ERR_INVALID,
+                        "params 'strategy_file' and 'strategy_library': give one of them");
+    if (!strategy_file.empty()) {
+      auto s = sim::load_strategy(strategy_file);
+      if (!s) return make_error(PLR_ERR_INVALID, "param 'strategy_file': " + s.error().message);
+      first_strategy_ = std::move(*s);
+    } else if (!library.empty()) {
+      const auto entry = params().require<std::string>("strategy_entry");
+      auto lib = sim::load_library(library);
+      if (!lib)
+        return make_error(PLR_ERR_INVALID, "param 'strategy_library': " + lib.error().message);
+      for (auto& e : lib->entries) {
+        if (e.name == entry) first_strategy_ = std::move(e.strategy);
+      }
+      if (!first_strategy_)
+        return make_error(PLR_ERR_INVALID,
+                          fmt::format("param 'strategy_entry': {}: no entry '{}'", library, entry));
+    }
     actions::ActionOptions& o = options_;
     auto observation =
         sim::ObservationParams::from_json(params().json().value("observation", nlohmann::json()));
@@ -154,6 +183,7 @@ class ExecutorNode : public plr::Node {
   plr::Status on_activate() override {
     stop_ = false;
     stats_ = {};
+    first_used_ = false;
     memory_ = {};
     rules_ = actions::RunRules({max_actions_, max_idle_});
     backend_ = std::make_unique<BusBackend>(ctx(), bus_, [this](std::chrono::nanoseconds d) {
@@ -376,6 +406,13 @@ class ExecutorNode : public plr::Node {
         if (child) {
           node = child;
           ++stats_.strategy_steps;
+        } else if (first_strategy_ && !first_used_) {
+          strategy = *first_strategy_;
+          node = strategy.root;
+          first_used_ = true;
+          ++stats_.strategies_asked;
+          log().info("strategy '{}' from the config ({} nodes), open loop", strategy.name,
+                     strategy.nodes.size());
         } else {
           strategy = ask_strategy(observation);
           node = strategy.root;
@@ -585,6 +622,8 @@ class ExecutorNode : public plr::Node {
 
   // Parameters.
   std::string report_dir_, env_, world_file_;
+  std::optional<sim::Strategy> first_strategy_;
+  bool first_used_ = false;
   std::uint64_t seed_ = 1;
   actions::ActionOptions options_;
   BusOptions bus_;

@@ -56,6 +56,11 @@ class GenerativeModel {
   // Bayes update.
   virtual Expansion expand(const Belief& belief, ActionId action, Rng& rng) const;
 
+  // Every action of `belief` is about to be expanded (a search node's
+  // expansion). A model whose steps are costly may compute them all at once
+  // here, in parallel; the steps must come out as they would one by one.
+  virtual void prefetch(const Belief& /*belief*/) const {}
+
   // How many times the default expand() simulates each particle.
   int samples_per_particle = 1;
 };

@@ -132,6 +132,7 @@ void Pomhdp::expand(std::uint32_t id) {
   std::vector<double> branch_h;
   // Nothing below adds nodes, so the belief stays where it is.
   const Node& n = nodes_[id];
+  model_.prefetch(n.belief);
   for (ActionId a = 0; a < model_.num_actions(); ++a) {
     Rng rng = expansion_rng(n.signature, a);
     const Expansion e = model_.expand(n.belief, a, rng);
@@ -520,7 +521,7 @@ void Pomhdp::reclaim() {
   compact();
 }
 
-PolicyTree Pomhdp::policy_tree(int horizon) {
+PolicyTree Pomhdp::policy_tree(int horizon, bool expand_unvisited) {
   PolicyTree tree;
   if (horizon <= 0) return tree;
   struct Item {
@@ -544,8 +545,11 @@ PolicyTree Pomhdp::policy_tree(int horizon) {
     for (std::uint32_t b = e.first; b < e.first + e.count; ++b) {
       std::uint32_t child = nodes_[item.graph].branches[b].child;
       if (child == kTerminal) continue;
-      if (child == kUnvisited) child = visit(item.graph, a, b);
-      if (nodes_[child].terminal) continue;
+      if (child == kUnvisited) {
+        if (!expand_unvisited) continue;
+        child = visit(item.graph, a, b);
+      }
+      if (nodes_[child].terminal || (!expand_unvisited && !nodes_[child].expanded)) continue;
       children.emplace_back(nodes_[item.graph].branches[b].observation,
                             static_cast<std::uint32_t>(queue.size()));
       queue.push_back({child, item.depth + 1});

@@ -86,8 +86,10 @@ class Pomhdp final : public OnlinePlanner {
   ActionId best_action();
   // The policy from the root up to `horizon` actions deep: the best-lower-bound
   // action at each belief, a child per possible observation. Expands beliefs
-  // the trials did not reach.
-  PolicyTree policy_tree(int horizon);
+  // the trials did not reach, unless `expand_unvisited` is false: then a
+  // branch ends at a belief no trial expanded (its policy is left to whoever
+  // runs the tree), which costs no model calls.
+  PolicyTree policy_tree(int horizon, bool expand_unvisited = true);
 
   // Belief nodes (visited beliefs); unvisited children are not nodes.
   std::size_t num_nodes() const { return nodes_.size(); }

@@ -99,6 +99,13 @@ class UnloaderSimulation {
   struct Saved;
   std::shared_ptr<const Saved> save() const;
   void restore(const Saved& saved);
+  // A checkpoint's parts, to carry it to another process (state_bytes.hpp):
+  // the physics, the robot's joints, the boxes unloaded so far.
+  static const sim::Snapshot& physics_of(const Saved& saved);
+  static const sim::JointVector& q_of(const Saved& saved);
+  static std::uint32_t unloaded_of(const Saved& saved);
+  static std::shared_ptr<const Saved> make_saved(sim::Snapshot physics, const sim::JointVector& q,
+                                                 std::uint32_t unloaded);
 
   // Gives the boxes named by id these masses (kg) and leaves everything else
   // as it is: the same state on another particle of the belief over W^t

@@ -1,0 +1,324 @@
+// The strategy generator node: for each configured world, one strategy by
+// POMHDP over mass particles (truck/generate.hpp), simulated by worker
+// processes; the library L written after each strategy (atomically), with
+// each strategy's tree and anytime curve as SVG beside it. Progress on
+// stderr: trials, tree nodes, root bounds, workers busy, ETA.
+//
+// Checkpoint and resume: every simulation result goes to a journal per
+// world (checkpoint_dir) before the search uses it, and finished strategies
+// are in the library. Started again after a kill, the node skips the
+// library's strategies and replays the journal: the search repeats itself
+// without simulating anything twice and ends with the same strategy.
+#include <plr/atomic_file.hpp>
+#include <plr/messages.hpp>
+#include <plr/node.hpp>
+#include <plr/plugin.hpp>
+
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <thread>
+
+#include "plr/sim/library.hpp"
+#include "plr/sim/world_io.hpp"
+#include "truck/generate.hpp"
+#include "truck/svg.hpp"
+#include "truck/worker_pool.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace plr;
+using generator::GenerateOptions;
+using Clock = std::chrono::steady_clock;
+
+// A family's world by seed, or a world file with a family's mass prior.
+struct WorldSpec {
+  sim::EnvFamily family = sim::EnvFamily::kA1;
+  std::uint64_t seed = 1;
+  std::string file;
+};
+
+std::string duration(double s) {
+  if (!std::isfinite(s) || s < 0) return "-";
+  const auto t = static_cast<long>(s + 0.5);
+  return t >= 60 ? fmt::format("{}m{:02d}s", t / 60, t % 60) : fmt::format("{}s", t);
+}
+
+// The worker program beside this process's executable (build/bin).
+std::string default_worker() {
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? "plr_sim_worker" : (self.parent_path() / "plr_sim_worker").string();
+}
+
+class GeneratorNode : public Node {
+ public:
+  using Node::Node;
+
+ protected:
+  Status on_configure() override {
+    params().allow_only({"library", "checkpoint_dir", "worlds", "particles", "horizon", "epsilon1",
+                         "epsilon2", "trials", "target_gap", "seed", "seconds_per_box", "action_s",
+                         "workers", "worker_program", "observation", "progress", "max_wall_s",
+                         "complete_tree"});
+    library_ = params().require<std::string>("library");
+    checkpoint_dir_ = params().get<std::string>("checkpoint_dir", library_ + ".checkpoint");
+    particles_ = params().get<int>("particles", 5);
+    seed_ = params().get<std::uint64_t>("seed", 1);
+    workers_ = params().get<int>("workers", 2);
+    worker_program_ = params().get<std::string>("worker_program", default_worker());
+    show_progress_ = params().get<bool>("progress", true);
+    GenerateOptions& o = options_;
+    o.truck.horizon = params().get<int>("horizon", o.truck.horizon);
+    o.truck.seconds_per_box = params().get<double>("seconds_per_box", o.truck.seconds_per_box);
+    o.truck.action_s = params().get<double>("action_s", o.truck.action_s);
+    o.epsilon1 = params().get<double>("epsilon1", o.epsilon1);
+    o.epsilon2 = params().get<double>("epsilon2", o.epsilon2);
+    o.trials = params().get<std::uint64_t>("trials", o.trials);
+    o.target_gap = params().get<double>("target_gap", o.target_gap);
+    o.max_wall_s = params().get<double>("max_wall_s", o.max_wall_s);
+    o.complete_tree = params().get<bool>("complete_tree", o.complete_tree);
+    o.seed = seed_;
+    if (particles_ < 1 || particles_ > 100)
+      return make_error(PLR_ERR_INVALID,
+                        fmt::format("param 'particles': {} is not in 1..100", particles_));
+    if (o.truck.horizon < 1 || o.truck.horizon > 50)
+      return make_error(PLR_ERR_INVALID,
+                        fmt::format("param 'horizon': {} is not in 1..50", o.truck.horizon));
+    if (workers_ < 0 || workers_ > 256)
+      return make_error(PLR_ERR_INVALID,
+                        fmt::format("param 'workers': {} is not in 0..256", workers_));
+    if (!(o.epsilon1 >= 1) || !(o.epsilon2 >= 1))
+      return make_error(PLR_ERR_INVALID, "params 'epsilon1', 'epsilon2': must be >= 1");
+    if (!(o.truck.seconds_per_box > 0) || !(o.truck.action_s > 0))
+      return make_error(PLR_ERR_INVALID, "params 'seconds_per_box', 'action_s': must be > 0");
+    if (o.trials < 1 || o.trials > 10'000'000)
+      return make_error(PLR_ERR_INVALID, "param 'trials': must be in 1..10000000");
+    const nlohmann::json observation = params().json().value("observation", nlohmann::json());
+    auto obs = sim::ObservationParams::from_json(observation);
+    if (!obs) return make_error(PLR_ERR_INVALID, "param 'observation': " + obs.error().message);
+    observation_ = *obs;
+    observation_json_ = observation.is_null() ? "{}" : observation.dump();
+    worlds_.clear();
+    const nlohmann::json worlds = params().json().value("worlds", nlohmann::json::array());
+    if (!worlds.is_array() || worlds.empty() || worlds.size() > 1000)
+      return make_error(PLR_ERR_INVALID, "param 'worlds': a list of 1..1000 {family, seed}");
+    for (std::size_t i = 0; i < worlds.size(); ++i) {
+      const auto& w = worlds[i];
+      const auto where = fmt::format("param 'worlds[{}]'", i);
+      const bool has_file = w.is_object() && w.contains("world_file");
+      if (!w.is_object() || !w.contains("family") || !w["family"].is_string() ||
+          (has_file ? !w["world_file"].is_string()
+                    : !w.contains("seed") || !w["seed"].is_number_unsigned()))
+        return make_error(PLR_ERR_INVALID,
+                          where + ": needs family (A1, B1, ...) and seed (>= 0) or world_file");
+      const auto f = sim::parse_env_family(w["family"].get<std::string>());
+      if (!f)
+        return make_error(PLR_ERR_INVALID,
+                          where + ": unknown family '" + w["family"].get<std::string>() + "'");
+      WorldSpec spec{*f, w.value("seed", std::uint64_t{0}), ""};
+      if (has_file) {
+        spec.file = w["world_file"].get<std::string>();
+        if (auto world = sim::load_world(spec.file); !world)
+          return make_error(PLR_ERR_INVALID, where + ": " + world.error().message);
+      }
+      worlds_.push_back(std::move(spec));
+    }
+    auto done = ctx().advertise<msg::PipelineDone>("pipeline/done");
+    if (!done) return done.error();
+    done_ = *done;
+    tty_ = isatty(STDERR_FILENO) == 1;
+    return {};
+  }
+
+  Status on_activate() override {
+    stop_ = false;
+    thread_ = std::thread([this] { run(); });
+    return {};
+  }
+
+  Status on_deactivate() override {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+    return {};
+  }
+
+ private:
+  void run() {
+    std::string why;
+    const bool ok = generate_all(why);
+    if (show_progress_ && tty_) std::fputs("\n", stderr);
+    if (ok)
+      log().info("{}", why);
+    else if (!stop_)
+      log().error("{}", why);
+    flatbuffers::FlatBufferBuilder fbb;
+    fbb.Finish(msg::CreatePipelineDoneDirect(fbb, ok, why.c_str()));
+    (void)done_.publish(fbb);
+  }
+
+  bool generate_all(std::string& why) {
+    std::error_code ec;
+    fs::create_directories(checkpoint_dir_, ec);
+    const fs::path lib(library_);
+    if (!lib.parent_path().empty()) fs::create_directories(lib.parent_path(), ec);
+    sim::Library library;
+    if (fs::exists(lib)) {
+      auto loaded = sim::load_library(lib);
+      if (!loaded) {
+        why = loaded.error().message;
+        return false;
+      }
+      library = std::move(*loaded);
+    }
+    auto runner = generator::ActionRunner::create(observation_);
+    if (!runner) {
+      why = runner.error().message;
+      return false;
+    }
+    std::unique_ptr<generator::Simulator> simulator;
+    if (workers_ == 0) {
+      simulator = std::make_unique<generator::LocalSimulator>(**runner);
+    } else {
+      auto pool = generator::WorkerPool::create({worker_program_, workers_, observation_json_, 3});
+      if (!pool) {
+        why = pool.error().message;
+        return false;
+      }
+      simulator = std::move(*pool);
+    }
+    std::size_t made = 0;
+    for (std::size_t i = 0; i < worlds_.size(); ++i) {
+      if (stop_) {
+        why = "stopped";
+        return false;
+      }
+      const WorldSpec& spec = worlds_[i];
+      generator::Problem problem =
+          spec.file.empty()
+              ? generator::make_problem(spec.family, spec.seed, particles_, seed_)
+              : generator::make_problem(sim::load_world(spec.file).value(), spec.family,
+                                        fs::path(spec.file).stem().string(), particles_, seed_);
+      problem.observation_json = observation_json_;
+      const bool have =
+          std::any_of(library.entries.begin(), library.entries.end(),
+                      [&](const sim::LibraryEntry& e) { return e.name == problem.name; });
+      if (have) {
+        log().info("{}: in the library already", problem.name);
+        continue;
+      }
+      auto journal =
+          generator::Journal::open(fs::path(checkpoint_dir_) / (problem.name + ".journal"));
+      if (!journal) {
+        why = journal.error().message;
+        return false;
+      }
+      if ((*journal)->loaded_count() > 0)
+        log().info("{}: resuming with {} simulations from the journal{}", problem.name,
+                   (*journal)->loaded_count(),
+                   (*journal)->dropped_bytes() ? " (a torn record dropped)" : "");
+      const auto t0 = Clock::now();
+      // The line is drawn again every second, also while a batch of
+      // simulations runs (workers busy, ETA), from the last trial's figures.
+      std::mutex m;
+      std::condition_variable cv;
+      bool finished = false;
+      generator::GenerateProgress last;
+      std::thread ticker([&] {
+        std::unique_lock lock(m);
+        while (!cv.wait_for(lock, std::chrono::seconds(1), [&] { return finished; })) {
+          show(problem.name, i, last, *simulator, t0);
+        }
+      });
+      auto result = generator::generate(problem, options_, **runner, *simulator, journal->get(),
+                                        [&](const generator::GenerateProgress& p) {
+                                          std::lock_guard lock(m);
+                                          last = p;
+                                          return !stop_.load();
+                                        });
+      {
+        std::lock_guard lock(m);
+        finished = true;
+      }
+      cv.notify_all();
+      ticker.join();
+      if (!result) {
+        why = result.error().message;
+        return false;
+      }
+      library.entries.push_back(std::move(result->entry));
+      if (auto s = sim::save_library(library, lib); !s) {
+        why = s.error().message;
+        return false;
+      }
+      const sim::LibraryEntry& e = library.entries.back();
+      const fs::path dir = lib.parent_path();
+      (void)write_file_atomically((dir / (e.name + ".svg")).string(),
+                                  generator::strategy_svg(e.strategy));
+      (void)write_file_atomically((dir / (e.name + "-anytime.svg")).string(),
+                                  generator::anytime_svg(e));
+      if (show_progress_ && tty_) std::fputs("\n", stderr);
+      log().info(
+          "{}: {} nodes, root bounds [{:.1f}, {:.1f}], {} trials, {} simulations ({} run now), "
+          "{:.0f} s",
+          e.name, e.strategy.nodes.size(), e.lower, e.upper, e.provenance.trials,
+          e.provenance.simulations, result->simulated, e.provenance.wall_s);
+      ++made;
+    }
+    why = fmt::format("library {}: {} strategies ({} made now)", library_, library.entries.size(),
+                      made);
+    return true;
+  }
+
+  void show(const std::string& name, std::size_t index, const generator::GenerateProgress& p,
+            const generator::Simulator& simulator, Clock::time_point t0) {
+    if (!show_progress_) return;
+    const double elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
+    const double frac = p.trial_budget ? double(p.trials) / double(p.trial_budget) : 0.0;
+    // From the trials' pace; unrolling the policy has no measure of its own
+    // length, so the ETA is unknown then.
+    double eta = frac > 0 && !p.unrolling ? elapsed / frac - elapsed : NAN;
+    const double per_world = frac > 0 ? elapsed / frac : NAN;
+    eta += per_world * double(worlds_.size() - index - 1);
+    constexpr int kBar = 20;
+    const int filled = std::clamp(static_cast<int>(frac * kBar), 0, kBar);
+    const std::string line = fmt::format(
+        "{} ({}/{}) [{}{}] trials {}/{}  nodes {}  root [{:.1f}, {:.1f}]  workers {}/{} busy  "
+        "sims {}  {}{} elapsed, ETA {}",
+        name, index + 1, worlds_.size(), std::string(filled, '#'), std::string(kBar - filled, '-'),
+        p.trials, p.trial_budget, p.nodes, p.lower, p.upper, simulator.busy(), simulator.workers(),
+        p.results, p.unrolling ? "unrolling the policy  " : "", duration(elapsed), duration(eta));
+    const auto now = Clock::now();
+    if (tty_) {
+      std::fprintf(stderr, "\r\033[K%s", line.c_str());
+      std::fflush(stderr);
+    } else if (now - last_line_ > std::chrono::seconds(10)) {
+      std::fprintf(stderr, "%s\n", line.c_str());
+      last_line_ = now;
+    }
+  }
+
+  std::string library_, checkpoint_dir_, worker_program_, observation_json_;
+  int particles_ = 5, workers_ = 2;
+  std::uint64_t seed_ = 1;
+  bool show_progress_ = true, tty_ = false;
+  GenerateOptions options_;
+  sim::ObservationParams observation_;
+  std::vector<WorldSpec> worlds_;
+  Publisher<msg::PipelineDone> done_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  Clock::time_point last_line_{};
+};
+
+}  // namespace
+
+PLR_PLUGIN(
+    GeneratorNode, "strategy_generator", "1.0.0", PLR_KIND_GENERATOR,
+    "Generates the strategy library L: POMHDP over simulated mass particles, in worker processes")

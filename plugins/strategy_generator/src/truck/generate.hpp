@@ -1,0 +1,91 @@
+// One strategy from one world: POMHDP (plr_pomdp) on the truck model over
+// the world's mass particles, to a budget of trials; its lower-bound policy
+// unrolled to the horizon becomes the strategy, with the root's bounds, the
+// anytime curve and how it was made (a library entry, plr/sim/library.hpp).
+//
+// The result depends on the problem and the options only: the budget is in
+// trials, every simulation is a function of its (state, action), and the
+// solver is deterministic. So neither the number nor the speed of the
+// workers, nor a resume from the journal, changes it; only the times in the
+// curve and provenance differ.
+#pragma once
+
+#include <plr/expected.hpp>
+
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "plr/sim/generators.hpp"
+#include "plr/sim/library.hpp"
+#include "pomdp/policy_tree.hpp"
+#include "truck/action_runner.hpp"
+#include "truck/journal.hpp"
+#include "truck/truck_model.hpp"
+
+namespace plr::generator {
+
+struct Problem {
+  std::string name;
+  std::string family;
+  std::uint64_t world_seed = 0;
+  sim::World world;                   // W (masses 0)
+  std::vector<sim::World> particles;  // W with each particle's masses
+  std::string observation_json = "{}";
+};
+
+// W^t = make_environment(family, world_seed); the particles are W with
+// masses from the family's prior (sample_masses, seeds from `seed`).
+Problem make_problem(sim::EnvFamily family, std::uint64_t world_seed, int particles,
+                     std::uint64_t seed);
+// A given world W (masses dropped), its masses from `family`'s prior.
+Problem make_problem(const sim::World& world, sim::EnvFamily family, std::string name,
+                     int particles, std::uint64_t seed);
+std::uint64_t particle_seed(std::uint64_t seed, int particle);
+
+struct GenerateOptions {
+  TruckOptions truck;
+  double epsilon1 = 10.0, epsilon2 = 10.0;
+  std::uint64_t seed = 1;
+  std::uint64_t trials = 8;  // the budget
+  double target_gap = 0.5;   // s; stop early once the root's bounds are this close
+  // Unroll the policy through beliefs no trial expanded (costs their
+  // simulations); off, the strategy ends there and its runner's fallback
+  // (strategy H) goes on.
+  bool complete_tree = true;
+  // A safety net only: a run that hits it depends on the machine's speed.
+  double max_wall_s = std::numeric_limits<double>::infinity();
+};
+
+struct GenerateProgress {
+  std::uint64_t trials = 0, trial_budget = 0;
+  std::size_t nodes = 0;
+  std::uint64_t results = 0, simulated = 0;
+  double lower = 0.0, upper = 0.0;
+  double wall_s = 0.0;
+  bool unrolling = false;  // the budget is spent; the policy is being unrolled
+};
+
+struct GenerateResult {
+  sim::LibraryEntry entry;
+  pomdp::PolicyTree tree;
+  std::uint64_t simulated = 0;  // by this run (the rest came from the journal)
+  double simulated_robot_s = 0.0;
+  double simulated_wall_s = 0.0;  // inside the workers
+};
+
+// `runner` makes the particles' starting states; `simulator` runs the
+// actions. `on_progress` is called after every trial; returning false stops
+// the generation (PLR_ERR_CANCELLED). An error says which simulation failed.
+plr::Expected<GenerateResult> generate(
+    const Problem& problem, const GenerateOptions& options, ActionRunner& runner,
+    Simulator& simulator, Journal* journal,
+    const std::function<bool(const GenerateProgress&)>& on_progress = {});
+
+// The policy tree with the truck's labels (observations of an empty
+// trailer end a branch).
+sim::Strategy to_strategy(const pomdp::PolicyTree& tree, const std::string& name);
+
+}  // namespace plr::generator

@@ -1,0 +1,88 @@
+// plr_sim_worker: a simulation worker of the strategy generator. Reads
+// frames (sim_work.hpp) on stdin — a setup, then jobs — and answers each job
+// with its result on stdout. Log lines go to stderr; stdout carries nothing
+// but frames.
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "truck/action_runner.hpp"
+#include "truck/sim_work.hpp"
+
+namespace {
+
+bool read_all(int fd, std::uint8_t* data, std::size_t size) {
+  std::size_t done = 0;
+  while (done < size) {
+    const ssize_t n = ::read(fd, data + done, size - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    done += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+bool write_all(int fd, const std::vector<std::uint8_t>& bytes) {
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    done += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+// The next frame; nullopt at the end of input.
+std::optional<plr::Expected<plr::generator::Frame>> next_frame() {
+  std::uint8_t head[4];
+  if (!read_all(0, head, 4)) return std::nullopt;
+  const std::size_t size = std::size_t{head[0]} | std::size_t{head[1]} << 8 |
+                           std::size_t{head[2]} << 16 | std::size_t{head[3]} << 24;
+  if (size > plr::generator::kMaxFrameBytes) {
+    return plr::make_error(PLR_ERR_INVALID, "stdin: frame of " + std::to_string(size) + " bytes");
+  }
+  std::vector<std::uint8_t> body(size);
+  if (!read_all(0, body.data(), size)) return std::nullopt;
+  return plr::generator::decode_frame(body.data(), size, "stdin");
+}
+
+}  // namespace
+
+int main() {
+  // Frames go to a private copy of stdout; whatever a library prints goes to stderr.
+  const int out = ::dup(1);
+  ::dup2(2, 1);
+  auto setup = next_frame();
+  if (!setup || !*setup || (*setup)->kind != plr::generator::Frame::Kind::kSetup) {
+    std::fprintf(stderr, "plr_sim_worker: expected a setup frame first\n");
+    return 2;
+  }
+  const auto json = nlohmann::json::parse((*setup)->observation_json, nullptr, false);
+  auto params =
+      plr::sim::ObservationParams::from_json(json.is_discarded() ? nlohmann::json() : json);
+  if (!params) {
+    std::fprintf(stderr, "plr_sim_worker: observation: %s\n", params.error().message.c_str());
+    return 2;
+  }
+  auto runner = plr::generator::ActionRunner::create(*params);
+  if (!runner) {
+    std::fprintf(stderr, "plr_sim_worker: %s\n", runner.error().message.c_str());
+    return 1;
+  }
+  while (auto frame = next_frame()) {
+    if (!*frame || (*frame)->kind != plr::generator::Frame::Kind::kJob) {
+      std::fprintf(stderr, "plr_sim_worker: %s\n",
+                   *frame ? "expected a job" : frame->error().message.c_str());
+      return 2;
+    }
+    const auto result = (*runner)->run((*frame)->request);
+    if (!write_all(out, plr::generator::frame_result((*frame)->id, result))) return 0;
+  }
+  return 0;
+}

@@ -1,0 +1,136 @@
+// `plr run` of a generation, killed with SIGKILL mid-run and run again:
+// the library it ends with is the one an undisturbed run writes.
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "plr/sim/library.hpp"
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = (fs::temp_directory_path() / "plr_generate_XXXXXX").string();
+    path_ = mkdtemp(pattern.data());
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  fs::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  fs::path path_;
+};
+
+pid_t start(const fs::path& config, const fs::path& report) {
+  const std::string cfg = config.string(), rep = report.string();
+  char* argv[] = {const_cast<char*>(PLR_BIN),     const_cast<char*>("run"),
+                  const_cast<char*>(cfg.c_str()), const_cast<char*>("--report"),
+                  const_cast<char*>(rep.c_str()), nullptr};
+  pid_t pid = -1;
+  EXPECT_EQ(::posix_spawn(&pid, PLR_BIN, nullptr, nullptr, argv, environ), 0);
+  return pid;
+}
+
+int wait_exit(pid_t pid) {
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+}
+
+std::string output(const std::string& command) {
+  std::string out;
+  if (std::FILE* p = ::popen(command.c_str(), "r")) {
+    char buf[4096];
+    while (const std::size_t n = std::fread(buf, 1, sizeof buf, p)) out.append(buf, n);
+    ::pclose(p);
+  }
+  return out;
+}
+
+std::string fingerprint(const fs::path& library) {
+  const auto lib = plr::sim::load_library(library);
+  if (!lib) return "error: " + lib.error().message;
+  std::string s;
+  for (const auto& e : lib->entries) {
+    s += fmt::format("{}\n{}[{:.17g}, {:.17g}] trials {} nodes {} simulations {}\n", e.name,
+                     plr::sim::format_yaml(e.strategy), e.lower, e.upper, e.provenance.trials,
+                     e.provenance.nodes, e.provenance.simulations);
+    for (const auto& p : e.curve)
+      s += fmt::format("{} {:.17g} {:.17g}\n", p.trials, p.lower, p.upper);
+  }
+  return s;
+}
+
+TEST(GeneratorNode, KilledWithSigkillAndRunAgainGivesTheSameLibrary) {
+  TempDir dir;
+  {
+    std::ofstream cfg(dir / "generate.yaml");
+    cfg << "pipeline: generate_test\n"
+           "nodes:\n"
+           "  generator:\n"
+           "    plugin: strategy_generator\n"
+           "    params:\n"
+           "      library: ${report_dir}/library.plrl\n"
+           "      checkpoint_dir: ${report_dir}/checkpoint\n"
+           "      worlds: [{family: A1, world_file: " BLOCK_WORLD
+           "}]\n"
+           "      particles: 3\n"
+           "      horizon: 3\n"
+           "      trials: 6\n"
+           "      workers: 2\n"
+           "      progress: false\n"
+           "      observation: {h_pile: 0.55, pile_mid: 0.25, pile_high: 0.4, wall_mid: 1.2, "
+           "wall_high: 1.9}\n";
+  }
+  ASSERT_EQ(wait_exit(start(dir / "generate.yaml", dir / "whole")), 0);
+  const std::string whole = fingerprint(dir / "whole/library.plrl");
+  ASSERT_EQ(whole.rfind("block\n", 0), 0u) << whole;
+
+  // Killed once its journal holds some results, before the strategy is done.
+  const pid_t pid = start(dir / "generate.yaml", dir / "killed");
+  const fs::path journal = dir / "killed/checkpoint/block.journal";
+  const auto t0 = std::chrono::steady_clock::now();
+  std::error_code ec;
+  while (!(fs::exists(journal, ec) && fs::file_size(journal, ec) > 20000) &&
+         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_EQ(::kill(pid, SIGKILL), 0);
+  EXPECT_EQ(wait_exit(pid), -SIGKILL);
+  EXPECT_FALSE(fs::exists(dir / "killed/library.plrl"));
+  ASSERT_EQ(wait_exit(start(dir / "generate.yaml", dir / "killed")), 0);
+  EXPECT_EQ(fingerprint(dir / "killed/library.plrl"), whole);
+  EXPECT_TRUE(fs::exists(dir / "killed/block.svg"));
+  EXPECT_TRUE(fs::exists(dir / "killed/block-anytime.svg"));
+
+  // `plr library` (the kernel runs plr-library) lists and shows the entry,
+  // and refuses a truncated file with its located error.
+  const std::string lib = (dir / "whole/library.plrl").string();
+  const std::string list = output(std::string(PLR_BIN) + " library list " + lib);
+  EXPECT_NE(list.find("block"), std::string::npos) << list;
+  EXPECT_NE(list.find("root bounds"), std::string::npos) << list;
+  const std::string show = output(std::string(PLR_BIN) + " library show " + lib + " block");
+  EXPECT_NE(show.find("particles: 3, horizon: 3"), std::string::npos) << show;
+  EXPECT_NE(show.find("nodes:"), std::string::npos) << show;
+  fs::resize_file(lib, fs::file_size(lib) - 10);
+  const std::string refused = output(std::string(PLR_BIN) + " library list " + lib + " 2>&1");
+  EXPECT_EQ(refused, fmt::format("plr library: {}: truncated: {} of {} bytes\n", lib,
+                                 fs::file_size(lib), fs::file_size(lib) + 10));
+}
+
+}  // namespace

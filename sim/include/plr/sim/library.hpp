@@ -1,0 +1,75 @@
+// The strategy library L: strategies generated offline (the strategy
+// generator plug-in), each with the world it was generated on (what the
+// chooser computes its features from) and how it was made.
+//
+// File (extension .plrl): a 4-byte little-endian size N, N bytes of
+// plr.msg.StrategyLibrary (sdk/schemas/library.fbs, identifier "PLRL"), a
+// 4-byte CRC-32 of those N bytes. Written atomically; a file that is cut
+// short, altered or malformed is refused with one line naming the file and
+// where ("lib.plrl: truncated: 812 of 4104 bytes", "lib.plrl: bytes
+// 4..4100: checksum mismatch (corrupt)", "lib.plrl: entries[1] 'A1-2':
+// strategy: ...").
+#pragma once
+
+#include <plr/expected.hpp>
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "plr/sim/strategy.hpp"
+#include "plr/sim/world.hpp"
+
+namespace plr::sim {
+
+inline constexpr std::uint32_t kLibraryVersion = 1;
+// Bounds on what a library file may hold.
+inline constexpr std::size_t kMaxLibraryBytes = std::size_t{1} << 30;
+inline constexpr std::size_t kMaxLibraryEntries = 100000;
+
+struct BoundPoint {
+  double wall_s = 0.0;
+  double lower = 0.0, upper = 0.0;
+  std::uint64_t trials = 0;
+};
+
+struct Provenance {
+  std::uint64_t seed = 0;
+  std::uint32_t particles = 0;
+  std::uint32_t horizon = 0;
+  std::uint64_t trial_budget = 0;
+  std::uint64_t trials = 0;
+  std::uint64_t simulations = 0;
+  std::uint64_t nodes = 0;
+  double wall_s = 0.0;
+  std::uint32_t workers = 0;
+  double epsilon1 = 0.0, epsilon2 = 0.0;
+  double seconds_per_box = 0.0;
+  std::string created;
+};
+
+struct LibraryEntry {
+  std::string name;
+  std::string family;
+  std::uint64_t world_seed = 0;
+  World world;  // W at the strategy's start, without masses
+  std::string observation_json;
+  Strategy strategy;
+  double lower = 0.0, upper = 0.0;  // the root's value bounds: negated robot seconds
+  Provenance provenance;
+  std::vector<BoundPoint> curve;
+};
+
+struct Library {
+  std::vector<LibraryEntry> entries;
+};
+
+std::vector<std::uint8_t> serialize(const Library& library);
+plr::Expected<Library> deserialize_library(const std::uint8_t* data, std::size_t size,
+                                           const std::string& origin);
+
+plr::Status save_library(const Library& library, const std::filesystem::path& file);
+plr::Expected<Library> load_library(const std::filesystem::path& file);
+
+}  // namespace plr::sim

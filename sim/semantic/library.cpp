@@ -1,0 +1,196 @@
+#include "plr/sim/library.hpp"
+
+#include <plr/msg/library_generated.h>
+#include <plr/atomic_file.hpp>
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+
+#include "plr/sim/crc32.hpp"
+#include "plr/sim/observation.hpp"
+
+namespace plr::sim {
+
+namespace {
+
+namespace msg = plr::msg;
+
+constexpr std::size_t kMaxBoxes = 100000;
+constexpr std::size_t kMaxCurve = 1000000;
+constexpr std::size_t kMaxText = 1 << 16;
+
+std::uint32_t read_u32(const std::uint8_t* p) {
+  return static_cast<std::uint32_t>(p[0]) | static_cast<std::uint32_t>(p[1]) << 8 |
+         static_cast<std::uint32_t>(p[2]) << 16 | static_cast<std::uint32_t>(p[3]) << 24;
+}
+void write_u32(std::vector<std::uint8_t>& out, std::uint32_t v) {
+  for (int i = 0; i < 4; ++i) out.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
+}
+
+flatbuffers::Offset<msg::WorldState> build_world(flatbuffers::FlatBufferBuilder& fbb,
+                                                 const World& w) {
+  const msg::Vec3 size(w.trailer.width, w.trailer.height, w.trailer.depth);
+  std::vector<msg::BoxState> boxes;
+  for (const Box& b : w.boxes) {
+    const Eigen::Quaterniond q(b.pose.linear());
+    const Eigen::Vector3d p = b.pose.translation();
+    boxes.emplace_back(
+        b.id, msg::Vec3(b.size.x(), b.size.y(), b.size.z()),
+        msg::Pose(msg::Vec3(p.x(), p.y(), p.z()), msg::Quat(q.x(), q.y(), q.z(), q.w())), 0.0);
+  }
+  return msg::CreateWorldStateDirect(fbb, 0, &size, nullptr, 0.0, &boxes);
+}
+
+std::string text(const flatbuffers::String* s) {
+  return s ? s->str() : std::string();
+}
+
+plr::Error error(const std::string& where, const std::string& what) {
+  return plr::make_error(PLR_ERR_INVALID, where + ": " + what);
+}
+
+plr::Expected<LibraryEntry> read_entry(const msg::LibraryEntry& m, const std::string& where) {
+  LibraryEntry e;
+  for (const auto& [s, name] : {std::pair{m.name(), "name"},
+                                {m.family(), "family"},
+                                {m.observation_json(), "observation_json"}}) {
+    if (s && s->size() > kMaxText)
+      return error(where, fmt::format("{}: longer than {} bytes", name, kMaxText));
+  }
+  e.name = text(m.name());
+  e.family = text(m.family());
+  e.world_seed = m.world_seed();
+  e.observation_json = text(m.observation_json());
+  if (!m.world()) return error(where, "world: missing");
+  if (m.world()->boxes() && m.world()->boxes()->size() > kMaxBoxes)
+    return error(where, fmt::format("world: more than {} boxes", kMaxBoxes));
+  e.world = world_from_message(*m.world());
+  for (std::size_t i = 0; i < e.world.boxes.size(); ++i) {
+    const Box& b = e.world.boxes[i];
+    if (!b.pose.matrix().allFinite() || !b.size.allFinite() || (b.size.array() <= 0).any())
+      return error(where, fmt::format("world: boxes[{}]: size must be > 0 and pose finite", i));
+  }
+  if (!m.strategy()) return error(where, "strategy: missing");
+  auto strategy = from_message(*m.strategy(), "strategy");
+  if (!strategy) return error(where, strategy.error().message);
+  e.strategy = std::move(*strategy);
+  e.lower = m.lower();
+  e.upper = m.upper();
+  if (!std::isfinite(e.lower) || !std::isfinite(e.upper) || e.lower > e.upper + 1e-9)
+    return error(
+        where, fmt::format("bounds [{}, {}]: must be finite and lower <= upper", e.lower, e.upper));
+  if (const msg::LibraryProvenance* p = m.provenance()) {
+    if (p->created() && p->created()->size() > kMaxText)
+      return error(where, "provenance.created: too long");
+    e.provenance = {p->seed(),         p->particles(),   p->horizon(),  p->trial_budget(),
+                    p->trials(),       p->simulations(), p->nodes(),    p->wall_s(),
+                    p->workers(),      p->epsilon1(),    p->epsilon2(), p->seconds_per_box(),
+                    text(p->created())};
+  }
+  if (m.curve()) {
+    if (m.curve()->size() > kMaxCurve) return error(where, "curve: too many points");
+    for (const msg::BoundPoint* b : *m.curve()) {
+      e.curve.push_back({b->wall_s(), b->lower(), b->upper(), b->trials()});
+    }
+  }
+  return e;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> serialize(const Library& library) {
+  flatbuffers::FlatBufferBuilder fbb;
+  std::vector<flatbuffers::Offset<msg::LibraryEntry>> entries;
+  for (const LibraryEntry& e : library.entries) {
+    const auto name = fbb.CreateString(e.name);
+    const auto family = fbb.CreateString(e.family);
+    const auto world = build_world(fbb, e.world);
+    const auto obs = fbb.CreateString(e.observation_json);
+    const auto strategy = build(fbb, e.strategy);
+    const Provenance& p = e.provenance;
+    const auto prov =
+        msg::CreateLibraryProvenance(fbb, p.seed, p.particles, p.horizon, p.trial_budget, p.trials,
+                                     p.simulations, p.nodes, p.wall_s, p.workers, p.epsilon1,
+                                     p.epsilon2, p.seconds_per_box, fbb.CreateString(p.created));
+    std::vector<msg::BoundPoint> curve;
+    for (const BoundPoint& b : e.curve) curve.emplace_back(b.wall_s, b.lower, b.upper, b.trials);
+    entries.push_back(msg::CreateLibraryEntry(fbb, name, family, e.world_seed, world, obs, strategy,
+                                              e.lower, e.upper, prov,
+                                              fbb.CreateVectorOfStructs(curve)));
+  }
+  msg::FinishStrategyLibraryBuffer(
+      fbb, msg::CreateStrategyLibrary(fbb, kLibraryVersion, fbb.CreateVector(entries)));
+  std::vector<std::uint8_t> out;
+  out.reserve(fbb.GetSize() + 8);
+  write_u32(out, static_cast<std::uint32_t>(fbb.GetSize()));
+  out.insert(out.end(), fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize());
+  write_u32(out, crc32(fbb.GetBufferPointer(), fbb.GetSize()));
+  return out;
+}
+
+plr::Expected<Library> deserialize_library(const std::uint8_t* data, std::size_t size,
+                                           const std::string& origin) {
+  if (size < 8)
+    return error(origin, fmt::format("truncated: {} bytes, a library has at least 8", size));
+  const std::size_t body = read_u32(data);
+  if (body > kMaxLibraryBytes)
+    return error(
+        origin, fmt::format("bytes 0..4: size {} is over the limit of {}", body, kMaxLibraryBytes));
+  if (size < body + 8)
+    return error(origin, fmt::format("truncated: {} of {} bytes", size, body + 8));
+  if (size > body + 8)
+    return error(origin, fmt::format("byte {}: {} bytes after the end of the library", body + 8,
+                                     size - body - 8));
+  const std::uint8_t* fb = data + 4;
+  if (crc32(fb, body) != read_u32(fb + body))
+    return error(origin, fmt::format("bytes 4..{}: checksum mismatch (corrupt)", body + 4));
+  if (!msg::StrategyLibraryBufferHasIdentifier(fb))
+    return error(origin, "byte 8: not a strategy library (identifier is not PLRL)");
+  flatbuffers::Verifier verifier(fb, body);
+  if (!msg::VerifyStrategyLibraryBuffer(verifier))
+    return error(origin,
+                 fmt::format("bytes 4..{}: malformed (FlatBuffers verification)", body + 4));
+  const msg::StrategyLibrary* m = msg::GetStrategyLibrary(fb);
+  if (m->version() != kLibraryVersion)
+    return error(origin, fmt::format("version {} is not supported (this build reads {})",
+                                     m->version(), kLibraryVersion));
+  Library library;
+  if (m->entries()) {
+    if (m->entries()->size() > kMaxLibraryEntries)
+      return error(origin, fmt::format("entries: more than {}", kMaxLibraryEntries));
+    for (flatbuffers::uoffset_t i = 0; i < m->entries()->size(); ++i) {
+      const msg::LibraryEntry* e = m->entries()->Get(i);
+      const std::string name = text(e->name()).substr(0, 64);
+      auto entry = read_entry(*e, fmt::format("{}: entries[{}] '{}'", origin, i, name));
+      if (!entry) return entry.error();
+      library.entries.push_back(std::move(*entry));
+    }
+  }
+  return library;
+}
+
+plr::Status save_library(const Library& library, const std::filesystem::path& file) {
+  const std::vector<std::uint8_t> bytes = serialize(library);
+  return plr::write_file_atomically(
+      file.string(), std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+}
+
+plr::Expected<Library> load_library(const std::filesystem::path& file) {
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(file, ec);
+  if (ec) return plr::make_error(PLR_ERR_INVALID, file.string() + ": " + ec.message());
+  if (size > kMaxLibraryBytes + 8)
+    return error(file.string(),
+                 fmt::format("{} bytes, over the limit of {}", size, kMaxLibraryBytes + 8));
+  std::ifstream in(file, std::ios::binary);
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
+  if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size)))
+    return plr::make_error(PLR_ERR_INVALID, file.string() + ": cannot read");
+  return deserialize_library(bytes.data(), bytes.size(), file.string());
+}
+
+}  // namespace plr::sim

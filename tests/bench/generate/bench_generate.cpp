@@ -1,0 +1,292 @@
+// Strategy generation, measured: time to one strategy (5 particles,
+// horizon 6 by default) for A1 and B1 worlds with 1 and 2 local simulation
+// workers; simulated actions per second; the root's bounds at the end; the
+// tree's size. Each generation starts from nothing (no journal). With more
+// than one worker count, the strategies must come out the same; the bench
+// says whether they did. Then each strategy runs open loop from its own
+// world on mass particles not used for planning, against strategy H over
+// the same number of actions.
+//
+//   bench_generate [--quick] [--json] [--worlds A1:1,B1:1] [--workers 1,2]
+//                  [--trials N] [--particles N] [--horizon N] [--eval N]
+//                  [--partial-tree]
+//   bench_generate --library FILE [--eval N] [--json]   (evaluation only)
+// --partial-tree: the strategy stops at beliefs no trial expanded (no
+// simulations to unroll it; with --trials 1 that measures the root's batch).
+// --quick: one full-size strategy (5 particles, horizon 6) for A1 seed 1
+// with 2 local workers, no evaluation.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "plr/actions/in_process.hpp"
+#include "plr/planning/lattice_planner.hpp"
+#include "plr/sim/generators.hpp"
+#include "plr/sim/library.hpp"
+#include "plr/sim/physics.hpp"
+#include "plr/sim/shipped_files.hpp"
+#include "truck/generate.hpp"
+#include "truck/open_loop.hpp"
+#include "truck/worker_pool.hpp"
+
+namespace {
+
+using namespace plr;
+using generator::GenerateOptions;
+using Clock = std::chrono::steady_clock;
+
+struct WorldSpec {
+  sim::EnvFamily family;
+  std::uint64_t seed;
+};
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  for (std::size_t at = 0; at <= s.size();) {
+    const std::size_t end = std::min(s.find(',', at), s.size());
+    if (end > at) out.push_back(s.substr(at, end - at));
+    at = end + 1;
+  }
+  return out;
+}
+
+std::string worker_program(const char* argv0) {
+  std::error_code ec;
+  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  return ec ? std::string(argv0) : (self.parent_path() / "plr_sim_worker").string();
+}
+
+int usage() {
+  std::fprintf(stderr,
+               "usage: bench_generate [--quick] [--json] [--worlds A1:1,B1:1] [--workers 1,2]\n"
+               "                      [--trials N] [--particles N] [--horizon N] [--eval N]\n"
+               "                      [--partial-tree]\n"
+               "       bench_generate --library FILE [--eval N] [--json]\n");
+  return 2;
+}
+
+struct Eval {
+  double strategy_boxes = 0, strategy_s = 0, h_boxes = 0, h_s = 0, strategy_steps = 0;
+  int runs = 0;
+};
+
+// Open loop from the strategy's own world against H over `actions`
+// actions, on mass particles the generator did not plan with.
+std::optional<nlohmann::json> evaluate(const std::string& name, const sim::World& world,
+                                       sim::EnvFamily family, const sim::Strategy& strategy,
+                                       int actions, int particles, std::uint64_t seed, bool json) {
+  auto robot = sim::load_robot();
+  auto lattice = planning::LatticeConfig::from_file(
+      sim::shipped_file("robots/unloader_lattice.yaml").value().string());
+  if (!robot || !lattice) return std::nullopt;
+  planning::LatticePlanner planner(std::move(*lattice));
+  const actions::ActionModel model(*robot, {});
+  Eval ev;
+  for (int p = 0; p < particles; ++p) {
+    const sim::World truth =
+        sim::sample_masses(world, family, generator::particle_seed(seed + 1'000'003, p));
+    for (const bool use_strategy : {true, false}) {
+      actions::UnloaderSimulation simulation(*robot, truth);
+      actions::InProcessBackend backend(simulation, planner);
+      auto run = generator::run_open_loop(model, backend,
+                                          use_strategy ? std::optional(strategy) : std::nullopt, {},
+                                          static_cast<std::uint64_t>(actions));
+      if (!run) {
+        std::fprintf(stderr, "bench_generate: %s\n", run.error().message.c_str());
+        return std::nullopt;
+      }
+      (use_strategy ? ev.strategy_boxes : ev.h_boxes) += run->boxes;
+      (use_strategy ? ev.strategy_s : ev.h_s) += run->robot_time_s;
+      if (use_strategy) ev.strategy_steps += static_cast<double>(run->strategy_steps);
+    }
+    ++ev.runs;
+  }
+  const double n = ev.runs;
+  const double rate_s = ev.strategy_s > 0 ? ev.strategy_boxes / ev.strategy_s : 0;
+  const double rate_h = ev.h_s > 0 ? ev.h_boxes / ev.h_s : 0;
+  if (!json) {
+    std::printf(
+        "%-6s open loop, %d held-out particles, %d actions: strategy %.2f boxes in %.1f s "
+        "(%.3f boxes/s, %.1f of its own steps), H %.2f boxes in %.1f s (%.3f boxes/s)\n",
+        name.c_str(), ev.runs, actions, ev.strategy_boxes / n, ev.strategy_s / n, rate_s,
+        ev.strategy_steps / n, ev.h_boxes / n, ev.h_s / n, rate_h);
+    std::fflush(stdout);
+  }
+  return nlohmann::json{{"world", name},
+                        {"held_out_particles", ev.runs},
+                        {"actions", actions},
+                        {"strategy_boxes", ev.strategy_boxes / n},
+                        {"strategy_robot_s", ev.strategy_s / n},
+                        {"strategy_steps", ev.strategy_steps / n},
+                        {"h_boxes", ev.h_boxes / n},
+                        {"h_robot_s", ev.h_s / n},
+                        {"strategy_boxes_per_s", rate_s},
+                        {"h_boxes_per_s", rate_h},
+                        {"at_least_as_fast_as_h", rate_s >= rate_h}};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  bool quick = false, json = false;
+  std::vector<WorldSpec> worlds{{sim::EnvFamily::kA1, 1}, {sim::EnvFamily::kB1, 1}};
+  std::vector<int> worker_counts{1, 2};
+  GenerateOptions o;
+  int particles = 5, eval_particles = 3;
+  std::string library;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const bool more = i + 1 < argc;
+    if (arg == "--quick") {
+      quick = true;
+    } else if (arg == "--json") {
+      json = true;
+    } else if (arg == "--worlds" && more) {
+      worlds.clear();
+      for (const auto& w : split(argv[++i])) {
+        const auto colon = w.find(':');
+        const auto f = sim::parse_env_family(w.substr(0, colon));
+        if (!f || colon == std::string::npos) return usage();
+        worlds.push_back({*f, std::strtoull(w.c_str() + colon + 1, nullptr, 10)});
+      }
+    } else if (arg == "--workers" && more) {
+      worker_counts.clear();
+      for (const auto& w : split(argv[++i])) worker_counts.push_back(std::atoi(w.c_str()));
+    } else if (arg == "--trials" && more) {
+      o.trials = std::strtoull(argv[++i], nullptr, 10);
+    } else if (arg == "--particles" && more) {
+      particles = std::atoi(argv[++i]);
+    } else if (arg == "--horizon" && more) {
+      o.truck.horizon = std::atoi(argv[++i]);
+    } else if (arg == "--partial-tree") {
+      o.complete_tree = false;
+    } else if (arg == "--library" && more) {
+      library = argv[++i];
+    } else if (arg == "--eval" && more) {
+      eval_particles = std::atoi(argv[++i]);
+    } else {
+      return usage();
+    }
+  }
+  if (quick) {
+    worlds = {{sim::EnvFamily::kA1, 1}};
+    worker_counts = {2};
+    eval_particles = 0;
+  }
+  if (!library.empty()) {
+    // Only the evaluation, of every strategy of a library.
+    auto lib = sim::load_library(library);
+    if (!lib) {
+      std::fprintf(stderr, "bench_generate: %s\n", lib.error().message.c_str());
+      return 1;
+    }
+    nlohmann::json evals = nlohmann::json::array();
+    for (const sim::LibraryEntry& e : lib->entries) {
+      const auto family = sim::parse_env_family(e.family);
+      if (!family) continue;
+      const auto ev =
+          evaluate(e.name, e.world, *family, e.strategy, static_cast<int>(e.provenance.horizon),
+                   eval_particles, e.provenance.seed, json);
+      if (!ev) return 1;
+      evals.push_back(*ev);
+    }
+    if (json) std::printf("%s\n", nlohmann::json{{"evaluation", evals}}.dump(2).c_str());
+    return 0;
+  }
+  auto runner = generator::ActionRunner::create({});
+  if (!runner) {
+    std::fprintf(stderr, "bench_generate: %s\n", runner.error().message.c_str());
+    return 1;
+  }
+  const std::string program = worker_program(argv[0]);
+  nlohmann::json out = {{"particles", particles},
+                        {"horizon", o.truck.horizon},
+                        {"trials", o.trials},
+                        {"epsilon1", o.epsilon1},
+                        {"epsilon2", o.epsilon2},
+                        {"runs", nlohmann::json::array()},
+                        {"evaluation", nlohmann::json::array()}};
+  for (const WorldSpec& w : worlds) {
+    const generator::Problem problem = generator::make_problem(w.family, w.seed, particles, o.seed);
+    std::string first_strategy;
+    std::optional<sim::Strategy> strategy;
+    for (const int workers : worker_counts) {
+      std::unique_ptr<generator::Simulator> simulator;
+      if (workers <= 0) {
+        simulator = std::make_unique<generator::LocalSimulator>(**runner);
+      } else {
+        auto pool = generator::WorkerPool::create({program, workers, "{}", 3});
+        if (!pool) {
+          std::fprintf(stderr, "bench_generate: %s\n", pool.error().message.c_str());
+          return 1;
+        }
+        simulator = std::move(*pool);
+      }
+      const auto t0 = Clock::now();
+      auto r = generator::generate(
+          problem, o, **runner, *simulator, nullptr, [&](const generator::GenerateProgress& p) {
+            std::fprintf(stderr,
+                         "\r\033[K%s, %d workers: trial %llu/%llu, %zu "
+                         "nodes, %llu sims, root [%.1f, %.1f], %.0f s",
+                         problem.name.c_str(), workers, (unsigned long long)p.trials,
+                         (unsigned long long)p.trial_budget, p.nodes,
+                         (unsigned long long)p.simulated, p.lower, p.upper, p.wall_s);
+            return true;
+          });
+      std::fprintf(stderr, "\n");
+      if (!r) {
+        std::fprintf(stderr, "bench_generate: %s\n", r.error().message.c_str());
+        return 1;
+      }
+      const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
+      const sim::LibraryEntry& e = r->entry;
+      const std::string yaml = sim::format_yaml(e.strategy);
+      if (first_strategy.empty()) first_strategy = yaml;
+      strategy = e.strategy;
+      out["runs"].push_back(
+          {{"world", problem.name},
+           {"boxes", problem.world.boxes.size()},
+           {"workers", workers},
+           {"particles", particles},
+           {"horizon", o.truck.horizon},
+           {"wall_s", wall},
+           {"trials", e.provenance.trials},
+           {"belief_nodes", e.provenance.nodes},
+           {"nodes", e.strategy.nodes.size()},
+           {"depth", e.strategy.depth()},
+           {"simulations", r->simulated},
+           {"actions_per_s", r->simulated / wall},
+           {"simulated_robot_s", r->simulated_robot_s},
+           {"real_time_factor", r->simulated_robot_s / wall},
+           {"worker_s_per_action", r->simulated_wall_s / std::max<double>(1, r->simulated)},
+           {"lower", e.lower},
+           {"upper", e.upper},
+           {"same_strategy_as_first", yaml == first_strategy}});
+      if (!json) {
+        std::printf(
+            "%-6s %d worker(s): %6.1f s, %llu trials, %zu tree nodes (depth %zu), %llu simulated "
+            "actions (%.2f/s, %.0fx real time, %.2f s each in a worker), root [%.1f, %.1f]%s\n",
+            problem.name.c_str(), workers, wall, (unsigned long long)e.provenance.trials,
+            e.strategy.nodes.size(), e.strategy.depth(), (unsigned long long)r->simulated,
+            r->simulated / wall, r->simulated_robot_s / wall,
+            r->simulated_wall_s / std::max<double>(1, r->simulated), e.lower, e.upper,
+            yaml == first_strategy ? "" : "  DIFFERENT STRATEGY");
+        std::fflush(stdout);
+      }
+    }
+    if (eval_particles <= 0 || !strategy) continue;
+    const auto ev = evaluate(problem.name, problem.world, w.family, *strategy, o.truck.horizon,
+                             eval_particles, o.seed, json);
+    if (!ev) return 1;
+    out["evaluation"].push_back(*ev);
+  }
+  if (json) std::printf("%s\n", out.dump(2).c_str());
+  return 0;
+}

@@ -1,0 +1,143 @@
+#include "plr/sim/library.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+namespace fs = std::filesystem;
+using namespace plr::sim;
+
+namespace {
+
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = (fs::temp_directory_path() / "plr_library_XXXXXX").string();
+    path_ = mkdtemp(pattern.data());
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  fs::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  fs::path path_;
+};
+
+LibraryEntry entry(const std::string& name) {
+  LibraryEntry e;
+  e.name = name;
+  e.family = "A1";
+  e.world_seed = 3;
+  e.world.trailer.depth = 12.0;
+  Box b;
+  b.id = 7;
+  b.size = {0.4, 0.5, 0.3};
+  b.pose.translation() = Eigen::Vector3d(11.5, 0.2, 0.15);
+  e.world.boxes.push_back(b);
+  e.observation_json = R"({"h_pile":0.55})";
+  e.strategy.name = name;
+  e.strategy.nodes = {{make_pick(Height::kHigh, Side::kLeft),
+                       {{make_observation(Structure::kWall, Height::kMid, Side::kCenter), 1}}},
+                      {make_sweep(Height::kLow), {}}};
+  e.lower = -120.5;
+  e.upper = -40.25;
+  e.provenance.seed = 9;
+  e.provenance.particles = 5;
+  e.provenance.horizon = 6;
+  e.provenance.trials = 60;
+  e.provenance.created = "2026-11-26T19:00:00Z";
+  e.curve = {{1.0, -300, -0.5, 1}, {2.0, -200, -10, 2}};
+  return e;
+}
+
+std::vector<std::uint8_t> read(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write(const fs::path& p, const std::vector<std::uint8_t>& bytes) {
+  std::ofstream out(p, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
+}
+
+}  // namespace
+
+TEST(Library, RoundTripsThroughItsFile) {
+  TempDir dir;
+  Library lib;
+  lib.entries = {entry("A1-3"), entry("B1-1")};
+  ASSERT_TRUE(save_library(lib, dir / "l.plrl"));
+  const auto back = load_library(dir / "l.plrl");
+  ASSERT_TRUE(back) << back.error().message;
+  ASSERT_EQ(back->entries.size(), 2u);
+  const LibraryEntry& e = back->entries[1];
+  EXPECT_EQ(e.name, "B1-1");
+  EXPECT_EQ(e.world_seed, 3u);
+  ASSERT_EQ(e.world.boxes.size(), 1u);
+  EXPECT_EQ(e.world.boxes[0].id, 7u);
+  EXPECT_DOUBLE_EQ(e.world.boxes[0].pose.translation().y(), 0.2);
+  EXPECT_EQ(e.world.boxes[0].mass, 0.0);
+  EXPECT_EQ(format_yaml(e.strategy), format_yaml(entry("B1-1").strategy));
+  EXPECT_DOUBLE_EQ(e.lower, -120.5);
+  EXPECT_DOUBLE_EQ(e.upper, -40.25);
+  EXPECT_EQ(e.provenance.particles, 5u);
+  EXPECT_EQ(e.provenance.created, "2026-11-26T19:00:00Z");
+  ASSERT_EQ(e.curve.size(), 2u);
+  EXPECT_EQ(e.curve[1].trials, 2u);
+  EXPECT_EQ(serialize(*back), serialize(lib));
+}
+
+TEST(Library, TruncatedFileIsRefusedWithWhereItEnds) {
+  TempDir dir;
+  Library lib;
+  lib.entries = {entry("A1-3")};
+  ASSERT_TRUE(save_library(lib, dir / "l.plrl"));
+  auto bytes = read(dir / "l.plrl");
+  const std::size_t full = bytes.size();
+  bytes.resize(full / 2);
+  write(dir / "l.plrl", bytes);
+  const auto back = load_library(dir / "l.plrl");
+  ASSERT_FALSE(back);
+  EXPECT_EQ(back.error().message, (dir / "l.plrl").string() +
+                                      ": truncated: " + std::to_string(full / 2) + " of " +
+                                      std::to_string(full) + " bytes");
+  bytes.resize(3);
+  write(dir / "l.plrl", bytes);
+  EXPECT_EQ(load_library(dir / "l.plrl").error().message,
+            (dir / "l.plrl").string() + ": truncated: 3 bytes, a library has at least 8");
+}
+
+TEST(Library, CorruptByteIsRefusedAsAChecksumMismatch) {
+  TempDir dir;
+  Library lib;
+  lib.entries = {entry("A1-3")};
+  ASSERT_TRUE(save_library(lib, dir / "l.plrl"));
+  auto bytes = read(dir / "l.plrl");
+  bytes[bytes.size() / 2] ^= 0x40;
+  write(dir / "l.plrl", bytes);
+  const auto back = load_library(dir / "l.plrl");
+  ASSERT_FALSE(back);
+  EXPECT_EQ(back.error().message, (dir / "l.plrl").string() + ": bytes 4.." +
+                                      std::to_string(bytes.size() - 4) +
+                                      ": checksum mismatch (corrupt)");
+}
+
+TEST(Library, AnInvalidTreeNamesItsEntry) {
+  Library lib;
+  lib.entries = {entry("A1-3"), entry("B1-1")};
+  lib.entries[1].strategy.nodes[0].children[0].second = 5;  // no node 5
+  const auto bytes = serialize(lib);
+  const auto back = deserialize_library(bytes.data(), bytes.size(), "l.plrl");
+  ASSERT_FALSE(back);
+  EXPECT_EQ(back.error().message.rfind("l.plrl: entries[1] 'B1-1': strategy: ", 0), 0u)
+      << back.error().message;
+}
+
+TEST(Library, OtherFilesAreRefused) {
+  const std::vector<std::uint8_t> text{'h', 'e', 'l', 'l', 'o', ' ', 'w', 'o', 'r', 'l', 'd'};
+  const auto back = deserialize_library(text.data(), text.size(), "x");
+  ASSERT_FALSE(back);
+  EXPECT_EQ(back.error().message, "x: bytes 0..4: size 1819043176 is over the limit of 1073741824");
+}
