@@ -44,6 +44,9 @@ inline constexpr std::size_t kMaxFrameBytes = std::size_t{1} << 28;
 std::vector<std::uint8_t> frame_setup(const std::string& observation_json);
 std::vector<std::uint8_t> frame_job(std::uint64_t id, const SimRequest& request);
 std::vector<std::uint8_t> frame_result(std::uint64_t id, const plr::Expected<SimOutcome>& result);
+// Writes a whole frame to a pipe (retrying interrupted writes); false when
+// the reader is gone.
+bool write_all(int fd, const std::vector<std::uint8_t>& bytes);
 
 struct Frame {
   enum class Kind { kSetup, kJob, kResult } kind = Kind::kSetup;

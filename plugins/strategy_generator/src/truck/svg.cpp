@@ -6,31 +6,13 @@
 #include <cmath>
 #include <vector>
 
+#include "plr/sim/render.hpp"
+
 namespace plr::generator {
 
 namespace {
 
 constexpr double kNodeW = 120, kNodeH = 28, kGapX = 16, kRowH = 90, kMargin = 20;
-
-std::string escape(const std::string& s) {
-  std::string out;
-  for (const char c : s) {
-    switch (c) {
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '&':
-        out += "&amp;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 // Leaves take one column each; a parent sits over the middle of its children.
 double place(const sim::Strategy& s, std::uint32_t n, int depth, double& next_x,
@@ -68,7 +50,7 @@ std::string strategy_svg(const sim::Strategy& s) {
       "font-family=\"sans-serif\" font-size=\"11\">\n"
       "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
       "<text x=\"{}\" y=\"{}\" font-size=\"14\">strategy {} ({} nodes, depth {})</text>\n",
-      w, h, kMargin, kMargin + 4, escape(s.name), s.nodes.size(), s.depth());
+      w, h, kMargin, kMargin + 4, sim::xml_escape(s.name), s.nodes.size(), s.depth());
   auto top = [&](std::uint32_t n) { return kMargin + 30 + row[n] * kRowH; };
   for (std::uint32_t n = 0; n < s.nodes.size(); ++n) {
     for (const auto& [o, c] : s.nodes[n].children) {
@@ -81,7 +63,7 @@ std::string strategy_svg(const sim::Strategy& s) {
           "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\" fill=\"#246\" "
           "font-size=\"10\">{}</text>\n",
           // Nearer the child than the parent: siblings' labels spread apart.
-          0.3 * x0 + 0.7 * x1, 0.3 * y0 + 0.7 * y1 - 4, escape(sim::to_string(o)));
+          0.3 * x0 + 0.7 * x1, 0.3 * y0 + 0.7 * y1 - 4, sim::xml_escape(sim::to_string(o)));
     }
   }
   for (std::uint32_t n = 0; n < s.nodes.size(); ++n) {
@@ -90,7 +72,7 @@ std::string strategy_svg(const sim::Strategy& s) {
         "<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{}\" height=\"{}\" rx=\"6\" fill=\"{}\" "
         "stroke=\"#333\"/>\n<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n",
         x[n], top(n), kNodeW, kNodeH, sweep ? "#fde2c8" : "#d6e8fa", x[n] + kNodeW / 2,
-        top(n) + kNodeH / 2 + 4, escape(sim::to_string(s.nodes[n].action)));
+        top(n) + kNodeH / 2 + 4, sim::xml_escape(sim::to_string(s.nodes[n].action)));
   }
   out += "</svg>\n";
   return out;
@@ -121,7 +103,7 @@ std::string anytime_svg(const sim::LibraryEntry& e) {
       "wall time</text>\n"
       "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"black\"/>\n"
       "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"black\"/>\n",
-      W, H, L, escape(e.name), L, H - B, W - R, H - B, L, T, L, H - B);
+      W, H, L, sim::xml_escape(e.name), L, H - B, W - R, H - B, L, T, L, H - B);
   for (int i = 0; i <= 4; ++i) {
     const double v = v_min + (v_max - v_min) * i / 4, t = t_max * i / 4;
     out += fmt::format(

@@ -27,17 +27,6 @@ bool read_all(int fd, std::uint8_t* data, std::size_t size) {
   return true;
 }
 
-bool write_all(int fd, const std::vector<std::uint8_t>& bytes) {
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
-    done += static_cast<std::size_t>(n);
-  }
-  return true;
-}
-
 // The next frame; nullopt at the end of input.
 std::optional<plr::Expected<plr::generator::Frame>> next_frame() {
   std::uint8_t head[4];
@@ -82,7 +71,7 @@ int main() {
       return 2;
     }
     const auto result = (*runner)->run((*frame)->request);
-    if (!write_all(out, plr::generator::frame_result((*frame)->id, result))) return 0;
+    if (!plr::generator::write_all(out, plr::generator::frame_result((*frame)->id, result))) return 0;
   }
   return 0;
 }
