@@ -309,10 +309,10 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     };
     std::optional<Grip> best;
     // Why the plate centred on the face was not taken: what the caller is
-    // told if no other pose is taken either.
+    // told if no other pose is taken either. Worded only if asked for.
     std::string refused;
-    auto refuse = [&](const std::string& why) {
-      if (refused.empty()) refused = why;
+    auto refuse = [&](const auto& why) {
+      if (rejected && refused.empty()) refused = why();
     };
     for (const auto& [dy, dz] : offsets) {
       const Eigen::Vector3d p = plate_at(dy, dz);
@@ -335,11 +335,15 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
         }
       }
       if (back - g.grasp_gap > kProud) {
-        refuse(fmt::format("box {} stands out before its face", world.boxes[proud].id));
+        refuse([&] {
+          return fmt::format("box {} stands out before its face", world.boxes[proud].id);
+        });
         continue;
       }
       if (room < kMinPregrasp) {
-        refuse(fmt::format("box {} leaves the plate no room before it", world.boxes[before].id));
+        refuse([&] {
+          return fmt::format("box {} leaves the plate no room before it", world.boxes[before].id);
+        });
         continue;
       }
       Grip grip;
@@ -349,7 +353,7 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       const Eigen::Vector3d surface = p - back * n;
       const int own = cups_on(i, p);
       if (own == 0) {
-        refuse("no whole cup on its face");
+        refuse([] { return std::string("no whole cup on its face"); });
         continue;
       }
       grip.group.push_back(i);
@@ -378,27 +382,26 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       }
       grip.lift = std::max(g.retract_lift, g.nose_top + kMargin - z0);
       grip.out_depth = std::max(2 * f.half_d, depth) + kMargin;
-      std::string blocked;
+      bool blocked = false;
       for (auto j : grip.group) {
         // Lifted, nothing may stand over it; pulled out, each box (it may be
         // wider than the plate) passes over what stands in front of it.
         // Neighbours beside it, flush with it, are not in the way.
-        if (const auto k =
-                in_the_way(grip.group, outline[j], b[j].z1, b[j].z1 + grip.lift, false)) {
-          blocked = fmt::format("box {} rests on box {}", world.boxes[*k].id, world.boxes[j].id);
-          break;
-        }
-        if (const auto k = in_the_way(grip.group, swept(outline[j], -grip.out_depth * n.head<2>()),
-                                      b[j].z0 + grip.lift, b[j].z1 + grip.lift, true)) {
-          blocked = fmt::format("box {} is in the way out of box {}", world.boxes[*k].id,
-                                world.boxes[j].id);
-          break;
-        }
+        const auto over = in_the_way(grip.group, outline[j], b[j].z1, b[j].z1 + grip.lift, false);
+        const auto out =
+            over ? over
+                 : in_the_way(grip.group, swept(outline[j], -grip.out_depth * n.head<2>()),
+                              b[j].z0 + grip.lift, b[j].z1 + grip.lift, true);
+        if (!out) continue;
+        refuse([&] {
+          const auto k = world.boxes[*out].id, id = world.boxes[j].id;
+          return over ? fmt::format("box {} rests on box {}", k, id)
+                      : fmt::format("box {} is in the way out of box {}", k, id);
+        });
+        blocked = true;
+        break;
       }
-      if (!blocked.empty()) {
-        refuse(blocked);
-        continue;
-      }
+      if (blocked) continue;
       // More boxes at once first, then more cups on the box that has the
       // fewest (the cups' force is shared by cups), then more in all; after
       // a failed grip, fewer boxes and more cups on the box itself.
