@@ -43,6 +43,14 @@ sim::Side side_of(double y, const sim::World& w, const sim::ObservationParams& o
   return y > band ? sim::Side::kLeft : (y < -band ? sim::Side::kRight : sim::Side::kCenter);
 }
 
+// The plate link's body behind its suction surface (its collision box along x).
+double plate_body_depth(const sim::RobotModel& robot) {
+  double depth = 0.0;
+  for (const auto& shape : robot.links()[static_cast<std::size_t>(robot.plate_link())].shapes)
+    if (shape.type == sim::CollisionShape::Type::kBox) depth = std::max(depth, shape.size.x());
+  return depth;
+}
+
 bool reachable(const sim::RobotModel& robot, const sim::PlateTarget& t,
                const sim::JointVector& seed) {
   return !robot.arm_ik(t, seed).empty();
@@ -224,6 +232,7 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     return std::nullopt;
   };
   const double pw = g.plate_half_width(), ph = g.plate_half_height();
+  const double plate_depth = plate_body_depth(robot);
 
   struct Ranked {
     PickCandidate c;
@@ -245,8 +254,10 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     const double half_w = f.half_w, half_up = f.half_up;
     const double y = box.pose.translation().y();
 
-    // Plate centred on the face, kept inside the trailer and off the floor.
-    const double ylim = world.trailer.width / 2 - pw - kMargin;
+    // Plate centred on the face, kept inside the trailer and off the floor;
+    // turned, its body's back corner reaches further out.
+    const double ylim =
+        world.trailer.width / 2 - pw * std::abs(n.x()) - plate_depth * std::abs(n.y()) - kMargin;
     const double zc =
         std::clamp(face_centre.z(), ph + kMargin, world.trailer.height - ph - kMargin);
     const Eigen::Vector3d face(face_centre.x(), face_centre.y(), zc);
@@ -429,7 +440,11 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     c.cups = best->cups.front();
     const Eigen::Vector3d& at_face = best->at_face;
     c.grasp = {at_face - best->back * n, plate_yaw};
-    c.pregrasp = {at_face - best->pregrasp * n, plate_yaw};
+    // Backed off along a turned face's normal, the plate also moves sideways:
+    // near a side wall, only as far as the wall lets it.
+    Eigen::Vector3d pregrasp = at_face - best->pregrasp * n;
+    pregrasp.y() = std::clamp(pregrasp.y(), -ylim, ylim);
+    c.pregrasp = {pregrasp, plate_yaw};
     // The valves: the cup grid runs down the plate by rows, across by columns.
     const sim::SuctionPlate& grid = g.cups;
     c.cups_open.assign(static_cast<std::size_t>(grid.cups_x * grid.cups_y), false);

@@ -384,6 +384,28 @@ TEST(PickCandidates, ATurnedBoxAgainstASideWallIsPulledOutInsideTheTrailer) {
   }
 }
 
+TEST(PickCandidates, ATurnedBoxBesideASideWallIsApproachedWithThePlateInsideTheTrailer) {
+  // Turned 0.2 rad, its face towards the wall: backed off along the face's
+  // normal to the pre-grasp, a plate at the wall would go into it.
+  sim::World w = trailer_world();
+  for (const double sign : {1.0, -1.0}) {
+    w.boxes = {sim::testing::make_box(1, 6.2, sign * 0.97, 0.0, {0.3, 0.3, 0.28})};
+    w.boxes[0].pose.linear() = Eigen::AngleAxisd(-sign * 0.2, Eigen::Vector3d::UnitZ()).matrix();
+    const auto c = candidates(
+        w, sim::make_pick(sim::Height::kMid, sign > 0 ? sim::Side::kLeft : sim::Side::kRight));
+    ASSERT_EQ(c.size(), 1u) << sign;
+    const Geometry g;
+    for (const sim::PlateTarget& t : {c.front().pregrasp, c.front().grasp}) {
+      const Eigen::Vector2d n(std::cos(t.yaw), std::sin(t.yaw)), across(-n.y(), n.x());
+      for (const double a : {-1.0, 1.0})
+        for (const double back : {0.0, 0.05}) {  // the plate's surface and its body's back
+          const double y = t.position.y() + a * g.plate_half_width() * across.y() - back * n.y();
+          EXPECT_LE(std::abs(y), w.trailer.width / 2) << sign;
+        }
+    }
+  }
+}
+
 TEST(DropOff, PlacesHoldTheBoxOverTheConveyorAndTurnTheWristSideways) {
   sim::World w = trailer_world();
   w.boxes.push_back(sim::testing::make_box(7, 6.0, 0.0, 1.0, {0.45, 0.55, 0.35}));
