@@ -43,6 +43,7 @@ struct UnloaderSimulation::Impl {
   // Boxes unloaded before the physics' own unload events began (a restore
   // brings its events back with it).
   std::uint32_t unloaded_before = 0;
+  std::vector<Eigen::Isometry3d> link_poses;  // touches_trailer's, kept between steps
 
   Impl(const sim::RobotModel& r, const sim::World& truth, const JointVector& q0,
        const UnloaderOptions& o)
@@ -61,19 +62,20 @@ struct UnloaderSimulation::Impl {
   }
 
   // Robot shapes beyond the side walls, the ceiling or the front wall (the
-  // floor is where the scoop works, so touching it is not counted).
-  bool touches_trailer() const {
+  // floor is where the scoop works, so touching it is not counted). The
+  // shapes are the URDF's: the physics stands a cube in for a sphere, whose
+  // corners reach out where the robot does not.
+  bool touches_trailer(const JointVector& at) {
     const auto& t = sim.trailer();
-    for (const auto& link : sim.robot_links()) {
-      Eigen::Vector3d half = link.size / 2;
-      if (link.shape == sim::LinkGeometry::Shape::kCylinder)
-        half = Eigen::Vector3d(link.size.x(), link.size.x(), link.size.z() / 2);
-      for (int c = 0; c < 8; ++c) {
-        const Eigen::Vector3d local((c & 1 ? 1 : -1) * half.x(), (c & 2 ? 1 : -1) * half.y(),
-                                    (c & 4 ? 1 : -1) * half.z());
-        const Eigen::Vector3d p = link.pose * local;
-        if (p.x() < 0) continue;  // outside the trailer, behind its open rear
-        if (std::abs(p.y()) > t.width / 2 || p.z() > t.height || p.x() > t.depth) return true;
+    robot->forward_kinematics(at, link_poses);
+    for (std::size_t l = 0; l < robot->links().size(); ++l) {
+      for (const auto& shape : robot->links()[l].shapes) {
+        const Eigen::Isometry3d pose = link_poses[l] * shape.origin;
+        const Eigen::Vector3d c = pose.translation(), e = sim::half_extents(shape, pose);
+        if (c.x() + e.x() < 0) continue;  // outside the trailer, behind its open rear
+        if (std::abs(c.y()) + e.y() > t.width / 2 || c.z() + e.z() > t.height ||
+            c.x() + e.x() > t.depth)
+          return true;
       }
     }
     return false;
@@ -137,7 +139,7 @@ plr::Expected<Executed> UnloaderSimulation::execute(const Motion& motion) {
   auto advance = [&](double dt, const JointVector& q) {
     m.move_robot(q, motion.conveyor);
     m.sim.step(dt);
-    const bool now = m.touches_trailer();
+    const bool now = m.touches_trailer(q);
     if (now && !touching) ++out.robot_trailer_contacts;
     touching = now;
   };

@@ -419,6 +419,27 @@ void RobotModel::forward_kinematics(const JointVector& q,
   }
 }
 
+Eigen::Vector3d half_extents(const CollisionShape& shape, const Eigen::Isometry3d& pose) {
+  const Eigen::Matrix3d& r = pose.linear();
+  switch (shape.type) {
+    case CollisionShape::Type::kBox:
+      return r.cwiseAbs() * (shape.size / 2);
+    case CollisionShape::Type::kCylinder: {
+      // Along a world axis: half the axis' projection plus the rim's.
+      const Eigen::Vector3d axis = r.col(2);
+      const double radius = shape.size.x(), half_length = shape.size.y() / 2;
+      Eigen::Vector3d e;
+      for (int i = 0; i < 3; ++i)
+        e[i] = half_length * std::abs(axis[i]) +
+               radius * std::sqrt(std::max(0.0, 1.0 - axis[i] * axis[i]));
+      return e;
+    }
+    case CollisionShape::Type::kSphere:
+      return Eigen::Vector3d::Constant(shape.size.x());
+  }
+  return Eigen::Vector3d::Zero();
+}
+
 Eigen::Isometry3d RobotModel::plate_pose(const JointVector& q) const {
   std::vector<Eigen::Isometry3d> poses;
   forward_kinematics(q, poses);

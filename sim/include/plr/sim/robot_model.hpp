@@ -54,6 +54,11 @@ struct CollisionShape {
   Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();  // in the link frame
 };
 
+// How far the shape at `pose` reaches from pose's origin along each world
+// axis: exact for every type (a cylinder or a sphere is not its bounding
+// box turned with it).
+Eigen::Vector3d half_extents(const CollisionShape& shape, const Eigen::Isometry3d& pose);
+
 enum class JointType { kFixed, kRevolute, kPrismatic };
 
 struct Link {

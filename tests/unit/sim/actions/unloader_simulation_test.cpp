@@ -103,5 +103,47 @@ TEST(BaseDrive, AHeavyBlockStallsThePushALightOneLetsThrough) {
                                 << pushed->peak_push_force;
 }
 
+// Straight in joint space from the robot's configuration to `to` in 2 s.
+Motion move_to(const sim::JointVector& from, const sim::JointVector& to) {
+  Motion m;
+  m.conveyor = false;
+  for (int k = 0; k <= 20; ++k) {
+    planning::TimedPoint p;
+    p.time_s = 0.1 * k;
+    p.position = from + (to - from) * (k / 20.0);
+    p.velocity = (to - from) / 2.0;
+    m.points.push_back(p);
+  }
+  return m;
+}
+
+TEST(TrailerContact, IsCountedForTheRobotsShapesNotTheirBoundingCubes) {
+  sim::World empty;
+  empty.trailer = {2.5, 2.7, 16.0};
+  sim::JointVector q = home_configuration();
+  q[sim::kBaseX] = 11.0;
+  // The arm reaching right, its knuckle (a 9 cm sphere) 3 cm from the side
+  // wall: a cube of the sphere's size, turned with the forearm, would reach
+  // through the wall.
+  sim::JointVector near_wall = q;
+  near_wall.segment<4>(sim::kArm1) << -0.802, -0.355, 1.512, 1.404;
+  std::vector<Eigen::Isometry3d> poses;
+  robot().forward_kinematics(near_wall, poses);
+  const double knuckle_y =
+      poses[static_cast<std::size_t>(robot().link_index("arm_knuckle"))].translation().y();
+  ASSERT_GT(std::abs(knuckle_y) + 0.09 * std::sqrt(2.0), empty.trailer.width / 2);
+  ASSERT_LT(std::abs(knuckle_y) + 0.09, empty.trailer.width / 2);
+  UnloaderSimulation sim(robot(), empty, q);
+  auto out = sim.execute(move_to(q, near_wall));
+  ASSERT_TRUE(out) << out.error().message;
+  EXPECT_EQ(out->robot_trailer_contacts, 0u);
+  // Turned further right, the plate goes into the wall.
+  sim::JointVector into_wall = near_wall;
+  into_wall[sim::kArm1] = -1.2;
+  out = sim.execute(move_to(near_wall, into_wall));
+  ASSERT_TRUE(out) << out.error().message;
+  EXPECT_EQ(out->robot_trailer_contacts, 1u);
+}
+
 }  // namespace
 }  // namespace plr::actions
