@@ -92,9 +92,13 @@ nlohmann::json run(const Job& job) {
           plr::sim::save_world(simulation.truth(), start_world.replace_extension(".start.yaml"));
       !saved)
     die(saved.error().message);
-  // As configs/unload_sim.yaml: plans are bounded by expansions; the time
-  // limit is a safety net for a machine loaded by the other workers.
-  const plr::actions::ActionModel model(robot, plr::actions::ActionOptions{});
+  // As configs/unload_sim.yaml: plans are bounded by expansions, so the
+  // outcome does not depend on the load. The time limit is only a safety
+  // net; on a machine the other workers (or other jobs) load tenfold, a
+  // budget's search takes minutes, and the run's own timeout is the net.
+  plr::actions::ActionOptions options;
+  options.plan_timeout_s = 1800.0;
+  const plr::actions::ActionModel model(robot, options);
   // Each action as it went, so that a run that stopped early can be read.
   nlohmann::json steps = nlohmann::json::array();
   const auto episode = value_or_die(plr::actions::run_hardcoded(
