@@ -17,8 +17,11 @@ namespace {
 
 constexpr double kMargin = 0.03;     // m, footprint shrink and clearances
 constexpr double kClearance = 0.02;  // m, the plate's distance to boxes it must not touch
-constexpr double kSlide = 0.05;      // m, steps of the plate off the face's centre
-constexpr double kCovered = 0.1;     // m, the plate's centre stays this far inside the face
+// m, the plate's lowest edge above the floor: its bottom row of cups then
+// seals on a box 9.5 cm high lying flat on the floor.
+constexpr double kFloorGap = 0.015;
+constexpr double kSlide = 0.05;   // m, steps of the plate off the face's centre
+constexpr double kCovered = 0.1;  // m, the plate's centre stays this far inside the face
 // m, the nearest pre-grasp: the plate comes down between the face and
 // what stands in front of it.
 constexpr double kMinPregrasp = 0.08;
@@ -156,6 +159,10 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
   const std::size_t count = world.boxes.size();
   std::vector<sim::Bounds> b(count);
   double nearest = std::numeric_limits<double>::infinity();
+  // The nearest box low enough to meet the lowered nose: one leaning out
+  // high up does not keep the base back (the robot's moves are planned
+  // against it all the same).
+  double nearest_low = nearest;
   // The action's region: boxes of the first wall or front pile of its
   // height class (a box's top against the wall or pile thresholds) and
   // third of the width.
@@ -164,6 +171,7 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     const auto& box = world.boxes[i];
     b[i] = sim::bounds(box);
     nearest = std::min(nearest, b[i].x0);
+    if (b[i].z0 < g.nose_top) nearest_low = std::min(nearest_low, b[i].x0);
     const bool is_wall = wall.count(box.id) > 0;
     if (!is_wall && !front.count(box.id)) continue;
     const auto cls = is_wall ? height_class(b[i].z1, obs.wall_mid, obs.wall_high)
@@ -259,7 +267,7 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     const double ylim =
         world.trailer.width / 2 - pw * std::abs(n.x()) - plate_depth * std::abs(n.y()) - kMargin;
     const double zc =
-        std::clamp(face_centre.z(), ph + kMargin, world.trailer.height - ph - kMargin);
+        std::clamp(face_centre.z(), ph + kFloorGap, world.trailer.height - ph - kMargin);
     const Eigen::Vector3d face(face_centre.x(), face_centre.y(), zc);
     // The plate is wider than many boxes: the corridor it moves through to
     // the face must be clear of every other box. Where a neighbour is in the
@@ -282,7 +290,7 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     auto plate_at = [&](double dy, double dz) {
       Eigen::Vector3d p = face + dy * lateral;
       p.y() = std::clamp(p.y(), -ylim, ylim);
-      p.z() = std::clamp(face.z() + dz, ph + kMargin, world.trailer.height - ph - kMargin);
+      p.z() = std::clamp(face.z() + dz, ph + kFloorGap, world.trailer.height - ph - kMargin);
       return p;
     };
     auto cups_on = [&](std::size_t j, const Eigen::Vector3d& p) {
@@ -462,11 +470,11 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       }
     }
     // Base: the arm at its preferred reach, the lowered nose short of every
-    // box. A plate low enough to meet the lowered nose stays ahead of its tip
+    // box it would meet. A plate low enough to meet the lowered nose stays ahead of its tip
     // at the pre-grasp (nose_clearance covers the plate's body): turned off
     // the trailer's axis, by its leading corner.
     const double by_reach = face.x() - g.pick_reach + g.arm_yaw_offset;
-    const double by_nose = nearest - g.conveyor_length - g.nose_clearance;
+    const double by_nose = nearest_low - g.conveyor_length - g.nose_clearance;
     const double plate_back = c.pregrasp.position.x() - pw * std::abs(n.y());
     const double by_plate = c.pregrasp.position.z() - ph < g.nose_top
                                 ? plate_back - g.conveyor_length - g.nose_clearance

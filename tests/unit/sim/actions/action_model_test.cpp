@@ -95,6 +95,23 @@ TEST(ActionModel, ASweepCarriesALowPileOut) {
   EXPECT_GE(out->boxes, 3u);
 }
 
+TEST(ActionModel, APickTakesAFlatBoxLyingOnTheFloor) {
+  // 10 cm high: the plate comes down to 1.5 cm over the floor, and its
+  // lowest cups seal on the box's face.
+  sim::World w;
+  w.trailer.depth = 8.0;
+  w.boxes.push_back(box(1, 5.0, 0.0, 0.0, 4.0));
+  w.boxes[0].size = {0.4, 0.5, 0.1};
+  w.boxes[0].pose.translation().z() = 0.05;
+  Fixture f(w);
+  const ActionModel model(robot(), options());
+  const auto out = model.run(sim::make_pick(Height::kLow, Side::kCenter), f.backend, f.memory);
+  ASSERT_TRUE(out) << out.error().message;
+  EXPECT_TRUE(out->applicable) << out->why;
+  EXPECT_EQ(out->boxes, 1u);
+  EXPECT_EQ(out->robot_trailer_contacts, 0u);
+}
+
 // Two columns of two 0.45 m wide, 0.35 m high boxes side by side in the
 // centre third, front face at x = 5: one low block the plate seals on whole
 // (on the corner of the four, four cups on each box).
