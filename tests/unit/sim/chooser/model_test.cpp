@@ -16,8 +16,8 @@ namespace fs = std::filesystem;
 namespace {
 
 // Worlds described by two features that matter (the highest stack and the
-// pile's depth) and noise in the rest: NN wins on high stacks over a short
-// pile, H elsewhere.
+// pile's depth) and noise in a few others: NN wins on high stacks over a
+// short pile, H elsewhere.
 struct Data {
   std::vector<Features> x;
   std::vector<int> y;
@@ -28,11 +28,11 @@ Data make_data(std::uint32_t seed, int n) {
   Data d;
   for (int i = 0; i < n; ++i) {
     Features f{};
-    for (double& v : f) v = u(rng);
+    for (std::size_t k = 0; k < 5; ++k) f[k] = u(rng);
     f[kHighestStack] = 2.7 * u(rng);
     f[kPileDepth] = 2.0 * u(rng);
     d.x.push_back(f);
-    d.y.push_back(f[kHighestStack] > 1.4 && f[kPileDepth] < 1.0 ? kNearestLabel : kHardcodedLabel);
+    d.y.push_back(f[kHighestStack] > 1.35 && f[kPileDepth] < 1.5 ? kNearestLabel : kHardcodedLabel);
   }
   return d;
 }
