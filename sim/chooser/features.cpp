@@ -89,6 +89,19 @@ Features features(const sim::World& world, const sim::ObservationParams& observa
   return f;
 }
 
+double resolution(std::size_t index) {
+  if (index < kSlices * kPerSlice) return index % kPerSlice == kPerSlice - 1 ? 1.0 : kCellHeight;
+  switch (index) {
+    case kPileDepth:
+    case kFrontDistance:
+      return kSliceDepth / 2;
+    case kBoxCount:
+      return 1.0;
+    default:
+      return kCellHeight;
+  }
+}
+
 std::string feature_name(std::size_t index) {
   if (index < kSlices * kPerSlice) {
     const std::size_t s = index / kPerSlice, i = index % kPerSlice;

@@ -1,5 +1,6 @@
 #include "plr/chooser/nearest.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -15,7 +16,7 @@ Features Scaling::apply(const Features& raw) const {
 
 Scaling Scaling::fit(const std::vector<Features>& samples) {
   Scaling s;
-  s.scale.fill(1.0);
+  for (std::size_t i = 0; i < kFeatureCount; ++i) s.scale[i] = resolution(i);
   if (samples.empty()) return s;
   const auto n = static_cast<double>(samples.size());
   for (const Features& f : samples)
@@ -23,9 +24,7 @@ Scaling Scaling::fit(const std::vector<Features>& samples) {
   for (std::size_t i = 0; i < kFeatureCount; ++i) {
     double var = 0;
     for (const Features& f : samples) var += (f[i] - s.mean[i]) * (f[i] - s.mean[i]) / n;
-    // A constant feature would divide by zero; left unscaled it adds
-    // nothing to distances among the samples it was fitted on.
-    s.scale[i] = var > 1e-12 ? std::sqrt(var) : 1.0;
+    s.scale[i] = std::max(std::sqrt(var), resolution(i));
   }
   return s;
 }

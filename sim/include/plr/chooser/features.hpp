@@ -61,4 +61,8 @@ Features features(const sim::World& world, const sim::ObservationParams& observa
 // "height[s1][c3]", "difference[s0][c2]", "holes[s2]", "highest_stack", ...
 std::string feature_name(std::size_t index);
 
+// The smallest change of a feature that means something: a cell's height for
+// heights, one hole, half a slice of depth, one box.
+double resolution(std::size_t index);
+
 }  // namespace plr::chooser

@@ -14,7 +14,11 @@ namespace plr::chooser {
 
 struct Scaling {
   Features mean{};
-  Features scale{};  // standard deviation; 1 where a feature never varied
+  // The standard deviation, at least the feature's resolution(): fitted on
+  // a few starting worlds, a feature that hardly varies among them (how far
+  // the load has been worked) would otherwise turn any later change into
+  // dozens of deviations and swamp the distance.
+  Features scale{};
 
   Features apply(const Features& raw) const;
   static Scaling fit(const std::vector<Features>& samples);

@@ -41,11 +41,6 @@ fs::path temp(const std::string& name) {
   return fs::path(::testing::TempDir()) / ("plr_chooser_" + std::to_string(getpid()) + "_" + name);
 }
 
-std::vector<std::uint8_t> read(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 Model trained() {
   const Data d = make_data(1, 120);
   return Model::train(d.x, d.y, Scaling::fit(d.x), 77).value();

@@ -73,12 +73,25 @@ TEST(Scaling, FitsEachFeatureToZeroMeanAndUnitDeviation) {
   Features a{}, b{};
   a[0] = 1.0;
   b[0] = 3.0;
-  a[1] = b[1] = 7.0;  // constant: kept, not divided by zero
+  a[1] = b[1] = 7.0;  // constant: not divided by zero
   const Scaling s = Scaling::fit({a, b});
   EXPECT_DOUBLE_EQ(s.apply(a)[0], -1.0);
   EXPECT_DOUBLE_EQ(s.apply(b)[0], 1.0);
-  EXPECT_DOUBLE_EQ(s.scale[1], 1.0);
+  EXPECT_DOUBLE_EQ(s.scale[1], kCellHeight);
   EXPECT_DOUBLE_EQ(s.apply(a)[1], 0.0);
+}
+
+// Starting worlds all worked to the same depth: a later world 1 m further
+// in is 4 half-slices away, not thousands of (near-zero) deviations.
+TEST(Scaling, NoDeviationIsSmallerThanTheFeaturesResolution) {
+  Features a{}, b{}, later{};
+  a[kFrontDistance] = 5.0;
+  b[kFrontDistance] = 5.001;
+  later[kFrontDistance] = 6.0;
+  const Scaling s = Scaling::fit({a, b});
+  EXPECT_NEAR(s.apply(later)[kFrontDistance], (6.0 - 5.0005) / (kSliceDepth / 2), 1e-9);
+  EXPECT_DOUBLE_EQ(s.scale[holes_index(0)], 1.0);
+  EXPECT_DOUBLE_EQ(s.scale[kBoxCount], 1.0);
 }
 
 TEST(Fingerprint, ChangesWithTheLibrary) {
