@@ -1,16 +1,12 @@
 #include "plr/sim/library.hpp"
 
 #include <plr/msg/library_generated.h>
-#include <plr/atomic_file.hpp>
 
 #include <fmt/format.h>
 
 #include <cmath>
-#include <cstring>
-#include <fstream>
-#include <iterator>
 
-#include "plr/sim/crc32.hpp"
+#include "plr/sim/framed_file.hpp"
 #include "plr/sim/observation.hpp"
 
 namespace plr::sim {
@@ -22,14 +18,6 @@ namespace msg = plr::msg;
 constexpr std::size_t kMaxBoxes = 100000;
 constexpr std::size_t kMaxCurve = 1000000;
 constexpr std::size_t kMaxText = 1 << 16;
-
-std::uint32_t read_u32(const std::uint8_t* p) {
-  return static_cast<std::uint32_t>(p[0]) | static_cast<std::uint32_t>(p[1]) << 8 |
-         static_cast<std::uint32_t>(p[2]) << 16 | static_cast<std::uint32_t>(p[3]) << 24;
-}
-void write_u32(std::vector<std::uint8_t>& out, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
-}
 
 flatbuffers::Offset<msg::WorldState> build_world(flatbuffers::FlatBufferBuilder& fbb,
                                                  const World& w) {
@@ -124,30 +112,15 @@ std::vector<std::uint8_t> serialize(const Library& library) {
   }
   msg::FinishStrategyLibraryBuffer(
       fbb, msg::CreateStrategyLibrary(fbb, kLibraryVersion, fbb.CreateVector(entries)));
-  std::vector<std::uint8_t> out;
-  out.reserve(fbb.GetSize() + 8);
-  write_u32(out, static_cast<std::uint32_t>(fbb.GetSize()));
-  out.insert(out.end(), fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize());
-  write_u32(out, crc32(fbb.GetBufferPointer(), fbb.GetSize()));
-  return out;
+  return frame(fbb.GetBufferPointer(), fbb.GetSize());
 }
 
 plr::Expected<Library> deserialize_library(const std::uint8_t* data, std::size_t size,
                                            const std::string& origin) {
-  if (size < 8)
-    return error(origin, fmt::format("truncated: {} bytes, a library has at least 8", size));
-  const std::size_t body = read_u32(data);
-  if (body > kMaxLibraryBytes)
-    return error(
-        origin, fmt::format("bytes 0..4: size {} is over the limit of {}", body, kMaxLibraryBytes));
-  if (size < body + 8)
-    return error(origin, fmt::format("truncated: {} of {} bytes", size, body + 8));
-  if (size > body + 8)
-    return error(origin, fmt::format("byte {}: {} bytes after the end of the library", body + 8,
-                                     size - body - 8));
-  const std::uint8_t* fb = data + 4;
-  if (crc32(fb, body) != read_u32(fb + body))
-    return error(origin, fmt::format("bytes 4..{}: checksum mismatch (corrupt)", body + 4));
+  auto framed = unframe(data, size, kMaxLibraryBytes, "a library", origin);
+  if (!framed) return framed.error();
+  const std::uint8_t* fb = framed->data;
+  const std::size_t body = framed->size;
   if (!msg::StrategyLibraryBufferHasIdentifier(fb))
     return error(origin, "byte 8: not a strategy library (identifier is not PLRL)");
   flatbuffers::Verifier verifier(fb, body);
@@ -174,23 +147,13 @@ plr::Expected<Library> deserialize_library(const std::uint8_t* data, std::size_t
 }
 
 plr::Status save_library(const Library& library, const std::filesystem::path& file) {
-  const std::vector<std::uint8_t> bytes = serialize(library);
-  return plr::write_file_atomically(
-      file.string(), std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+  return save_framed(serialize(library), file);
 }
 
 plr::Expected<Library> load_library(const std::filesystem::path& file) {
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(file, ec);
-  if (ec) return plr::make_error(PLR_ERR_INVALID, file.string() + ": " + ec.message());
-  if (size > kMaxLibraryBytes + 8)
-    return error(file.string(),
-                 fmt::format("{} bytes, over the limit of {}", size, kMaxLibraryBytes + 8));
-  std::ifstream in(file, std::ios::binary);
-  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
-  if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size)))
-    return plr::make_error(PLR_ERR_INVALID, file.string() + ": cannot read");
-  return deserialize_library(bytes.data(), bytes.size(), file.string());
+  auto bytes = read_bounded_file(file, kMaxLibraryBytes + 8);
+  if (!bytes) return bytes.error();
+  return deserialize_library(bytes->data(), bytes->size(), file.string());
 }
 
 }  // namespace plr::sim

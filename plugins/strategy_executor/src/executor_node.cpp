@@ -274,9 +274,11 @@ class ExecutorNode : public plr::Node {
     ++stats_.strategies_asked;
     auto s = sim::from_message(*r.value()->strategy(), "strategy/next reply");
     if (!s) throw std::runtime_error(s.error().message);
-    log().info("strategy '{}' from {} ({} nodes) for {}", s->name,
-               r.value()->source() ? r.value()->source()->str() : "?", s->nodes.size(),
-               sim::to_string(observation));
+    const auto* reason = r.value()->reason();
+    log().info("strategy '{}' from {}{} ({} nodes) for {}", s->name,
+               r.value()->source() ? r.value()->source()->str() : "?",
+               reason && reason->size() > 0 ? " (" + reason->str() + ")" : std::string(),
+               s->nodes.size(), sim::to_string(observation));
     return std::move(*s);
   }
 

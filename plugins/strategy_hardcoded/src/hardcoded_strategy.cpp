@@ -24,7 +24,7 @@ class HardcodedStrategy : public plr::Node {
 
  protected:
   plr::Status on_configure() override {
-    params().allow_only({"observation", "h_min", "d_min"});
+    params().allow_only({"observation", "h_min", "d_min", "service"});
     auto observation = plr::sim::ObservationParams::from_json(
         params().json().value("observation", nlohmann::json()));
     if (!observation) return observation.error();
@@ -32,8 +32,10 @@ class HardcodedStrategy : public plr::Node {
     h_.h_min = params().get<double>("h_min", h_.h_min);
     h_.d_min = params().get<double>("d_min", h_.d_min);
     if (auto ok = h_.check(); !ok) return ok;
+    // Under a chooser, H serves another name (strategy/hardcoded) and the
+    // chooser serves strategy/next.
     return ctx().provide<plr::msg::NextStrategyRequest, plr::msg::NextStrategyReply>(
-        "strategy/next",
+        params().get<std::string>("service", "strategy/next"),
         [this](const plr::Message<plr::msg::NextStrategyRequest>& request,
                flatbuffers::FlatBufferBuilder& reply) { return next(*request, reply); });
   }

@@ -57,6 +57,13 @@ TEST_F(Hardcoded, HighWallIsPickedFromTheTop) {
   EXPECT_EQ(decide(w), Action::PickHighRight);
 }
 
+// Under a chooser, which serves strategy/next itself.
+TEST_F(Hardcoded, ServesTheServiceItsParamsName) {
+  start(R"({"service": "strategy/hardcoded"})");
+  EXPECT_TRUE(kernel_.has_provider("strategy/hardcoded"));
+  EXPECT_FALSE(kernel_.has_provider("strategy/next"));
+}
+
 TEST_F(Hardcoded, DeepPileIsSwept) {
   start();
   sim::World w;

@@ -27,13 +27,13 @@
 #include <nlohmann/json.hpp>
 
 #include "plr/actions/in_process.hpp"
+#include "plr/actions/open_loop.hpp"
 #include "plr/planning/lattice_planner.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/library.hpp"
 #include "plr/sim/physics.hpp"
 #include "plr/sim/shipped_files.hpp"
 #include "truck/generate.hpp"
-#include "truck/open_loop.hpp"
 #include "truck/worker_pool.hpp"
 
 namespace {
@@ -95,9 +95,10 @@ std::optional<nlohmann::json> evaluate(const std::string& name, const sim::World
     for (const bool use_strategy : {true, false}) {
       actions::UnloaderSimulation simulation(*robot, truth);
       actions::InProcessBackend backend(simulation, planner);
-      auto run = generator::run_open_loop(model, backend,
-                                          use_strategy ? std::optional(strategy) : std::nullopt, {},
-                                          static_cast<std::uint64_t>(actions));
+      actions::Memory memory;
+      auto run = actions::run_open_loop(model, backend, memory,
+                                        use_strategy ? std::optional(strategy) : std::nullopt, {},
+                                        static_cast<std::uint64_t>(actions));
       if (!run) {
         std::fprintf(stderr, "bench_generate: %s\n", run.error().message.c_str());
         return std::nullopt;

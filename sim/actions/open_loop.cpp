@@ -1,16 +1,14 @@
-#include "truck/open_loop.hpp"
+#include "plr/actions/open_loop.hpp"
 
 #include "plr/actions/episode.hpp"
 
-namespace plr::generator {
+namespace plr::actions {
 
-plr::Expected<OpenLoopRun> run_open_loop(const actions::ActionModel& model,
-                                         actions::Backend& backend,
+plr::Expected<OpenLoopRun> run_open_loop(const ActionModel& model, Backend& backend, Memory& memory,
                                          const std::optional<sim::Strategy>& strategy,
                                          const sim::HardcodedParams& h, std::uint64_t max_actions) {
   OpenLoopRun run;
-  actions::RunRules rules({max_actions, 24});
-  actions::Memory memory;
+  RunRules rules({max_actions, 24});
   // The strategy leads from its root while its tree plans for what is seen
   // and its actions move boxes; then H, to the end.
   bool following = strategy.has_value();
@@ -51,4 +49,4 @@ plr::Expected<OpenLoopRun> run_open_loop(const actions::ActionModel& model,
   }
 }
 
-}  // namespace plr::generator
+}  // namespace plr::actions

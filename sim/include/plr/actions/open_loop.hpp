@@ -2,7 +2,8 @@
 // follow the tree's edge for the observation, run the action; where the tree
 // ends (or after an action that moved nothing, as RunRules has it), strategy
 // H's ranking takes over. Without a strategy it is H alone. For comparing a
-// library strategy with H over its horizon on held-out mass particles.
+// library strategy with H from one state: the generator over its horizon on
+// held-out mass particles, the chooser's training from each visited state.
 #pragma once
 
 #include <plr/expected.hpp>
@@ -14,7 +15,7 @@
 #include "plr/sim/hardcoded_strategy.hpp"
 #include "plr/sim/strategy.hpp"
 
-namespace plr::generator {
+namespace plr::actions {
 
 struct OpenLoopRun {
   std::uint64_t actions = 0;
@@ -23,9 +24,9 @@ struct OpenLoopRun {
   double robot_time_s = 0.0;
 };
 
-plr::Expected<OpenLoopRun> run_open_loop(const actions::ActionModel& model,
-                                         actions::Backend& backend,
+// `memory` is the state's: what the robot learnt before it, and after.
+plr::Expected<OpenLoopRun> run_open_loop(const ActionModel& model, Backend& backend, Memory& memory,
                                          const std::optional<sim::Strategy>& strategy,
                                          const sim::HardcodedParams& h, std::uint64_t max_actions);
 
-}  // namespace plr::generator
+}  // namespace plr::actions

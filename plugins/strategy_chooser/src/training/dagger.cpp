@@ -1,0 +1,225 @@
+#include "training/dagger.hpp"
+
+#include <plr/atomic_file.hpp>
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <optional>
+
+#include "plr/chooser/model.hpp"
+#include "plr/chooser/nearest.hpp"
+#include "plr/sim/library.hpp"
+#include "training/curve_svg.hpp"
+#include "training/data_set.hpp"
+#include "training/rollout.hpp"
+
+namespace plr::chooser {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+namespace fs = std::filesystem;
+
+std::vector<int> labels_of(const std::vector<Sample>& samples) {
+  std::vector<int> y;
+  for (const Sample& s : samples) y.push_back(s.label);
+  return y;
+}
+std::vector<Features> features_of(const std::vector<Sample>& samples) {
+  std::vector<Features> x;
+  for (const Sample& s : samples) x.push_back(s.features);
+  return x;
+}
+
+double majority_share(const std::vector<Sample>& samples) {
+  if (samples.empty()) return 0.0;
+  std::size_t nearest = 0;
+  for (const Sample& s : samples) nearest += s.label == kNearestLabel;
+  const auto n = static_cast<double>(samples.size());
+  return std::max(static_cast<double>(nearest), n - static_cast<double>(nearest)) / n;
+}
+
+plr::Error error(const std::string& what) {
+  return plr::make_error(PLR_ERR_INVALID, what);
+}
+
+}  // namespace
+
+plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
+                                             const std::function<void(const std::string&)>& log) {
+  auto library = sim::load_library(settings.library);
+  if (!library) return library.error();
+  if (library->entries.empty()) return error(settings.library.string() + ": the library is empty");
+  const std::uint32_t library_crc = fingerprint(*library);
+  const std::uint64_t hash = settings.hash(library_crc);
+  std::error_code ec;
+  fs::create_directories(settings.out, ec);
+  if (ec) return error(settings.out.string() + ": " + ec.message());
+  const fs::path data_file = settings.out / "data.plrd", model_file = settings.out / "model.plrm",
+                 curve_file = settings.out / "validation.svg";
+
+  DataSet d;
+  if (fs::exists(data_file)) {
+    auto loaded = load_data_set(data_file);
+    if (!loaded) return loaded.error();
+    d = std::move(*loaded);
+    if (d.settings_hash != hash)
+      return error(data_file.string() +
+                   ": made with other settings or another library; train into another folder "
+                   "(out) or remove this one");
+    log(fmt::format("resuming: {} validation and {} training states labelled, {} iterations",
+                    d.validation.size(), d.training.size(), d.iterations.size()));
+  } else {
+    // The scaling is fixed before any label: the training worlds' layouts
+    // and the library's worlds, the spaces NN and M work in.
+    std::vector<Features> seen;
+    for (const WorldSource& w : settings.train) {
+      auto world = w.layout();
+      if (!world) return world.error();
+      seen.push_back(features(*world, settings.observation));
+    }
+    for (const sim::LibraryEntry& e : library->entries)
+      seen.push_back(features(e.world, settings.observation));
+    d.settings_hash = hash;
+    d.scaling = Scaling::fit(seen);
+    if (auto ok = save_data_set(d, data_file); !ok) return ok.error();
+  }
+  const LibraryIndex index(*library, d.scaling, settings.observation);
+  auto rig = Rig::create(settings.observation);
+  if (!rig) return rig.error();
+
+  std::optional<Model> model;
+  const auto retrain = [&]() -> plr::Status {
+    auto m = Model::train(features_of(d.training), labels_of(d.training), d.scaling, library_crc,
+                          settings.svm);
+    if (!m) return m.error();
+    model = std::move(*m);
+    return {};
+  };
+  if (!d.training.empty())
+    if (auto ok = retrain(); !ok) return ok.error();
+
+  auto world_start = Clock::now();
+  for (;;) {
+    const auto& worlds = d.validating ? settings.validation : settings.train;
+    if (d.world >= worlds.size()) {
+      if (!d.validating) break;
+      d.validating = false;
+      d.world = d.step = 0;
+      d.state.clear();
+      if (auto ok = save_data_set(d, data_file); !ok) return ok.error();
+      continue;
+    }
+    const WorldSource& source = worlds[d.world];
+    const auto t0 = Clock::now();
+    if (d.state.empty()) {
+      auto truth = source.load();
+      if (!truth) return truth.error();
+      d.state = (*rig)->start(*truth);
+      world_start = t0;
+    }
+    auto seen = (*rig)->observe(d.state);
+    if (!seen) return seen.error();
+
+    bool world_done = seen->world.boxes.empty() || d.step >= settings.states_per_world;
+    if (!world_done) {
+      const Features f = features(seen->world, settings.observation);
+      const Nearest nn = index.nearest(d.scaling.apply(f));
+      const auto runs =
+          (*rig)->run_parallel(d.state, {{library->entries[nn.entry].strategy}, {std::nullopt}},
+                               settings.h, settings.rollout_actions, settings.workers);
+      bool failed = false;
+      for (const auto& r : runs) {
+        if (!r) {
+          // A rollout that cannot go on (a process that died, an action the
+          // model refused) ends this world's trajectory, not the training.
+          log(fmt::format("{} state {}: {}; going on with the next world", source.name, d.step,
+                          r.error().message));
+          failed = true;
+        }
+      }
+      if (failed) {
+        ++d.world;
+        d.step = 0;
+        d.state.clear();
+        if (auto ok = save_data_set(d, data_file); !ok) return ok.error();
+        continue;
+      }
+      const Rollout& by_nn = *runs[0];
+      const Rollout& by_h = *runs[1];
+      // Ties go to H: the library strategy must earn its place.
+      const int label = by_nn.rate() > by_h.rate() ? kNearestLabel : kHardcodedLabel;
+      Sample s{source.name,
+               d.step,
+               f,
+               label,
+               static_cast<std::uint32_t>(nn.entry),
+               nn.distance,
+               by_nn.boxes,
+               by_nn.robot_time_s,
+               by_h.boxes,
+               by_h.robot_time_s};
+      bool follow_nearest = label == kNearestLabel;
+      if (d.validating) {
+        d.validation.push_back(s);
+      } else {
+        d.training.push_back(s);
+        if (auto ok = retrain(); !ok) return ok.error();
+        follow_nearest = model->decide(f).nearest;
+      }
+      log(fmt::format(
+          "{} {} state {}: NN {} ({:.2f}) {} boxes in {:.1f} s, H {} boxes in {:.1f} s "
+          "-> {}; going on with {} ({:.1f} s)",
+          d.validating ? "validation" : "training", source.name, d.step,
+          library->entries[nn.entry].name, nn.distance, by_nn.boxes, by_nn.robot_time_s, by_h.boxes,
+          by_h.robot_time_s, label == kNearestLabel ? "NN" : "H", follow_nearest ? "NN" : "H",
+          std::chrono::duration<double>(Clock::now() - t0).count()));
+      const Rollout& next = follow_nearest ? by_nn : by_h;
+      ++d.step;
+      if (next.actions == 0) {
+        world_done = true;  // nothing moves from here: the trailer is done with
+      } else {
+        d.state = next.end;
+      }
+    }
+    if (world_done) {
+      if (!d.validating && model) {
+        IterationRecord r;
+        r.iteration = static_cast<std::uint32_t>(d.iterations.size() + 1);
+        r.samples = static_cast<std::uint32_t>(d.training.size());
+        r.cv_accuracy = model->cv_accuracy();
+        r.validation_accuracy = model->accuracy(features_of(d.validation), labels_of(d.validation));
+        r.majority_accuracy = majority_share(d.validation);
+        r.c = model->c();
+        r.gamma = model->gamma();
+        r.wall_s = std::chrono::duration<double>(Clock::now() - world_start).count();
+        d.iterations.push_back(r);
+        if (auto ok = model->save(model_file); !ok) return ok.error();
+        if (auto ok = plr::write_file_atomically(curve_file.string(), curve_svg(d.iterations)); !ok)
+          return ok.error();
+        log(
+            fmt::format("iteration {} ({}): {} samples, validation accuracy {:.3f} (majority "
+                        "{:.3f}), cross-validation {:.3f}, C {:g}, gamma {:g}, {:.0f} s",
+                        r.iteration, source.name, r.samples, r.validation_accuracy,
+                        r.majority_accuracy, r.cv_accuracy, r.c, r.gamma, r.wall_s));
+      }
+      ++d.world;
+      d.step = 0;
+      d.state.clear();
+    }
+    d.wall_s += std::chrono::duration<double>(Clock::now() - t0).count();
+    if (auto ok = save_data_set(d, data_file); !ok) return ok.error();
+  }
+  if (!model) return error("no training state was labelled: nothing to train on");
+  if (auto ok = model->save(model_file); !ok) return ok.error();
+  TrainingSummary summary;
+  summary.validation_samples = d.validation.size();
+  summary.training_samples = d.training.size();
+  summary.iterations = d.iterations.size();
+  summary.validation_accuracy = model->accuracy(features_of(d.validation), labels_of(d.validation));
+  summary.majority_accuracy = majority_share(d.validation);
+  return summary;
+}
+
+}  // namespace plr::chooser

@@ -1,0 +1,128 @@
+#include "training/settings.hpp"
+
+#include <plr/yaml_reader.hpp>
+
+#include <fmt/format.h>
+
+#include "plr/sim/generators.hpp"
+#include "plr/sim/physics.hpp"
+#include "plr/sim/world_io.hpp"
+
+namespace plr::chooser {
+
+namespace {
+
+constexpr std::size_t kMaxWorlds = 10000;
+
+struct FamilySeed {
+  sim::EnvFamily family;
+  std::uint64_t seed;
+};
+std::optional<FamilySeed> family_seed(const std::string& name) {
+  const auto colon = name.find(':');
+  if (colon == std::string::npos) return std::nullopt;
+  const auto family = sim::parse_env_family(name.substr(0, colon));
+  if (!family) return std::nullopt;
+  try {
+    std::size_t used = 0;
+    const auto seed = std::stoull(name.substr(colon + 1), &used);
+    if (used != name.size() - colon - 1) return std::nullopt;
+    return FamilySeed{*family, seed};
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+std::vector<WorldSource> read_worlds(const yaml::Node& node) {
+  std::vector<WorldSource> out;
+  for (const yaml::Node& item :
+       node.list("a list of worlds (A1:3 or a world file)", 1, kMaxWorlds)) {
+    const auto name = item.string();
+    if (!name) continue;
+    if (family_seed(*name)) {
+      out.push_back({*name});
+    } else if (name->find(':') != std::string::npos) {
+      item.error("not a family:seed such as A1:3");
+    } else {
+      out.push_back({*name});
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+plr::Expected<sim::World> WorldSource::load() const {
+  if (const auto fs = family_seed(name)) return sim::make_environment(fs->family, fs->seed);
+  return sim::load_world(name);
+}
+
+plr::Expected<sim::World> WorldSource::layout() const {
+  if (const auto fs = family_seed(name)) return sim::generate_world(fs->family, fs->seed);
+  return sim::load_world(name);
+}
+
+std::uint64_t TrainingSettings::hash(std::uint32_t library_fingerprint) const {
+  std::string text = fmt::format(
+      "lib {} spw {} ra {} obs {} {} {} {} {} {} {} {} h {} {} svm {} ", library_fingerprint,
+      states_per_world, rollout_actions, observation.h_pile, observation.wall_depth,
+      observation.min_pile_depth, observation.pile_mid, observation.pile_high, observation.wall_mid,
+      observation.wall_high, observation.side_band, h.h_min, h.d_min, svm.folds);
+  for (int c : svm.log2_c) text += fmt::format("c{} ", c);
+  for (int g : svm.log2_gamma) text += fmt::format("g{} ", g);
+  for (const auto* list : {&train, &validation}) {
+    text += "| ";
+    for (const WorldSource& w : *list) text += w.name + " ";
+  }
+  std::uint64_t h64 = 1469598103934665603ull;  // FNV-1a
+  for (unsigned char ch : text) h64 = (h64 ^ ch) * 1099511628211ull;
+  return h64;
+}
+
+plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::path& file,
+                                                       const std::vector<std::string>& overrides) {
+  auto doc = yaml::Document::open(file.string(), "the training settings");
+  if (!doc) return doc.error();
+  for (const std::string& o : overrides) {
+    const auto eq = o.find('=');
+    if (eq == std::string::npos)
+      return plr::make_error(PLR_ERR_INVALID, "--set " + o + ": expected key=value");
+    doc->set(o.substr(0, eq), o.substr(eq + 1), "--set " + o.substr(0, eq));
+  }
+  TrainingSettings s;
+  const yaml::Map top = doc->root().map(
+      "chooser training settings",
+      {"format", "library", "out", "train", "validation", "states_per_world", "rollout_actions",
+       "workers", "observation", "h_min", "d_min", "folds", "log2_c", "log2_gamma"});
+  (void)top.required("format").one_of({"plr-chooser-training"});
+  if (auto l = top.required("library").string()) s.library = *l;
+  if (auto o = top.required("out").string()) s.out = *o;
+  s.train = read_worlds(top.required("train"));
+  s.validation = read_worlds(top.required("validation"));
+  if (auto n = top.find("states_per_world").integer(1, 1000)) s.states_per_world = *n;
+  if (auto n = top.find("rollout_actions").integer(1, 1000)) s.rollout_actions = *n;
+  if (auto n = top.find("workers").integer(1, 64)) s.workers = static_cast<int>(*n);
+  if (auto n = top.find("folds").integer(2, 100)) s.svm.folds = static_cast<int>(*n);
+  for (auto [key, grid] : {std::pair{"log2_c", &s.svm.log2_c}, {"log2_gamma", &s.svm.log2_gamma}}) {
+    const yaml::Node n = top.find(key);
+    if (!n.present()) continue;
+    grid->clear();
+    for (const yaml::Node& v : n.list("a list of integers", 1, 64))
+      if (auto i = v.integer(-30, 30)) grid->push_back(static_cast<int>(*i));
+  }
+  if (auto v = top.find("h_min").number(0, 10)) s.h.h_min = *v;
+  if (auto v = top.find("d_min").number(0, 20)) s.h.d_min = *v;
+  const yaml::Node obs = top.find("observation");
+  if (obs.present()) {
+    auto o = sim::ObservationParams::from_json(obs.to_json());
+    if (o)
+      s.observation = *o;
+    else
+      obs.error(o.error().message);
+  }
+  if (!doc->ok()) return doc->error();
+  if (auto ok = s.h.check(); !ok) return ok.error();
+  return s;
+}
+
+}  // namespace plr::chooser

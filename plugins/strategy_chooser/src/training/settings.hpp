@@ -1,0 +1,50 @@
+// What a chooser training runs on (configs/train_chooser.yaml): the library,
+// the worlds whose states are labelled, how long each rollout from a state
+// runs, and where the data set, model and curve go. Relative paths are
+// relative to the current folder, as plr run's --report is.
+#pragma once
+
+#include <plr/expected.hpp>
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "plr/chooser/model.hpp"
+#include "plr/sim/hardcoded_strategy.hpp"
+#include "plr/sim/observation.hpp"
+#include "plr/sim/world.hpp"
+
+namespace plr::chooser {
+
+// A starting world: a family and seed ("A1:3"), or a world file.
+struct WorldSource {
+  std::string name;
+  plr::Expected<sim::World> load() const;  // the truth, with masses
+  // The world before it settles (cheap: no physics), for fitting the scaling.
+  plr::Expected<sim::World> layout() const;
+};
+
+struct TrainingSettings {
+  std::filesystem::path library;
+  std::filesystem::path out;  // data.plrd, model.plrm, validation.svg
+  std::vector<WorldSource> train, validation;
+  std::uint32_t states_per_world = 3;
+  std::uint32_t rollout_actions = 4;
+  int workers = 2;
+  sim::ObservationParams observation;
+  sim::HardcodedParams h;
+  TrainOptions svm;
+
+  // Of what shapes the data and the model (not of `workers` or `out`): a
+  // data set made with other settings is not resumed.
+  std::uint64_t hash(std::uint32_t library_fingerprint) const;
+
+  // The file, then each "key=value" override (as --set gives them); errors
+  // name the file, line and key.
+  static plr::Expected<TrainingSettings> load(const std::filesystem::path& file,
+                                              const std::vector<std::string>& overrides = {});
+};
+
+}  // namespace plr::chooser

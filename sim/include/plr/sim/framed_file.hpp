@@ -1,0 +1,37 @@
+// The frame the offline files share (the strategy library, the chooser's
+// model and data set): a 4-byte little-endian size N, N bytes of a
+// FlatBuffers buffer, a 4-byte CRC-32 of those N bytes. The size prefix
+// tells a file cut short from a whole one, the CRC an altered one.
+#pragma once
+
+#include <plr/expected.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace plr::sim {
+
+std::vector<std::uint8_t> frame(const std::uint8_t* body, std::size_t size);
+
+struct FramedBody {
+  const std::uint8_t* data = nullptr;
+  std::size_t size = 0;
+};
+
+// The body of a framed buffer, checked against `max_body` bytes and the
+// CRC. `what` names the content in errors ("a library has at least 8
+// bytes"); errors are one line, "<origin>: <cause>", with byte offsets.
+plr::Expected<FramedBody> unframe(const std::uint8_t* data, std::size_t size, std::size_t max_body,
+                                  const std::string& what, const std::string& origin);
+
+// The whole file, refused when larger than `max_bytes`.
+plr::Expected<std::vector<std::uint8_t>> read_bounded_file(const std::filesystem::path& file,
+                                                           std::size_t max_bytes);
+
+// frame() written atomically (plr::write_file_atomically).
+plr::Status save_framed(const std::vector<std::uint8_t>& framed, const std::filesystem::path& file);
+
+}  // namespace plr::sim
