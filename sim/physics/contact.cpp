@@ -185,10 +185,10 @@ void Contacts::apply(State& state, int a, int b, const Other& o, const PairKey& 
   }
 }
 
-void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
-                       std::vector<Wrench>& wrenches, std::vector<int>& wake) {
+void Contacts::compute(State& state, const std::vector<int>& moving,
+                       const std::vector<Mover>& links, double dt, std::vector<Wrench>& wrenches,
+                       std::vector<int>& wake) {
   std::vector<Body>& bodies = state.bodies;
-  const int n = static_cast<int>(bodies.size());
   wrenches.assign(bodies.size(), Wrench{});
   old_pairs_.swap(state.pairs);
   state.pairs.clear();
@@ -216,7 +216,7 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
   const Other ground{0.0, zero, zero, zero, zero, zero};
 
   const Eigen::Vector3d margin = Eigen::Vector3d::Constant(kWakeMargin);
-  for (int i = 0; i < n; ++i) {
+  for (const int i : moving) {
     Body& a = bodies[static_cast<std::size_t>(i)];
     if (a.mode != Mode::kAwake) continue;
     const std::size_t ai = static_cast<std::size_t>(i);
@@ -284,7 +284,7 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
   }
 
   // Held boxes that move wake the sleeping boxes next to them.
-  for (int i = 0; i < n; ++i) {
+  for (const int i : moving) {
     const std::size_t k = static_cast<std::size_t>(i);
     const Body& h = bodies[k];
     if (h.mode != Mode::kHeld || corner_speed(h) <= 1e-6) continue;
@@ -297,10 +297,12 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
   wake.erase(std::unique(wake.begin(), wake.end()), wake.end());
 }
 
-void Contacts::damp(State& state, double dt, std::vector<Wrench>& wrenches) {
+void Contacts::damp(State& state, const std::vector<int>& moving, double dt,
+                    std::vector<Wrench>& wrenches) {
   std::vector<Body>& bodies = state.bodies;
   inverse_inertia_.resize(bodies.size());
-  for (std::size_t i = 0; i < bodies.size(); ++i) {
+  for (const int m : moving) {
+    const auto i = static_cast<std::size_t>(m);
     const Body& b = bodies[i];
     if (b.mode != Mode::kAwake) continue;
     const Eigen::Vector3d s2 = b.box.size.cwiseProduct(b.box.size);

@@ -25,9 +25,10 @@ class Contacts {
   // Wrenches on every body for the step starting now (awake: what moves it;
   // held: what the cups must resist in addition to weight). Updates the
   // friction springs in `state.pairs` and lists sleeping boxes that something
-  // moving touches in `wake`.
-  void compute(State& state, const std::vector<Mover>& links, double dt,
-               std::vector<Wrench>& wrenches, std::vector<int>& wake);
+  // moving touches in `wake`. `moving`: the awake and held bodies,
+  // ascending (the sleeping ones are only found through the broad phase).
+  void compute(State& state, const std::vector<int>& moving, const std::vector<Mover>& links,
+               double dt, std::vector<Wrench>& wrenches, std::vector<int>& wake);
   // From the last compute(), per robot shape: the force the boxes exert on
   // it (world frame), and the force its belt exerts on them along belt_dir.
   const std::vector<Eigen::Vector3d>& link_forces() const { return link_force_; }
@@ -41,7 +42,8 @@ class Contacts {
   // leaves a stack of boxes rocking on its contact springs for seconds; this
   // is stable at any c, so boxes are damped like cardboard (no bounce).
   // Impulses on held boxes go to their wrenches, for the suction load.
-  void damp(State& state, double dt, std::vector<Wrench>& wrenches);
+  // `moving` as for compute().
+  void damp(State& state, const std::vector<int>& moving, double dt, std::vector<Wrench>& wrenches);
 
  private:
   struct Point {
