@@ -22,6 +22,14 @@ class Contacts {
   void set_boxes(const std::vector<Body>& bodies);
   void set_links(const std::vector<LinkGeometry>& links);
 
+  // Before the fixed steps of a Simulation::step() call: each robot shape's
+  // centre moves on a line from `from` to `to` during the call. Finds once
+  // the boxes each shape may reach in the call, so that compute() tests
+  // only those and the boxes moving in the call (a sleeping box does not
+  // move), not the grid cells around the shape at every step.
+  void sweep_links(const std::vector<Body>& bodies, const std::vector<Eigen::Vector3d>& from,
+                   const std::vector<Eigen::Vector3d>& to);
+
   // Wrenches on every body for the step starting now (awake: what moves it;
   // held: what the cups must resist in addition to weight). Updates the
   // friction springs in `state.pairs` and lists sleeping boxes that something
@@ -75,6 +83,10 @@ class Contacts {
   std::vector<Eigen::Vector3d> link_half_;  // bounding half extents in the link frame
   BroadPhase broad_;
   std::vector<int> near_;  // a query's answer
+  // From sweep_links(): per robot shape, the boxes it may reach in the
+  // call; the bodies awake or held at any step of the call so far; scratch.
+  std::vector<std::vector<int>> link_reach_;
+  std::vector<int> moved_, merged_;
   std::vector<Point> points_;
   Patch patch_;
   std::vector<PairState> old_pairs_;

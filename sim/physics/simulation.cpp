@@ -579,6 +579,13 @@ void Simulation::step(double duration) {
   const Eigen::Vector3d plate_a = (plate_v - s.plate_velocity) / total;
   m.prepare_loads();
   m.set_belt_ends();
+  std::vector<Eigen::Vector3d> from, to;
+  for (std::size_t l = 0; l < s.links.size(); ++l) {
+    const bool moves = !m.link_paths.empty();
+    from.push_back(moves ? m.link_paths[l].pa : s.links[l].pose.translation());
+    to.push_back(moves ? m.link_paths[l].pb : s.links[l].pose.translation());
+  }
+  m.contacts.sweep_links(s.bodies, from, to);
   for (long k = 0; k < n; ++k) {
     m.fixed_step(m.options.step, static_cast<double>(k) / static_cast<double>(n), plate_a);
   }
