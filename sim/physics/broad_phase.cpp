@@ -101,4 +101,13 @@ void BroadPhase::query(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, uns
   }
 }
 
+void BroadPhase::filter(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, unsigned which,
+                        const std::vector<int>& candidates, std::vector<int>& out) const {
+  out.clear();
+  for (const int j : candidates) {
+    const auto k = static_cast<std::size_t>(j);
+    if ((kind_[k] & which) != 0 && !disjoint(lo, hi, lo_[k], hi_[k])) out.push_back(j);
+  }
+}
+
 }  // namespace plr::sim::detail

@@ -38,6 +38,10 @@ class BroadPhase {
   // bounding boxes overlap [lo, hi] (touching counts).
   void query(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, unsigned which,
              std::vector<int>& out) const;
+  // The same answer as query() when `candidates` (ascending) holds every
+  // box it would find, testing only those.
+  void filter(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, unsigned which,
+              const std::vector<int>& candidates, std::vector<int>& out) const;
 
  private:
   using Cell = std::array<int, 3>;

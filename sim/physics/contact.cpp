@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 namespace plr::sim::detail {
 namespace {
@@ -45,6 +46,23 @@ void Contacts::set_links(const std::vector<LinkGeometry>& links) {
       link_shapes_.push_back(std::make_unique<fcl::Boxd>(l.size));
       link_half_.push_back(0.5 * l.size);
     }
+  }
+}
+
+void Contacts::sweep_links(const std::vector<Body>& bodies,
+                           const std::vector<Eigen::Vector3d>& from,
+                           const std::vector<Eigen::Vector3d>& to) {
+  link_reach_.clear();
+  moved_.clear();
+  if (from.size() != link_half_.size() || to.size() != link_half_.size()) return;
+  broad_.update(bodies);
+  link_reach_.resize(link_half_.size());
+  for (std::size_t l = 0; l < link_half_.size(); ++l) {
+    // A shape lies within its half diagonal of its centre however it turns;
+    // the margin covers the rounding of the centre's interpolation.
+    const Eigen::Vector3d r = Eigen::Vector3d::Constant(link_half_[l].norm() + 1e-6);
+    broad_.query(from[l].cwiseMin(to[l]) - r, from[l].cwiseMax(to[l]) + r,
+                 BroadPhase::kSleeping | BroadPhase::kMoving, link_reach_[l]);
   }
 }
 
@@ -185,11 +203,15 @@ void Contacts::apply(State& state, int a, int b, const Other& o, const PairKey& 
   }
 }
 
-void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
-                       std::vector<Wrench>& wrenches, std::vector<int>& wake) {
+void Contacts::compute(State& state, const std::vector<int>& moving,
+                       const std::vector<Mover>& links, double dt, std::vector<Wrench>& wrenches,
+                       std::vector<int>& wake) {
   std::vector<Body>& bodies = state.bodies;
-  const int n = static_cast<int>(bodies.size());
   wrenches.assign(bodies.size(), Wrench{});
+  merged_.clear();
+  std::set_union(moved_.begin(), moved_.end(), moving.begin(), moving.end(),
+                 std::back_inserter(merged_));
+  moved_.swap(merged_);
   old_pairs_.swap(state.pairs);
   state.pairs.clear();
   dampers_.clear();
@@ -216,7 +238,7 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
   const Other ground{0.0, zero, zero, zero, zero, zero};
 
   const Eigen::Vector3d margin = Eigen::Vector3d::Constant(kWakeMargin);
-  for (int i = 0; i < n; ++i) {
+  for (const int i : moving) {
     Body& a = bodies[static_cast<std::size_t>(i)];
     if (a.mode != Mode::kAwake) continue;
     const std::size_t ai = static_cast<std::size_t>(i);
@@ -266,7 +288,14 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
     // Sleeping boxes only notice a shape that moves.
     const unsigned which = moving ? BroadPhase::kMoving | BroadPhase::kSleeping
                                   : static_cast<unsigned>(BroadPhase::kMoving);
-    broad_.query(llo, lhi, which, near_);
+    if (link_reach_.size() == links.size()) {
+      merged_.clear();
+      std::set_union(link_reach_[l].begin(), link_reach_[l].end(), moved_.begin(), moved_.end(),
+                     std::back_inserter(merged_));
+      broad_.filter(llo, lhi, which, merged_, near_);
+    } else {
+      broad_.query(llo, lhi, which, near_);
+    }
     for (const int j : near_) {
       const std::size_t bj = static_cast<std::size_t>(j);
       const Body& b = bodies[bj];
@@ -284,7 +313,7 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
   }
 
   // Held boxes that move wake the sleeping boxes next to them.
-  for (int i = 0; i < n; ++i) {
+  for (const int i : moving) {
     const std::size_t k = static_cast<std::size_t>(i);
     const Body& h = bodies[k];
     if (h.mode != Mode::kHeld || corner_speed(h) <= 1e-6) continue;
@@ -297,10 +326,12 @@ void Contacts::compute(State& state, const std::vector<Mover>& links, double dt,
   wake.erase(std::unique(wake.begin(), wake.end()), wake.end());
 }
 
-void Contacts::damp(State& state, double dt, std::vector<Wrench>& wrenches) {
+void Contacts::damp(State& state, const std::vector<int>& moving, double dt,
+                    std::vector<Wrench>& wrenches) {
   std::vector<Body>& bodies = state.bodies;
   inverse_inertia_.resize(bodies.size());
-  for (std::size_t i = 0; i < bodies.size(); ++i) {
+  for (const int m : moving) {
+    const auto i = static_cast<std::size_t>(m);
     const Body& b = bodies[i];
     if (b.mode != Mode::kAwake) continue;
     const Eigen::Vector3d s2 = b.box.size.cwiseProduct(b.box.size);

@@ -22,12 +22,21 @@ class Contacts {
   void set_boxes(const std::vector<Body>& bodies);
   void set_links(const std::vector<LinkGeometry>& links);
 
+  // Before the fixed steps of a Simulation::step() call: each robot shape's
+  // centre moves on a line from `from` to `to` during the call. Finds once
+  // the boxes each shape may reach in the call, so that compute() tests
+  // only those and the boxes moving in the call (a sleeping box does not
+  // move), not the grid cells around the shape at every step.
+  void sweep_links(const std::vector<Body>& bodies, const std::vector<Eigen::Vector3d>& from,
+                   const std::vector<Eigen::Vector3d>& to);
+
   // Wrenches on every body for the step starting now (awake: what moves it;
   // held: what the cups must resist in addition to weight). Updates the
   // friction springs in `state.pairs` and lists sleeping boxes that something
-  // moving touches in `wake`.
-  void compute(State& state, const std::vector<Mover>& links, double dt,
-               std::vector<Wrench>& wrenches, std::vector<int>& wake);
+  // moving touches in `wake`. `moving`: the awake and held bodies,
+  // ascending (the sleeping ones are only found through the broad phase).
+  void compute(State& state, const std::vector<int>& moving, const std::vector<Mover>& links,
+               double dt, std::vector<Wrench>& wrenches, std::vector<int>& wake);
   // From the last compute(), per robot shape: the force the boxes exert on
   // it (world frame), and the force its belt exerts on them along belt_dir.
   const std::vector<Eigen::Vector3d>& link_forces() const { return link_force_; }
@@ -41,7 +50,8 @@ class Contacts {
   // leaves a stack of boxes rocking on its contact springs for seconds; this
   // is stable at any c, so boxes are damped like cardboard (no bounce).
   // Impulses on held boxes go to their wrenches, for the suction load.
-  void damp(State& state, double dt, std::vector<Wrench>& wrenches);
+  // `moving` as for compute().
+  void damp(State& state, const std::vector<int>& moving, double dt, std::vector<Wrench>& wrenches);
 
  private:
   struct Point {
@@ -73,6 +83,10 @@ class Contacts {
   std::vector<Eigen::Vector3d> link_half_;  // bounding half extents in the link frame
   BroadPhase broad_;
   std::vector<int> near_;  // a query's answer
+  // From sweep_links(): per robot shape, the boxes it may reach in the
+  // call; the bodies awake or held at any step of the call so far; scratch.
+  std::vector<std::vector<int>> link_reach_;
+  std::vector<int> moved_, merged_;
   std::vector<Point> points_;
   Patch patch_;
   std::vector<PairState> old_pairs_;

@@ -82,6 +82,11 @@ struct Simulation::Impl {
   detail::Multibody multibody;
   std::vector<int> slots;  // body index of each Simbody body
   bool rebuild = true;     // the awake set changed
+  // The held and awake bodies, ascending: a wall's boxes sleep, and the
+  // per-step loops over the bodies visit these without reading the rest.
+  // Stale after any change of a body's mode.
+  std::vector<int> moving;
+  bool moving_stale = true;
   // Set by restore(): the Simbody system to rebuild before the next step.
   struct Pending {
     std::vector<int> slots;
@@ -140,6 +145,7 @@ struct Simulation::Impl {
     contacts.set_links(state.link_targets);
     pending = Pending{saved.state.slots, saved.state.q, saved.state.u};
     rebuild = saved.state.rebuild;
+    moving_stale = true;
   }
 
   void wake_body(int i) {
@@ -148,6 +154,19 @@ struct Simulation::Impl {
     b.mode = Mode::kAwake;
     b.still = 0.0;
     rebuild = true;
+    moving_stale = true;
+  }
+
+  const std::vector<int>& moving_bodies() {
+    if (moving_stale) {
+      moving.clear();
+      for (std::size_t i = 0; i < state.bodies.size(); ++i) {
+        const Mode mode = state.bodies[i].mode;
+        if (mode == Mode::kAwake || mode == Mode::kHeld) moving.push_back(static_cast<int>(i));
+      }
+      moving_stale = false;
+    }
+    return moving;
   }
 
   // Simbody system for `members` (body indices). Bodies already integrated
@@ -187,7 +206,8 @@ struct Simulation::Impl {
 
   void place_held(const Eigen::Isometry3d& plate, const Eigen::Vector3d& v,
                   const Eigen::Vector3d& w) {
-    for (Body& b : state.bodies) {
+    for (const int i : moving_bodies()) {
+      Body& b = state.bodies[static_cast<std::size_t>(i)];
       if (b.mode != Mode::kHeld) continue;
       b.box.pose = plate * b.grip;
       b.w = w;
@@ -247,6 +267,7 @@ struct Simulation::Impl {
     const bool was_awake = b.mode == Mode::kAwake;
     b.mode = Mode::kGone;
     if (was_awake) rebuild = true;
+    moving_stale = true;
     // What rested on or leaned against it must notice that it is gone.
     const Eigen::Vector3d e =
         b.box.pose.linear().cwiseAbs() * (0.5 * b.box.size) + Eigen::Vector3d::Constant(0.02);
@@ -333,11 +354,13 @@ struct Simulation::Impl {
 
   // The fraction of cup_force each sealed cup holds with the held boxes'
   // cups (Body::capacity = cups * cup_force) sharing the pump's limit.
-  double pump_share() const {
+  double pump_share() {
     if (!state.plate) return 1.0;
     double sealed = 0.0;
-    for (const Body& b : state.bodies)
+    for (const int i : moving_bodies()) {
+      const Body& b = state.bodies[static_cast<std::size_t>(i)];
       if (b.mode == Mode::kHeld) sealed += b.capacity;
+    }
     return sealed > state.plate->pump_max_force ? state.plate->pump_max_force / sealed : 1.0;
   }
 
@@ -394,7 +417,7 @@ struct Simulation::Impl {
 
     wake.clear();
     if (anything_moves) {
-      contacts.compute(state, movers, dt, wrenches, wake);
+      contacts.compute(state, moving_bodies(), movers, dt, wrenches, wake);
       update_loads(dt);
     } else {
       state.pairs.clear();
@@ -411,7 +434,7 @@ struct Simulation::Impl {
         const Body& b = state.bodies[static_cast<std::size_t>(slots[s])];
         undamped[s] = {b.v, b.w};
       }
-      contacts.damp(state, dt, wrenches);
+      contacts.damp(state, moving_bodies(), dt, wrenches);
       for (std::size_t s = 0; s < slots.size(); ++s) {
         const Body& b = state.bodies[static_cast<std::size_t>(slots[s])];
         if (b.v != undamped[s].v || b.w != undamped[s].w) {
@@ -437,7 +460,8 @@ struct Simulation::Impl {
     const double share = pump_share();
     int overloaded = -1;
     double worst = 1.0;
-    for (std::size_t i = 0; i < state.bodies.size(); ++i) {
+    for (const int h : moving_bodies()) {
+      const auto i = static_cast<std::size_t>(h);
       Body& b = state.bodies[i];
       if (b.mode != Mode::kHeld) continue;
       // What the cups must supply: the box's inertia and weight plus what
@@ -455,45 +479,67 @@ struct Simulation::Impl {
       b.mode = Mode::kAwake;
       b.still = 0.0;
       rebuild = true;
+      moving_stale = true;
       state.suction_events.push_back(
           {b.box.id, state.time, SuctionEvent::Kind::kDropped, b.load, share * b.capacity});
     }
     // A sleeping box has not moved, and the belts stand still within a
     // step() call: after the call's first fixed step (fraction 0) it stays
-    // where it was found not to be unloaded.
+    // where it was found not to be unloaded, and only the moving bodies
+    // need a look. A removal wakes its neighbours, which the list does not
+    // hold: from there on every body is looked at, as before the list.
     const bool belts_moved = fraction == 0.0;
-    for (std::size_t i = 0; i < state.bodies.size(); ++i) {
-      Body& b = state.bodies[i];
-      if (b.mode == Mode::kHeld || b.mode == Mode::kGone) continue;
-      if (b.mode == Mode::kAsleep && !belts_moved) continue;
-      if (b.box.pose.translation().x() < 0.0 || unloaded_by_belt(b)) {
-        state.unloaded.push_back({b.box.id, state.time});
-        remove(static_cast<int>(i));
-        continue;
-      }
-      if (b.mode != Mode::kAwake || !options.sleeping) continue;
-      if (b.still == 0.0) b.rest = b.box.pose;
-      // Slow: below sleep_speed, or ringing on its contact springs a little
-      // faster while its corners stay within sleep_drift of where it was.
-      const double speed = b.v.norm() + b.w.norm() * b.radius;
-      const auto drift = [&] {
-        const Eigen::AngleAxisd turn(b.box.pose.linear() * b.rest.linear().transpose());
-        return (b.box.pose.translation() - b.rest.translation()).norm() +
-               std::abs(turn.angle()) * b.radius;
-      };
-      if (speed < options.sleep_speed ||
-          (speed < options.sleep_ring_speed && drift() < options.sleep_drift)) {
-        b.still += dt;
-        if (b.still >= options.sleep_time) {
-          b.mode = Mode::kAsleep;
-          b.v.setZero();
-          b.w.setZero();
-          rebuild = true;
-        }
-      } else {
-        b.still = 0.0;
-      }
+    const std::size_t n = state.bodies.size();
+    if (belts_moved) {
+      for (std::size_t i = 0; i < n; ++i) unload_or_sleep(i, dt);
+      return;
     }
+    const std::vector<int>& listed = moving_bodies();
+    for (std::size_t k = 0; k < listed.size(); ++k) {
+      const auto i = static_cast<std::size_t>(listed[k]);
+      if (!unload_or_sleep(i, dt)) continue;
+      for (std::size_t j = i + 1; j < n; ++j) {
+        if (state.bodies[j].mode != Mode::kAsleep) unload_or_sleep(j, dt);
+      }
+      return;
+    }
+  }
+
+  // After a fixed step: body i unloaded if it left the trailer or reached
+  // the end of a belt (true: it was removed), else put to sleep once it has
+  // been slow long enough.
+  bool unload_or_sleep(std::size_t i, double dt) {
+    Body& b = state.bodies[i];
+    if (b.mode == Mode::kHeld || b.mode == Mode::kGone) return false;
+    if (b.box.pose.translation().x() < 0.0 || unloaded_by_belt(b)) {
+      state.unloaded.push_back({b.box.id, state.time});
+      remove(static_cast<int>(i));
+      return true;
+    }
+    if (b.mode != Mode::kAwake || !options.sleeping) return false;
+    if (b.still == 0.0) b.rest = b.box.pose;
+    // Slow: below sleep_speed, or ringing on its contact springs a little
+    // faster while its corners stay within sleep_drift of where it was.
+    const double speed = b.v.norm() + b.w.norm() * b.radius;
+    const auto drift = [&] {
+      const Eigen::AngleAxisd turn(b.box.pose.linear() * b.rest.linear().transpose());
+      return (b.box.pose.translation() - b.rest.translation()).norm() +
+             std::abs(turn.angle()) * b.radius;
+    };
+    if (speed < options.sleep_speed ||
+        (speed < options.sleep_ring_speed && drift() < options.sleep_drift)) {
+      b.still += dt;
+      if (b.still >= options.sleep_time) {
+        b.mode = Mode::kAsleep;
+        b.v.setZero();
+        b.w.setZero();
+        rebuild = true;
+        moving_stale = true;
+      }
+    } else {
+      b.still = 0.0;
+    }
+    return false;
   }
 };
 
@@ -533,6 +579,13 @@ void Simulation::step(double duration) {
   const Eigen::Vector3d plate_a = (plate_v - s.plate_velocity) / total;
   m.prepare_loads();
   m.set_belt_ends();
+  std::vector<Eigen::Vector3d> from, to;
+  for (std::size_t l = 0; l < s.links.size(); ++l) {
+    const bool moves = !m.link_paths.empty();
+    from.push_back(moves ? m.link_paths[l].pa : s.links[l].pose.translation());
+    to.push_back(moves ? m.link_paths[l].pb : s.links[l].pose.translation());
+  }
+  m.contacts.sweep_links(s.bodies, from, to);
   for (long k = 0; k < n; ++k) {
     m.fixed_step(m.options.step, static_cast<double>(k) / static_cast<double>(n), plate_a);
   }
@@ -653,6 +706,7 @@ std::vector<std::uint32_t> Simulation::suction_on(const std::vector<bool>& open)
         Body& b = s.bodies[x.body];
         if (b.mode == Mode::kAwake) m.rebuild = true;
         b.mode = Mode::kHeld;
+        m.moving_stale = true;
         b.grip = plate.pose.inverse() * b.box.pose;
         b.capacity = x.capacity;
         b.load = x.load;
@@ -677,6 +731,7 @@ void Simulation::suction_off() {
     b.mode = Mode::kAwake;
     b.still = 0.0;
     m.rebuild = true;
+    m.moving_stale = true;
     m.state.suction_events.push_back(
         {b.box.id, m.state.time, SuctionEvent::Kind::kReleased, b.load, b.capacity});
   }
