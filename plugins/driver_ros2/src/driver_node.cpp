@@ -284,6 +284,12 @@ class DriverNode : public Node {
     }
     forget(id);
     publish_status(id, duration);
+    // The result may overtake the last joint state (another topic): wait for
+    // one more, so the measured motion ends where the joints stopped.
+    const std::uint64_t seen = client_.states_received();
+    for (const auto until = WallClock::now() + 200ms;
+         client_.states_received() == seen && WallClock::now() < until;)
+      client_.wait(5ms);
 
     // What the joints did goes to the world, even when the motion stopped
     // early: the robot is where it stopped, and what it carries stays on the plate.

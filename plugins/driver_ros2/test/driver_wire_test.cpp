@@ -7,6 +7,8 @@
 #include "control_msgs/action/FollowJointTrajectory.h"
 #include "sensor_msgs/msg/JointState.h"
 
+#include <dds/dds.h>
+
 #include <plr/messages.hpp>
 #include <plr/testing/fake_kernel.hpp>
 
