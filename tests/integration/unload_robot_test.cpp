@@ -20,7 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Run {
+struct Unloading {
   fs::path dir;
   std::string log;
   nlohmann::json report;
@@ -32,8 +32,8 @@ std::string read(const fs::path& file) {
   return std::string((std::istreambuf_iterator<char>(in)), {});
 }
 
-Run unload(const char* config, const std::string& tag, std::vector<std::string> overrides) {
-  Run run;
+Unloading unload(const char* config, const std::string& tag, std::vector<std::string> overrides) {
+  Unloading run;
   std::string pattern = (fs::temp_directory_path() / ("plr_unload_robot_XXXXXX")).string();
   run.dir = mkdtemp(pattern.data());
   const std::string err = (run.dir / "stderr.txt").string();
@@ -73,10 +73,10 @@ Run unload(const char* config, const std::string& tag, std::vector<std::string> 
 TEST(UnloadRobot, UnloadsTheSameBoxesThroughTheEmulatedControllerAsTheSimulator) {
   // A domain of its own, so a run of this test elsewhere on the machine does not meet it.
   const std::string domain = std::to_string(150 + ::getpid() % 80);
-  const Run robot = unload(UNLOAD_ROBOT_CONFIG, "unload_robot",
+  const Unloading robot = unload(UNLOAD_ROBOT_CONFIG, "unload_robot",
                            {"nodes.driver.params.domain_id=" + domain,
                             "nodes.controller.params.domain_id=" + domain});
-  const Run sim = unload(UNLOAD_SMALL_CONFIG, "unload_small", {});
+  const Unloading sim = unload(UNLOAD_SMALL_CONFIG, "unload_small", {});
   ASSERT_FALSE(robot.report.is_null());
   ASSERT_FALSE(sim.report.is_null());
   EXPECT_EQ(robot.report.at("boxes_total").get<int>(), 30);
