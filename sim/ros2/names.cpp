@@ -22,23 +22,34 @@ plr::Status check_name(const std::string& name) {
     }
     if (!(std::isalnum(c) || c == '_'))
       return bad(fmt::format("character '{}' at {} is not a letter, digit or '_'", name[i], i));
-    if (token_start && std::isdigit(c)) return bad(fmt::format("token at {} starts with a digit", i));
+    if (token_start && std::isdigit(c))
+      return bad(fmt::format("token at {} starts with a digit", i));
     token_start = false;
   }
   if (token_start) return bad("ends with '/'");
   return {};
 }
 
-std::string topic_name(const std::string& ros_name) { return "rt" + ros_name; }
-std::string request_topic_name(const std::string& service) { return "rq" + service + "Request"; }
-std::string reply_topic_name(const std::string& service) { return "rr" + service + "Reply"; }
+std::string topic_name(const std::string& ros_name) {
+  return "rt" + ros_name;
+}
+std::string request_topic_name(const std::string& service) {
+  return "rq" + service + "Request";
+}
+std::string reply_topic_name(const std::string& service) {
+  return "rr" + service + "Reply";
+}
 
 ActionTopics action_topics(const std::string& action_name) {
   const std::string a = action_name + "/_action/";
-  return {request_topic_name(a + "send_goal"),   reply_topic_name(a + "send_goal"),
-          request_topic_name(a + "get_result"),  reply_topic_name(a + "get_result"),
-          request_topic_name(a + "cancel_goal"), reply_topic_name(a + "cancel_goal"),
-          topic_name(a + "feedback"),            topic_name(a + "status")};
+  return {request_topic_name(a + "send_goal"),
+          reply_topic_name(a + "send_goal"),
+          request_topic_name(a + "get_result"),
+          reply_topic_name(a + "get_result"),
+          request_topic_name(a + "cancel_goal"),
+          reply_topic_name(a + "cancel_goal"),
+          topic_name(a + "feedback"),
+          topic_name(a + "status")};
 }
 
 }  // namespace plr::ros2

@@ -94,8 +94,8 @@ void put(dds_sequence_control_msgs_msg_dds__JointTolerance_& s,
 plr::Expected<std::vector<JointTolerance>> take(
     const dds_sequence_control_msgs_msg_dds__JointTolerance_& s, const char* what) {
   if (s._length > kMaxJoints)
-    return plr::make_error(PLR_ERR_INVALID, fmt::format("{}: {} entries, at most {}", what,
-                                                        s._length, kMaxJoints));
+    return plr::make_error(PLR_ERR_INVALID,
+                           fmt::format("{}: {} entries, at most {}", what, s._length, kMaxJoints));
   std::vector<JointTolerance> v;
   for (std::uint32_t i = 0; i < s._length; ++i) {
     auto name = take(s._buffer[i].name, what);
@@ -116,7 +116,8 @@ char* wire_string(const std::string& s) {
 
 builtin_interfaces_msg_dds__Duration_ to_duration(double s) {
   const double whole = std::floor(s);
-  return {static_cast<std::int32_t>(whole), static_cast<std::uint32_t>(std::llround((s - whole) * 1e9) % 1000000000)};
+  return {static_cast<std::int32_t>(whole),
+          static_cast<std::uint32_t>(std::llround((s - whole) * 1e9) % 1000000000)};
 }
 
 builtin_interfaces_msg_dds__Time_ to_time(double s) {
@@ -151,9 +152,8 @@ plr::Expected<TrajectoryGoal> decode(
   if (!names) return names.error();
   g.joint_names = std::move(*names);
   if (in.trajectory.points._length > kMaxPoints)
-    return plr::make_error(PLR_ERR_INVALID,
-                           fmt::format("trajectory.points: {} points, at most {}",
-                                       in.trajectory.points._length, kMaxPoints));
+    return plr::make_error(PLR_ERR_INVALID, fmt::format("trajectory.points: {} points, at most {}",
+                                                        in.trajectory.points._length, kMaxPoints));
   for (std::uint32_t i = 0; i < in.trajectory.points._length; ++i) {
     auto p = take(in.trajectory.points._buffer[i], fmt::format("trajectory.points[{}]", i));
     if (!p) return p.error();
@@ -219,9 +219,8 @@ plr::Expected<JointStateSample> decode(const sensor_msgs_msg_dds__JointState_& i
   js.position = std::move(*pos);
   js.velocity = std::move(*vel);
   if (js.position.size() != js.names.size())
-    return plr::make_error(PLR_ERR_INVALID,
-                           fmt::format("joint_states: {} positions for {} names",
-                                       js.position.size(), js.names.size()));
+    return plr::make_error(PLR_ERR_INVALID, fmt::format("joint_states: {} positions for {} names",
+                                                        js.position.size(), js.names.size()));
   return js;
 }
 

@@ -73,9 +73,9 @@ Unloading unload(const char* config, const std::string& tag, std::vector<std::st
 TEST(UnloadRobot, UnloadsTheSameBoxesThroughTheEmulatedControllerAsTheSimulator) {
   // A domain of its own, so a run of this test elsewhere on the machine does not meet it.
   const std::string domain = std::to_string(150 + ::getpid() % 80);
-  const Unloading robot = unload(UNLOAD_ROBOT_CONFIG, "unload_robot",
-                           {"nodes.driver.params.domain_id=" + domain,
-                            "nodes.controller.params.domain_id=" + domain});
+  const Unloading robot = unload(
+      UNLOAD_ROBOT_CONFIG, "unload_robot",
+      {"nodes.driver.params.domain_id=" + domain, "nodes.controller.params.domain_id=" + domain});
   const Unloading sim = unload(UNLOAD_SMALL_CONFIG, "unload_small", {});
   ASSERT_FALSE(robot.report.is_null());
   ASSERT_FALSE(sim.report.is_null());

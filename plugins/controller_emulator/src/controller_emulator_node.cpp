@@ -49,22 +49,22 @@ class ControllerEmulatorNode : public Node {
     action_ = params().get<std::string>("action", "/unloader_controller/follow_joint_trajectory");
     joint_states_ = params().get<std::string>("joint_states", "/joint_states");
     fault_topic_ = params().get<std::string>("fault_topic", "/unloader_controller/inject_fault");
-    for (const auto& [key, name] : {std::pair{"action", action_},
-                                    std::pair{"joint_states", joint_states_},
-                                    std::pair{"fault_topic", fault_topic_}})
+    for (const auto& [key, name] :
+         {std::pair{"action", action_}, std::pair{"joint_states", joint_states_},
+          std::pair{"fault_topic", fault_topic_}})
       if (auto ok = cm::check_name(name); !ok)
         return make_error(PLR_ERR_INVALID, fmt::format("param '{}': {}", key, ok.error().message));
     const auto domain = params().get<int>("domain_id", 0);
     scale_ = params().get<double>("time_scale", 1.0);
     options_.lag_s = params().get<double>("lag_s", 0.02);
     period_ = params().get<double>("period_s", 0.01);
-    for (const auto& [name, value, lo, hi] :
-         {std::tuple{"time_scale", scale_, 0.1, 100.0},
-          std::tuple{"lag_s", options_.lag_s, 0.0, 1.0},
-          std::tuple{"period_s", period_, 0.001, 0.1}})
+    for (const auto& [name, value, lo, hi] : {std::tuple{"time_scale", scale_, 0.1, 100.0},
+                                              std::tuple{"lag_s", options_.lag_s, 0.0, 1.0},
+                                              std::tuple{"period_s", period_, 0.001, 0.1}})
       if (!(value >= lo && value <= hi))
-        return make_error(PLR_ERR_INVALID, fmt::format("param '{}': must be between {} and {}, got {}",
-                                                       name, lo, hi, value));
+        return make_error(
+            PLR_ERR_INVALID,
+            fmt::format("param '{}': must be between {} and {}, got {}", name, lo, hi, value));
     if (domain < 0 || domain > 232)
       return make_error(PLR_ERR_INVALID,
                         fmt::format("param 'domain_id': must be 0 to 232, got {}", domain));
@@ -104,8 +104,7 @@ class ControllerEmulatorNode : public Node {
   }
 
  private:
-  dds_entity_t reader(const std::string& name, const dds_topic_descriptor_t* desc,
-                      dds_qos_t* qos) {
+  dds_entity_t reader(const std::string& name, const dds_topic_descriptor_t* desc, dds_qos_t* qos) {
     const dds_entity_t t = dds_create_topic(participant_, desc, name.c_str(), nullptr, nullptr);
     const dds_entity_t r = t < 0 ? t : dds_create_reader(participant_, t, qos, nullptr);
     dds_delete_qos(qos);
@@ -132,22 +131,23 @@ class ControllerEmulatorNode : public Node {
     result_rep_ = writer(a.get_result_reply,
                          &control_msgs_action_dds__FollowJointTrajectory_GetResult_Response__desc,
                          cm::default_qos());
-    cancel_req_ =
-        reader(a.cancel_goal_request, &action_msgs_srv_dds__CancelGoal_Request__desc, cm::default_qos());
-    cancel_rep_ =
-        writer(a.cancel_goal_reply, &action_msgs_srv_dds__CancelGoal_Response__desc, cm::default_qos());
-    feedback_ = writer(a.feedback,
-                       &control_msgs_action_dds__FollowJointTrajectory_FeedbackMessage__desc,
-                       cm::default_qos());
+    cancel_req_ = reader(a.cancel_goal_request, &action_msgs_srv_dds__CancelGoal_Request__desc,
+                         cm::default_qos());
+    cancel_rep_ = writer(a.cancel_goal_reply, &action_msgs_srv_dds__CancelGoal_Response__desc,
+                         cm::default_qos());
+    feedback_ =
+        writer(a.feedback, &control_msgs_action_dds__FollowJointTrajectory_FeedbackMessage__desc,
+               cm::default_qos());
     status_ = writer(a.status, &action_msgs_msg_dds__GoalStatusArray__desc, cm::status_qos());
     joint_state_ = writer(cm::topic_name(joint_states_), &sensor_msgs_msg_dds__JointState__desc,
                           cm::default_qos());
-    fault_ = reader(cm::topic_name(fault_topic_), &std_msgs_msg_dds__String__desc, cm::default_qos());
+    fault_ =
+        reader(cm::topic_name(fault_topic_), &std_msgs_msg_dds__String__desc, cm::default_qos());
     for (dds_entity_t e : {goal_req_, goal_rep_, result_req_, result_rep_, cancel_req_, cancel_rep_,
                            feedback_, status_, joint_state_, fault_})
       if (e < 0)
-        return make_error(PLR_ERR_INTERNAL,
-                          fmt::format("DDS endpoint for action '{}': {}", action_, dds_strretcode(e)));
+        return make_error(PLR_ERR_INTERNAL, fmt::format("DDS endpoint for action '{}': {}", action_,
+                                                        dds_strretcode(e)));
     waitset_ = dds_create_waitset(participant_);
     for (dds_entity_t r : {goal_req_, result_req_, cancel_req_, fault_}) {
       const dds_entity_t cond = dds_create_readcondition(r, DDS_ANY_STATE);
@@ -207,8 +207,9 @@ class ControllerEmulatorNode : public Node {
           waiting_.push_back({goal_id_of(req.goal_id), req.client_guid, req.sequence_number});
         });
     take_all<action_msgs_srv_dds__CancelGoal_Request_>(cancel_req_,
-                                                        [&](const auto& req) { cancel_goal(req); });
-    take_all<std_msgs_msg_dds__String_>(fault_, [&](const auto& m) { inject(m.data ? m.data : ""); });
+                                                       [&](const auto& req) { cancel_goal(req); });
+    take_all<std_msgs_msg_dds__String_>(fault_,
+                                        [&](const auto& m) { inject(m.data ? m.data : ""); });
     answer_waiting();
   }
 
@@ -277,9 +278,10 @@ class ControllerEmulatorNode : public Node {
       ok = make_error(PLR_ERR_INVALID, "");
     }
     if (!ok)
-      log().warn("fault request '{}' on {}: not understood ({}expected drop_feedback, stuck_joint "
-                 "<joint>, tolerance_violation <joint> <offset>, late_start <s> or clear)",
-                 request, fault_topic_, ok.error().message.empty() ? "" : ok.error().message + "; ");
+      log().warn(
+          "fault request '{}' on {}: not understood ({}expected drop_feedback, stuck_joint "
+          "<joint>, tolerance_violation <joint> <offset>, late_start <s> or clear)",
+          request, fault_topic_, ok.error().message.empty() ? "" : ok.error().message + "; ");
     else
       log().info("fault injected: {}", request);
   }
@@ -307,9 +309,12 @@ class ControllerEmulatorNode : public Node {
           &control_msgs_action_dds__FollowJointTrajectory_GetResult_Response__desc);
       rep.msg.client_guid = it->client_guid;
       rep.msg.sequence_number = it->sequence;
-      rep.msg.status = static_cast<std::uint8_t>(done ? done->result.status : ros2::GoalStatus::kUnknown);
-      rep.msg.result.error_code = static_cast<std::int32_t>(done ? done->result.error : ros2::TrajectoryError::kInvalidGoal);
-      rep.msg.result.error_string = cm::wire_string(done ? done->result.error_string : "unknown goal");
+      rep.msg.status =
+          static_cast<std::uint8_t>(done ? done->result.status : ros2::GoalStatus::kUnknown);
+      rep.msg.result.error_code = static_cast<std::int32_t>(
+          done ? done->result.error : ros2::TrajectoryError::kInvalidGoal);
+      rep.msg.result.error_string =
+          cm::wire_string(done ? done->result.error_string : "unknown goal");
       dds_write(result_rep_, &rep.msg);
       if (done) accepted_at_.erase(it->id);
       it = waiting_.erase(it);

@@ -39,7 +39,8 @@ plr::Expected<std::optional<FinishedGoal>> JointTrajectoryController::accept(
   std::vector<int> order;
   for (const auto& name : goal.joint_names) {
     const int j = index_of(name);
-    if (j < 0) return invalid(fmt::format("INVALID_JOINTS: no joint '{}' in this controller", name));
+    if (j < 0)
+      return invalid(fmt::format("INVALID_JOINTS: no joint '{}' in this controller", name));
     if (std::find(order.begin(), order.end(), j) != order.end())
       return invalid(fmt::format("INVALID_JOINTS: joint '{}' twice", name));
     order.push_back(j);
@@ -52,9 +53,10 @@ plr::Expected<std::optional<FinishedGoal>> JointTrajectoryController::accept(
   for (std::size_t i = 0; i < goal.points.size(); ++i) {
     const auto& p = goal.points[i];
     if (p.positions.size() != n || (!p.velocities.empty() && p.velocities.size() != n))
-      return invalid(fmt::format("INVALID_GOAL: point {} has {} positions and {} velocities for {} "
-                                 "joints",
-                                 i, p.positions.size(), p.velocities.size(), n));
+      return invalid(
+          fmt::format("INVALID_GOAL: point {} has {} positions and {} velocities for {} "
+                      "joints",
+                      i, p.positions.size(), p.velocities.size(), n));
     if (!(p.time_s > last_t))
       return invalid(fmt::format("INVALID_GOAL: point {} at {:.3f} s is not after the one before",
                                  i, p.time_s));
@@ -75,7 +77,8 @@ plr::Expected<std::optional<FinishedGoal>> JointTrajectoryController::accept(
     std::vector<double> tol(n, fallback);
     for (const auto& t : given) {
       const int j = index_of(t.name);
-      if (j < 0) return invalid(fmt::format("INVALID_GOAL: tolerance for unknown joint '{}'", t.name));
+      if (j < 0)
+        return invalid(fmt::format("INVALID_GOAL: tolerance for unknown joint '{}'", t.name));
       const double v = velocity ? t.velocity : t.position;
       if (v < 0.0) tol[j] = 0.0;
       if (v > 0.0) tol[j] = v;
@@ -91,8 +94,8 @@ plr::Expected<std::optional<FinishedGoal>> JointTrajectoryController::accept(
   a.path_tol = std::move(*path);
   a.goal_tol = std::move(*goal_pos);
   a.goal_vel_tol = std::move(*goal_vel);
-  a.goal_time_tol =
-      goal.goal_time_tolerance_s > 0.0 ? goal.goal_time_tolerance_s : options_.goal_time_tolerance_s;
+  a.goal_time_tol = goal.goal_time_tolerance_s > 0.0 ? goal.goal_time_tolerance_s
+                                                     : options_.goal_time_tolerance_s;
 
   std::optional<FinishedGoal> preempted;
   if (active_)
@@ -209,7 +212,8 @@ std::optional<FinishedGoal> JointTrajectoryController::step(double dt) {
                             std::abs(qd_[j]), a.goal_vel_tol[j]);
   }
   if (outside.empty())
-    return finish(GoalStatus::kSucceeded, TrajectoryError::kSuccessful, "Goal successfully reached!");
+    return finish(GoalStatus::kSucceeded, TrajectoryError::kSuccessful,
+                  "Goal successfully reached!");
   if (a.goal_time_tol > 0.0 && t > end + a.goal_time_tol)
     return finish(GoalStatus::kAborted, TrajectoryError::kGoalToleranceViolated,
                   fmt::format("Aborted due to goal tolerance violation {:.3f} s after the end: {}",
@@ -226,7 +230,8 @@ plr::Status JointTrajectoryController::stick_joint(const std::string& joint) {
 
 plr::Status JointTrajectoryController::knock_joint(const std::string& joint, double offset) {
   const int j = index_of(joint);
-  if (j < 0) return plr::make_error(PLR_ERR_INVALID, "tolerance_violation: no joint '" + joint + "'");
+  if (j < 0)
+    return plr::make_error(PLR_ERR_INVALID, "tolerance_violation: no joint '" + joint + "'");
   q_[j] += offset;
   return {};
 }

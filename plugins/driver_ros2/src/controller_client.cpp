@@ -48,24 +48,27 @@ void take_each(dds_entity_t reader, F&& handle) {
 
 plr::Status ControllerClient::open(const ClientOptions& options) {
   options_ = options;
-  for (const auto& [key, name] : {std::pair{"action", options.action},
-                                  std::pair{"joint_states", options.joint_states}})
+  for (const auto& [key, name] :
+       {std::pair{"action", options.action}, std::pair{"joint_states", options.joint_states}})
     if (auto ok = ros2::check_name(name); !ok)
-      return plr::make_error(PLR_ERR_INVALID, fmt::format("param '{}': {}", key, ok.error().message));
+      return plr::make_error(PLR_ERR_INVALID,
+                             fmt::format("param '{}': {}", key, ok.error().message));
   auto p = ros2::open_participant(options.domain_id, options.loopback_only);
   if (!p) return p.error();
   participant_ = *p;
   const auto a = ros2::action_topics(options.action);
-  goal_req_ = endpoint(participant_, a.send_goal_request,
-                       &control_msgs_action_dds__FollowJointTrajectory_SendGoal_Request__desc, false);
-  goal_rep_ = endpoint(participant_, a.send_goal_reply,
-                       &control_msgs_action_dds__FollowJointTrajectory_SendGoal_Response__desc, true);
-  result_req_ = endpoint(participant_, a.get_result_request,
-                         &control_msgs_action_dds__FollowJointTrajectory_GetResult_Request__desc,
-                         false);
-  result_rep_ = endpoint(participant_, a.get_result_reply,
-                         &control_msgs_action_dds__FollowJointTrajectory_GetResult_Response__desc,
-                         true);
+  goal_req_ =
+      endpoint(participant_, a.send_goal_request,
+               &control_msgs_action_dds__FollowJointTrajectory_SendGoal_Request__desc, false);
+  goal_rep_ =
+      endpoint(participant_, a.send_goal_reply,
+               &control_msgs_action_dds__FollowJointTrajectory_SendGoal_Response__desc, true);
+  result_req_ =
+      endpoint(participant_, a.get_result_request,
+               &control_msgs_action_dds__FollowJointTrajectory_GetResult_Request__desc, false);
+  result_rep_ =
+      endpoint(participant_, a.get_result_reply,
+               &control_msgs_action_dds__FollowJointTrajectory_GetResult_Response__desc, true);
   cancel_req_ = endpoint(participant_, a.cancel_goal_request,
                          &action_msgs_srv_dds__CancelGoal_Request__desc, false);
   cancel_rep_ = endpoint(participant_, a.cancel_goal_reply,
@@ -200,8 +203,8 @@ plr::Status ControllerClient::send_goal(const ros2::GoalId& id, const ros2::Traj
   std::memcpy(req.msg.goal_id.uuid, id.data(), id.size());
   ros2::encode(goal, req.msg.goal);
   if (const dds_return_t rc = dds_write(goal_req_, &req.msg); rc < 0)
-    return plr::make_error(PLR_ERR_INTERNAL,
-                           fmt::format("send_goal to '{}': {}", options_.action, dds_strretcode(rc)));
+    return plr::make_error(PLR_ERR_INTERNAL, fmt::format("send_goal to '{}': {}", options_.action,
+                                                         dds_strretcode(rc)));
   std::unique_lock lock(m_);
   if (!cv_.wait_for(lock, timeout, [&] { return accepted_.count(seq) > 0; }))
     return plr::make_error(PLR_ERR_TIMEOUT, fmt::format("controller '{}' did not answer the goal "
@@ -251,8 +254,8 @@ plr::Status ControllerClient::cancel(const ros2::GoalId& id) {
   req.sequence_number = ++sequence_;
   std::memcpy(req.goal_info.goal_id.uuid, id.data(), id.size());
   if (const dds_return_t rc = dds_write(cancel_req_, &req); rc < 0)
-    return plr::make_error(PLR_ERR_INTERNAL, fmt::format("cancel_goal to '{}': {}",
-                                                         options_.action, dds_strretcode(rc)));
+    return plr::make_error(PLR_ERR_INTERNAL, fmt::format("cancel_goal to '{}': {}", options_.action,
+                                                         dds_strretcode(rc)));
   return {};
 }
 

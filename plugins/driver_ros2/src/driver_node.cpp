@@ -9,9 +9,9 @@
 #include "controller_client.hpp"
 #include "limit_check.hpp"
 
+#include <plr/msg/driver_generated.h>
 #include <plr/actions/motion_messages.hpp>
 #include <plr/messages.hpp>
-#include <plr/msg/driver_generated.h>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
 #include <plr/sim/robot_model.hpp>
@@ -63,8 +63,9 @@ class DriverNode : public Node {
           std::tuple{"limit_margin", limit_margin_, 0.0, 0.5},
           std::tuple{"domain_id", static_cast<double>(domain), 0.0, 232.0}})
       if (!(value >= lo && value <= hi))
-        return make_error(PLR_ERR_INVALID, fmt::format("param '{}': must be between {} and {}, got {}",
-                                                       name, lo, hi, value));
+        return make_error(
+            PLR_ERR_INVALID,
+            fmt::format("param '{}': must be between {} and {}, got {}", name, lo, hi, value));
     ClientOptions c;
     c.action = params().get<std::string>("action", c.action);
     c.joint_states = params().get<std::string>("joint_states", c.joint_states);
@@ -81,8 +82,8 @@ class DriverNode : public Node {
         !s)
       return s;
     return ctx().provide_async<msg::ExecuteRequest, msg::ExecuteOutcome>(
-        "sim/execute", [this](const Message<msg::ExecuteRequest>& r,
-                              Responder<msg::ExecuteOutcome> responder) {
+        "sim/execute",
+        [this](const Message<msg::ExecuteRequest>& r, Responder<msg::ExecuteOutcome> responder) {
           auto motion = actions::decode_execute_request(*r);
           if (!motion) {
             (void)responder.fail(PLR_ERR_INVALID, "sim/execute: " + motion.error().message);
@@ -186,9 +187,10 @@ class DriverNode : public Node {
     g.joint_names.assign(sim::kJointNames.begin(), sim::kJointNames.end());
     const double t0 = m.points.front().time_s;
     for (const auto& p : m.points)
-      g.points.push_back({p.time_s - t0,
-                          std::vector<double>(p.position.data(), p.position.data() + sim::kNumJoints),
-                          std::vector<double>(p.velocity.data(), p.velocity.data() + sim::kNumJoints)});
+      g.points.push_back(
+          {p.time_s - t0,
+           std::vector<double>(p.position.data(), p.position.data() + sim::kNumJoints),
+           std::vector<double>(p.velocity.data(), p.velocity.data() + sim::kNumJoints)});
     for (const auto& name : g.joint_names) {
       g.path_tolerance.push_back({name, path_tolerance_ > 0.0 ? path_tolerance_ : -1.0});
       g.goal_tolerance.push_back({name, goal_tolerance_ > 0.0 ? goal_tolerance_ : -1.0});
@@ -212,8 +214,8 @@ class DriverNode : public Node {
       return refuse(PLR_ERR_INVALID, "refused before sending: " + ok.error().message);
     const auto state = client_.latest_state();
     if (!state)
-      return refuse(PLR_ERR_UNAVAILABLE, fmt::format("no joint state on {} yet: nothing is sent",
-                                                     joint_states_name_));
+      return refuse(PLR_ERR_UNAVAILABLE,
+                    fmt::format("no joint state on {} yet: nothing is sent", joint_states_name_));
     if (const double age = seconds_since(state->received); age > watchdog_s_)
       return refuse(PLR_ERR_UNAVAILABLE,
                     fmt::format("joint state on {} is {:.2f} s old (watchdog {:.2f} s): nothing "
@@ -236,8 +238,9 @@ class DriverNode : public Node {
     }
     (void)client_.request_result(id);
     const double duration = goal.points.back().time_s;
-    const auto deadline = WallClock::now() + to_ms((duration + goal_time_tolerance_ + 1.0) / time_scale_ +
-                                                   accept_timeout_s_);
+    const auto deadline =
+        WallClock::now() +
+        to_ms((duration + goal_time_tolerance_ + 1.0) / time_scale_ + accept_timeout_s_);
     auto last_status = WallClock::now();
     std::optional<ros2::TrajectoryResult> result;
     for (;;) {
@@ -275,8 +278,9 @@ class DriverNode : public Node {
       const auto until = WallClock::now() + 300ms;
       while (!client_.result(id) && WallClock::now() < until) client_.wait(10ms);
     } else if (result->status != ros2::GoalStatus::kSucceeded) {
-      failure = fmt::format("controller ended the goal {}: {} ({})", ros2::to_string(result->status),
-                            ros2::to_string(result->error), result->error_string);
+      failure =
+          fmt::format("controller ended the goal {}: {} ({})", ros2::to_string(result->status),
+                      ros2::to_string(result->error), result->error_string);
       if (result->status == ros2::GoalStatus::kCanceled &&
           result->error == ros2::TrajectoryError::kInvalidGoal)
         failure = "preempted by a newer motion: " + failure;
@@ -348,8 +352,8 @@ class DriverNode : public Node {
     flatbuffers::FlatBufferBuilder req;
     actions::encode_execute_request(m, req);
     auto reply = ctx()
-                     .call<msg::ExecuteRequest, msg::ExecuteOutcome>(
-                         world_execute_, req, std::chrono::seconds(300))
+                     .call<msg::ExecuteRequest, msg::ExecuteOutcome>(world_execute_, req,
+                                                                     std::chrono::seconds(300))
                      .get();
     if (!reply)
       return make_error(reply.error().code, world_execute_ + ": " + reply.error().message);

@@ -25,15 +25,16 @@ plr::Status check_limits(const std::vector<planning::TimedPoint>& points,
       const double q = p.position[j], v = p.velocity[j];
       if (!std::isfinite(q) || !std::isfinite(v)) return refuse(i, j, "not a finite number");
       if (q < l.lower - 1e-6 || q > l.upper + 1e-6)
-        return refuse(i, j, fmt::format("position {:.4f} outside its limits [{:.4f}, {:.4f}]", q,
-                                        l.lower, l.upper));
+        return refuse(i, j,
+                      fmt::format("position {:.4f} outside its limits [{:.4f}, {:.4f}]", q, l.lower,
+                                  l.upper));
       if (std::abs(v) > l.velocity * (1.0 + margin))
         return refuse(i, j, fmt::format("velocity {:.4f} beyond its limit {:.4f}", v, l.velocity));
       if (i > 0) {
         const double a = (v - points[i - 1].velocity[j]) / (p.time_s - points[i - 1].time_s);
         if (std::abs(a) > l.acceleration * (1.0 + margin))
-          return refuse(i, j, fmt::format("acceleration {:.4f} beyond its limit {:.4f}", a,
-                                          l.acceleration));
+          return refuse(
+              i, j, fmt::format("acceleration {:.4f} beyond its limit {:.4f}", a, l.acceleration));
       }
     }
   }

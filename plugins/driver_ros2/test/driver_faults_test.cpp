@@ -21,17 +21,22 @@ using Outcome = plr::Expected<plr::Message<plr::msg::ExecuteOutcome>>;
 
 constexpr double kHome[] = {0.0, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0};
 
-int test_domain() { return 100 + static_cast<int>((::getpid() + 50) % 100); }
+int test_domain() {
+  return 100 + static_cast<int>((::getpid() + 50) % 100);
+}
 
 class DriverFaults : public ::testing::Test {
  protected:
   void SetUp() override {
     const std::string common = R"("loopback_only": true, "domain_id": )" + std::to_string(domain_);
-    auto emulator = k_.load_node(EMULATOR_SO, plr::testing::NodeOptions().with_name("emulator").with_params(
-                                                  "{" + common + R"(, "lag_s": 0.02})"));
+    auto emulator =
+        k_.load_node(EMULATOR_SO, plr::testing::NodeOptions()
+                                      .with_name("emulator")
+                                      .with_params("{" + common + R"(, "lag_s": 0.02})"));
     ASSERT_TRUE(emulator);
-    auto driver = k_.load_node(DRIVER_SO, plr::testing::NodeOptions().with_name("driver").with_params(
-                                              "{" + common + R"(, "world_execute": "", "watchdog_s": 0.3})"));
+    auto driver =
+        k_.load_node(DRIVER_SO, plr::testing::NodeOptions().with_name("driver").with_params(
+                                    "{" + common + R"(, "world_execute": "", "watchdog_s": 0.3})"));
     ASSERT_TRUE(driver);
     for (auto* n : {&*emulator, &*driver}) {
       ASSERT_TRUE(n->configure());
@@ -40,8 +45,9 @@ class DriverFaults : public ::testing::Test {
     auto p = plr::ros2::open_participant(static_cast<std::uint32_t>(domain_), true);
     ASSERT_TRUE(p);
     participant_ = *p;
-    const dds_entity_t t = dds_create_topic(participant_, &std_msgs_msg_dds__String__desc,
-                                            "rt/unloader_controller/inject_fault", nullptr, nullptr);
+    const dds_entity_t t =
+        dds_create_topic(participant_, &std_msgs_msg_dds__String__desc,
+                         "rt/unloader_controller/inject_fault", nullptr, nullptr);
     dds_qos_t* q = plr::ros2::default_qos();
     faults_ = dds_create_writer(participant_, t, q, nullptr);
     dds_delete_qos(q);
@@ -69,8 +75,8 @@ class DriverFaults : public ::testing::Test {
 
   plr::testing::CallHandle<plr::msg::ExecuteOutcome> execute(
       const flatbuffers::FlatBufferBuilder& fbb) {
-    auto c = k_.call_async<plr::msg::ExecuteRequest, plr::msg::ExecuteOutcome>("sim/execute", fbb,
-                                                                               30s);
+    auto c =
+        k_.call_async<plr::msg::ExecuteRequest, plr::msg::ExecuteOutcome>("sim/execute", fbb, 30s);
     k_.spin();
     return c;
   }

@@ -42,7 +42,9 @@ constexpr const char* kJoints[] = {"base_x", "arm_1",  "arm_2",  "arm_3",
 constexpr double kHome[] = {0.0, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0};
 
 // Its own DDS domain, so that tests running at the same time do not meet.
-int test_domain() { return 100 + static_cast<int>(::getpid() % 100); }
+int test_domain() {
+  return 100 + static_cast<int>(::getpid() % 100);
+}
 
 dds_entity_t loopback_participant(int domain) {
   const char* xml =
@@ -62,7 +64,8 @@ dds_entity_t endpoint(dds_entity_t p, const char* name, const dds_topic_descript
   dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
   dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 10);
   const dds_entity_t t = dds_create_topic(p, desc, name, nullptr, nullptr);
-  const dds_entity_t e = reader ? dds_create_reader(p, t, q, nullptr) : dds_create_writer(p, t, q, nullptr);
+  const dds_entity_t e =
+      reader ? dds_create_reader(p, t, q, nullptr) : dds_create_writer(p, t, q, nullptr);
   dds_delete_qos(q);
   return e;
 }
@@ -84,14 +87,19 @@ TEST(DriverWire, TheGoalTheDriverSendsDecodesWithTheRos2Definitions) {
   const dds_entity_t p = loopback_participant(domain);
   ASSERT_GT(p, 0);
   const dds_entity_t goals =
-      endpoint(p, kGoalRequest, &control_msgs_action_dds__FollowJointTrajectory_SendGoal_Request__desc, true);
+      endpoint(p, kGoalRequest,
+               &control_msgs_action_dds__FollowJointTrajectory_SendGoal_Request__desc, true);
   const dds_entity_t accepts =
-      endpoint(p, kGoalReply, &control_msgs_action_dds__FollowJointTrajectory_SendGoal_Response__desc, false);
-  const dds_entity_t result_calls = endpoint(
-      p, kResultRequest, &control_msgs_action_dds__FollowJointTrajectory_GetResult_Request__desc, true);
-  const dds_entity_t results = endpoint(
-      p, kResultReply, &control_msgs_action_dds__FollowJointTrajectory_GetResult_Response__desc, false);
-  const dds_entity_t states = endpoint(p, kJointStates, &sensor_msgs_msg_dds__JointState__desc, false);
+      endpoint(p, kGoalReply,
+               &control_msgs_action_dds__FollowJointTrajectory_SendGoal_Response__desc, false);
+  const dds_entity_t result_calls =
+      endpoint(p, kResultRequest,
+               &control_msgs_action_dds__FollowJointTrajectory_GetResult_Request__desc, true);
+  const dds_entity_t results =
+      endpoint(p, kResultReply,
+               &control_msgs_action_dds__FollowJointTrajectory_GetResult_Response__desc, false);
+  const dds_entity_t states =
+      endpoint(p, kJointStates, &sensor_msgs_msg_dds__JointState__desc, false);
   for (dds_entity_t e : {goals, accepts, result_calls, results, states}) ASSERT_GT(e, 0);
 
   // Joint states from the "controller", so the driver's watchdog is content.
@@ -115,10 +123,10 @@ TEST(DriverWire, TheGoalTheDriverSendsDecodesWithTheRos2Definitions) {
   });
 
   plr::testing::FakeKernel k;
-  auto node = k.load_node(
-      DRIVER_SO, plr::testing::NodeOptions().with_params(
-                     R"({"loopback_only": true, "world_execute": "", "domain_id": )" +
-                     std::to_string(domain) + "}"));
+  auto node =
+      k.load_node(DRIVER_SO, plr::testing::NodeOptions().with_params(
+                                 R"({"loopback_only": true, "world_execute": "", "domain_id": )" +
+                                 std::to_string(domain) + "}"));
   ASSERT_TRUE(node);
   ASSERT_TRUE(node->configure());
   ASSERT_TRUE(node->activate());
@@ -130,8 +138,8 @@ TEST(DriverWire, TheGoalTheDriverSendsDecodesWithTheRos2Definitions) {
   pts.push_back(plr::msg::CreateTrajectoryPointDirect(fbb, 0.0, &q, &zero));
   q[0] = 0.4;
   pts.push_back(plr::msg::CreateTrajectoryPointDirect(fbb, 1.5, &q, &zero));
-  fbb.Finish(plr::msg::CreateExecuteRequest(
-      fbb, plr::msg::CreateTrajectory(fbb, fbb.CreateVector(pts))));
+  fbb.Finish(
+      plr::msg::CreateExecuteRequest(fbb, plr::msg::CreateTrajectory(fbb, fbb.CreateVector(pts))));
   auto call = k.call_async<plr::msg::ExecuteRequest, plr::msg::ExecuteOutcome>("sim/execute", fbb);
   k.spin();
 

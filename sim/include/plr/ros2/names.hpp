@@ -18,9 +18,9 @@ namespace plr::ros2 {
 // The error names the name and what is wrong.
 plr::Status check_name(const std::string& name);
 
-std::string topic_name(const std::string& ros_name);           // "rt" + name
-std::string request_topic_name(const std::string& service);    // "rq" + name + "Request"
-std::string reply_topic_name(const std::string& service);      // "rr" + name + "Reply"
+std::string topic_name(const std::string& ros_name);         // "rt" + name
+std::string request_topic_name(const std::string& service);  // "rq" + name + "Request"
+std::string reply_topic_name(const std::string& service);    // "rr" + name + "Reply"
 
 struct ActionTopics {
   std::string send_goal_request, send_goal_reply;

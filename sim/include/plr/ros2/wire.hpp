@@ -33,7 +33,8 @@ double seconds(const builtin_interfaces_msg_dds__Duration_& d);
 double seconds(const builtin_interfaces_msg_dds__Time_& t);
 
 void encode(const TrajectoryGoal& goal, control_msgs_action_dds__FollowJointTrajectory_Goal_& out);
-plr::Expected<TrajectoryGoal> decode(const control_msgs_action_dds__FollowJointTrajectory_Goal_& in);
+plr::Expected<TrajectoryGoal> decode(
+    const control_msgs_action_dds__FollowJointTrajectory_Goal_& in);
 
 void encode(const TrajectoryFeedback& fb,
             control_msgs_action_dds__FollowJointTrajectory_Feedback_& out);
