@@ -185,11 +185,9 @@ class DriverNode : public Node {
   ros2::TrajectoryGoal goal_of(const actions::Motion& m) const {
     ros2::TrajectoryGoal g;
     g.joint_names.assign(sim::kJointNames.begin(), sim::kJointNames.end());
-    const double t0 = m.points.front().time_s;
     for (const auto& p : m.points)
       g.points.push_back(
-          {p.time_s - t0,
-           std::vector<double>(p.position.data(), p.position.data() + sim::kNumJoints),
+          {p.time_s, std::vector<double>(p.position.data(), p.position.data() + sim::kNumJoints),
            std::vector<double>(p.velocity.data(), p.velocity.data() + sim::kNumJoints)});
     for (const auto& name : g.joint_names) {
       g.path_tolerance.push_back({name, path_tolerance_ > 0.0 ? path_tolerance_ : -1.0});

@@ -73,6 +73,19 @@ class DriverFaults : public ::testing::Test {
     return fbb;
   }
 
+  // base_x to `x` by `duration` s from wherever the joints are: one point,
+  // which the controller reaches from its current state.
+  static flatbuffers::FlatBufferBuilder move_base_from_here(double x, double duration) {
+    flatbuffers::FlatBufferBuilder fbb;
+    std::vector<double> q(kHome, kHome + 8), zero(8, 0.0);
+    q[0] = x;
+    std::vector<flatbuffers::Offset<plr::msg::TrajectoryPoint>> pts = {
+        plr::msg::CreateTrajectoryPointDirect(fbb, duration, &q, &zero)};
+    fbb.Finish(plr::msg::CreateExecuteRequest(
+        fbb, plr::msg::CreateTrajectory(fbb, fbb.CreateVector(pts))));
+    return fbb;
+  }
+
   plr::testing::CallHandle<plr::msg::ExecuteOutcome> execute(
       const flatbuffers::FlatBufferBuilder& fbb) {
     auto c =
@@ -164,7 +177,7 @@ TEST_F(DriverFaults, EStopMidTrajectoryHaltsAndRefusesMotionUntilReset) {
       << r.error().message;
   EXPECT_TRUE(logged("emulator", "CANCELED"));
 
-  auto refused = wait(execute(move_base(0.1, 1.0)));
+  auto refused = wait(execute(move_base_from_here(0.1, 1.0)));
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.error().message.find("motion refused until it is reset"), std::string::npos);
 
@@ -172,14 +185,14 @@ TEST_F(DriverFaults, EStopMidTrajectoryHaltsAndRefusesMotionUntilReset) {
   reset.Finish(plr::msg::CreateEStopDirect(reset, false, "checked"));
   ASSERT_TRUE(k_.publish<plr::msg::EStop>("estop", reset));
   k_.spin();
-  auto again = wait(execute(move_base(0.1, 1.0)));
+  auto again = wait(execute(move_base_from_here(0.1, 1.0)));
   EXPECT_TRUE(again) << again.error().message;
 }
 
 TEST_F(DriverFaults, ANewMotionPreemptsTheRunningOne) {
   auto first = execute(move_base(0.5, 3.0));
   ASSERT_TRUE(wait_progress(0.1));
-  auto second = execute(move_base(0.2, 1.0));
+  auto second = execute(move_base_from_here(0.2, 1.0));
   auto r1 = wait(first);
   ASSERT_FALSE(r1);
   EXPECT_NE(r1.error().message.find("preempted by a newer motion"), std::string::npos)
