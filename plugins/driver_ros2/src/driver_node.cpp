@@ -208,6 +208,14 @@ class DriverNode : public Node {
     if (estop_)
       return refuse(PLR_ERR_STATE,
                     "e-stop engaged (" + estop_reason() + "): motion refused until it is reset");
+    if (motion.points.empty()) {
+      // Suction or conveyor alone: I/O only, nothing for the controller.
+      flatbuffers::FlatBufferBuilder out;
+      if (auto world = to_world(motion, {}, false, out); !world)
+        return refuse(world.error().code, world.error().message);
+      (void)responder.reply(out);
+      return;
+    }
     if (auto ok = check_limits(motion.points, *robot_, limit_margin_); !ok)
       return refuse(PLR_ERR_INVALID, "refused before sending: " + ok.error().message);
     const auto state = client_.latest_state();
@@ -342,7 +350,7 @@ class DriverNode : public Node {
       }
       m.points.push_back(p);
     }
-    if (m.points.size() < 2)
+    if (!asked.points.empty() && m.points.size() < 2)
       return make_error(PLR_ERR_STATE,
                         fmt::format("{} joint states with all joints during the motion: the world "
                                     "cannot follow it",
