@@ -310,7 +310,7 @@ class ControllerEmulatorNode : public Node {
       rep.msg.client_guid = it->client_guid;
       rep.msg.sequence_number = it->sequence;
       rep.msg.status =
-          static_cast<std::uint8_t>(done ? done->result.status : ros2::GoalStatus::kUnknown);
+          static_cast<std::int8_t>(done ? done->result.status : ros2::GoalStatus::kUnknown);
       rep.msg.result.error_code = static_cast<std::int32_t>(
           done ? done->result.error : ros2::TrajectoryError::kInvalidGoal);
       rep.msg.result.error_string =
@@ -335,7 +335,7 @@ class ControllerEmulatorNode : public Node {
     for (std::size_t i = 0; i < list.size(); ++i) {
       std::memset(&seq._buffer[i], 0, sizeof(seq._buffer[i]));
       std::memcpy(seq._buffer[i].goal_info.goal_id.uuid, list[i].first.data(), 16);
-      seq._buffer[i].status = static_cast<std::uint8_t>(list[i].second);
+      seq._buffer[i].status = static_cast<std::int8_t>(list[i].second);
     }
     dds_write(status_, &m.msg);
   }

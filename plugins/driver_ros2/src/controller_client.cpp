@@ -137,7 +137,7 @@ void ControllerClient::take_all() {
         std::lock_guard lock(m_);
         const auto call = result_calls_.find(m.sequence_number);
         if (call == result_calls_.end()) return;
-        results_[call->second] = {static_cast<ros2::GoalStatus>(static_cast<std::int8_t>(m.status)),
+        results_[call->second] = {static_cast<ros2::GoalStatus>(m.status),
                                   static_cast<ros2::TrajectoryError>(m.result.error_code),
                                   m.result.error_string ? m.result.error_string : ""};
         result_calls_.erase(call);
