@@ -250,11 +250,12 @@ class DriverNode : public Node {
     auto last_status = WallClock::now();
     std::optional<ros2::TrajectoryResult> result;
     for (;;) {
-      if ((result = client_.result(id))) break;
+      // Before the result: the e-stop's own cancel may have ended the goal.
       if (estop_) {
         failure = "e-stop engaged (" + estop_reason() + "): halted mid-trajectory";
         break;
       }
+      if ((result = client_.result(id))) break;
       if (!active_) {
         failure = "the driver was deactivated: halted mid-trajectory";
         code = PLR_ERR_CANCELLED;
