@@ -36,7 +36,7 @@ Unloading unload(const char* config, const std::string& tag, std::vector<std::st
   Unloading run;
   std::string pattern = (fs::temp_directory_path() / ("plr_unload_robot_XXXXXX")).string();
   run.dir = mkdtemp(pattern.data());
-  const std::string err = (run.dir / "stderr.txt").string();
+  const std::string err = (run.dir / "log.txt").string();
   const std::string report = (run.dir / "report").string();
   // Names of their own: two runs of one pipeline name cannot run at once.
   overrides.push_back("pipeline=" + tag + "_" + std::to_string(::getpid()));
@@ -48,6 +48,7 @@ Unloading unload(const char* config, const std::string& tag, std::vector<std::st
   const pid_t pid = fork();
   if (pid == 0) {
     const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    dup2(fd, 1);
     dup2(fd, 2);
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
