@@ -17,7 +17,7 @@
 #include <chrono>
 #include <cstring>
 #include <deque>
-#include <map>
+#include <set>
 #include <sstream>
 #include <thread>
 #include <tuple>
@@ -223,7 +223,7 @@ class ControllerEmulatorNode : public Node {
     } else {
       accepted = true;
       if (*a) finished(**a);
-      accepted_at_[id] = controller_->now();
+      accepted_.insert(id);
     }
     control_msgs_action_dds__FollowJointTrajectory_SendGoal_Response_ rep{};
     rep.client_guid = req.client_guid;
@@ -300,7 +300,7 @@ class ControllerEmulatorNode : public Node {
       const FinishedGoal* done = nullptr;
       for (const auto& r : results_)
         if (r.id == it->id) done = &r;
-      const bool known = done != nullptr || accepted_at_.count(it->id) > 0;
+      const bool known = done != nullptr || accepted_.count(it->id) > 0;
       if (done == nullptr && known) {
         ++it;
         continue;
@@ -316,7 +316,7 @@ class ControllerEmulatorNode : public Node {
       rep.msg.result.error_string =
           cm::wire_string(done ? done->result.error_string : "unknown goal");
       dds_write(result_rep_, &rep.msg);
-      if (done) accepted_at_.erase(it->id);
+      if (done) accepted_.erase(it->id);
       it = waiting_.erase(it);
     }
   }
@@ -371,7 +371,7 @@ class ControllerEmulatorNode : public Node {
                cancel_rep_ = 0, feedback_ = 0, status_ = 0, joint_state_ = 0, fault_ = 0;
   std::optional<JointTrajectoryController> controller_;
   std::deque<FinishedGoal> results_;
-  std::map<ros2::GoalId, double> accepted_at_;
+  std::set<ros2::GoalId> accepted_;  // goals whose result is not out yet
   std::vector<Waiting> waiting_;
   bool dropping_ = false;
   std::atomic<bool> running_{false};

@@ -259,6 +259,13 @@ plr::Status ControllerClient::cancel(const ros2::GoalId& id) {
   return {};
 }
 
+void ControllerClient::forget(const ros2::GoalId& id) {
+  std::lock_guard lock(m_);
+  results_.erase(id);
+  feedback_of_.erase(id);
+  std::erase_if(result_calls_, [&](const auto& call) { return call.second == id; });
+}
+
 void ControllerClient::wait(std::chrono::milliseconds d) const {
   std::unique_lock lock(m_);
   cv_.wait_for(lock, d);

@@ -63,6 +63,8 @@ class ControllerClient {
   std::optional<ros2::TrajectoryFeedback> feedback(const ros2::GoalId& id) const;
   // Cancels the goal: the controller holds the joints where they are.
   plr::Status cancel(const ros2::GoalId& id);
+  // Drops what is kept of a goal that is over.
+  void forget(const ros2::GoalId& id);
   // Returns when something arrived, or after `d`.
   void wait(std::chrono::milliseconds d) const;
 

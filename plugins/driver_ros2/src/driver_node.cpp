@@ -17,6 +17,7 @@
 #include <plr/sim/robot_model.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <memory>
 #include <mutex>
 #include <random>
@@ -40,7 +41,8 @@ class DriverNode : public Node {
   Status on_configure() override {
     params().allow_only({"urdf", "action", "joint_states", "domain_id", "loopback_only",
                          "time_scale", "path_tolerance", "goal_tolerance", "goal_time_tolerance_s",
-                         "watchdog_s", "accept_timeout_s", "limit_margin", "world_execute"});
+                         "watchdog_s", "accept_timeout_s", "limit_margin", "world_execute",
+                         "world_observe"});
     auto robot = sim::load_robot(params().get<std::string>("urdf", ""));
     if (!robot) return make_error(PLR_ERR_INVALID, "param 'urdf': " + robot.error().message);
     robot_.emplace(std::move(*robot));
@@ -52,6 +54,7 @@ class DriverNode : public Node {
     accept_timeout_s_ = params().get<double>("accept_timeout_s", 5.0);
     limit_margin_ = params().get<double>("limit_margin", 0.05);
     world_execute_ = params().get<std::string>("world_execute", "world/execute");
+    world_observe_ = params().get<std::string>("world_observe", "sim/observe");
     const int domain = params().get<int>("domain_id", 0);
     for (const auto& [name, value, lo, hi] :
          {std::tuple{"time_scale", time_scale_, 0.1, 100.0},
@@ -228,48 +231,75 @@ class DriverNode : public Node {
                                 "is sent",
                                 joint_states_name_, age, watchdog_s_));
 
-    const ros2::TrajectoryGoal goal = goal_of(motion);
+    GoalRun run = run_goal(goal_of(motion));
+    if (!run.sent) return refuse(run.code, run.failure);
+    // What the joints did goes to the world, even when the motion stopped
+    // early: the robot is where it stopped, and what it carries stays on the plate.
+    flatbuffers::FlatBufferBuilder out;
+    if (auto world = to_world(motion, run.measured, !run.failure.empty(), out); !world) {
+      if (run.failure.empty()) return refuse(world.error().code, world.error().message);
+      run.failure += "; " + world.error().message;
+    }
+    if (!run.failure.empty()) return refuse(run.code, run.failure);
+    if (flatbuffers::GetRoot<msg::ExecuteOutcome>(out.GetBufferPointer())->stalled())
+      realign_with_world();
+    (void)responder.reply(out);
+  }
+
+  struct GoalRun {
+    bool sent = false;    // the controller accepted the goal
+    std::string failure;  // why it did not succeed; empty when it did
+    plr_status code = PLR_ERR_STATE;
+    std::vector<ros2::JointStateSample> measured;  // joint states from before it to after it
+  };
+
+  // Sends one goal and follows it to its end, stopping the robot (cancel:
+  // the controller holds where the joints are) on the e-stop, stale joint
+  // states, deactivation or a missing result.
+  GoalRun run_goal(const ros2::TrajectoryGoal& goal) {
+    GoalRun run;
     const ros2::GoalId id = new_goal_id();
     const std::uint64_t first_state = client_.states_received();
     {
       std::lock_guard lock(goals_m_);
       active_goals_.insert(id);
     }
-    std::string failure;
-    plr_status code = PLR_ERR_STATE;
     if (auto sent = client_.send_goal(id, goal, to_ms(accept_timeout_s_)); !sent) {
       forget(id);
-      return refuse(sent.error().code == PLR_ERR_UNAVAILABLE ? PLR_ERR_UNAVAILABLE : PLR_ERR_STATE,
-                    sent.error().message);
+      run.code = sent.error().code == PLR_ERR_UNAVAILABLE ? PLR_ERR_UNAVAILABLE : PLR_ERR_STATE;
+      run.failure = sent.error().message;
+      return run;
     }
+    run.sent = true;
     (void)client_.request_result(id);
     const double duration = goal.points.back().time_s;
     const auto deadline =
         WallClock::now() +
-        to_ms((duration + goal_time_tolerance_ + 1.0) / time_scale_ + accept_timeout_s_);
+        to_ms((duration + goal.goal_time_tolerance_s + 1.0) / time_scale_ + accept_timeout_s_);
     auto last_status = WallClock::now();
     std::optional<ros2::TrajectoryResult> result;
     for (;;) {
       // Before the result: the e-stop's own cancel may have ended the goal.
       if (estop_) {
-        failure = "e-stop engaged (" + estop_reason() + "): halted mid-trajectory";
+        run.failure = "e-stop engaged (" + estop_reason() + "): halted mid-trajectory";
         break;
       }
       if ((result = client_.result(id))) break;
       if (!active_) {
-        failure = "the driver was deactivated: halted mid-trajectory";
-        code = PLR_ERR_CANCELLED;
+        run.failure = "the driver was deactivated: halted mid-trajectory";
+        run.code = PLR_ERR_CANCELLED;
         break;
       }
       const auto now_state = client_.latest_state();
       if (const double age = seconds_since(now_state->received); age > watchdog_s_) {
-        failure = fmt::format("joint state on {} stale for {:.2f} s (watchdog {:.2f} s): stopped",
-                              joint_states_name_, age, watchdog_s_);
+        run.failure =
+            fmt::format("joint state on {} stale for {:.2f} s (watchdog {:.2f} s): stopped",
+                        joint_states_name_, age, watchdog_s_);
         break;
       }
       if (WallClock::now() > deadline) {
-        failure = fmt::format("no result {:.1f} s after the trajectory's end: stopped",
-                              goal_time_tolerance_ + 1.0);
+        run.failure = fmt::format("no result {:.1f} s after the trajectory's end: stopped",
+                                  goal.goal_time_tolerance_s + 1.0);
         break;
       }
       if (WallClock::now() - last_status > 100ms) {
@@ -279,39 +309,75 @@ class DriverNode : public Node {
       client_.wait(10ms);
     }
     if (!result) {
-      // The controller holds where the joints are once it cancels the goal.
       (void)client_.cancel(id);
-      log().error("goal {}: {}", ros2::to_string(id), failure);
+      log().error("goal {}: {}", ros2::to_string(id), run.failure);
       const auto until = WallClock::now() + 300ms;
       while (!client_.result(id) && WallClock::now() < until) client_.wait(10ms);
     } else if (result->status != ros2::GoalStatus::kSucceeded) {
-      failure =
+      run.failure =
           fmt::format("controller ended the goal {}: {} ({})", ros2::to_string(result->status),
                       ros2::to_string(result->error), result->error_string);
       if (result->status == ros2::GoalStatus::kCanceled &&
           result->error == ros2::TrajectoryError::kInvalidGoal)
-        failure = "preempted by a newer motion: " + failure;
-      log().error("goal {}: {}", ros2::to_string(id), failure);
+        run.failure = "preempted by a newer motion: " + run.failure;
+      log().error("goal {}: {}", ros2::to_string(id), run.failure);
     }
     forget(id);
     publish_status(id, duration);
+    client_.forget(id);
     // The result may overtake the last joint state (another topic): wait for
     // one more, so the measured motion ends where the joints stopped.
     const std::uint64_t seen = client_.states_received();
     for (const auto until = WallClock::now() + 200ms;
          client_.states_received() == seen && WallClock::now() < until;)
       client_.wait(5ms);
+    run.measured = client_.states_since(first_state);
+    return run;
+  }
 
-    // What the joints did goes to the world, even when the motion stopped
-    // early: the robot is where it stopped, and what it carries stays on the plate.
-    const auto measured = client_.states_since(first_state);
-    flatbuffers::FlatBufferBuilder out;
-    if (auto world = to_world(motion, measured, !failure.empty(), out); !world) {
-      if (failure.empty()) return refuse(world.error().code, world.error().message);
-      failure += "; " + world.error().message;
+  // The world stopped the base (its boxes pushed back harder than the drive
+  // can push) where the emulated joints, which feel no boxes, went on. Brings
+  // the controller back to where the world holds the robot, to within 1e-5,
+  // so that the next trajectory, planned from the world's state, starts where
+  // the joints are. A real robot stalls by itself; this is for a simulated world.
+  void realign_with_world() {
+    if (world_observe_.empty()) return;
+    flatbuffers::FlatBufferBuilder req;
+    req.Finish(msg::CreateObserveRequest(req, false));
+    auto w = ctx().call<msg::ObserveRequest, msg::WorldState>(world_observe_, req, 30s).get();
+    const auto state = client_.latest_state();
+    if (!w || !w.value()->robot() || !w.value()->robot()->positions() ||
+        w.value()->robot()->positions()->size() != sim::kNumJoints || !state)
+      return log().error("{}: no robot state to realign the controller with after a stall",
+                         world_observe_);
+    std::vector<double> target(w.value()->robot()->positions()->begin(),
+                               w.value()->robot()->positions()->end());
+    // Rest to rest in T with a cubic: peak velocity 1.5 d/T, peak acceleration 6 d/T^2.
+    double duration = 0.1;
+    for (int j = 0; j < sim::kNumJoints; ++j) {
+      const auto it =
+          std::find(state->sample.names.begin(), state->sample.names.end(), sim::kJointNames[j]);
+      if (it == state->sample.names.end()) return;
+      const double d =
+          std::abs(target[j] - state->sample.position[it - state->sample.names.begin()]);
+      const sim::JointLimits& l = robot_->limits(j);
+      duration = std::max({duration, 1.5 * d / l.velocity, std::sqrt(6.0 * d / l.acceleration)});
     }
-    if (!failure.empty()) return refuse(code, failure);
-    (void)responder.reply(out);
+    ros2::TrajectoryGoal g;
+    g.joint_names.assign(sim::kJointNames.begin(), sim::kJointNames.end());
+    g.points.push_back({duration * 1.2, target, std::vector<double>(sim::kNumJoints, 0.0)});
+    for (const auto& name : g.joint_names) {
+      g.path_tolerance.push_back({name, -1.0});
+      g.goal_tolerance.push_back({name, 1e-5});
+    }
+    g.goal_time_tolerance_s = 2.0;
+    const GoalRun run = run_goal(g);
+    if (!run.failure.empty())
+      return log().error("realigning the controller with the world after a stall: {}", run.failure);
+    log().warn(
+        "the world stalled the base: the controller was brought back to the world's "
+        "robot state in {:.2f} s",
+        duration * 1.2);
   }
 
   void forget(const ros2::GoalId& id) {
@@ -395,7 +461,7 @@ class DriverNode : public Node {
 
   std::optional<sim::RobotModel> robot_;
   ControllerClient client_;
-  std::string joint_states_name_, world_execute_;
+  std::string joint_states_name_, world_execute_, world_observe_;
   double time_scale_ = 1.0, path_tolerance_ = 0.1, goal_tolerance_ = 0.01,
          goal_time_tolerance_ = 1.0, watchdog_s_ = 0.5, accept_timeout_s_ = 5.0,
          limit_margin_ = 0.05;

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <optional>
 #include <thread>
 
 namespace {
@@ -38,6 +39,7 @@ class DriverFaults : public ::testing::Test {
         k_.load_node(DRIVER_SO, plr::testing::NodeOptions().with_name("driver").with_params(
                                     "{" + common + R"(, "world_execute": "", "watchdog_s": 0.3})"));
     ASSERT_TRUE(driver);
+    driver_ = *driver;
     for (auto* n : {&*emulator, &*driver}) {
       ASSERT_TRUE(n->configure());
       ASSERT_TRUE(n->activate());
@@ -129,6 +131,7 @@ class DriverFaults : public ::testing::Test {
 
   int domain_ = test_domain();
   plr::testing::FakeKernel k_;
+  std::optional<plr::testing::NodeHandle> driver_;
   dds_entity_t participant_ = 0, faults_ = 0;
 };
 
@@ -211,6 +214,18 @@ TEST_F(DriverFaults, ATolerenceViolationAbortsHoldingPosition) {
             std::string::npos)
       << r.error().message;
   EXPECT_NE(r.error().message.find("joint arm_3"), std::string::npos);
+}
+
+TEST_F(DriverFaults, DeactivatingTheDriverMidTrajectoryStopsTheRobot) {
+  auto c = execute(move_base(0.5, 2.0));
+  ASSERT_TRUE(wait_progress(0.2));
+  ASSERT_TRUE(driver_->deactivate());
+  auto r = wait(c);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().message.find("the driver was deactivated: halted mid-trajectory"),
+            std::string::npos)
+      << r.error().message;
+  EXPECT_TRUE(logged("emulator", "CANCELED"));
 }
 
 TEST_F(DriverFaults, ALateStartIsCaughtByThePathTolerance) {
