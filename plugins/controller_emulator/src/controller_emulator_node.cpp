@@ -258,7 +258,11 @@ class ControllerEmulatorNode : public Node {
     if (done) finished(*done);
   }
 
-  void inject(const std::string& request) {
+  void inject(const char* text) {
+    const std::string request(text, strnlen(text, ros2::kMaxNameSize + 1));
+    if (request.size() > ros2::kMaxNameSize)
+      return log().warn("fault request on {}: longer than {} characters, ignored", fault_topic_,
+                        ros2::kMaxNameSize);
     std::istringstream in(request);
     std::string kind, joint;
     in >> kind;
