@@ -41,8 +41,8 @@ class DriverNode : public Node {
   Status on_configure() override {
     params().allow_only({"urdf", "action", "joint_states", "domain_id", "loopback_only",
                          "time_scale", "path_tolerance", "goal_tolerance", "goal_time_tolerance_s",
-                         "watchdog_s", "accept_timeout_s", "limit_margin", "world_execute",
-                         "world_observe"});
+                         "watchdog_s", "accept_timeout_s", "limit_margin", "start_tolerance",
+                         "world_execute", "world_observe"});
     auto robot = sim::load_robot(params().get<std::string>("urdf", ""));
     if (!robot) return make_error(PLR_ERR_INVALID, "param 'urdf': " + robot.error().message);
     robot_.emplace(std::move(*robot));
@@ -53,6 +53,7 @@ class DriverNode : public Node {
     watchdog_s_ = params().get<double>("watchdog_s", 0.5);
     accept_timeout_s_ = params().get<double>("accept_timeout_s", 5.0);
     limit_margin_ = params().get<double>("limit_margin", 0.05);
+    start_tolerance_ = params().get<double>("start_tolerance", 0.01);
     world_execute_ = params().get<std::string>("world_execute", "world/execute");
     world_observe_ = params().get<std::string>("world_observe", "sim/observe");
     const int domain = params().get<int>("domain_id", 0);
@@ -64,6 +65,7 @@ class DriverNode : public Node {
           std::tuple{"watchdog_s", watchdog_s_, 0.01, 10.0},
           std::tuple{"accept_timeout_s", accept_timeout_s_, 0.1, 60.0},
           std::tuple{"limit_margin", limit_margin_, 0.0, 0.5},
+          std::tuple{"start_tolerance", start_tolerance_, 1e-6, 1.0},
           std::tuple{"domain_id", static_cast<double>(domain), 0.0, 232.0}})
       if (!(value >= lo && value <= hi))
         return make_error(
@@ -222,15 +224,37 @@ class DriverNode : public Node {
     if (auto ok = check_limits(motion.points, *robot_, limit_margin_); !ok)
       return refuse(PLR_ERR_INVALID, "refused before sending: " + ok.error().message);
     const auto state = client_.latest_state();
+    // Refusals are PLR_ERR_STATE: the action goes on without the motion. The
+    // executor takes UNAVAILABLE for a simulator that restarted and would
+    // restore the world, which moves no real robot.
     if (!state)
-      return refuse(PLR_ERR_UNAVAILABLE,
+      return refuse(PLR_ERR_STATE,
                     fmt::format("no joint state on {} yet: nothing is sent", joint_states_name_));
     if (const double age = seconds_since(state->received); age > watchdog_s_)
-      return refuse(PLR_ERR_UNAVAILABLE,
+      return refuse(PLR_ERR_STATE,
                     fmt::format("joint state on {} is {:.2f} s old (watchdog {:.2f} s): nothing "
                                 "is sent",
                                 joint_states_name_, age, watchdog_s_));
 
+    // A trajectory from t = 0 must start where the joints are: the
+    // controller would jump to its first point.
+    if (motion.points.front().time_s == 0.0) {
+      for (int j = 0; j < sim::kNumJoints; ++j) {
+        const auto& names = state->sample.names;
+        const auto it = std::find(names.begin(), names.end(), sim::kJointNames[j]);
+        if (it == names.end())
+          return refuse(PLR_ERR_STATE, fmt::format("joint state on {} has no joint {}: nothing "
+                                                   "is sent",
+                                                   joint_states_name_, sim::kJointNames[j]));
+        const double off = std::abs(motion.points.front().position[j] -
+                                    state->sample.position[it - names.begin()]);
+        if (off > start_tolerance_)
+          return refuse(PLR_ERR_STATE,
+                        fmt::format("refused before sending: the trajectory starts {:.4f} from "
+                                    "joint {} (start tolerance {:.4f})",
+                                    off, sim::kJointNames[j], start_tolerance_));
+      }
+    }
     GoalRun run = run_goal(goal_of(motion));
     if (!run.sent) return refuse(run.code, run.failure);
     // What the joints did goes to the world, even when the motion stopped
@@ -266,7 +290,7 @@ class DriverNode : public Node {
     }
     if (auto sent = client_.send_goal(id, goal, to_ms(accept_timeout_s_)); !sent) {
       forget(id);
-      run.code = sent.error().code == PLR_ERR_UNAVAILABLE ? PLR_ERR_UNAVAILABLE : PLR_ERR_STATE;
+      run.code = PLR_ERR_STATE;
       run.failure = sent.error().message;
       return run;
     }
@@ -464,7 +488,7 @@ class DriverNode : public Node {
   std::string joint_states_name_, world_execute_, world_observe_;
   double time_scale_ = 1.0, path_tolerance_ = 0.1, goal_tolerance_ = 0.01,
          goal_time_tolerance_ = 1.0, watchdog_s_ = 0.5, accept_timeout_s_ = 5.0,
-         limit_margin_ = 0.05;
+         limit_margin_ = 0.05, start_tolerance_ = 0.01;
   Publisher<msg::Statistics> status_pub_;
   std::atomic<bool> active_{false};
   std::atomic<bool> estop_{false};

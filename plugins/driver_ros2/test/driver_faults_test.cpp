@@ -154,6 +154,24 @@ TEST_F(DriverFaults, ATrajectoryBeyondAJointLimitIsRefusedBeforeSending) {
   EXPECT_FALSE(logged("emulator", "goal"));  // the controller never heard of it
 }
 
+TEST_F(DriverFaults, ATrajectoryStartingAwayFromTheJointsIsRefusedBeforeSending) {
+  flatbuffers::FlatBufferBuilder fbb;
+  std::vector<double> q(kHome, kHome + 8), zero(8, 0.0);
+  q[0] = 0.3;  // the joints are at home, base_x 0
+  std::vector<flatbuffers::Offset<plr::msg::TrajectoryPoint>> pts = {
+      plr::msg::CreateTrajectoryPointDirect(fbb, 0.0, &q, &zero),
+      plr::msg::CreateTrajectoryPointDirect(fbb, 1.0, &q, &zero)};
+  fbb.Finish(
+      plr::msg::CreateExecuteRequest(fbb, plr::msg::CreateTrajectory(fbb, fbb.CreateVector(pts))));
+  auto r = wait(execute(fbb));
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().message.find("refused before sending: the trajectory starts 0.3000 from "
+                                   "joint base_x (start tolerance 0.0100)"),
+            std::string::npos)
+      << r.error().message;
+  EXPECT_FALSE(logged("emulator", "goal"));
+}
+
 TEST_F(DriverFaults, FeedbackLostMidTrajectoryStopsTheRobot) {
   auto c = execute(move_base(0.5, 2.0));
   ASSERT_TRUE(wait_progress(0.2));
