@@ -303,17 +303,18 @@ class DriverNode : public Node {
     auto last_status = WallClock::now();
     std::optional<ros2::TrajectoryResult> result;
     for (;;) {
-      // Before the result: the e-stop's own cancel may have ended the goal.
+      // Before the result: the e-stop's or the deactivation's own cancel may
+      // have ended the goal.
       if (estop_) {
         run.failure = "e-stop engaged (" + estop_reason() + "): halted mid-trajectory";
         break;
       }
-      if ((result = client_.result(id))) break;
       if (!active_) {
         run.failure = "the driver was deactivated: halted mid-trajectory";
         run.code = PLR_ERR_CANCELLED;
         break;
       }
+      if ((result = client_.result(id))) break;
       const auto now_state = client_.latest_state();
       if (const double age = seconds_since(now_state->received); age > watchdog_s_) {
         run.failure =
