@@ -470,9 +470,9 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       }
     }
     // Base: the arm at its preferred reach, the lowered nose short of every
-    // box it would meet. A plate low enough to meet the lowered nose stays ahead of its tip
-    // at the pre-grasp (nose_clearance covers the plate's body): turned off
-    // the trailer's axis, by its leading corner.
+    // box it would meet. A plate low enough to meet the lowered nose stays
+    // ahead of its tip at the pre-grasp (nose_clearance covers the plate's
+    // body): turned off the trailer's axis, by its leading corner.
     const double by_reach = face.x() - g.pick_reach + g.arm_yaw_offset;
     const double by_nose = nearest_low - g.conveyor_length - g.nose_clearance;
     const double plate_back = c.pregrasp.position.x() - pw * std::abs(n.y());
