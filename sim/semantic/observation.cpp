@@ -1,6 +1,8 @@
 #include "plr/sim/observation.hpp"
 #include "plr/sim/unaligned.hpp"
 
+#include <plr/message.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -210,6 +212,17 @@ World world_from_message(const plr::msg::WorldState& state) {
     }
   }
   return w;
+}
+
+plr::Expected<World> world_from_request(const plr::msg::NextStrategyRequest& request) {
+  const auto* bytes = request.world();
+  if (bytes == nullptr || bytes->size() == 0)
+    return plr::make_error(PLR_ERR_INVALID, "strategy/next: request carries no world");
+  std::vector<std::uint64_t> aligned;
+  const auto* state = plr::read_nested<plr::msg::WorldState>(bytes, aligned);
+  if (state == nullptr)
+    return plr::make_error(PLR_ERR_INVALID, "strategy/next: world is not a valid WorldState");
+  return world_from_message(*state);
 }
 
 }  // namespace plr::sim

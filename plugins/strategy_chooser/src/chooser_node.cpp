@@ -65,14 +65,9 @@ class StrategyChooser : public plr::Node {
  private:
   plr::Status next(const plr::msg::NextStrategyRequest& request,
                    flatbuffers::FlatBufferBuilder& reply) {
-    const auto* bytes = request.world();
-    if (bytes == nullptr || bytes->size() == 0)
-      return plr::make_error(PLR_ERR_INVALID, "strategy/next: request carries no world");
-    std::vector<std::uint64_t> aligned;
-    const auto* state = plr::read_nested<plr::msg::WorldState>(bytes, aligned);
-    if (state == nullptr)
-      return plr::make_error(PLR_ERR_INVALID, "strategy/next: world is not a valid WorldState");
-    const auto world = plr::sim::world_from_message(*state);
+    auto read = plr::sim::world_from_request(request);
+    if (!read) return read.error();
+    const plr::sim::World& world = *read;
     const chooser::Features f = chooser::features(world, obs_);
     const chooser::Nearest nn = index_->nearest(model_->scaling().apply(f));
     const chooser::Verdict verdict = model_->decide(f);
@@ -103,7 +98,7 @@ class StrategyChooser : public plr::Node {
     flatbuffers::FlatBufferBuilder ask;
     std::vector<plr::msg::Action> ex;
     if (excluded) ex.assign(excluded->begin(), excluded->end());
-    std::vector<std::uint8_t> world_bytes(bytes->begin(), bytes->end());
+    std::vector<std::uint8_t> world_bytes(request.world()->begin(), request.world()->end());
     ask.Finish(
         plr::msg::CreateNextStrategyRequestDirect(ask, &world_bytes, request.observation(), &ex));
     const auto h = ctx()

@@ -43,14 +43,9 @@ class HardcodedStrategy : public plr::Node {
  private:
   plr::Status next(const plr::msg::NextStrategyRequest& request,
                    flatbuffers::FlatBufferBuilder& reply) {
-    const auto* bytes = request.world();
-    if (bytes == nullptr || bytes->size() == 0)
-      return plr::make_error(PLR_ERR_INVALID, "strategy/next: request carries no world");
-    std::vector<std::uint64_t> aligned;
-    const auto* state = plr::read_nested<plr::msg::WorldState>(bytes, aligned);
-    if (state == nullptr)
-      return plr::make_error(PLR_ERR_INVALID, "strategy/next: world is not a valid WorldState");
-    const auto world = plr::sim::world_from_message(*state);
+    auto read = plr::sim::world_from_request(request);
+    if (!read) return read.error();
+    const plr::sim::World& world = *read;
     const auto scene = plr::sim::analyse(world, obs_);
     if (!scene.observation)
       return plr::make_error(PLR_ERR_INVALID, "strategy/next: the trailer is empty");

@@ -82,5 +82,8 @@ std::optional<Observation> classify(const World& world, const ObservationParams&
 
 // The perceived world in a WorldState message (masses as given, usually 0).
 World world_from_message(const plr::msg::WorldState& state);
+// The world a strategy/next request carries; a request without one, or with
+// bytes that are not a WorldState, is refused naming the service.
+plr::Expected<World> world_from_request(const plr::msg::NextStrategyRequest& request);
 
 }  // namespace plr::sim
