@@ -159,10 +159,6 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
   const std::size_t count = world.boxes.size();
   std::vector<sim::Bounds> b(count);
   double nearest = std::numeric_limits<double>::infinity();
-  // The nearest box low enough to meet the lowered nose: one leaning out
-  // high up does not keep the base back (the robot's moves are planned
-  // against it all the same).
-  double nearest_low = nearest;
   // The action's region: boxes of the first wall or front pile of its
   // height class (a box's top against the wall or pile thresholds) and
   // third of the width.
@@ -171,7 +167,6 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     const auto& box = world.boxes[i];
     b[i] = sim::bounds(box);
     nearest = std::min(nearest, b[i].x0);
-    if (b[i].z0 < g.nose_top) nearest_low = std::min(nearest_low, b[i].x0);
     const bool is_wall = wall.count(box.id) > 0;
     if (!is_wall && !front.count(box.id)) continue;
     const auto cls = is_wall ? height_class(b[i].z1, obs.wall_mid, obs.wall_high)
@@ -470,11 +465,11 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       }
     }
     // Base: the arm at its preferred reach, the lowered nose short of every
-    // box it would meet. A plate low enough to meet the lowered nose stays
+    // box. A plate low enough to meet the lowered nose stays
     // ahead of its tip at the pre-grasp (nose_clearance covers the plate's
     // body): turned off the trailer's axis, by its leading corner.
     const double by_reach = face.x() - g.pick_reach + g.arm_yaw_offset;
-    const double by_nose = nearest_low - g.conveyor_length - g.nose_clearance;
+    const double by_nose = nearest - g.conveyor_length - g.nose_clearance;
     const double plate_back = c.pregrasp.position.x() - pw * std::abs(n.y());
     const double by_plate = c.pregrasp.position.z() - ph < g.nose_top
                                 ? plate_back - g.conveyor_length - g.nose_clearance

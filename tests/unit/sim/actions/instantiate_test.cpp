@@ -406,24 +406,6 @@ TEST(PickCandidates, ATurnedBoxBesideASideWallIsApproachedWithThePlateInsideTheT
   }
 }
 
-TEST(PickCandidates, ABoxLeaningOutHighUpDoesNotKeepTheBaseBack) {
-  // The lowered nose passes under a box hanging out of the top of the wall:
-  // the base comes as near for a low box as without it.
-  sim::World w = trailer_world();
-  w.boxes = {sim::testing::make_box(1, 6.2, 0.0, 0.0, {0.4, 0.4, 0.3})};
-  const auto alone = candidates(w, sim::make_pick(sim::Height::kMid, sim::Side::kCenter));
-  ASSERT_EQ(alone.size(), 1u);
-  w.boxes.push_back(sim::testing::make_box(2, 5.8, 0.8, 1.6, {0.4, 0.4, 0.3}));
-  const auto with_high = candidates(w, sim::make_pick(sim::Height::kMid, sim::Side::kCenter));
-  ASSERT_EQ(with_high.size(), 1u);
-  EXPECT_DOUBLE_EQ(with_high.front().base_x, alone.front().base_x);
-  // On the floor, the same box does keep the base back.
-  w.boxes[1] = sim::testing::make_box(2, 5.8, 0.8, 0.0, {0.4, 0.4, 0.3});
-  const auto with_low = candidates(w, sim::make_pick(sim::Height::kMid, sim::Side::kCenter));
-  ASSERT_EQ(with_low.size(), 1u);
-  EXPECT_LT(with_low.front().base_x, alone.front().base_x - 0.1);
-}
-
 TEST(DropOff, PlacesHoldTheBoxOverTheConveyorAndTurnTheWristSideways) {
   sim::World w = trailer_world();
   w.boxes.push_back(sim::testing::make_box(7, 6.0, 0.0, 1.0, {0.45, 0.55, 0.35}));
