@@ -569,6 +569,16 @@ std::vector<EnvFamily> all_env_families() {
   return {EnvFamily::kA1, EnvFamily::kA2, EnvFamily::kB1, EnvFamily::kB2, EnvFamily::kC};
 }
 
+std::string env_family_names() {
+  const std::vector<EnvFamily> all = all_env_families();
+  std::string names;
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    if (i > 0) names += i + 1 == all.size() ? " or " : ", ";
+    names += to_string(all[i]);
+  }
+  return names;
+}
+
 std::optional<EnvFamily> parse_env_family(std::string_view name) {
   for (EnvFamily f : all_env_families()) {
     const std::string_view s = to_string(f);

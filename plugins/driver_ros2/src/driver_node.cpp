@@ -91,7 +91,7 @@ class DriverNode : public Node {
         [this](const Message<msg::ExecuteRequest>& r, Responder<msg::ExecuteOutcome> responder) {
           auto motion = actions::decode_execute_request(*r);
           if (!motion) {
-            (void)responder.fail(PLR_ERR_INVALID, "sim/execute: " + motion.error().message);
+            (void)responder.fail(PLR_ERR_INVALID, motion.error().message);
             return;
           }
           start_job(std::move(*motion), std::move(responder));

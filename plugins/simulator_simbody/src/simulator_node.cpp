@@ -140,21 +140,21 @@ class SimulatorNode : public Node {
     std::optional<sim::EnvFamily> family;
     if (r.world_file() && r.world_file()->size() > 0) {
       auto loaded = sim::load_world(r.world_file()->str());
-      if (!loaded) return make_error(PLR_ERR_INVALID, "sim/reset: " + loaded.error().message);
+      if (!loaded) return make_error(PLR_ERR_INVALID, loaded.error().message);
       world = std::move(*loaded);
     } else {
       const std::string env = r.env() ? r.env()->str() : "A1";
       family = sim::parse_env_family(env);
       if (!family)
         return make_error(PLR_ERR_INVALID,
-                          "sim/reset: env '" + env + "': expected A1, A2, B1 or B2");
+                          "env '" + env + "': expected " + sim::env_family_names());
     }
     // The physics throws, on a world it cannot simulate (a box without mass) and from Simbody.
     try {
       if (family) world = sim::make_environment(*family, r.seed(), {}, max_settle_);
       start(world, {home_configuration(), {}}, static_cast<std::uint32_t>(world.boxes.size()), 0);
     } catch (const std::exception& e) {
-      return make_error(PLR_ERR_INVALID, std::string("sim/reset: ") + e.what());
+      return make_error(PLR_ERR_INVALID, e.what());
     }
     log().info("reset: {} boxes", world.boxes.size());
     publish_state();
@@ -177,10 +177,10 @@ class SimulatorNode : public Node {
   Status execute(const msg::ExecuteRequest& r, flatbuffers::FlatBufferBuilder& out) {
     if (!sim_) return make_error(PLR_ERR_STATE, "no world yet: call sim/reset first");
     auto motion = actions::decode_execute_request(r);
-    if (!motion) return make_error(PLR_ERR_INVALID, "sim/execute: " + motion.error().message);
+    if (!motion) return make_error(PLR_ERR_INVALID, motion.error().message);
     const auto wall_start = std::chrono::steady_clock::now();
     auto done = sim_->execute(*motion);
-    if (!done) return make_error(done.error().code, "sim/execute: " + done.error().message);
+    if (!done) return make_error(done.error().code, done.error().message);
     for (const auto& e : done->suction)
       log().info("box {} {} at t={:.2f} s: the cups had to hold {:.0f} N, can hold {:.0f} N",
                  e.box_id, e.kind == sim::SuctionEvent::Kind::kDropped ? "dropped" : "not gripped",
@@ -206,7 +206,7 @@ class SimulatorNode : public Node {
               checkpoint_dir_,
               {sim_->truth(), robot_state(), sim_->time(), boxes_total_, boxes_unloaded()});
           !saved)
-        return make_error(PLR_ERR_INTERNAL, "sim/snapshot: " + saved.error().message);
+        return make_error(PLR_ERR_INTERNAL, saved.error().message);
     }
     out.Finish(msg::CreateSnapshotReplyDirect(out, true, "", name.c_str()));
     return {};
@@ -217,13 +217,12 @@ class SimulatorNode : public Node {
       sim_->restore(*it->second);
     } else if (name == "checkpoint" && !checkpoint_dir_.empty()) {
       auto c = load_checkpoint(checkpoint_dir_);
-      if (!c) return make_error(c.error().code, "sim/restore: " + c.error().message);
-      if (!*c)
-        return make_error(PLR_ERR_INVALID, "sim/restore: no checkpoint in " + checkpoint_dir_);
+      if (!c) return make_error(c.error().code, c.error().message);
+      if (!*c) return make_error(PLR_ERR_INVALID, "no checkpoint in " + checkpoint_dir_);
       const Checkpoint& restored = **c;
       start(restored.world, restored.robot, restored.boxes_total, restored.boxes_unloaded);
     } else {
-      return make_error(PLR_ERR_INVALID, "sim/restore: no snapshot named '" + name + "'");
+      return make_error(PLR_ERR_INVALID, "no snapshot named '" + name + "'");
     }
     publish_state();
     out.Finish(msg::CreateSnapshotReplyDirect(out, true, "", name.c_str()));

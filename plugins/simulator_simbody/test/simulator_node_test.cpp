@@ -84,17 +84,17 @@ TEST_F(SimulatorService, ServicesBeforeResetSayWhatIsMissing) {
   EXPECT_EQ(s.error().message, "no world yet: call sim/reset first");
   const auto r = snapshot("sim/restore", "a");
   ASSERT_FALSE(r);
-  EXPECT_EQ(r.error().message, "sim/restore: no snapshot named 'a'");
+  EXPECT_EQ(r.error().message, "no snapshot named 'a'");
 }
 
 TEST_F(SimulatorService, BadResetRequestsNameTheProblem) {
   const auto family = reset("C7", "");
   ASSERT_FALSE(family);
-  EXPECT_EQ(family.error().message, "sim/reset: env 'C7': expected A1, A2, B1 or B2");
+  EXPECT_EQ(family.error().message, "env 'C7': expected A1, A2, B1, B2 or C");
   const auto file = reset("", "/nonexistent/world.yaml");
   ASSERT_FALSE(file);
   EXPECT_EQ(file.error().message,
-            "sim/reset: /nonexistent/world.yaml: cannot read the world: No such file or directory");
+            "/nonexistent/world.yaml: cannot read the world: No such file or directory");
   // A perceived world (masses unknown) is a valid world file, but not one to simulate.
   const auto perceived =
       std::filesystem::temp_directory_path() / ("plr_perceived_" + std::to_string(::getpid()));
@@ -105,7 +105,7 @@ TEST_F(SimulatorService, BadResetRequestsNameTheProblem) {
   std::filesystem::remove(perceived);
   ASSERT_FALSE(massless);
   EXPECT_EQ(massless.error().message,
-            "sim/reset: Simulation: box 4 has no mass (the simulator needs the true world)");
+            "Simulation: box 4 has no mass (the simulator needs the true world)");
 }
 
 TEST_F(SimulatorService, ResetFromAFileThenObservePerceivedAndTrueState) {
@@ -131,11 +131,10 @@ TEST_F(SimulatorService, BadTrajectoriesAreRefusedWithTheReason) {
   const auto short_point = execute({home(), {0.0, 0.0, -1.0}}, {0.0, 0.1});
   ASSERT_FALSE(short_point);
   EXPECT_EQ(short_point.error().message,
-            "sim/execute: ExecuteRequest.trajectory: every point needs 8 positions");
+            "ExecuteRequest.trajectory: every point needs 8 positions");
   const auto backwards = execute({home(), home()}, {0.5, 0.1});
   ASSERT_FALSE(backwards);
-  EXPECT_EQ(backwards.error().message,
-            "sim/execute: ExecuteRequest.trajectory: times must not decrease");
+  EXPECT_EQ(backwards.error().message, "ExecuteRequest.trajectory: times must not decrease");
   // Planned from another state: the robot would jump to its first point.
   auto elsewhere = home();
   elsewhere[0] += 0.5;
@@ -143,7 +142,7 @@ TEST_F(SimulatorService, BadTrajectoriesAreRefusedWithTheReason) {
   ASSERT_FALSE(jump);
   EXPECT_EQ(jump.error().code, PLR_ERR_STATE);
   EXPECT_EQ(jump.error().message,
-            "sim/execute: the trajectory starts 0.5000 (rad or m) away from the robot's "
+            "the trajectory starts 0.5000 (rad or m) away from the robot's "
             "configuration");
 }
 
@@ -183,7 +182,7 @@ TEST_F(SimulatorService, RestoreThroughTheServiceGoesBackInTime) {
   }
   const auto unknown = snapshot("sim/restore", "never-saved");
   ASSERT_FALSE(unknown);
-  EXPECT_EQ(unknown.error().message, "sim/restore: no snapshot named 'never-saved'");
+  EXPECT_EQ(unknown.error().message, "no snapshot named 'never-saved'");
 }
 
 // control_period_s: 1e-7 made sim/execute never return; an octree at 0.1 mm

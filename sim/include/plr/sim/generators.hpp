@@ -30,6 +30,8 @@ enum class EnvFamily { kA1, kA2, kB1, kB2, kC };
 std::string_view to_string(EnvFamily family);
 // Every family, in order.
 std::vector<EnvFamily> all_env_families();
+// "A1, A2, B1, B2 or C", for messages.
+std::string env_family_names();
 // "A1", "a1", ... ; nullopt for anything else.
 std::optional<EnvFamily> parse_env_family(std::string_view name);
 
