@@ -115,10 +115,15 @@ UnloaderSimulation& UnloaderSimulation::operator=(UnloaderSimulation&&) noexcept
 
 plr::Expected<Executed> UnloaderSimulation::execute(const Motion& motion) {
   Impl& m = *impl_;
-  for (std::size_t i = 1; i < motion.points.size(); ++i) {
-    if (motion.points[i].time_s < motion.points[i - 1].time_s)
+  // A non-finite point would reach the contact model and Simbody as NaN poses.
+  for (std::size_t i = 0; i < motion.points.size(); ++i) {
+    if (!std::isfinite(motion.points[i].time_s) || !motion.points[i].position.allFinite())
+      return plr::make_error(PLR_ERR_INVALID, fmt::format("trajectory point {} is not finite", i));
+    if (i > 0 && motion.points[i].time_s < motion.points[i - 1].time_s)
       return plr::make_error(PLR_ERR_INVALID, "trajectory times must not decrease");
   }
+  if (!std::isfinite(motion.settle_s))
+    return plr::make_error(PLR_ERR_INVALID, "settle time is not finite");
   if (!motion.points.empty()) {
     const double off = (motion.points.front().position - m.q).cwiseAbs().maxCoeff();
     // A trajectory planned from another state would make the robot jump: a

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "plr/sim/generators.hpp"
 #include "plr/sim/robot_links.hpp"
@@ -143,6 +144,24 @@ TEST(TrailerContact, IsCountedForTheRobotsShapesNotTheirBoundingCubes) {
   out = sim.execute(move_to(near_wall, into_wall));
   ASSERT_TRUE(out) << out.error().message;
   EXPECT_EQ(out->robot_trailer_contacts, 1u);
+}
+
+TEST(Execute, RefusesATrajectoryWithANonFinitePointAndLeavesTheWorldAsItWas) {
+  const sim::JointVector q = home_configuration();
+  UnloaderSimulation sim(robot(), block_ahead_of(q, 10.0), q);
+  const double before = sim.time();
+  Motion nan_position = drive_forward(q);
+  nan_position.points[7].position[sim::kBaseX] = std::nan("");
+  auto out = sim.execute(nan_position);
+  ASSERT_FALSE(out);
+  EXPECT_EQ(out.error().message, "trajectory point 7 is not finite");
+  Motion nan_time = drive_forward(q);
+  nan_time.points[3].time_s = std::nan("");
+  out = sim.execute(nan_time);
+  ASSERT_FALSE(out);
+  EXPECT_EQ(out.error().message, "trajectory point 3 is not finite");
+  EXPECT_EQ(sim.time(), before);
+  EXPECT_TRUE(sim.execute(drive_forward(q)));
 }
 
 }  // namespace
