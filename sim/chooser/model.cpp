@@ -282,7 +282,7 @@ plr::Expected<Model> Model::deserialize(const std::uint8_t* data, std::size_t si
   const std::size_t classes = count(m->labels());
   if (classes < 1 || classes > 2 || count(m->class_support()) != classes)
     return error(origin, "labels: one or two classes, each with its support count");
-  int support = 0;
+  std::int64_t support = 0;  // two ints from the file: their sum must not overflow
   for (std::size_t i = 0; i < classes; ++i) {
     const int label = m->labels()->Get(static_cast<flatbuffers::uoffset_t>(i));
     const int n = m->class_support()->Get(static_cast<flatbuffers::uoffset_t>(i));

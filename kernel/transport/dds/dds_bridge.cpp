@@ -1,6 +1,6 @@
 #include "dds_bridge.hpp"
 
-#include "envelope.h"
+#include "envelope_check.hpp"
 
 #include <dds/ddsc/dds_statistics.h>
 #include <fmt/format.h>
@@ -21,28 +21,12 @@ using Clock = std::chrono::steady_clock;
 // Which DDS topic a reader listens to.
 enum ReaderKind { kDataReader, kRequestReader, kReplyReader, kAnnounceReader, kControlReader };
 
-constexpr std::size_t kMaxKernelId = 128;
 constexpr std::size_t kMaxErrorText = 4096;
 // A remote call nobody answered for this long is forgotten (the bus has timed it out).
 constexpr auto kForgetCall = 15min;
 
 // Set on Cyclone's threads that run our listeners.
 thread_local bool t_on_receive_thread = false;
-
-std::size_t bounded_len(const char* s, std::size_t max) {
-  return s == nullptr ? max + 1 : ::strnlen(s, max + 1);
-}
-
-// Field sizes and the kind, before anything reads the envelope.
-const char* envelope_problem(const plr_dds_Envelope& e) {
-  const auto kernel = bounded_len(e.kernel, kMaxKernelId);
-  if (kernel == 0 || kernel > kMaxKernelId) return "bad sender id";
-  if (bounded_len(e.target, kMaxKernelId) > kMaxKernelId) return "bad target id";
-  if (bounded_len(e.name, kMaxNameSize) > kMaxNameSize) return "name too long";
-  if (e.kind > static_cast<std::uint8_t>(EnvelopeKind::kResult)) return "unknown kind";
-  if (e.payload._length > 0 && e.payload._buffer == nullptr) return "missing payload";
-  return nullptr;
-}
 
 dds_qos_t* topic_qos(const TopicSettings& t) {
   dds_qos_t* q = dds_create_qos();
@@ -473,19 +457,12 @@ void DdsBridge::on_announce(const plr_dds_Envelope& e, bool alive) {
   if (!alive) return peer_gone(e.kernel, "left the DDS domain");
   if (e.kind != static_cast<std::uint8_t>(EnvelopeKind::kAnnounce))
     return invalid("not an announce", e.kernel);
-  if (e.payload._length > kMaxJsonPayload) return invalid("announce too large", e.kernel);
-  const auto j = nlohmann::json::parse(e.payload._buffer, e.payload._buffer + e.payload._length,
-                                       nullptr, false);
-  if (j.is_discarded() || !j.is_object() || !j.contains("services") || !j["services"].is_array())
-    return invalid("malformed announce", e.kernel);
-  std::set<std::string> services;
-  for (const auto& s : j["services"])
-    if (s.is_string() && s.get_ref<const std::string&>().size() <= kMaxNameSize)
-      services.insert(s.get<std::string>());
+  auto services = announce_services(e.payload._buffer, e.payload._length);
+  if (!services) return invalid(services.error().message.c_str(), e.kernel);
   std::lock_guard lock(m_);
   auto [it, fresh] = peers_.try_emplace(e.kernel);
   it->second.seen = Clock::now();
-  it->second.services = std::move(services);
+  it->second.services = std::move(*services);
   if (fresh) spdlog::info("dds: kernel '{}' joined", e.kernel);
 }
 
@@ -597,13 +574,12 @@ void DdsBridge::on_command(const plr_dds_Envelope& e) {
     write(result_writer_, from, "result", EnvelopeKind::kResult, 0, 0, corr, status,
           reinterpret_cast<const std::uint8_t*>(text.data()), text.size());
   };
-  if (e.payload._length > kMaxJsonPayload) return invalid("command too large", from);
-  auto cmd = nlohmann::json::parse(e.payload._buffer, e.payload._buffer + e.payload._length,
-                                   nullptr, false);
-  if (cmd.is_discarded() || !cmd.is_object() || !cmd.contains("cmd") || !cmd["cmd"].is_string()) {
-    invalid("malformed command", from);
-    return result(PLR_ERR_INVALID, "malformed command");
+  auto parsed = remote_command(e.payload._buffer, e.payload._length);
+  if (!parsed) {
+    invalid(parsed.error().message.c_str(), from);
+    return result(PLR_ERR_INVALID, parsed.error().message);
   }
+  auto cmd = std::move(*parsed);
   const auto what = cmd.dump();
   if (!config_.dds.allow_remote_control) {
     commands_refused_.fetch_add(1, std::memory_order_relaxed);

@@ -122,6 +122,23 @@ TEST(Model, AModelOfOtherFeaturesIsRefused) {
             "1 (85): train the chooser again");
 }
 
+// Support counts are two int32 from the file; their sum must not overflow.
+TEST(Model, SupportCountsWhoseSumOverflowsAnIntAreRefused) {
+  auto bytes = trained().serialize();
+  flatbuffers::FlatBufferBuilder fbb;
+  auto obj = plr::msg::GetChooserModel(bytes.data() + 4)->UnPack();
+  obj->labels = {kNearestLabel, kHardcodedLabel};
+  obj->class_support = {INT32_MAX, INT32_MAX};
+  plr::msg::FinishChooserModelBuffer(fbb, plr::msg::ChooserModel::Pack(fbb, obj));
+  delete obj;
+  const auto framed = plr::sim::frame(fbb.GetBufferPointer(), fbb.GetSize());
+  const auto r = Model::deserialize(framed.data(), framed.size(), "big.plrm");
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().message,
+            "big.plrm: support_vectors: 4294967294 vectors of 85 values and as many coefficients "
+            "expected");
+}
+
 TEST(Model, ALibraryIsNotAModel) {
   const auto bytes = trained().serialize();
   auto other = bytes;
