@@ -1,7 +1,10 @@
 // FCL collision checking of the unloader against the world W and itself.
 //
 // World: the trailer shell as an octree (octomap::OcTree -> fcl::OcTree) plus
-// every perceived box as an FCL box. Self-collision: every pair of links
+// every perceived box as an FCL box. The octree counts outside the trailer's
+// inner volume (world.trailer) only: inside it the perceived boxes are the
+// obstacles, and a shape within it is clear of the shell however the
+// octree's grid rounds the walls. Self-collision: every pair of links
 // except the URDF-adjacent ones and those allowed with allow_collision().
 // Boxes held by the suction plate are attached to the plate link, so they
 // collide with the world and with the rest of the robot like part of the arm.

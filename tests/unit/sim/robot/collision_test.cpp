@@ -264,6 +264,32 @@ bool valid_by_fcl_alone(const JointVector& q, const World& w,
 
 // The checker's shortcuts (occupied-cell grid, FCL's box-box SAT in place of
 // its narrow phase, cached free placements) must not change any answer.
+// A 40 ft container (2.35 m wide, 2.39 m high) is off the octree's 5 cm
+// grid: its shell's leaves reach 2.5 cm into the sides and 4 cm below the
+// ceiling. A box packed against the wall or just under the ceiling, once
+// held, is still clear of the shell; pushed 1 cm into the wall it is not.
+TEST(Collision, AHeldBoxAgainstAContainerWallOffTheOctreeGridIsClearOfIt) {
+  World w;
+  w.trailer = {2.35, 2.39, 12.0};
+  const JointVector q = home();
+  const double side = 0.5 * w.trailer.width;
+  const auto held_at = [&](double y, double z) {
+    CollisionChecker cc(robot(), w);
+    cc.attach_box(box(7, 6.0, y, z, 0.5), q);
+    return cc;
+  };
+  EXPECT_TRUE(held_at(side - 0.25, 1.0).is_valid(q))
+      << held_at(side - 0.25, 1.0).describe_collision(q);
+  EXPECT_TRUE(held_at(-side + 0.25, 1.0).is_valid(q));
+  EXPECT_TRUE(held_at(0.0, w.trailer.height - 0.25).is_valid(q));
+  EXPECT_EQ(held_at(side - 0.24, 1.0).describe_collision(q), "held box 7 - trailer");
+  EXPECT_EQ(held_at(0.0, w.trailer.height - 0.24).describe_collision(q), "held box 7 - trailer");
+  // Slid along the wall, as a lift or a pull-out does.
+  JointVector back = q;
+  back[plr::sim::kBaseX] -= 0.3;
+  EXPECT_TRUE(held_at(side - 0.25, 1.0).is_motion_valid(q, back));
+}
+
 TEST(Collision, AgreesWithFclAloneOnRandomStates) {
   World w;
   std::mt19937 rng(7);
