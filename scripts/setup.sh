@@ -14,7 +14,7 @@ case "${1:-}" in
 esac
 
 packages=(
-  build-essential cmake ninja-build pkg-config git clang-format
+  build-essential cmake ninja-build pkg-config git clang-format lld
   libeigen3-dev libfcl-dev liboctomap-dev libsimbody-dev
   cyclonedds-dev cyclonedds-tools
   libyaml-cpp-dev libflatbuffers-dev flatbuffers-compiler
