@@ -175,6 +175,7 @@ plr::Expected<Episode> run_strategies(const ActionModel& model, Backend& backend
   std::optional<std::uint32_t> unloaded_at_start;
   sim::Strategy strategy;
   std::string from;
+  bool blind = false;
   std::optional<std::uint32_t> node;
   for (;;) {
     auto seen = backend.observe();
@@ -189,8 +190,8 @@ plr::Expected<Episode> run_strategies(const ActionModel& model, Backend& backend
     if (!why) {
       // After an action that moved nothing, the tree is not followed
       // blindly: the source is asked again, its rules telling what failed.
-      const auto child =
-          node && rules.fresh() ? strategy.next(*node, *scene.observation) : std::nullopt;
+      const auto child = node && (blind || rules.fresh()) ? strategy.next(*node, *scene.observation)
+                                                          : std::nullopt;
       if (child) {
         node = child;
         ++e.strategy_steps;
@@ -203,6 +204,7 @@ plr::Expected<Episode> run_strategies(const ActionModel& model, Backend& backend
         } else {
           strategy = std::move(*choice->strategy);
           from = std::move(choice->source);
+          blind = choice->blind;
           node = strategy.root;
         }
       }

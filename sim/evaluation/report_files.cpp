@@ -125,7 +125,7 @@ std::string plot_svg(const nlohmann::json& summary, const std::string& name) {
 std::string report_html(const nlohmann::json& r) {
   const auto& set = r["settings"];
   std::string h =
-      "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>PLR evaluation</title>\n"
+      "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"/><title>PLR evaluation</title>\n"
       "<style>body{font-family:sans-serif;max-width:1000px;margin:auto}table{border-collapse:"
       "collapse}td,th{border:1px solid #999;padding:2px 8px;text-align:right}th{background:#ddd}"
       "td:first-child{text-align:left}</style></head><body>\n<h1>PLR evaluation</h1>\n";
@@ -137,7 +137,7 @@ std::string report_html(const nlohmann::json& r) {
       xml_escape(set["library"].get<std::string>()), xml_escape(set["model"].get<std::string>()));
   h += "<h2>Boxes unloaded against robot time</h2>\n";
   for (const auto& [name, env] : r["environments"].items())
-    h += fmt::format("<img src=\"{}\" alt=\"{}\">\n",
+    h += fmt::format("<img src=\"{}\" alt=\"{}\"/>\n",
                      xml_escape(env["plot_svg"].get<std::string>()), xml_escape(name));
   h += "<h2>Findings</h2>\n<ul>\n";
   for (const auto& f : r["findings"])

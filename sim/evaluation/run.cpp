@@ -44,18 +44,19 @@ actions::StrategySource method_source(const EvaluationSettings& settings, const 
       return h;
     case Method::kOpenLoop:
     case Method::kExpectedOffline: {
-      // The precomputed strategy from the start, and nothing after it: the
-      // library holds one strategy per training world.
+      // The precomputed strategy from the start, followed as it was
+      // generated, and nothing after it: the library holds one strategy per
+      // training world.
       auto used = std::make_shared<bool>(false);
       return [own, used](const actions::Perceived&, const sim::SceneAnalysis&,
                          const actions::RunRules&) -> plr::Expected<actions::StrategyChoice> {
         if (*used)
           return actions::StrategyChoice{
               std::nullopt, "library:" + own->name,
-              "the precomputed strategy ended (its tree ended, did not plan for what was "
-              "seen, or its action moved nothing)"};
+              "the precomputed strategy ended (its tree ended or did not plan for what was "
+              "seen)"};
         *used = true;
-        return actions::StrategyChoice{own->strategy, "library:" + own->name, {}};
+        return actions::StrategyChoice{own->strategy, "library:" + own->name, {}, true};
       };
     }
     case Method::kNearest:
@@ -70,14 +71,15 @@ actions::StrategySource method_source(const EvaluationSettings& settings, const 
         const chooser::Nearest nn = r.index->nearest(r.model->scaling().apply(f));
         const sim::LibraryEntry& entry = r.library.entries[nn.entry];
         if (!plr) {
-          // NN alone has nothing else to run: a first action that moved
-          // nothing here would only be tried again.
+          // NN alone follows its strategies as generated, and has nothing
+          // else to run: a first action that moved nothing here would only
+          // be tried again.
           if (excluded_root(entry.strategy, rules))
             return actions::StrategyChoice{
                 std::nullopt, "library:" + entry.name,
                 fmt::format("the nearest strategy {}'s first action moved nothing here",
                             entry.name)};
-          return actions::StrategyChoice{entry.strategy, "library:" + entry.name, {}};
+          return actions::StrategyChoice{entry.strategy, "library:" + entry.name, {}, true};
         }
         // As the strategy_chooser plug-in decides.
         const chooser::Verdict verdict = r.model->decide(f);

@@ -50,8 +50,16 @@ struct Pool {
   double sd() const { return n > 1 ? std::sqrt(m2 / (n - 1)) : 0.0; }
 };
 
+// run[a][b], or an empty object where the run's file lacks it.
+const nlohmann::json& field(const nlohmann::json& run, const char* a, const std::string& b) {
+  static const nlohmann::json kEmpty = nlohmann::json::object();
+  if (!run.contains(a) || !run[a].is_object() || !run[a].contains(b) || !run[a][b].is_object())
+    return kEmpty;
+  return run[a][b];
+}
+
 bool ok(const nlohmann::json& run) {
-  return !run.contains("error") && run.contains("curve");
+  return !run.contains("error") && run.contains("curve") && run["curve"].is_array();
 }
 
 // Standard errors between two means: the difference over its standard error.
@@ -84,7 +92,7 @@ nlohmann::json table1(const std::vector<const nlohmann::json*>& runs) {
     Pool ms;
     std::string name;
     for (const nlohmann::json* r : runs) {
-      const auto& mode = (*r)["planner_modes"][key];
+      const auto& mode = field(*r, "planner_modes", key);
       name = mode.value("name", key);
       const double q = mode.value("queries", 0.0);
       queries.push_back(q);
@@ -112,7 +120,7 @@ nlohmann::json table2(const std::vector<const nlohmann::json*>& runs) {
     Pool plan, exec;
     double boxes = 0, seconds = 0;
     for (const nlohmann::json* r : runs) {
-      const auto& a = (*r)["action_stats"][kind];
+      const auto& a = field(*r, "action_stats", kind);
       const double n = a.value("executions", 0.0);
       executions.push_back(n);
       if (n > 0) rates.push_back(a.value("boxes_per_s", 0.0));

@@ -83,7 +83,7 @@ class EvaluationTest : public ::testing::Test {
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     // A library of one strategy for the small world: H's first action, then
-    // a low sweep whatever is seen.
+    // a low sweep whatever is seen (a leaf per observation).
     auto world = plr::sim::load_world(SMALL_WORLD);
     ASSERT_TRUE(world) << world.error().message;
     plr::sim::LibraryEntry e;
@@ -95,9 +95,10 @@ class EvaluationTest : public ::testing::Test {
     e.strategy.name = "S-1";
     const auto first = plr::sim::hardcoded_action(plr::sim::analyse(e.world), {});
     e.strategy.nodes.push_back({first, {}});
-    e.strategy.nodes.push_back({plr::sim::make_sweep(plr::sim::Height::kLow), {}});
-    for (int o = 0; o < plr::sim::kNumObservations; ++o)
-      e.strategy.nodes[0].children.push_back({static_cast<plr::sim::Observation>(o), 1});
+    for (std::uint32_t o = 0; o < plr::sim::kNumObservations; ++o) {
+      e.strategy.nodes[0].children.push_back({static_cast<plr::sim::Observation>(o), o + 1});
+      e.strategy.nodes.push_back({plr::sim::make_sweep(plr::sim::Height::kLow), {}});
+    }
     e.provenance.seed = 1;
     e.provenance.particles = 2;
     e.provenance.horizon = 2;
@@ -179,8 +180,9 @@ TEST_F(EvaluationTest, ReportHoldsPlotsAndTablesOfItsRuns) {
   const std::string html = read(report / "report.html");
   EXPECT_TRUE(well_formed_xml(html.substr(html.find("<html>"))));
   const auto& t1 = j["table1"]["modes"];
-  EXPECT_GT(t1["M1"]["queries_per_run"].get<double>() + t1["M2"]["queries_per_run"].get<double>(),
-            0);
+  double queries = 0;
+  for (const auto& [key, m] : t1.items()) queries += m["queries_per_run"].get<double>();
+  EXPECT_GT(queries, 0);
   for (const auto& [key, m] : t1.items()) {
     const auto cells = row(html, "table1", key);
     ASSERT_EQ(cells.size(), 5u) << key;

@@ -106,6 +106,9 @@ struct StrategyChoice {
   std::optional<sim::Strategy> strategy;
   std::string source;  // "hardcoded", "library:A1-1"
   std::string why;
+  // Follow the tree even after an action that moved nothing: a precomputed
+  // strategy run as it was generated (its tree may plan for such actions).
+  bool blind = false;
 };
 using StrategySource = std::function<plr::Expected<StrategyChoice>(
     const Perceived& seen, const sim::SceneAnalysis& scene, const RunRules& rules)>;
