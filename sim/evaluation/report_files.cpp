@@ -48,7 +48,7 @@ std::string pm(const nlohmann::json& j, const char* mean, const char* sd, int di
 }  // namespace
 
 std::string plot_svg(const nlohmann::json& summary, const std::string& name) {
-  constexpr double kW = 640, kH = 420, kL = 60, kR = 170, kT = 40, kB = 50;
+  constexpr double kW = 680, kH = 420, kL = 60, kR = 210, kT = 40, kB = 50;
   const auto& env = summary["environments"][name];
   const auto& grid = summary["grid_s"];
   const double t_max = std::max(1.0, grid.back().get<double>());
