@@ -22,7 +22,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   liburdfdom-dev libsvm-dev
   libompl-dev libboost-serialization-dev libboost-filesystem-dev libboost-system-dev
-  libexpat1-dev
+  libexpat1-dev librsvg2-bin
   iproute2 openssl procps
 )
 

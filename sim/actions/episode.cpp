@@ -13,6 +13,8 @@ std::optional<std::string> RunRules::stop(std::size_t boxes) const {
   if (boxes == 0) return "trailer empty";
   if (limits_.max_actions != 0 && actions_ >= limits_.max_actions)
     return fmt::format("action limit ({})", limits_.max_actions);
+  if (limits_.max_robot_time_s > 0 && robot_time_s_ >= limits_.max_robot_time_s)
+    return fmt::format("robot-time horizon ({:g} s)", limits_.max_robot_time_s);
   if (excluded_.size() == static_cast<std::size_t>(sim::kNumActions))
     return fmt::format("no action moves a box: all {} tried since the last progress",
                        sim::kNumActions);
@@ -23,6 +25,7 @@ std::optional<std::string> RunRules::stop(std::size_t boxes) const {
 
 void RunRules::record(sim::Action action, const Outcome& outcome) {
   ++actions_;
+  robot_time_s_ += outcome.robot_time_s;
   if (outcome.boxes > 0) {
     excluded_.clear();
     idle_ = 0;
@@ -149,13 +152,31 @@ std::map<std::string, std::uint32_t> count_by_reason(const std::vector<LeftBox>&
   return out;
 }
 
-plr::Expected<Episode> run_hardcoded(const ActionModel& model, Backend& backend,
-                                     const sim::HardcodedParams& h, const RunLimits& limits,
-                                     const std::function<void(const EpisodeStep&)>& on_step) {
+StrategySource hardcoded_source(const sim::HardcodedParams& h) {
+  return [h](const Perceived&, const sim::SceneAnalysis& scene,
+             const RunRules& rules) -> plr::Expected<StrategyChoice> {
+    for (const sim::Action a : sim::hardcoded_ranking(scene, h)) {
+      if (rules.excluded(a)) continue;
+      sim::Strategy s;
+      s.name = "H";
+      s.nodes.push_back({a, {}});
+      return StrategyChoice{std::move(s), "hardcoded", {}};
+    }
+    return StrategyChoice{std::nullopt, "hardcoded", "every action of H's ranking moved nothing"};
+  };
+}
+
+plr::Expected<Episode> run_strategies(const ActionModel& model, Backend& backend,
+                                      const StrategySource& source, const RunLimits& limits,
+                                      const std::function<void(const EpisodeStep&)>& on_step) {
   Episode e;
   RunRules rules(limits);
   Memory memory;
   std::optional<std::uint32_t> unloaded_at_start;
+  sim::Strategy strategy;
+  std::string from;
+  bool blind = false;
+  std::optional<std::uint32_t> node;
   for (;;) {
     auto seen = backend.observe();
     if (!seen) return seen.error();
@@ -164,32 +185,55 @@ plr::Expected<Episode> run_hardcoded(const ActionModel& model, Backend& backend,
       e.boxes_total = static_cast<std::uint32_t>(seen->world.boxes.size());
     }
     e.boxes_unloaded = seen->unloaded - *unloaded_at_start;
-    if (auto why = rules.stop(seen->world.boxes.size())) {
+    std::optional<std::string> why = rules.stop(seen->world.boxes.size());
+    const sim::SceneAnalysis scene = why ? sim::SceneAnalysis{} : model.scene(*seen, memory);
+    if (!why) {
+      // After an action that moved nothing, the tree is not followed
+      // blindly: the source is asked again, its rules telling what failed.
+      const auto child = node && (blind || rules.fresh()) ? strategy.next(*node, *scene.observation)
+                                                          : std::nullopt;
+      if (child) {
+        node = child;
+        ++e.strategy_steps;
+      } else {
+        auto choice = source(*seen, scene, rules);
+        if (!choice) return choice.error();
+        ++e.strategies_asked;
+        if (!choice->strategy) {
+          why = choice->why;
+        } else {
+          strategy = std::move(*choice->strategy);
+          from = std::move(choice->source);
+          blind = choice->blind;
+          node = strategy.root;
+        }
+      }
+    }
+    if (why) {
       e.stop_reason = std::move(*why);
       e.left = boxes_left(seen->world, seen->q, memory, model);
       e.final_world = std::move(seen->world);
       return e;
     }
-    const sim::SceneAnalysis scene = model.scene(*seen, memory);
-    std::optional<sim::Action> action;
-    for (const sim::Action a : sim::hardcoded_ranking(scene, h)) {
-      if (!rules.excluded(a)) {
-        action = a;
-        break;
-      }
-    }
+    const sim::Action action = strategy.nodes[*node].action;
     std::vector<std::string> notes;
     Reporter reporter;
     if (on_step) reporter.note = [&notes](const std::string& line) { notes.push_back(line); };
-    auto out = model.run(*action, backend, memory, reporter);
+    auto out = model.run(action, backend, memory, reporter);
     if (!out) return out.error();
-    rules.record(*action, *out);
+    rules.record(action, *out);
     ++e.actions;
     e.robot_time_s += out->robot_time_s;
     e.robot_trailer_contacts += out->robot_trailer_contacts;
     e.failed_grasps += out->failed_grasp ? 1 : 0;
-    if (on_step) on_step(EpisodeStep{*action, *scene.observation, *out, std::move(notes)});
+    if (on_step) on_step(EpisodeStep{from, action, *scene.observation, *out, std::move(notes)});
   }
+}
+
+plr::Expected<Episode> run_hardcoded(const ActionModel& model, Backend& backend,
+                                     const sim::HardcodedParams& h, const RunLimits& limits,
+                                     const std::function<void(const EpisodeStep&)>& on_step) {
+  return run_strategies(model, backend, hardcoded_source(h), limits, on_step);
 }
 
 }  // namespace plr::actions

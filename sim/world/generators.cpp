@@ -660,4 +660,11 @@ World generate_world(EnvFamily family, std::uint64_t seed, const Trailer& traile
   return make_pile(family, seed, trailer);
 }
 
+std::uint64_t particle_seed(std::uint64_t seed, int particle) {
+  std::uint64_t z = seed * 0x9e3779b97f4a7c15ull + static_cast<std::uint64_t>(particle) + 1;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
 }  // namespace plr::sim

@@ -38,7 +38,6 @@ namespace {
 
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
-using planning::PlanMode;
 
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
@@ -330,31 +329,6 @@ class ExecutorNode : public plr::Node {
     }
   }
 
-  // The planner statistics of one action's queries (the paper's Table I).
-  void tally(const std::vector<actions::QueryRecord>& queries) {
-    for (const auto& q : queries) {
-      auto& ms = stats_.modes[static_cast<std::size_t>(q.mode)];
-      ++ms.queries;
-      if (!q.answered) {
-        ++ms.failures;
-        ++stats_.plan_calls_unanswered;
-        continue;
-      }
-      if (q.status != planning::PlanStatus::kSolved) ++ms.failures;
-      ms.ms.add(q.planning_ms);
-      ms.expansions.add(static_cast<double>(q.expansions));
-      ms.max_expansions = std::max(ms.max_expansions, q.expansions);
-      ++stats_.planners[q.planner.empty() ? "?" : q.planner];
-      if (q.escaped && q.mode != PlanMode::kEscape) {
-        // The escape the planner ran first counts as an M6 query of its own.
-        ++stats_.m6_implicit;
-        auto& m6 = stats_.modes[static_cast<std::size_t>(PlanMode::kEscape)];
-        ++m6.queries;
-        if (q.escape_ms > 0) m6.ms.add(q.escape_ms);
-      }
-    }
-  }
-
   void job(Clock::time_point t0) {
     // A simulator may hold no world before its first reset: reset first when
     // asked to (waiting for it to come up), observe only otherwise.
@@ -436,16 +410,11 @@ class ExecutorNode : public plr::Node {
       repeating = false;
       const actions::Outcome& o = *outcome;
       rules_.record(action, o);
-      tally(o.queries);
+      stats_.planner.add(o.queries);
       if (!o.applicable) {
         ++stats_.not_applicable;
       } else {
-        auto& as = sim::kind(action) == sim::ActionKind::kPick ? stats_.pick : stats_.sweep;
-        ++as.executions;
-        as.boxes += o.boxes;
-        ++as.boxes_histogram[o.boxes];
-        as.plan_s.add(o.plan_model_s);
-        as.exec_s.add(o.exec_s);
+        actions::add_execution(stats_.pick, stats_.sweep, action, o);
       }
       stats_.steps.push_back({sim::to_string(action), sim::to_string(observation),
                               scene.wall_height, scene.pile_height, scene.pile_depth, o.applicable,

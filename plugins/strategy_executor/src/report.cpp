@@ -10,65 +10,7 @@
 
 namespace plr::executor {
 
-void Accumulator::add(double x) {
-  ++n;
-  sum += x;
-  const double d = x - mean;
-  mean += d / static_cast<double>(n);
-  m2 += d * (x - mean);
-}
-
-double Accumulator::sd() const {
-  return n > 1 ? std::sqrt(m2 / static_cast<double>(n - 1)) : 0.0;
-}
-
-namespace {
-
-// Boxes per execution, and per execution that moved any.
-double per_execution(const ActionStats& a) {
-  return a.executions ? static_cast<double>(a.boxes) / static_cast<double>(a.executions) : 0.0;
-}
-double per_success(const ActionStats& a) {
-  const auto none = a.boxes_histogram.count(0) ? a.boxes_histogram.at(0) : 0;
-  const auto n = a.executions - std::min(a.executions, none);
-  return n ? static_cast<double>(a.boxes) / static_cast<double>(n) : 0.0;
-}
-
-nlohmann::json action_json(const ActionStats& a) {
-  const double total = a.plan_s.sum + a.exec_s.sum;
-  nlohmann::json histogram = nlohmann::json::object();
-  for (const auto& [boxes, n] : a.boxes_histogram) histogram[std::to_string(boxes)] = n;
-  return {{"executions", a.executions},
-          {"boxes", a.boxes},
-          {"boxes_per_execution", per_execution(a)},
-          {"boxes_per_success", per_success(a)},
-          {"boxes_histogram", histogram},
-          {"plan_s", a.plan_s.mean},
-          {"plan_s_sd", a.plan_s.sd()},
-          {"exec_s", a.exec_s.mean},
-          {"exec_s_sd", a.exec_s.sd()},
-          {"boxes_per_s", total > 0 ? static_cast<double>(a.boxes) / total : 0.0}};
-}
-
-}  // namespace
-
 nlohmann::json to_json(const RunStats& s) {
-  nlohmann::json modes = nlohmann::json::object();
-  static constexpr std::array<const char*, 7> kNames = {
-      "", "M1 arm", "M2 arm+base", "M3 nose", "M4 arm line", "M5 base line", "M6 escape"};
-  for (int m = 1; m <= 6; ++m) {
-    const auto& ms = s.modes[static_cast<std::size_t>(m)];
-    modes["M" + std::to_string(m)] = {
-        {"name", kNames[static_cast<std::size_t>(m)]},
-        {"queries", ms.queries},
-        {"failures", ms.failures},
-        {"failure_rate", ms.queries ? static_cast<double>(ms.failures) / ms.queries : 0.0},
-        {"mean_ms", ms.ms.mean},
-        {"sd_ms", ms.ms.sd()},
-        {"mean_expansions", ms.expansions.mean},
-        {"max_expansions", ms.max_expansions}};
-  }
-  modes["M6"]["implicit"] = s.m6_implicit;
   nlohmann::json left = nlohmann::json::array();
   std::map<std::string, std::uint32_t> left_by_reason;
   for (const auto& b : s.boxes_left) {
@@ -97,8 +39,8 @@ nlohmann::json to_json(const RunStats& s) {
           {"wall_time_s", s.wall_time_s},
           {"boxes_per_robot_s", s.robot_time_s > 0 ? s.boxes_unloaded / s.robot_time_s : 0.0},
           // Boxes a pick moved out: per applicable pick, and per pick that moved any.
-          {"boxes_per_pick", per_execution(s.pick)},
-          {"boxes_per_successful_pick", per_success(s.pick)},
+          {"boxes_per_pick", actions::boxes_per_execution(s.pick)},
+          {"boxes_per_successful_pick", actions::boxes_per_success(s.pick)},
           {"robot_trailer_collisions", s.robot_trailer_collisions},
           {"failed_grasps", s.failed_grasps},
           {"not_applicable", s.not_applicable},
@@ -108,10 +50,11 @@ nlohmann::json to_json(const RunStats& s) {
           {"stop_reason", s.stop_reason},
           {"boxes_left", left},
           {"boxes_left_by_reason", left_by_reason},
-          {"planner_modes", modes},
-          {"planners", s.planners},
-          {"plan_calls_unanswered", s.plan_calls_unanswered},
-          {"actions", {{"pick", action_json(s.pick)}, {"sweep", action_json(s.sweep)}}},
+          {"planner_modes", actions::modes_json(s.planner)},
+          {"planners", s.planner.planners},
+          {"plan_calls_unanswered", s.planner.unanswered},
+          {"actions",
+           {{"pick", actions::action_json(s.pick)}, {"sweep", actions::action_json(s.sweep)}}},
           {"curve", curve},
           {"steps", steps}};
 }

@@ -10,33 +10,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include "plr/actions/run_stats.hpp"
+
 namespace plr::executor {
 
-// Running mean and spread (Welford), so no sample list is kept.
-struct Accumulator {
-  std::uint64_t n = 0;
-  double mean = 0, m2 = 0, sum = 0;
-  void add(double x);
-  double sd() const;
-};
-
-struct ModeStats {
-  std::uint64_t queries = 0;
-  std::uint64_t failures = 0;
-  Accumulator ms;  // planning time of the queries that reported one
-  Accumulator expansions;
-  std::uint64_t max_expansions = 0;
-};
-
-struct ActionStats {
-  std::uint64_t executions = 0;
-  std::uint64_t boxes = 0;
-  // Executions by the boxes each moved out (0, 1, 2, ...): a multi-box pick
-  // shows as 2 or more.
-  std::map<std::uint32_t, std::uint64_t> boxes_histogram;
-  Accumulator plan_s;  // per execution: planning time the robot waited for (modelled)
-  Accumulator exec_s;  // per execution: simulated execution time
-};
+using actions::Accumulator;
+using actions::ActionStats;
+using actions::ModeStats;
 
 struct CurvePoint {
   double robot_time_s = 0;  // execution + modelled planning (deterministic)
@@ -54,12 +34,7 @@ struct StepRecord {
 };
 
 struct RunStats {
-  std::array<ModeStats, 7> modes{};  // index = plan mode 1..6
-  std::uint64_t m6_implicit = 0;     // escapes the planner ran inside another query
-  // Who answered the plan queries (a hot swap shows as two names), and the
-  // queries no planner answered (lost in transit, timed out on the bus).
-  std::map<std::string, std::uint64_t> planners;
-  std::uint64_t plan_calls_unanswered = 0;
+  actions::PlannerStats planner;  // the paper's Table I
   ActionStats pick, sweep;
   std::vector<CurvePoint> curve;
   std::vector<StepRecord> steps;

@@ -24,9 +24,9 @@ TEST(Report, JsonHasTheFiguresOfTheTables) {
   s.boxes_total = 10;
   s.boxes_unloaded = 4;
   s.robot_time_s = 20.0;
-  s.modes[5].queries = 3;
-  s.modes[5].failures = 1;
-  s.modes[5].ms.add(2.0);
+  s.planner.modes[5].queries = 3;
+  s.planner.modes[5].failures = 1;
+  s.planner.modes[5].ms.add(2.0);
   s.pick.executions = 2;
   s.pick.boxes = 3;
   s.pick.plan_s.add(1.0);

@@ -91,7 +91,7 @@ std::optional<nlohmann::json> evaluate(const std::string& name, const sim::World
   Eval ev;
   for (int p = 0; p < particles; ++p) {
     const sim::World truth =
-        sim::sample_masses(world, family, generator::particle_seed(seed + 1'000'003, p));
+        sim::sample_masses(world, family, sim::particle_seed(seed + 1'000'003, p));
     for (const bool use_strategy : {true, false}) {
       actions::UnloaderSimulation simulation(*robot, truth);
       actions::InProcessBackend backend(simulation, planner);

@@ -14,9 +14,6 @@
 // boxes remain; a stopped benchmark started again with the same DIR runs
 // only what is missing. A run past --timeout (wall seconds, default
 // 3600) is killed and counted as such.
-#include <fcntl.h>
-#include <signal.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -35,6 +32,7 @@
 #include "bench_util.hpp"
 #include "plr/actions/episode.hpp"
 #include "plr/actions/in_process.hpp"
+#include "plr/actions/process_pool.hpp"
 #include "plr/atomic_file.hpp"
 #include "plr/planning/lattice_planner.hpp"
 #include "plr/sim/generators.hpp"
@@ -151,60 +149,23 @@ void save(const fs::path& file, const nlohmann::json& j) {
     die(ok.error().message);
 }
 
-// Runs the jobs, at most `workers` at once, each in a process of its own
-// (the simulation is single-threaded; a crash takes one run, not the
-// benchmark).
+// Runs the jobs in worker processes (plr/actions/process_pool.hpp).
 void run_all(const std::vector<Job>& jobs, const Options& o) {
-  struct Running {
-    Job job;
-    Clock::time_point start;
-    bool killed = false;
-  };
-  std::map<pid_t, Running> running;
+  std::vector<plr::actions::PoolRun> runs;
+  for (const Job& job : jobs)
+    runs.push_back({fmt::format("{} seed {}", to_string(job.family), job.seed), job.file});
   plr::bench::Progress progress("bench_unload", jobs.size());
-  std::size_t next = 0;
-  while (next < jobs.size() || !running.empty()) {
-    while (next < jobs.size() && running.size() < o.workers) {
-      const Job& job = jobs[next++];
-      const pid_t pid = fork();
-      if (pid < 0) die("fork failed");
-      if (pid == 0) {
-        // The worker's own log lines (the planner's, the simulation's) stay
-        // out of the table.
-        const int null = ::open("/dev/null", O_WRONLY);
-        if (null >= 0) dup2(null, STDOUT_FILENO);
-        save(job.file, run(job));
-        std::_Exit(0);
-      }
-      running.emplace(pid, Running{job, Clock::now()});
-    }
-    int status = 0;
-    const pid_t done = waitpid(-1, &status, WNOHANG);
-    if (done > 0) {
-      const auto it = running.find(done);
-      if (it == running.end()) continue;
-      const Job job = it->second.job;
-      running.erase(it);
-      if (!(WIFEXITED(status) && WEXITSTATUS(status) == 0) && !fs::exists(job.file))
-        save(job.file, {{"family", std::string(to_string(job.family))},
-                        {"seed", job.seed},
-                        {"failed", true},
-                        {"stop_reason", WIFSIGNALED(status) ? fmt::format("worker died (signal {})",
-                                                                          WTERMSIG(status))
-                                                            : "worker failed"}});
-      progress.step(fmt::format("{} seed {}", to_string(job.family), job.seed));
-      continue;
-    }
-    for (auto& [pid, r] : running) {
-      const double s = std::chrono::duration<double>(Clock::now() - r.start).count();
-      if (!r.killed && s > o.timeout_s) {
-        kill(pid, SIGKILL);
-        save(r.job.file, timed_out(r.job, s));
-        r.killed = true;
-      }
-    }
-    usleep(50'000);
-  }
+  const std::string error = plr::actions::run_in_processes(
+      runs, {o.workers, o.timeout_s, true}, [&](std::size_t i) { return run(jobs[i]); },
+      [&](std::size_t i, const std::string& why, double wall_s) {
+        if (why.rfind("killed", 0) == 0) return timed_out(jobs[i], wall_s);
+        return nlohmann::json{{"family", std::string(to_string(jobs[i].family))},
+                              {"seed", jobs[i].seed},
+                              {"failed", true},
+                              {"stop_reason", why}};
+      },
+      [&](std::size_t i) { progress.step(runs[i].name); });
+  if (!error.empty()) die(error);
   progress.finish();
 }
 

@@ -15,7 +15,6 @@
 
 #include "plr/actions/open_loop.hpp"
 #include "plr/actions/state_bytes.hpp"
-#include "plr/sim/shipped_files.hpp"
 
 namespace plr::chooser {
 
@@ -59,34 +58,22 @@ constexpr std::uint64_t kMaxPayload = std::uint64_t{1} << 30;
 
 }  // namespace
 
-Rig::Rig(sim::RobotModel robot, planning::LatticeConfig lattice, actions::ActionOptions options)
-    : robot_(std::move(robot)),
-      planner_(std::move(lattice)),
-      model_(robot_, std::move(options)),
-      simulation_(robot_, sim::World{}),
-      backend_(simulation_, planner_) {}
-
 plr::Expected<std::unique_ptr<Rig>> Rig::create(const sim::ObservationParams& observation) {
-  auto robot = sim::load_robot();
-  if (!robot) return robot.error();
-  const auto lattice_file = sim::shipped_file("robots/unloader_lattice.yaml");
-  if (!lattice_file) return lattice_file.error();
-  auto lattice = planning::LatticeConfig::from_file(lattice_file->string());
-  if (!lattice) return lattice.error();
   actions::ActionOptions options;
   options.observation = observation;
-  if (auto ok = options.check(); !ok) return ok.error();
-  return std::unique_ptr<Rig>(new Rig(std::move(*robot), std::move(*lattice), std::move(options)));
+  auto rig = actions::Rig::create(std::move(options));
+  if (!rig) return rig.error();
+  return std::unique_ptr<Rig>(new Rig(std::move(*rig)));
 }
 
 std::vector<std::uint8_t> Rig::snapshot(const actions::Memory& memory) const {
   flatbuffers::FlatBufferBuilder fbb;
-  fbb.Finish(actions::build(fbb, actions::SimState{simulation_.save(), memory}));
+  fbb.Finish(actions::build(fbb, actions::SimState{rig_->simulation().save(), memory}));
   return {fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()};
 }
 
 std::vector<std::uint8_t> Rig::start(const sim::World& truth) {
-  simulation_ = actions::UnloaderSimulation(robot_, truth);
+  rig_->reset(truth);
   return snapshot({});
 }
 
@@ -97,14 +84,14 @@ plr::Expected<actions::Memory> Rig::restore(const std::vector<std::uint8_t>& sta
   auto s =
       actions::from_message(*flatbuffers::GetRoot<plr::msg::TruckState>(state.data()), "state");
   if (!s) return s.error();
-  simulation_.restore(*s->saved);
+  rig_->simulation().restore(*s->saved);
   return std::move(s->memory);
 }
 
 plr::Expected<actions::Perceived> Rig::observe(const std::vector<std::uint8_t>& state) {
   auto memory = restore(state);
   if (!memory) return memory.error();
-  return backend_.observe();
+  return rig_->backend().observe();
 }
 
 plr::Expected<Rollout> Rig::run(const std::vector<std::uint8_t>& state,
@@ -112,7 +99,8 @@ plr::Expected<Rollout> Rig::run(const std::vector<std::uint8_t>& state,
                                 const sim::HardcodedParams& h, std::uint64_t max_actions) {
   auto memory = restore(state);
   if (!memory) return memory.error();
-  auto run = actions::run_open_loop(model_, backend_, *memory, strategy, h, max_actions);
+  auto run =
+      actions::run_open_loop(rig_->model(), rig_->backend(), *memory, strategy, h, max_actions);
   if (!run) return run.error();
   return Rollout{run->actions, run->boxes, run->robot_time_s, snapshot(*memory)};
 }

@@ -12,11 +12,8 @@
 #include <vector>
 
 #include "plr/actions/action_model.hpp"
-#include "plr/actions/in_process.hpp"
-#include "plr/actions/unloader_simulation.hpp"
-#include "plr/planning/lattice_planner.hpp"
+#include "plr/actions/rig.hpp"
 #include "plr/sim/hardcoded_strategy.hpp"
-#include "plr/sim/robot_model.hpp"
 #include "plr/sim/strategy.hpp"
 
 namespace plr::chooser {
@@ -31,7 +28,8 @@ struct Rollout {
   double rate() const { return robot_time_s > 0 ? boxes / robot_time_s : 0.0; }
 };
 
-// The action model on the Simbody simulation with the ARA* lattice planner.
+// The action model on the Simbody simulation with the ARA* lattice planner
+// (actions::Rig), with snapshots of its state and rollouts from them.
 class Rig {
  public:
   static plr::Expected<std::unique_ptr<Rig>> create(const sim::ObservationParams& observation);
@@ -57,15 +55,11 @@ class Rig {
                                                    std::uint64_t max_actions, int workers);
 
  private:
-  Rig(sim::RobotModel robot, planning::LatticeConfig lattice, actions::ActionOptions options);
+  explicit Rig(std::unique_ptr<actions::Rig> rig) : rig_(std::move(rig)) {}
   plr::Expected<actions::Memory> restore(const std::vector<std::uint8_t>& state);
   std::vector<std::uint8_t> snapshot(const actions::Memory& memory) const;
 
-  sim::RobotModel robot_;
-  planning::LatticePlanner planner_;
-  actions::ActionModel model_;
-  actions::UnloaderSimulation simulation_;
-  actions::InProcessBackend backend_;
+  std::unique_ptr<actions::Rig> rig_;
 };
 
 }  // namespace plr::chooser

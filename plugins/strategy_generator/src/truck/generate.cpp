@@ -26,13 +26,6 @@ std::string utc_now() {
 
 }  // namespace
 
-std::uint64_t particle_seed(std::uint64_t seed, int particle) {
-  std::uint64_t z = seed * 0x9e3779b97f4a7c15ull + static_cast<std::uint64_t>(particle) + 1;
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
-}
-
 Problem make_problem(const sim::World& world, sim::EnvFamily family, std::string name,
                      int particles, std::uint64_t seed) {
   Problem p;
@@ -40,7 +33,7 @@ Problem make_problem(const sim::World& world, sim::EnvFamily family, std::string
   p.name = std::move(name);
   p.world = sim::without_masses(world);
   for (int i = 0; i < particles; ++i) {
-    p.particles.push_back(sim::sample_masses(p.world, family, particle_seed(seed, i)));
+    p.particles.push_back(sim::sample_masses(p.world, family, sim::particle_seed(seed, i)));
   }
   return p;
 }

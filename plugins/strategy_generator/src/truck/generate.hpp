@@ -43,7 +43,6 @@ Problem make_problem(sim::EnvFamily family, std::uint64_t world_seed, int partic
 // A given world W (masses dropped), its masses from `family`'s prior.
 Problem make_problem(const sim::World& world, sim::EnvFamily family, std::string name,
                      int particles, std::uint64_t seed);
-std::uint64_t particle_seed(std::uint64_t seed, int particle);
 
 struct GenerateOptions {
   TruckOptions truck;

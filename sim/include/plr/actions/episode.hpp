@@ -23,6 +23,9 @@ struct RunLimits {
   // Actions in a row that move no box, whatever the exclusions say (a pick
   // whose grip keeps failing is retried until the box is given up).
   std::uint64_t max_idle_actions = 24;
+  // Robot seconds (execution + modelled planning): the run ends once this
+  // much has passed; 0: no limit.
+  double max_robot_time_s = 0.0;
 };
 
 // The run goes on while some action may still move a box. An action that
@@ -47,6 +50,7 @@ class RunRules {
   RunLimits limits_;
   std::set<std::uint8_t> excluded_;
   std::uint64_t actions_ = 0, idle_ = 0;
+  double robot_time_s_ = 0.0;
 };
 
 // Why a box is still in the trailer at the end of a run.
@@ -73,6 +77,7 @@ std::vector<LeftBox> boxes_left(const sim::World& world, const sim::JointVector&
 std::map<std::string, std::uint32_t> count_by_reason(const std::vector<LeftBox>& left);
 
 struct EpisodeStep {
+  std::string source;  // where the action's strategy came from (StrategyChoice)
   sim::Action action{};
   sim::Observation observation{};
   Outcome outcome;
@@ -86,14 +91,40 @@ struct Episode {
   std::uint64_t actions = 0;
   std::uint64_t robot_trailer_contacts = 0;
   std::uint64_t failed_grasps = 0;
+  std::uint64_t strategies_asked = 0;
+  std::uint64_t strategy_steps = 0;  // actions taken by following a branch
   std::string stop_reason;
   std::vector<LeftBox> left;
   sim::World final_world;  // as perceived at the end
 };
 
+// A run's strategies, asked for whenever the current one has no step for
+// what is seen — at the start, where its tree ends, after an action that
+// moved nothing — as the executor asks strategy/next. No strategy ends the
+// run, `why` saying why.
+struct StrategyChoice {
+  std::optional<sim::Strategy> strategy;
+  std::string source;  // "hardcoded", "library:A1-1"
+  std::string why;
+  // Follow the tree even after an action that moved nothing: a precomputed
+  // strategy run as it was generated (its tree may plan for such actions).
+  bool blind = false;
+};
+using StrategySource = std::function<plr::Expected<StrategyChoice>(
+    const Perceived& seen, const sim::SceneAnalysis& scene, const RunRules& rules)>;
+
+// Strategy H as a source: its first action the rules do not exclude.
+StrategySource hardcoded_source(const sim::HardcodedParams& h);
+
+// From the backend's state to the end of the run, each strategy's tree
+// followed while it plans for what is seen and its actions move boxes.
+// `on_step`, if given, sees each action's outcome.
+plr::Expected<Episode> run_strategies(const ActionModel& model, Backend& backend,
+                                      const StrategySource& source, const RunLimits& limits,
+                                      const std::function<void(const EpisodeStep&)>& on_step = {});
+
 // Strategy H from the backend's state to the end of the run: its ranking
-// for each scene, the first action the rules do not exclude. `on_step`, if
-// given, sees each action's outcome.
+// for each scene, the first action the rules do not exclude.
 plr::Expected<Episode> run_hardcoded(const ActionModel& model, Backend& backend,
                                      const sim::HardcodedParams& h, const RunLimits& limits,
                                      const std::function<void(const EpisodeStep&)>& on_step = {});

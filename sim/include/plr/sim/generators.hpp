@@ -68,6 +68,11 @@ MassPrior mass_prior(EnvFamily family);
 // same particle keeps its masses as boxes leave the world.
 World sample_masses(const World& visible, EnvFamily family, std::uint64_t seed);
 
+// The sample_masses seed of particle `particle` of a generator seeded with
+// `seed` (a SplitMix64 step): the strategy generator's particles, and what
+// the evaluation replays them from.
+std::uint64_t particle_seed(std::uint64_t seed, int particle);
+
 // Sets the masses of the boxes named by id. An unknown id or a mass that is
 // not finite and > 0 is refused (naming it) and changes nothing.
 plr::Status set_masses(World& world, const std::vector<std::pair<std::uint32_t, double>>& masses);

@@ -1,0 +1,29 @@
+#include "plr/actions/rig.hpp"
+
+#include "plr/sim/shipped_files.hpp"
+
+namespace plr::actions {
+
+Rig::Rig(sim::RobotModel robot, planning::LatticeConfig lattice, ActionOptions options)
+    : robot_(std::move(robot)),
+      planner_(std::move(lattice)),
+      model_(robot_, std::move(options)),
+      simulation_(robot_, sim::World{}),
+      backend_(simulation_, planner_) {}
+
+plr::Expected<std::unique_ptr<Rig>> Rig::create(ActionOptions options) {
+  auto robot = sim::load_robot();
+  if (!robot) return robot.error();
+  const auto lattice_file = sim::shipped_file("robots/unloader_lattice.yaml");
+  if (!lattice_file) return lattice_file.error();
+  auto lattice = planning::LatticeConfig::from_file(lattice_file->string());
+  if (!lattice) return lattice.error();
+  if (auto ok = options.check(); !ok) return ok.error();
+  return std::unique_ptr<Rig>(new Rig(std::move(*robot), std::move(*lattice), std::move(options)));
+}
+
+void Rig::reset(const sim::World& truth) {
+  simulation_ = UnloaderSimulation(robot_, truth);
+}
+
+}  // namespace plr::actions

@@ -1,0 +1,255 @@
+#include "plr/evaluation/run.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <memory>
+
+#include "plr/actions/episode.hpp"
+#include "plr/actions/run_stats.hpp"
+#include "plr/chooser/features.hpp"
+#include "plr/sim/physics.hpp"
+#include "plr/sim/world_io.hpp"
+
+namespace plr::evaluation {
+
+namespace {
+
+// Masses drawn for an evaluation seed: apart from the generator's particles
+// (sim::particle_seed(generator seed, particle)).
+constexpr std::uint64_t kMassStream = 0x6576616c;  // "eval"
+
+std::uint64_t mass_seed(std::uint64_t seed) {
+  return sim::particle_seed(seed ^ (kMassStream << 32), 0);
+}
+
+std::vector<const sim::LibraryEntry*> training_entries(const Resources& r, sim::EnvFamily family) {
+  std::vector<const sim::LibraryEntry*> out;
+  for (const auto& e : r.library.entries)
+    if (e.family == sim::to_string(family)) out.push_back(&e);
+  return out;
+}
+
+bool excluded_root(const sim::Strategy& s, const actions::RunRules& rules) {
+  return rules.excluded(s.nodes[s.root].action);
+}
+
+// The sources of the methods: where each run's strategies come from.
+actions::StrategySource method_source(const EvaluationSettings& settings, const Resources& r,
+                                      Method method, const sim::LibraryEntry* own) {
+  const actions::StrategySource h = actions::hardcoded_source(settings.h);
+  switch (method) {
+    case Method::kHardcoded:
+      return h;
+    case Method::kOpenLoop:
+    case Method::kExpectedOffline: {
+      // The precomputed strategy from the start, followed as it was
+      // generated, and nothing after it: the library holds one strategy per
+      // training world.
+      auto used = std::make_shared<bool>(false);
+      return [own, used](const actions::Perceived&, const sim::SceneAnalysis&,
+                         const actions::RunRules&) -> plr::Expected<actions::StrategyChoice> {
+        if (*used)
+          return actions::StrategyChoice{
+              std::nullopt, "library:" + own->name,
+              "the precomputed strategy ended (its tree ended or did not plan for what was "
+              "seen)"};
+        *used = true;
+        return actions::StrategyChoice{own->strategy, "library:" + own->name, {}, true};
+      };
+    }
+    case Method::kNearest:
+    case Method::kPlr: {
+      const bool plr = method == Method::kPlr;
+      const double max_distance = settings.max_distance;
+      const sim::ObservationParams obs = settings.observation;
+      return [&r, h, plr, max_distance, obs](
+                 const actions::Perceived& seen, const sim::SceneAnalysis& scene,
+                 const actions::RunRules& rules) -> plr::Expected<actions::StrategyChoice> {
+        const chooser::Features f = chooser::features(seen.world, obs);
+        const chooser::Nearest nn = r.index->nearest(r.model->scaling().apply(f));
+        const sim::LibraryEntry& entry = r.library.entries[nn.entry];
+        if (!plr) {
+          // NN alone follows its strategies as generated, and has nothing
+          // else to run: a first action that moved nothing here would only
+          // be tried again.
+          if (excluded_root(entry.strategy, rules))
+            return actions::StrategyChoice{
+                std::nullopt, "library:" + entry.name,
+                fmt::format("the nearest strategy {}'s first action moved nothing here",
+                            entry.name)};
+          return actions::StrategyChoice{entry.strategy, "library:" + entry.name, {}, true};
+        }
+        // As the strategy_chooser plug-in decides.
+        const chooser::Verdict verdict = r.model->decide(f);
+        if ((max_distance <= 0 || nn.distance <= max_distance) && verdict.nearest &&
+            !excluded_root(entry.strategy, rules))
+          return actions::StrategyChoice{entry.strategy, "library:" + entry.name, {}};
+        return h(seen, scene, rules);
+      };
+    }
+  }
+  return h;
+}
+
+}  // namespace
+
+plr::Expected<Resources> load_resources(const EvaluationSettings& settings) {
+  Resources r;
+  const bool uses_model =
+      std::any_of(settings.methods.begin(), settings.methods.end(),
+                  [](Method m) { return m == Method::kNearest || m == Method::kPlr; });
+  const bool uses_library = uses_model ||
+                            std::any_of(settings.methods.begin(), settings.methods.end(),
+                                        [](Method m) { return needs_training_world(m); }) ||
+                            std::any_of(settings.environments.begin(), settings.environments.end(),
+                                        [](const Environment& e) { return e.training; });
+  if (uses_library) {
+    if (!std::filesystem::exists(settings.library))
+      return plr::make_error(
+          PLR_ERR_UNAVAILABLE,
+          fmt::format("{}: no library; make it with `plr run configs/generate.yaml --report {}`",
+                      settings.library.string(), settings.library.parent_path().string()));
+    auto library = sim::load_library(settings.library);
+    if (!library) return library.error();
+    if (library->entries.empty())
+      return plr::make_error(PLR_ERR_INVALID, settings.library.string() + ": the library is empty");
+    r.library = std::move(*library);
+  }
+  if (uses_model) {
+    if (!std::filesystem::exists(settings.model))
+      return plr::make_error(PLR_ERR_UNAVAILABLE,
+                             fmt::format("{}: no chooser model; train it with `plr chooser train "
+                                         "configs/train_chooser.yaml`",
+                                         settings.model.string()));
+    auto model = chooser::Model::load(settings.model);
+    if (!model) return model.error();
+    if (model->library_crc() != chooser::fingerprint(r.library))
+      return plr::make_error(
+          PLR_ERR_INVALID,
+          fmt::format("{}: trained with another library (CRC {:08x}, {} is {:08x}); train it "
+                      "again with `plr chooser train configs/train_chooser.yaml`",
+                      settings.model.string(), model->library_crc(), settings.library.string(),
+                      chooser::fingerprint(r.library)));
+    r.index.emplace(r.library, model->scaling(), settings.observation);
+    r.model.emplace(std::move(*model));
+  }
+  for (const Environment& e : settings.environments)
+    if (e.training && training_entries(r, e.family).empty())
+      return plr::make_error(
+          PLR_ERR_INVALID,
+          fmt::format("{}: no {} strategy, so the training environment {} has no world",
+                      settings.library.string(), sim::to_string(e.family), e.name));
+  return r;
+}
+
+std::string result_file_name(const EvaluationSettings& settings, const RunSpec& run) {
+  return fmt::format("{}_{}_seed{}.json", settings.environments[run.environment].name,
+                     to_string(run.method), run.seed);
+}
+
+bool applies(const EvaluationSettings& settings, const RunSpec& run) {
+  return !needs_training_world(run.method) || settings.environments[run.environment].training;
+}
+
+plr::Expected<StartWorld> start_world(const EvaluationSettings& settings,
+                                      const Resources& resources, const RunSpec& run) {
+  const Environment& env = settings.environments[run.environment];
+  StartWorld w;
+  if (env.training) {
+    // The library's worlds in turn, with masses the generator did not plan
+    // with: as a trailer of a known layout would come.
+    const auto entries = training_entries(resources, env.family);
+    w.entry = entries[(run.seed - settings.first_seed) % entries.size()];
+    const sim::LibraryEntry& e = *w.entry;
+    if (run.method == Method::kExpectedOffline) {
+      // The masses of one of the generator's particles: the world as the
+      // strategy expected it, so each observation is one it planned for.
+      const auto particles = std::max<std::uint32_t>(1, e.provenance.particles);
+      const int p = static_cast<int>((run.seed - settings.first_seed) % particles);
+      w.truth = sim::sample_masses(e.world, env.family, sim::particle_seed(e.provenance.seed, p));
+      w.name = fmt::format("{}, particle {}", e.name, p);
+    } else {
+      w.truth = sim::sample_masses(e.world, env.family, mass_seed(run.seed));
+      w.name = fmt::format("{}, masses of seed {}", e.name, run.seed);
+    }
+  } else if (!env.world.empty()) {
+    auto world = sim::load_world(env.world);
+    if (!world) return world.error();
+    w.truth = sim::sample_masses(sim::without_masses(*world), env.family, mass_seed(run.seed));
+    w.name = fmt::format("{}, masses of seed {}", env.world.filename().string(), run.seed);
+  } else {
+    w.truth = sim::make_environment(env.family, run.seed);
+    w.name = fmt::format("{}:{}", sim::to_string(env.family), run.seed);
+  }
+  return w;
+}
+
+nlohmann::json run_one(actions::Rig& rig, const EvaluationSettings& settings,
+                       const Resources& resources, const RunSpec& run) {
+  const auto t0 = std::chrono::steady_clock::now();
+  nlohmann::json out = {{"environment", settings.environments[run.environment].name},
+                        {"method", to_string(run.method)},
+                        {"seed", run.seed}};
+  auto start = start_world(settings, resources, run);
+  if (!start) {
+    out["error"] = start.error().message;
+    return out;
+  }
+  out["world"] = start->name;
+  rig.reset(start->truth);
+  actions::PlannerStats planner;
+  actions::ActionStats pick, sweep;
+  nlohmann::json curve = nlohmann::json::array({{0.0, 0}});
+  nlohmann::json steps = nlohmann::json::array();
+  double t = 0;
+  std::uint32_t boxes = 0;
+  std::uint64_t library_actions = 0;
+  const actions::RunLimits limits{settings.max_actions, 24, settings.max_robot_time_s};
+  auto episode = actions::run_strategies(
+      rig.model(), rig.backend(), method_source(settings, resources, run.method, start->entry),
+      limits, [&](const actions::EpisodeStep& s) {
+        const actions::Outcome& o = s.outcome;
+        planner.add(o.queries);
+        if (o.applicable) actions::add_execution(pick, sweep, s.action, o);
+        if (s.source.rfind("library:", 0) == 0) ++library_actions;
+        // The curve steps where each box left; the action's end has the count.
+        std::vector<double> at = o.unloaded_at_s;
+        std::sort(at.begin(), at.end());
+        const std::uint32_t after = boxes + o.boxes;
+        for (double a : at)
+          if (boxes < after) curve.push_back({std::min(t + a, t + o.robot_time_s), ++boxes});
+        boxes = after;
+        t += o.robot_time_s;
+        curve.push_back({t, boxes});
+        steps.push_back({{"action", sim::to_string(s.action)},
+                         {"source", s.source},
+                         {"observation", sim::to_string(s.observation)},
+                         {"applicable", o.applicable},
+                         {"boxes", o.boxes},
+                         {"robot_time_s", o.robot_time_s}});
+      });
+  if (!episode) {
+    out["error"] = episode.error().message;
+  } else {
+    out["boxes_total"] = episode->boxes_total;
+    out["boxes_unloaded"] = episode->boxes_unloaded;
+    out["robot_time_s"] = episode->robot_time_s;
+    out["actions"] = episode->actions;
+    out["library_actions"] = library_actions;
+    out["strategies_asked"] = episode->strategies_asked;
+    out["strategy_steps"] = episode->strategy_steps;
+    out["robot_trailer_collisions"] = episode->robot_trailer_contacts;
+    out["stop_reason"] = episode->stop_reason;
+  }
+  out["curve"] = curve;
+  out["steps"] = steps;
+  out["planner_modes"] = actions::modes_json(planner);
+  out["action_stats"] = {{"pick", actions::action_json(pick)},
+                         {"sweep", actions::action_json(sweep)}};
+  out["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+}  // namespace plr::evaluation

@@ -1,0 +1,356 @@
+#include "plr/evaluation/summary.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "plr/actions/run_stats.hpp"
+
+namespace plr::evaluation {
+
+namespace {
+
+struct MeanSd {
+  double mean = 0, sd = 0, se = 0;
+  std::size_t n = 0;
+};
+
+MeanSd mean_sd(const std::vector<double>& v) {
+  MeanSd m;
+  m.n = v.size();
+  if (v.empty()) return m;
+  for (double x : v) m.mean += x;
+  m.mean /= static_cast<double>(v.size());
+  if (v.size() > 1) {
+    double ss = 0;
+    for (double x : v) ss += (x - m.mean) * (x - m.mean);
+    m.sd = std::sqrt(ss / static_cast<double>(v.size() - 1));
+    m.se = m.sd / std::sqrt(static_cast<double>(v.size()));
+  }
+  return m;
+}
+
+nlohmann::json to_json(const MeanSd& m) {
+  return {{"mean", m.mean}, {"sd", m.sd}, {"se", m.se}, {"n", m.n}};
+}
+
+// Pools groups given as (n, mean, sd) into the mean and sd of all samples.
+struct Pool {
+  double n = 0, mean = 0, m2 = 0;
+  void add(double gn, double gmean, double gsd) {
+    if (gn <= 0) return;
+    const double total = n + gn;
+    const double d = gmean - mean;
+    m2 += gsd * gsd * (gn - 1) + d * d * n * gn / total;
+    mean += d * gn / total;
+    n = total;
+  }
+  double sd() const { return n > 1 ? std::sqrt(m2 / (n - 1)) : 0.0; }
+};
+
+// run[a][b], or an empty object where the run's file lacks it.
+const nlohmann::json& field(const nlohmann::json& run, const char* a, const std::string& b) {
+  static const nlohmann::json kEmpty = nlohmann::json::object();
+  if (!run.contains(a) || !run[a].is_object() || !run[a].contains(b) || !run[a][b].is_object())
+    return kEmpty;
+  return run[a][b];
+}
+
+bool ok(const nlohmann::json& run) {
+  return !run.contains("error") && run.contains("curve") && run["curve"].is_array();
+}
+
+// Standard errors between two means: the difference over its standard error.
+double z_score(const nlohmann::json& a, const nlohmann::json& b) {
+  const double se = std::hypot(a["se"].get<double>(), b["se"].get<double>());
+  const double d = a["mean"].get<double>() - b["mean"].get<double>();
+  if (se > 0) return d / se;
+  return d == 0 ? 0.0 : std::copysign(INFINITY, d);
+}
+
+std::string compare_words(double z) {
+  if (z >= 2) return "ahead";
+  if (z <= -2) return "behind";
+  return "level (within 2 standard errors)";
+}
+
+// The method Table I and II are computed from: PLR, the paper's; else the
+// first method run.
+Method table_method(const EvaluationSettings& s) {
+  for (Method m : s.methods)
+    if (m == Method::kPlr) return m;
+  return s.methods.front();
+}
+
+nlohmann::json table1(const std::vector<const nlohmann::json*>& runs) {
+  nlohmann::json modes = nlohmann::json::object();
+  for (int m = 1; m <= 6; ++m) {
+    const std::string key = "M" + std::to_string(m);
+    std::vector<double> queries, failures_pct;
+    Pool ms;
+    std::string name;
+    for (const nlohmann::json* r : runs) {
+      const auto& mode = field(*r, "planner_modes", key);
+      name = mode.value("name", key);
+      const double q = mode.value("queries", 0.0);
+      queries.push_back(q);
+      if (q > 0) failures_pct.push_back(100.0 * mode.value("failures", 0.0) / q);
+      ms.add(mode.value("ms_samples", 0.0), mode.value("mean_ms", 0.0), mode.value("sd_ms", 0.0));
+    }
+    const MeanSd q = mean_sd(queries), f = mean_sd(failures_pct);
+    modes[key] = {{"name", name},
+                  {"dof", actions::plan_mode_dof(m)},
+                  {"queries_per_run", q.mean},
+                  {"queries_per_run_sd", q.sd},
+                  {"planning_ms", ms.mean},
+                  {"planning_ms_sd", ms.sd()},
+                  {"answered", ms.n},
+                  {"failures_pct", f.mean},
+                  {"failures_pct_sd", f.sd}};
+  }
+  return modes;
+}
+
+nlohmann::json table2(const std::vector<const nlohmann::json*>& runs) {
+  nlohmann::json out = nlohmann::json::object();
+  for (const char* kind : {"pick", "sweep"}) {
+    std::vector<double> executions, rates;
+    Pool plan, exec;
+    double boxes = 0, seconds = 0;
+    for (const nlohmann::json* r : runs) {
+      const auto& a = field(*r, "action_stats", kind);
+      const double n = a.value("executions", 0.0);
+      executions.push_back(n);
+      if (n > 0) rates.push_back(a.value("boxes_per_s", 0.0));
+      plan.add(n, a.value("plan_s", 0.0), a.value("plan_s_sd", 0.0));
+      exec.add(n, a.value("exec_s", 0.0), a.value("exec_s_sd", 0.0));
+      boxes += a.value("boxes", 0.0);
+      seconds += n * (a.value("plan_s", 0.0) + a.value("exec_s", 0.0));
+    }
+    const MeanSd e = mean_sd(executions), rate = mean_sd(rates);
+    out[kind] = {{"executions_per_run", e.mean},
+                 {"executions_per_run_sd", e.sd},
+                 {"plan_s", plan.mean},
+                 {"plan_s_sd", plan.sd()},
+                 {"exec_s", exec.mean},
+                 {"exec_s_sd", exec.sd()},
+                 {"boxes_per_s", rate.mean},
+                 {"boxes_per_s_sd", rate.sd},
+                 {"boxes", boxes},
+                 {"boxes_per_s_pooled", seconds > 0 ? boxes / seconds : 0.0}};
+  }
+  return out;
+}
+
+}  // namespace
+
+double boxes_at(const nlohmann::json& curve, double t) {
+  double boxes = 0;
+  for (const auto& p : curve) {
+    if (p[0].get<double>() > t) break;
+    boxes = p[1].get<double>();
+  }
+  return boxes;
+}
+
+nlohmann::json summarize(const EvaluationSettings& s, const std::vector<nlohmann::json>& runs,
+                         bool quick) {
+  const double horizon = s.max_robot_time_s;
+  std::vector<double> grid;
+  for (int i = 0; i < kGridPoints; ++i) grid.push_back(horizon * i / (kGridPoints - 1));
+
+  nlohmann::json envs = nlohmann::json::object();
+  nlohmann::json findings = nlohmann::json::array();
+  nlohmann::json claims = nlohmann::json::array();
+  for (const Environment& env : s.environments) {
+    nlohmann::json methods = nlohmann::json::object();
+    for (const Method m : s.methods) {
+      std::vector<const nlohmann::json*> mine;
+      std::size_t failed = 0;
+      std::map<std::string, int> stops;
+      for (const auto& r : runs) {
+        if (r.value("environment", "") != env.name || r.value("method", "") != to_string(m))
+          continue;
+        if (!ok(r)) {
+          ++failed;
+          ++stops[r.value("error", r.value("stop_reason", "failed"))];
+          continue;
+        }
+        mine.push_back(&r);
+        ++stops[r.value("stop_reason", "?")];
+      }
+      if (mine.empty() && failed == 0) continue;
+      nlohmann::json mean = nlohmann::json::array(), se = nlohmann::json::array();
+      for (double t : grid) {
+        std::vector<double> v;
+        for (const auto* r : mine) v.push_back(boxes_at((*r)["curve"], t));
+        const MeanSd ms = mean_sd(v);
+        mean.push_back(ms.mean);
+        se.push_back(ms.se);
+      }
+      std::vector<double> at_end, at_half, totals, walls, library_share;
+      for (const auto* r : mine) {
+        at_end.push_back(boxes_at((*r)["curve"], horizon));
+        at_half.push_back(boxes_at((*r)["curve"], horizon / 2));
+        totals.push_back(r->value("boxes_total", 0.0));
+        walls.push_back(r->value("wall_s", 0.0));
+        const double actions = r->value("actions", 0.0);
+        if (actions > 0) library_share.push_back(r->value("library_actions", 0.0) / actions);
+      }
+      methods[to_string(m)] = {{"runs", mine.size()},
+                               {"failed", failed},
+                               {"mean", mean},
+                               {"se", se},
+                               {"boxes_at_horizon", to_json(mean_sd(at_end))},
+                               {"boxes_at_half", to_json(mean_sd(at_half))},
+                               {"boxes_total", to_json(mean_sd(totals))},
+                               {"library_action_share", to_json(mean_sd(library_share))},
+                               {"wall_s", to_json(mean_sd(walls))},
+                               {"stop_reasons", stops}};
+    }
+    // Findings: each method against H at the horizon, PLR against NN, and
+    // how NN's and H's unloading split between the two halves.
+    auto has = [&](const char* m) {
+      return methods.contains(m) && methods[m]["runs"].get<std::size_t>() > 0;
+    };
+    auto at = [&](const char* m) -> const nlohmann::json& {
+      return methods[m]["boxes_at_horizon"];
+    };
+    auto line = [&](const char* a, const char* b) {
+      const double z = z_score(at(a), at(b));
+      const double d = at(a)["mean"].get<double>() - at(b)["mean"].get<double>();
+      findings.push_back(
+          {{"environment", env.name},
+           {"kind", "versus"},
+           {"a", a},
+           {"b", b},
+           {"difference", d},
+           {"z", std::isfinite(z) ? z : (z > 0 ? 1e9 : -1e9)},
+           {"text",
+            fmt::format("{}: {} unloads {:.1f} ± {:.1f} boxes by {:g} s, {} {:.1f} ± {:.1f}: "
+                        "{} by {:+.1f} boxes ({:+.1f} standard errors)",
+                        env.name, a, at(a)["mean"].get<double>(), at(a)["se"].get<double>(),
+                        horizon, b, at(b)["mean"].get<double>(), at(b)["se"].get<double>(),
+                        compare_words(z), d, std::isfinite(z) ? z : 0.0)}});
+      return z;
+    };
+    if (has("H")) {
+      for (const char* m : {"PLR", "NN", "open-loop", "expected-offline"})
+        if (has(m)) {
+          const double z = line(m, "H");
+          if (std::string(m) == "PLR") {
+            claims.push_back({{"claim", fmt::format("PLR >= H on {}", env.name)},
+                              {"holds", z > -2},
+                              {"z", std::isfinite(z) ? z : 0.0}});
+            if (env.family == sim::EnvFamily::kB1 || env.family == sim::EnvFamily::kB2)
+              claims.push_back({{"claim", fmt::format("PLR > H on {}", env.name)},
+                                {"holds", z >= 2},
+                                {"z", std::isfinite(z) ? z : 0.0}});
+          }
+        }
+    }
+    if (has("PLR") && has("NN")) line("PLR", "NN");
+    if (has("open-loop") && has("expected-offline")) line("open-loop", "expected-offline");
+    if (has("open-loop") && has("PLR")) {
+      const double z = line("open-loop", "PLR");
+      claims.push_back({{"claim", fmt::format("open-loop poor on {} (behind PLR)", env.name)},
+                        {"holds", z <= -2},
+                        {"z", std::isfinite(z) ? z : 0.0}});
+    }
+    if (has("NN") && has("H")) {
+      auto halves = [&](const char* m) {
+        const double half = methods[m]["boxes_at_half"]["mean"].get<double>();
+        const double end = at(m)["mean"].get<double>();
+        return std::pair{half, end - half};
+      };
+      const auto [nn1, nn2] = halves("NN");
+      const auto [h1, h2] = halves("H");
+      // Late degradation: NN's share of its boxes in the second half below H's.
+      const double nn_late = nn1 + nn2 > 0 ? nn2 / (nn1 + nn2) : 0.0;
+      const double h_late = h1 + h2 > 0 ? h2 / (h1 + h2) : 0.0;
+      const bool degrades = nn_late < h_late;
+      findings.push_back(
+          {{"environment", env.name},
+           {"kind", "halves"},
+           {"nn_first", nn1},
+           {"nn_second", nn2},
+           {"h_first", h1},
+           {"h_second", h2},
+           {"text",
+            fmt::format(
+                "{}: NN unloads {:.1f} boxes in the first {:g} s and {:.1f} in the "
+                "second ({:.0f} % late), H {:.1f} and {:.1f} ({:.0f} % late): NN {}",
+                env.name, nn1, horizon / 2, nn2, 100 * nn_late, h1, h2, 100 * h_late,
+                degrades ? "slows down later than H does" : "does not slow down more than H")}});
+      claims.push_back({{"claim", fmt::format("NN degrades late on {}", env.name)},
+                        {"holds", degrades},
+                        {"z", 0.0}});
+    }
+    envs[env.name] = {{"training", env.training},
+                      {"family", std::string(sim::to_string(env.family))},
+                      {"methods", methods},
+                      {"plot_svg", env.name + ".svg"},
+                      {"plot_png", env.name + ".png"}};
+  }
+
+  const Method tm = table_method(s);
+  std::vector<const nlohmann::json*> table_runs;
+  for (const auto& r : runs)
+    if (ok(r) && r.value("method", "") == to_string(tm)) table_runs.push_back(&r);
+  const nlohmann::json t2 = table2(table_runs);
+  {
+    const double pick = t2["pick"]["boxes_per_s_pooled"].get<double>();
+    const double sweep = t2["sweep"]["boxes_per_s_pooled"].get<double>();
+    const bool faster = sweep > pick;
+    findings.push_back(
+        {{"kind", "actions"},
+         {"text", fmt::format("{} runs: a sweep moves {:.3f} boxes per robot-second, a pick {:.3f}"
+                              " ({} sweeps, {} picks in all): the sweep is {}",
+                              to_string(tm), sweep, pick,
+                              t2["sweep"]["executions_per_run"].get<double>() * table_runs.size(),
+                              t2["pick"]["executions_per_run"].get<double>() * table_runs.size(),
+                              faster ? "faster" : "not faster")}});
+    claims.push_back(
+        {{"claim", "a sweep moves boxes faster than a pick"}, {"holds", faster}, {"z", 0.0}});
+  }
+
+  nlohmann::json index = nlohmann::json::array();
+  for (const auto& r : runs) {
+    index.push_back({{"environment", r.value("environment", "")},
+                     {"method", r.value("method", "")},
+                     {"seed", r.value("seed", 0)},
+                     {"world", r.value("world", "")},
+                     {"boxes_total", r.value("boxes_total", 0)},
+                     {"boxes_unloaded", r.value("boxes_unloaded", 0)},
+                     {"boxes_at_horizon", ok(r) ? boxes_at(r["curve"], horizon) : 0.0},
+                     {"robot_time_s", r.value("robot_time_s", 0.0)},
+                     {"actions", r.value("actions", 0)},
+                     {"stop_reason", r.value("error", r.value("stop_reason", ""))},
+                     {"wall_s", r.value("wall_s", 0.0)}});
+  }
+  nlohmann::json env_names = nlohmann::json::array(), method_names = nlohmann::json::array();
+  for (const auto& e : s.environments) env_names.push_back(e.name);
+  for (const auto m : s.methods) method_names.push_back(to_string(m));
+  return {{"settings",
+           {{"library", s.library.string()},
+            {"model", s.model.string()},
+            {"environments", env_names},
+            {"methods", method_names},
+            {"first_seed", s.first_seed},
+            {"seeds", quick ? s.quick_seeds : s.seeds},
+            {"quick", quick},
+            {"max_robot_time_s", horizon},
+            {"max_actions", s.max_actions}}},
+          {"grid_s", grid},
+          {"environments", envs},
+          {"table1",
+           {{"method", to_string(tm)}, {"runs", table_runs.size()}, {"modes", table1(table_runs)}}},
+          {"table2", {{"method", to_string(tm)}, {"runs", table_runs.size()}, {"actions", t2}}},
+          {"findings", findings},
+          {"claims", claims},
+          {"runs", index}};
+}
+
+}  // namespace plr::evaluation

@@ -1,0 +1,44 @@
+// The action model on the Simbody simulation with the ARA* lattice planner,
+// all in this process: the shipped robot and lattice loaded once, a trailer
+// put in front of the robot as often as wanted. What offline work (the
+// chooser's training rollouts, the evaluation) runs actions on; a process
+// forked from a rig inherits the loaded robot and planner.
+#pragma once
+
+#include <plr/expected.hpp>
+
+#include <memory>
+
+#include "plr/actions/action_model.hpp"
+#include "plr/actions/in_process.hpp"
+#include "plr/actions/unloader_simulation.hpp"
+#include "plr/planning/lattice_planner.hpp"
+#include "plr/sim/robot_model.hpp"
+#include "plr/sim/world.hpp"
+
+namespace plr::actions {
+
+class Rig {
+ public:
+  static plr::Expected<std::unique_ptr<Rig>> create(ActionOptions options);
+
+  // A new simulation of `truth` (with masses), the robot at home.
+  void reset(const sim::World& truth);
+
+  const sim::RobotModel& robot() const { return robot_; }
+  const ActionModel& model() const { return model_; }
+  UnloaderSimulation& simulation() { return simulation_; }
+  const UnloaderSimulation& simulation() const { return simulation_; }
+  InProcessBackend& backend() { return backend_; }
+
+ private:
+  Rig(sim::RobotModel robot, planning::LatticeConfig lattice, ActionOptions options);
+
+  sim::RobotModel robot_;
+  planning::LatticePlanner planner_;
+  ActionModel model_;
+  UnloaderSimulation simulation_;  // assigned anew by reset(): the backend keeps its address
+  InProcessBackend backend_;
+};
+
+}  // namespace plr::actions

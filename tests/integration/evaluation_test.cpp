@@ -1,0 +1,262 @@
+// plr evaluate end to end on a tiny configuration: two environments of the
+// small world (one a training world of a library made here, one held out),
+// the five methods, 2 seeds, a short horizon. The plots must be valid SVG
+// and PNG, the HTML tables must hold report.json's numbers, and a rerun
+// must run only what is missing.
+#include <expat.h>
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "plr/chooser/features.hpp"
+#include "plr/chooser/model.hpp"
+#include "plr/chooser/nearest.hpp"
+#include "plr/evaluation/summary.hpp"
+#include "plr/sim/generators.hpp"
+#include "plr/sim/hardcoded_strategy.hpp"
+#include "plr/sim/library.hpp"
+#include "plr/sim/world_io.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+int run(const std::string& command, std::string* output = nullptr) {
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  std::string text;
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, pipe) != nullptr) text += buf;
+  const int status = ::pclose(pipe);
+  if (output) *output = text;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+bool well_formed_xml(const std::string& text) {
+  XML_Parser p = XML_ParserCreate(nullptr);
+  const bool ok = XML_Parse(p, text.data(), static_cast<int>(text.size()), 1) == XML_STATUS_OK;
+  XML_ParserFree(p);
+  return ok;
+}
+
+// The cells of the table row <tr data-row="key"> of table `id`.
+std::vector<std::string> row(const std::string& html, const std::string& id,
+                             const std::string& key) {
+  const auto table = html.find("<table id=\"" + id + "\">");
+  const auto end = html.find("</table>", table);
+  const auto start = html.find("<tr data-row=\"" + key + "\">", table);
+  if (table == std::string::npos || start == std::string::npos || start > end) return {};
+  const std::string tr = html.substr(start, html.find("</tr>", start) - start);
+  std::vector<std::string> cells;
+  static const std::regex cell("<td[^>]*>([^<]*)</td>");
+  for (std::sregex_iterator it(tr.begin(), tr.end(), cell), e; it != e; ++it)
+    cells.push_back((*it)[1]);
+  return cells;
+}
+
+// "12.3 ± 4.5" against mean and sd, to the digits shown.
+void expect_pm(const std::string& cell, double mean, double sd, double digits_unit) {
+  const auto pm = cell.find(" ± ");
+  ASSERT_NE(pm, std::string::npos) << cell;
+  EXPECT_NEAR(std::stod(cell.substr(0, pm)), mean, digits_unit / 2 + 1e-9) << cell;
+  EXPECT_NEAR(std::stod(cell.substr(pm + 4)), sd, digits_unit / 2 + 1e-9) << cell;
+}
+
+class EvaluationTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("plr_evaluation_test_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    // A library of one strategy for the small world: H's first action, then
+    // a low sweep whatever is seen (a leaf per observation).
+    auto world = plr::sim::load_world(SMALL_WORLD);
+    ASSERT_TRUE(world) << world.error().message;
+    plr::sim::LibraryEntry e;
+    e.name = "S-1";
+    e.family = "A1";
+    e.world_seed = 1;
+    e.world = plr::sim::without_masses(*world);
+    e.observation_json = "{}";
+    e.strategy.name = "S-1";
+    const auto first = plr::sim::hardcoded_action(plr::sim::analyse(e.world), {});
+    e.strategy.nodes.push_back({first, {}});
+    for (std::uint32_t o = 0; o < plr::sim::kNumObservations; ++o) {
+      e.strategy.nodes[0].children.push_back({static_cast<plr::sim::Observation>(o), o + 1});
+      e.strategy.nodes.push_back({plr::sim::make_sweep(plr::sim::Height::kLow), {}});
+    }
+    e.provenance.seed = 1;
+    e.provenance.particles = 2;
+    e.provenance.horizon = 2;
+    plr::sim::Library library;
+    library.entries.push_back(e);
+    ASSERT_TRUE(plr::sim::save_library(library, dir_ / "library.plrl"));
+    // M: trained on the full world (NN's) and on it without its top layer (H's).
+    plr::sim::World lower = e.world;
+    std::erase_if(lower.boxes,
+                  [](const plr::sim::Box& b) { return b.pose.translation().z() > 0.8; });
+    plr::sim::World front = e.world;
+    front.boxes.resize(front.boxes.size() / 2);
+    const std::vector<plr::chooser::Features> samples = {
+        plr::chooser::features(e.world), plr::chooser::features(lower),
+        plr::chooser::features(front), plr::chooser::features(e.world)};
+    auto model =
+        plr::chooser::Model::train(samples, {1, -1, -1, 1}, plr::chooser::Scaling::fit(samples),
+                                   plr::chooser::fingerprint(library), {2, {1}, {-3}});
+    ASSERT_TRUE(model) << model.error().message;
+    ASSERT_TRUE(model->save(dir_ / "model.plrm"));
+    std::ofstream(dir_ / "evaluate.yaml")
+        << "format: plr-evaluation\n"
+        << "library: " << (dir_ / "library.plrl").string() << "\n"
+        << "model: " << (dir_ / "model.plrm").string() << "\n"
+        << "environments:\n"
+        << "  - {name: S, family: A1, training: true}\n"
+        << "  - {name: T, family: A1, world: " << SMALL_WORLD << "}\n"
+        << "methods: [H, NN, open-loop, expected-offline, PLR]\n"
+        << "seeds: 2\n"
+        << "max_robot_time_s: 60\n"
+        << "workers: 2\n";
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+
+  std::string evaluate(int expect_code = 0) {
+    std::string out;
+    const int code = run(std::string(PLR_EVALUATE) + " " + (dir_ / "evaluate.yaml").string() +
+                             " --report " + (dir_ / "report").string(),
+                         &out);
+    EXPECT_EQ(code, expect_code) << out;
+    return out;
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(EvaluationTest, ReportHoldsPlotsAndTablesOfItsRuns) {
+  evaluate();
+  const fs::path report = dir_ / "report";
+  // S: 5 methods x 2 seeds; T (held out): H, NN, PLR x 2 seeds.
+  std::size_t files = 0;
+  for (const auto& f : fs::directory_iterator(report / "runs"))
+    files += f.path().extension() == ".json";
+  EXPECT_EQ(files, 16u);
+  EXPECT_FALSE(fs::exists(report / "runs" / "T_open-loop_seed1.json"));
+  const auto j = nlohmann::json::parse(read(report / "report.json"));
+  for (const char* env : {"S", "T"}) {
+    const std::string svg = read(report / (std::string(env) + ".svg"));
+    EXPECT_TRUE(well_formed_xml(svg)) << env;
+    EXPECT_NE(svg.find("<svg"), std::string::npos);
+    EXPECT_NE(svg.find("<polygon"), std::string::npos);  // the standard-error bands
+    const std::string png = read(report / (std::string(env) + ".png"));
+    ASSERT_GT(png.size(), 24u);
+    EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+    EXPECT_EQ(png.substr(12, 4), "IHDR");
+    for (const auto& [m, d] : j["environments"][env]["methods"].items()) {
+      EXPECT_EQ(d["runs"].get<int>(), 2) << env << " " << m;
+      EXPECT_EQ(d["failed"].get<int>(), 0) << env << " " << m;
+      EXPECT_EQ(d["mean"].size(), static_cast<std::size_t>(plr::evaluation::kGridPoints));
+    }
+  }
+  // Every run moved boxes within 60 s but H's (its first action on this wall).
+  for (const auto& r : j["runs"])
+    EXPECT_EQ(r["stop_reason"].get<std::string>().find("process"), std::string::npos);
+  EXPECT_GT(j["environments"]["S"]["methods"]["H"]["boxes_at_horizon"]["mean"].get<double>(), 0);
+
+  const std::string html = read(report / "report.html");
+  EXPECT_TRUE(well_formed_xml(html.substr(html.find("<html>"))));
+  const auto& t1 = j["table1"]["modes"];
+  double queries = 0;
+  for (const auto& [key, m] : t1.items()) queries += m["queries_per_run"].get<double>();
+  EXPECT_GT(queries, 0);
+  for (const auto& [key, m] : t1.items()) {
+    const auto cells = row(html, "table1", key);
+    ASSERT_EQ(cells.size(), 5u) << key;
+    EXPECT_EQ(std::stoi(cells[1]), m["dof"].get<int>());
+    expect_pm(cells[2], m["queries_per_run"], m["queries_per_run_sd"], 0.1);
+    expect_pm(cells[3], m["planning_ms"], m["planning_ms_sd"], 0.1);
+    expect_pm(cells[4], m["failures_pct"], m["failures_pct_sd"], 0.1);
+  }
+  for (const auto& [key, a] : j["table2"]["actions"].items()) {
+    const auto cells = row(html, "table2", key);
+    ASSERT_EQ(cells.size(), 5u) << key;
+    expect_pm(cells[1], a["executions_per_run"], a["executions_per_run_sd"], 0.1);
+    expect_pm(cells[2], a["plan_s"], a["plan_s_sd"], 0.01);
+    expect_pm(cells[3], a["exec_s"], a["exec_s_sd"], 0.01);
+    expect_pm(cells[4], a["boxes_per_s"], a["boxes_per_s_sd"], 0.001);
+  }
+  for (const auto& [env, e] : j["environments"].items())
+    for (const auto& [m, d] : e["methods"].items()) {
+      const auto cells = row(html, "methods", env + "/" + m);
+      ASSERT_EQ(cells.size(), 6u) << env << "/" << m;
+      EXPECT_EQ(std::stoi(cells[2]), d["runs"].get<int>());
+      const auto& b = d["boxes_at_horizon"];
+      expect_pm(cells[3], b["mean"], b["se"], 0.1);
+    }
+  EXPECT_FALSE(j["findings"].empty());
+  EXPECT_FALSE(j["claims"].empty());
+
+  // Run again: nothing runs. Without one result, only that run, and it ends
+  // as before (robot time is deterministic).
+  EXPECT_NE(evaluate().find(""), std::string::npos);
+  const fs::path one = report / "runs" / "S_PLR_seed2.json";
+  const auto before = nlohmann::json::parse(read(one));
+  fs::remove(one);
+  const std::string again = evaluate();
+  EXPECT_NE(again.find("15 of 16 runs already"), std::string::npos) << again;
+  const auto after = nlohmann::json::parse(read(one));
+  EXPECT_EQ(after["boxes_unloaded"], before["boxes_unloaded"]);
+  EXPECT_DOUBLE_EQ(after["robot_time_s"].get<double>(), before["robot_time_s"].get<double>());
+}
+
+TEST_F(EvaluationTest, MissingModelIsOneLineNamingTheCommand) {
+  fs::remove(dir_ / "model.plrm");
+  const std::string out = evaluate(2);
+  EXPECT_NE(out.find("model.plrm: no chooser model; train it with `plr chooser train"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+}
+
+TEST(EvaluationSummary, MeanAndStandardErrorOfTheCurves) {
+  plr::evaluation::EvaluationSettings s;
+  s.environments.push_back({"E", plr::sim::EnvFamily::kB1, false, {}});
+  s.methods = {plr::evaluation::Method::kHardcoded};
+  s.max_robot_time_s = 100;
+  auto result = [](int seed, nlohmann::json curve) {
+    nlohmann::json modes = nlohmann::json::object();
+    return nlohmann::json{
+        {"environment", "E"},
+        {"method", "H"},
+        {"seed", seed},
+        {"curve", curve},
+        {"planner_modes", modes},
+        {"action_stats",
+         {{"pick", nlohmann::json::object()}, {"sweep", nlohmann::json::object()}}}};
+  };
+  // Boxes at 100 s: 10 and 20; at 50 s: 4 and 0.
+  const auto j = plr::evaluation::summarize(
+      s, {result(1, {{0, 0}, {40, 4}, {90, 10}}), result(2, {{0, 0}, {60, 20}})}, false);
+  const auto& h = j["environments"]["E"]["methods"]["H"];
+  EXPECT_DOUBLE_EQ(h["boxes_at_horizon"]["mean"].get<double>(), 15.0);
+  EXPECT_NEAR(h["boxes_at_horizon"]["se"].get<double>(), 5.0, 1e-12);
+  EXPECT_DOUBLE_EQ(h["boxes_at_half"]["mean"].get<double>(), 2.0);
+  EXPECT_DOUBLE_EQ(h["mean"].back().get<double>(), 15.0);
+  EXPECT_DOUBLE_EQ(plr::evaluation::boxes_at(nlohmann::json::array({{0, 0}, {5, 3}}), 4.99), 0.0);
+}
+
+}  // namespace
