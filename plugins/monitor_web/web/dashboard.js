@@ -48,7 +48,7 @@ function drawView(svg, world, u, v) {
 
 function drawCurve(svg, curve, total) {
   svg.replaceChildren();
-  const W = 500, H = 260, L = 40, B = 30;
+  const W = 500, H = 200, L = 40, B = 24;
   const tmax = Math.max(10, ...curve.map((p) => p[0]));
   const nmax = Math.max(1, total || 0, ...curve.map((p) => p[1]));
   const X = (t) => L + (t / tmax) * (W - L - 10);
@@ -58,7 +58,9 @@ function drawCurve(svg, curve, total) {
   el('text', {class: 'label', x: W - 10, y: H - 8, 'text-anchor': 'end'}, svg).textContent =
       `robot time ${fmt(tmax, 0)} s`;
   el('text', {class: 'label', x: 4, y: 14}, svg).textContent = `${nmax} boxes`;
-  const points = [[0, 0], ...curve];
+  // A step per box: the count holds until the next box leaves.
+  const points = [[0, 0]];
+  for (const [t, n] of curve) points.push([t, points[points.length - 1][1]], [t, n]);
   el('polyline', {class: 'curve', id: 'curve-line', 'data-points': curve.length,
                   'data-boxes': curve.length ? curve[curve.length - 1][1] : 0,
                   points: points.map((p) => `${X(p[0])},${Y(p[1])}`).join(' ')}, svg);
