@@ -222,6 +222,8 @@ class MonitorWebNode final : public Node, public WebHandler {
       const auto* api = ctx().api();
       for (auto& [topic, r] : readers_) (void)api->unsubscribe(api->ctx, r->subscription);
     }
+    // The I/O thread calls the handlers, which use server_: it ends first.
+    if (server_) server_->stop();
     server_.reset();
     std::lock_guard lock(readers_m_);
     readers_.clear();

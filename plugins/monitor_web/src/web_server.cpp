@@ -128,8 +128,10 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   // On any thread: counted against the limit here, written on the I/O thread.
   bool enqueue(std::shared_ptr<const std::string> data, bool binary) {
     const auto size = data->size();
-    if (queued_bytes_.load() + size > server_.options.send_limit) return false;
-    queued_bytes_ += size;
+    auto queued = queued_bytes_.load();
+    do {
+      if (queued + size > server_.options.send_limit) return false;
+    } while (!queued_bytes_.compare_exchange_weak(queued, queued + size));
     net::post(ws_.get_executor(),
               [self = shared_from_this(), data = std::move(data), binary]() mutable {
                 self->queue_.emplace_back(std::move(data), binary);
@@ -304,6 +306,10 @@ void WebServer::serve() {
 }
 
 WebServer::~WebServer() {
+  stop();
+}
+
+void WebServer::stop() {
   impl_->ioc.stop();
   if (impl_->thread.joinable()) impl_->thread.join();
 }

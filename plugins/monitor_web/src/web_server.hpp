@@ -63,6 +63,8 @@ class WebServer {
   static Expected<std::unique_ptr<WebServer>> start(const WebServerOptions& options,
                                                     WebHandler& handler);
   void serve();
+  // Stops serving: the handler is not called any more once it returns.
+  void stop();
   ~WebServer();
   WebServer(const WebServer&) = delete;
   WebServer& operator=(const WebServer&) = delete;
