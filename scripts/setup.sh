@@ -23,6 +23,8 @@ packages=(
   liburdfdom-dev libsvm-dev
   libompl-dev libboost-serialization-dev libboost-filesystem-dev libboost-system-dev
   libexpat1-dev librsvg2-bin
+  libboost-dev libzstd-dev zlib1g-dev
+  chromium
   iproute2 openssl procps
 )
 
@@ -30,11 +32,19 @@ missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+# Debian's node and npm, unless a node is there already (NodeSource's bundles npm).
+command -v npm >/dev/null || missing+=(nodejs npm)
 if ((${#missing[@]})); then
   echo "setup: installing ${missing[*]}"
   export DEBIAN_FRONTEND=noninteractive
   apt-get update -qq
   apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# The independent MCAP reader the recording test checks against (@mcap/core),
+# at the versions of the committed lock file; never fetched at build time.
+if [[ ! -d tests/js/node_modules/@mcap/core ]]; then
+  npm ci --prefix tests/js --no-audit --no-fund >/dev/null
 fi
 
 build_type=${PLR_BUILD_TYPE:-RelWithDebInfo}

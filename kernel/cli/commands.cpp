@@ -4,6 +4,8 @@
 #include "kernel.hpp"
 #include "pipeline_config.hpp"
 #include "plugin_loader.hpp"
+#include "recorder.hpp"
+#include "replayer.hpp"
 #include "supervisor.hpp"
 #include "variables.hpp"
 
@@ -100,7 +102,8 @@ struct RunEnd {
 // run's and is replaced.
 void write_run_report(const std::filesystem::path& dir, const RunEnd& end,
                       const PipelineConfig& config, const std::string& run_id,
-                      std::filesystem::file_time_type started, double wall_s, int restarts) {
+                      std::filesystem::file_time_type started, double wall_s, int restarts,
+                      const std::vector<TopicStatsSnapshot>& topics = {}) {
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -115,6 +118,8 @@ void write_run_report(const std::filesystem::path& dir, const RunEnd& end,
                    {"ended", to_string(end.ending)}, {"reason", end.reason},
                    {"exit_code", end.exit_code},     {"wall_s", wall_s},
                    {"host_restarts", restarts}};
+  // Messages each topic carried on the main host's bus (what a recording of it should hold).
+  for (const auto& t : topics) report["run"]["topic_messages"][t.name] = t.messages;
   if (auto s = write_file_atomically(file.string(), report.dump(2) + "\n"); !s)
     spdlog::error("report: {}", s.error().message);
   else
@@ -363,6 +368,19 @@ int run_pipeline(const RunOptions& options) {
   }
 
   Kernel kernel(*config, options.host, run_id);
+  // Attached before the nodes start, so it hears of every topic they advertise.
+  std::unique_ptr<Recorder> recorder;
+  if (main_host && !options.record_file.empty()) {
+    auto r = Recorder::create(kernel.bus(), options.record_file, options.record_topics);
+    if (!r) return not_started(r.error());
+    recorder = std::move(*r);
+  }
+  std::unique_ptr<Replayer> replayer;
+  if (main_host && !options.replay_file.empty()) {
+    auto r = Replayer::create(kernel.bus(), options.replay_file, options.replay_speed);
+    if (!r) return not_started(r.error());
+    replayer = std::move(*r);
+  }
   std::atomic<bool> finished{false};
   std::atomic<bool> finished_ok{true};
   std::string finish_reason;
@@ -432,6 +450,11 @@ int run_pipeline(const RunOptions& options) {
   if (!main_host) report_ready();
   spdlog::info("pipeline '{}' running ({} nodes); Ctrl-C stops it", config->pipeline,
                kernel.nodes().size());
+  std::optional<std::chrono::steady_clock::time_point> replayed_at;
+  if (replayer) {
+    spdlog::info("replaying {} messages of {}", replayer->size(), options.replay_file);
+    replayer->start();
+  }
 
   RunEnd end;
   for (;;) {
@@ -448,7 +471,8 @@ int run_pipeline(const RunOptions& options) {
              fmt::format("signal {} ({})", sig, sigabbrev_np(sig)), 128 + sig};
       break;
     }
-    if (finished) {
+    // A replayed pipeline/done is the recorded run's end, not this one's.
+    if (finished && !replayer) {
       std::lock_guard lock(reason_mutex);
       spdlog::info("pipeline done: {}", finish_reason);
       end = {finished_ok ? Ending::Finished : Ending::Failed, finish_reason, finished_ok ? 0 : 1};
@@ -457,6 +481,17 @@ int run_pipeline(const RunOptions& options) {
     if (stop_requested) {
       end = {Ending::Stopped, "stop requested on the control socket", exit_code(PLR_ERR_CANCELLED)};
       break;
+    }
+    if (replayer && replayer->done()) {
+      const auto now = std::chrono::steady_clock::now();
+      if (!replayed_at) {
+        replayed_at = now;
+        spdlog::info("replay done: {} messages published", replayer->published());
+      }
+      if (now - *replayed_at > std::chrono::duration<double>(options.replay_linger_s)) {
+        end = {Ending::Finished, "replay done", 0};
+        break;
+      }
     }
     if (supervisor) {
       if (auto s = supervisor->poll(); !s) {
@@ -478,6 +513,13 @@ int run_pipeline(const RunOptions& options) {
   // Hosts stop after the main nodes, so nothing waits on a vanished service.
   const int restarts = supervisor ? supervisor->restarts() : 0;
   supervisor.reset();
+  // After every host stopped: what they sent is on the bus and recorded.
+  if (recorder) {
+    if (auto s = recorder->finish(); !s)
+      spdlog::error("record: {}", s.error().message);
+    else
+      spdlog::info("recorded {} messages to {}", recorder->messages(), recorder->path());
+  }
   // The main host clears the run's shared memory; a host whose supervisor
   // died (kill -9) does it instead.
   if (main_host || !parent.alive()) (void)shm::remove_run_segments(run_id);
@@ -485,7 +527,8 @@ int run_pipeline(const RunOptions& options) {
   if (!main_host) return 0;
   write_run_report(
       report_dir, end, *config, run_id, started_file_time,
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), restarts);
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), restarts,
+      kernel.bus().topic_stats());
   return end.exit_code;
 }
 

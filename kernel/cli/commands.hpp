@@ -16,6 +16,14 @@ struct RunOptions {
   std::string host = "main";
   std::string run_id;
   bool verbose = false;
+  // Recording: the main host writes these topics ('*' wildcard; none: all) to an MCAP file.
+  std::string record_file;
+  std::vector<std::string> record_topics;
+  // Replay: the main host publishes this MCAP file's messages on its bus
+  // (speed 0: as fast as possible), then the run ends `replay_linger_s` later.
+  std::string replay_file;
+  double replay_speed = 1.0;
+  double replay_linger_s = 2.0;
 };
 
 struct PluginsOptions {

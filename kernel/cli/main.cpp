@@ -56,6 +56,34 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--host", run.host, "Run only this host's nodes (used by the supervisor)");
   run_cmd->add_option("--run-id", run.run_id, "Shared-memory run id (used by the supervisor)");
   run_cmd->add_flag("-v,--verbose", run.verbose, "Debug logging");
+  run_cmd->add_option("--record", run.record_file, "Record the run's topics to this MCAP file");
+  run_cmd->add_option("--record-topics", run.record_topics, "Topics to record ('*' wildcard)")
+      ->delimiter(',');
+
+  RunOptions record;
+  auto* record_cmd = app.add_subcommand(
+      "record", "Run a pipeline and record chosen topics to an MCAP file (= run --record)");
+  record_cmd->add_option("config", record.config, "Pipeline config (YAML)")->required();
+  record_cmd->add_option("file", record.record_file, "The MCAP file to write")->required();
+  record_cmd->add_option("--topics", record.record_topics, "Topics ('*' wildcard; default all)")
+      ->delimiter(',');
+  record_cmd->add_option("--set", record.overrides, "Override a config value");
+  record_cmd->add_option("--duration", record.duration_s, "Stop after this many seconds");
+  record_cmd->add_option("--report", record.report_dir, "Folder for the run's report");
+
+  RunOptions replay;
+  auto* replay_cmd = app.add_subcommand(
+      "replay", "Run a pipeline and publish an MCAP recording's messages on its bus");
+  replay_cmd->add_option("file", replay.replay_file, "The recording (plr run --record)")
+      ->required();
+  replay_cmd->add_option("config", replay.config, "Pipeline config (YAML) to replay into")
+      ->required();
+  replay_cmd->add_option("--speed", replay.replay_speed, "Pace: 1 as recorded, 0 at once")
+      ->capture_default_str();
+  replay_cmd->add_option("--linger", replay.replay_linger_s, "Seconds to run on after the replay")
+      ->capture_default_str();
+  replay_cmd->add_option("--set", replay.overrides, "Override a config value");
+  replay_cmd->add_option("--report", replay.report_dir, "Folder for the run's report");
 
   std::string validate_config;
   std::vector<std::string> validate_overrides;
@@ -123,6 +151,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   if (*run_cmd) return run_pipeline(run);
+  if (*record_cmd) return run_pipeline(record);
+  if (*replay_cmd) return run_pipeline(replay);
   if (*validate_cmd) return validate(validate_config, validate_overrides);
   if (*plugins_cmd) return list_plugins(plugins);
   if (*swap_cmd && !remote.kernel.empty()) {

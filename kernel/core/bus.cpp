@@ -116,15 +116,22 @@ static Error type_mismatch(const std::string& topic, std::uint64_t has, std::uin
 
 Expected<std::uint64_t> Bus::advertise(Endpoint* owner, const std::string& topic,
                                        std::uint64_t type_id, std::uint32_t schema_version) {
-  std::lock_guard lock(m_);
-  Topic& t = topic_locked(topic);
-  if (t.type_id != 0 && t.type_id != type_id) return type_mismatch(topic, t.type_id, type_id);
-  t.type_id = type_id;
-  t.schema_version = schema_version;
-  const auto id = next_id_++;
-  publishers_[id] = {&t, owner};
-  for (auto* l : links_)
-    if (owner != &l->link_endpoint()) l->topic_advertised(topic, type_id, schema_version);
+  std::vector<Link*> links;
+  std::uint64_t id = 0;
+  {
+    std::lock_guard lock(m_);
+    Topic& t = topic_locked(topic);
+    if (t.type_id != 0 && t.type_id != type_id) return type_mismatch(topic, t.type_id, type_id);
+    t.type_id = type_id;
+    t.schema_version = schema_version;
+    id = next_id_++;
+    publishers_[id] = {&t, owner};
+    for (auto* l : links_)
+      if (owner != &l->link_endpoint()) links.push_back(l);
+  }
+  // Unlocked, and before the publisher has its id: a link may subscribe here
+  // and miss none of the topic's messages (the recorder does).
+  for (auto* l : links) l->topic_advertised(topic, type_id, schema_version);
   return id;
 }
 

@@ -47,6 +47,7 @@ class Link {
  public:
   virtual ~Link() = default;
   virtual Endpoint& link_endpoint() = 0;
+  // Called without the bus lock, before the publisher learns its id.
   virtual void topic_advertised(const std::string& topic, std::uint64_t type_id,
                                 std::uint32_t schema_version) = 0;
   virtual void topic_subscribed(const std::string& topic, std::uint64_t type_id) = 0;

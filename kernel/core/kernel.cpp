@@ -3,6 +3,7 @@
 #include "dds_bridge.hpp"
 #include "shm_bridge.hpp"
 #include "supervisor.hpp"
+#include "telemetry_publisher.hpp"
 
 #include <plr/message.hpp>
 #include <plr/messages.hpp>
@@ -132,6 +133,10 @@ Status Kernel::start() {
   }
   if (config_.clock == "sim")
     if (auto s = follow_sim_clock(); !s) return s;
+  if (!telemetry_)
+    telemetry_ = std::make_unique<TelemetryPublisher>(
+        bus_, internal_.get(),
+        [this](flatbuffers::FlatBufferBuilder& fbb) { telemetry_message(fbb); });
   for (auto& s : slots_) {
     auto inst = bring_up(s->config);
     if (!inst) {
@@ -151,6 +156,8 @@ Status Kernel::start() {
 }
 
 void Kernel::stop() {
+  // Its thread reads the nodes and the bus: gone before the nodes go.
+  telemetry_.reset();
   for (auto it = slots_.rbegin(); it != slots_.rend(); ++it) {
     auto& s = **it;
     std::lock_guard lock(s.swap_mutex);
@@ -365,6 +372,21 @@ std::string Kernel::telemetry_json() {
   if (bridge_) j["shm"] = bridge_->stats();
   if (dds_) j["dds"] = dds_->stats();
   return j.dump();
+}
+
+void Kernel::telemetry_message(flatbuffers::FlatBufferBuilder& fbb) {
+  std::vector<flatbuffers::Offset<msg::NodeStatus>> nodes;
+  for (const auto& n : this->nodes())
+    nodes.push_back(msg::CreateNodeStatusDirect(fbb, n.name.c_str(), n.plugin.c_str(),
+                                                n.version.c_str(), n.kind.c_str(), n.state.c_str(),
+                                                n.host.c_str()));
+  std::vector<flatbuffers::Offset<msg::TopicStats>> topics;
+  for (const auto& t : bus_.topic_stats())
+    topics.push_back(msg::CreateTopicStatsDirect(fbb, t.name.c_str(), nullptr, t.messages, t.drops,
+                                                 t.invalid, t.rate_hz, t.latency_mean_us,
+                                                 t.latency_max_us, t.type_id));
+  const auto id = config_.pipeline + "@" + host_;
+  fbb.Finish(msg::CreateKernelTelemetryDirect(fbb, id.c_str(), clock_.now_ns(), &nodes, &topics));
 }
 
 }  // namespace plr::kernel

@@ -10,6 +10,8 @@
 
 #include <plr/expected.hpp>
 
+#include <flatbuffers/flatbuffers.h>
+
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -74,6 +76,8 @@ class Kernel {
   std::vector<NodeStatus> nodes() const;
   // Telemetry as JSON (nodes, topics, services), for `plr monitor` and the control socket.
   std::string telemetry_json();
+  // The same as a message (plr.msg.KernelTelemetry), for `kernel/telemetry`.
+  void telemetry_message(flatbuffers::FlatBufferBuilder& fbb);
 
  private:
   struct Slot {
@@ -111,6 +115,7 @@ class Kernel {
   std::unique_ptr<class DdsBridge> dds_;  // main host only, when remote.dds is configured
   // Kernel-side subscriptions (clock, pipeline/done), alive as long as the kernel.
   std::vector<std::unique_ptr<std::function<void(const plr_msg*)>>> listeners_;
+  std::unique_ptr<class TelemetryPublisher> telemetry_;
   bool started_ = false;
 };
 

@@ -196,7 +196,7 @@ DdsBridge::Reader* DdsBridge::add_reader(dds_entity_t topic, const dds_qos_t* qo
   return raw;
 }
 
-// The bus calls these with its lock held: the work happens on our own thread.
+// The bus may call these with its lock held: the work happens on our own thread.
 void DdsBridge::topic_advertised(const std::string& topic, std::uint64_t type_id,
                                  std::uint32_t version) {
   if (!matches_any(config_.dds.export_patterns, topic)) return;

@@ -20,6 +20,7 @@
 #include <plr/sim/world_io.hpp>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -166,6 +167,9 @@ class ExecutorNode : public plr::Node {
     auto status = ctx().advertise<msg::Statistics>("executor/status");
     if (!status) return status.error();
     status_ = *status;
+    auto state = ctx().advertise<msg::ExecutorState>("executor/state");
+    if (!state) return state.error();
+    state_pub_ = *state;
     auto done = ctx().advertise<msg::PipelineDone>("pipeline/done");
     if (!done) return done.error();
     done_ = *done;
@@ -395,7 +399,10 @@ class ExecutorNode : public plr::Node {
         }
         action = strategy.nodes[*node].action;
       }
+      strategy_ = strategy;
+      node_ = node;
       action_name_ = fmt::format("#{} {}", rules_.actions() + 1, sim::to_string(action));
+      publish_state("starting");
       repeat = action;
       repeating = true;
       auto outcome = model_->run(action, *backend_, memory_, reporter);
@@ -567,6 +574,7 @@ class ExecutorNode : public plr::Node {
   // ---- Progress ------------------------------------------------------------
 
   void report_progress(const std::string& what, bool action_done = false) {
+    publish_state(action_done ? "done" : what);
     if (!show_progress_) return;
     const auto line = progress_line(stats_.boxes_unloaded, stats_.boxes_total, stats_.robot_time_s,
                                     action_done ? what : action_name_ + ": " + what);
@@ -591,6 +599,30 @@ class ExecutorNode : public plr::Node {
     (void)status_.publish(fbb);
   }
 
+  // What a dashboard shows: the strategy and its node, the action and its
+  // step, the curve and the planner's figures so far.
+  void publish_state(const std::string& subaction) {
+    static constexpr std::array<const char*, 7> kModes = {
+        "", "M1 arm", "M2 arm+base", "M3 nose", "M4 arm line", "M5 base line", "M6 escape"};
+    flatbuffers::FlatBufferBuilder fbb;
+    const auto strategy =
+        strategy_ ? sim::build(fbb, *strategy_) : flatbuffers::Offset<msg::Strategy>();
+    std::vector<msg::CurveSample> curve;
+    curve.reserve(stats_.curve.size());
+    for (const auto& c : stats_.curve) curve.emplace_back(c.robot_time_s, c.boxes);
+    std::vector<flatbuffers::Offset<msg::PlanModeStats>> modes;
+    for (std::size_t m = 1; m < kModes.size(); ++m) {
+      const auto& ms = stats_.modes[m];
+      modes.push_back(msg::CreatePlanModeStatsDirect(fbb, kModes[m], ms.queries, ms.failures,
+                                                     ms.ms.mean, ms.expansions.mean));
+    }
+    fbb.Finish(msg::CreateExecutorStateDirect(
+        fbb, action_name_.c_str(), subaction.c_str(), strategy,
+        node_ ? static_cast<std::int32_t>(*node_) : -1, stats_.boxes_total, stats_.boxes_unloaded,
+        stats_.robot_time_s, &curve, &modes));
+    (void)state_pub_.publish(fbb);
+  }
+
   // Parameters.
   std::string report_dir_, env_, world_file_;
   std::optional<sim::Strategy> first_strategy_;
@@ -603,6 +635,7 @@ class ExecutorNode : public plr::Node {
   std::unique_ptr<sim::RobotModel> robot_;
   std::unique_ptr<actions::ActionModel> model_;
   Publisher<msg::Statistics> status_;
+  Publisher<msg::ExecutorState> state_pub_;
   Publisher<msg::PipelineDone> done_;
 
   // Worker.
@@ -619,6 +652,8 @@ class ExecutorNode : public plr::Node {
   actions::RunRules rules_, checkpoint_rules_;
   std::uint32_t unloaded_at_start_ = 0;
   std::string action_name_;
+  std::optional<sim::Strategy> strategy_;  // the one being walked (a copy: trees are small)
+  std::optional<std::uint32_t> node_;
 };
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <plr/msg/common_generated.h>
 #include <plr/msg/demo_generated.h>
 #include <plr/msg/driver_generated.h>
+#include <plr/msg/executor_state_generated.h>
 #include <plr/msg/plan_generated.h>
 #include <plr/msg/simulation_generated.h>
 #include <plr/msg/strategy_generated.h>

@@ -160,7 +160,7 @@ ShmBridge::~ShmBridge() {
     if (c->thread.joinable()) c->thread.join();
 }
 
-// The bus calls these with its lock held: the work happens on our own thread.
+// The bus may call these with its lock held: the work happens on our own thread.
 void ShmBridge::topic_advertised(const std::string& topic, std::uint64_t type_id,
                                  std::uint32_t version) {
   if (peers_.empty()) return;

@@ -1,0 +1,142 @@
+// A Foxglove WebSocket client (foxglove.websocket.v1) against the monitor in
+// a running demo pipeline: it is advertised PLR's topics as channels with
+// their binary schemas, subscribes to two, and decodes the message frames
+// with the reflection schema it was sent (not with PLR's generated code).
+#include "pipeline_process.hpp"
+#include "web_client.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <flatbuffers/reflection.h>
+
+#include <map>
+
+namespace plr::monitor_web::testing {
+namespace {
+
+std::uint64_t read_le(const std::string& s, std::size_t at, int bytes) {
+  std::uint64_t v = 0;
+  for (int i = bytes - 1; i >= 0; --i) v = v << 8 | static_cast<std::uint8_t>(s[at + i]);
+  return v;
+}
+
+struct Decoder {
+  std::string bfbs;
+  std::string schema_name;
+  const reflection::Schema& schema() const { return *reflection::GetSchema(bfbs.data()); }
+  const reflection::Object* table() const {
+    for (const auto* o : *schema().objects())
+      if (o->name()->str() == schema_name) return o;
+    return nullptr;
+  }
+};
+
+class Foxglove : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    pipeline_ = std::make_unique<PipelineProcess>(
+        PLR_BIN, std::vector<std::string>{
+                     DEMO_CONFIG, "--duration", "60", "--set",
+                     "pipeline=monitor_fox_" + std::to_string(::getpid()), "--set",
+                     "nodes.counter.params.limit=100000", "--set",
+                     "nodes.monitor={plugin: monitor_web, params: {port: 0, draw_robot: false}}"});
+    port_ = pipeline_->monitor_port();
+    ASSERT_NE(port_, 0) << pipeline_->log();
+  }
+
+  std::unique_ptr<PipelineProcess> pipeline_;
+  std::uint16_t port_ = 0;
+};
+
+TEST_F(Foxglove, AClientDecodesMessagesOfTwoTopics) {
+  WsClient client("127.0.0.1", port_, "/", "foxglove.websocket.v1");
+  EXPECT_EQ(client.handshake_response()[http::field::sec_websocket_protocol],
+            "foxglove.websocket.v1");
+
+  // serverInfo first, then channels: `count` comes with the kernel's telemetry.
+  std::map<std::string, nlohmann::json> channels;
+  auto first = client.read();
+  ASSERT_TRUE(first && !first->binary);
+  EXPECT_EQ(nlohmann::json::parse(first->data).at("op"), "serverInfo");
+  for (int i = 0; i < 20 && !(channels.count("count") && channels.count("kernel/telemetry")); ++i) {
+    auto m = client.read();
+    ASSERT_TRUE(m) << "no advertise for count and kernel/telemetry\n" << pipeline_->log();
+    if (m->binary) continue;
+    const auto j = nlohmann::json::parse(m->data);
+    if (j.at("op") != "advertise") continue;
+    for (const auto& c : j.at("channels")) channels[c.at("topic").get<std::string>()] = c;
+  }
+  const auto& count = channels.at("count");
+  const auto& telemetry = channels.at("kernel/telemetry");
+  for (const auto* c : {&count, &telemetry}) {
+    EXPECT_EQ(c->at("encoding"), "flatbuffer");
+    EXPECT_EQ(c->at("schemaEncoding"), "flatbuffer");
+  }
+  EXPECT_EQ(count.at("schemaName"), "plr.msg.Count");
+  EXPECT_EQ(telemetry.at("schemaName"), "plr.msg.KernelTelemetry");
+
+  std::map<std::uint32_t, Decoder> decoders;
+  decoders[7] = {unbase64(count.at("schema")), "plr.msg.Count"};
+  decoders[9] = {unbase64(telemetry.at("schema")), "plr.msg.KernelTelemetry"};
+  for (auto& [id, d] : decoders) {
+    flatbuffers::Verifier v(reinterpret_cast<const std::uint8_t*>(d.bfbs.data()), d.bfbs.size());
+    ASSERT_TRUE(reflection::VerifySchemaBuffer(v)) << d.schema_name;
+    ASSERT_NE(d.table(), nullptr) << d.schema_name;
+  }
+  client.send_text(nlohmann::json{{"op", "subscribe"},
+                                  {"subscriptions",
+                                   {{{"id", 7}, {"channelId", count.at("id")}},
+                                    {{"id", 9}, {"channelId", telemetry.at("id")}}}}}
+                       .dump());
+
+  std::vector<std::int64_t> counts;
+  std::vector<std::string> kernels;
+  for (int i = 0; i < 400 && (counts.size() < 5 || kernels.empty()); ++i) {
+    auto m = client.read();
+    ASSERT_TRUE(m) << pipeline_->log();
+    if (!m->binary) continue;
+    ASSERT_GE(m->data.size(), 13u);
+    ASSERT_EQ(m->data[0], 1) << "opcode: message data";
+    const auto sub = static_cast<std::uint32_t>(read_le(m->data, 1, 4));
+    EXPECT_GT(read_le(m->data, 5, 8), 0u) << "receive timestamp";
+    ASSERT_TRUE(decoders.count(sub)) << "unknown subscription " << sub;
+    const auto& d = decoders[sub];
+    const auto* data = reinterpret_cast<const std::uint8_t*>(m->data.data() + 13);
+    const auto size = m->data.size() - 13;
+    ASSERT_TRUE(flatbuffers::Verify(d.schema(), *d.table(), data, size)) << d.schema_name;
+    const auto& root = *flatbuffers::GetAnyRoot(data);
+    if (sub == 7) {
+      counts.push_back(
+          flatbuffers::GetFieldI<std::int64_t>(root, *d.table()->fields()->LookupByKey("value")));
+    } else {
+      kernels.push_back(
+          flatbuffers::GetFieldS(root, *d.table()->fields()->LookupByKey("kernel"))->str());
+    }
+  }
+  ASSERT_GE(counts.size(), 5u);
+  for (std::size_t i = 1; i < counts.size(); ++i) EXPECT_EQ(counts[i], counts[i - 1] + 1);
+  ASSERT_FALSE(kernels.empty());
+  EXPECT_EQ(kernels[0].rfind("monitor_fox_", 0), 0u) << kernels[0];
+}
+
+TEST_F(Foxglove, ItIsReadOnlyAndSaysWhatItRefuses) {
+  WsClient client("127.0.0.1", port_, "/", "foxglove.websocket.v1");
+  ASSERT_TRUE(client.read());  // serverInfo
+  client.send_text(R"({"op":"advertise","channels":[{"id":1,"topic":"count"}]})");
+  client.send_text(R"({"op":"subscribe","subscriptions":[{"id":1,"channelId":4242}]})");
+  std::vector<std::string> statuses;
+  for (int i = 0; i < 20 && statuses.size() < 2; ++i) {
+    auto m = client.read();
+    ASSERT_TRUE(m);
+    if (m->binary) continue;
+    const auto j = nlohmann::json::parse(m->data);
+    if (j.at("op") == "status") statuses.push_back(j.at("message"));
+  }
+  ASSERT_EQ(statuses.size(), 2u);
+  EXPECT_EQ(statuses[0], "unsupported operation 'advertise' (this server is read-only)");
+  EXPECT_EQ(statuses[1], "subscribe: no channel 4242");
+}
+
+}  // namespace
+}  // namespace plr::monitor_web::testing
