@@ -612,7 +612,7 @@ class ExecutorNode : public plr::Node {
     for (const auto& c : stats_.curve) curve.emplace_back(c.robot_time_s, c.boxes);
     std::vector<flatbuffers::Offset<msg::PlanModeStats>> modes;
     for (std::size_t m = 1; m < kModes.size(); ++m) {
-      const auto& ms = stats_.modes[m];
+      const auto& ms = stats_.planner.modes[m];
       modes.push_back(msg::CreatePlanModeStatsDirect(fbb, kModes[m], ms.queries, ms.failures,
                                                      ms.ms.mean, ms.expansions.mean));
     }
