@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <cstring>
 #include <fstream>
 #include <string_view>
 
@@ -25,6 +26,13 @@ plr::Error error(const std::string& where, const std::string& what) {
 }
 
 }  // namespace
+
+FramedBody::FramedBody(const std::uint8_t* body, std::size_t n) : data(body), size(n) {
+  if (n == 0 || reinterpret_cast<std::uintptr_t>(body) % alignof(std::uint64_t) == 0) return;
+  aligned.resize((n + sizeof(std::uint64_t) - 1) / sizeof(std::uint64_t));
+  std::memcpy(aligned.data(), body, n);
+  data = reinterpret_cast<const std::uint8_t*>(aligned.data());
+}
 
 std::vector<std::uint8_t> frame(const std::uint8_t* body, std::size_t size) {
   std::vector<std::uint8_t> out;
@@ -51,6 +59,11 @@ plr::Expected<FramedBody> unframe(const std::uint8_t* data, std::size_t size, st
   const std::uint8_t* fb = data + 4;
   if (crc32(fb, body) != read_u32(fb + body))
     return error(origin, fmt::format("bytes 4..{}: checksum mismatch (corrupt)", body + 4));
+  // Every framed body is a FlatBuffers buffer: the identifier test that
+  // follows reads its bytes 4..8.
+  if (body < 8)
+    return error(origin,
+                 fmt::format("bytes 4..{}: {} bytes, too short for {}", body + 4, body, what));
   return FramedBody{fb, body};
 }
 

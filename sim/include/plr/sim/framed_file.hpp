@@ -16,9 +16,19 @@ namespace plr::sim {
 
 std::vector<std::uint8_t> frame(const std::uint8_t* body, std::size_t size);
 
+// FlatBuffers reads 8-byte scalars in place, and the body follows a 4-byte
+// size: a body off an 8-byte boundary is copied into `aligned`, and `data`
+// points there (so a FramedBody moves but does not copy).
 struct FramedBody {
   const std::uint8_t* data = nullptr;
   std::size_t size = 0;
+  std::vector<std::uint64_t> aligned;
+
+  FramedBody(const std::uint8_t* body, std::size_t n);
+  FramedBody(FramedBody&&) noexcept = default;
+  FramedBody& operator=(FramedBody&&) noexcept = default;
+  FramedBody(const FramedBody&) = delete;
+  FramedBody& operator=(const FramedBody&) = delete;
 };
 
 // The body of a framed buffer, checked against `max_body` bytes and the

@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include "plr/sim/framed_file.hpp"
+
+#include <algorithm>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -107,6 +111,35 @@ TEST(Library, TruncatedFileIsRefusedWithWhereItEnds) {
   write(dir / "l.plrl", bytes);
   EXPECT_EQ(load_library(dir / "l.plrl").error().message,
             (dir / "l.plrl").string() + ": truncated: 3 bytes, a library has at least 8");
+}
+
+// The body follows a 4-byte size, so in a file read into memory it is off
+// the 8-byte boundary FlatBuffers reads doubles at; the reader hands it over
+// aligned, whatever the alignment of the bytes it was given.
+TEST(Library, TheFramedBodyIsReadAlignedWhereverTheFileLies) {
+  const auto framed = serialize(Library{{entry("A1-3")}});
+  std::vector<std::uint64_t> storage(framed.size() / 8 + 2);
+  for (std::size_t shift = 0; shift < 8; ++shift) {
+    auto* at = reinterpret_cast<std::uint8_t*>(storage.data()) + shift;
+    std::copy(framed.begin(), framed.end(), at);
+    const auto body = unframe(at, framed.size(), framed.size(), "a library", "l.plrl");
+    ASSERT_TRUE(body) << body.error().message;
+    EXPECT_EQ(reinterpret_cast<std::uintptr_t>(body->data) % 8, 0u) << "shift " << shift;
+    EXPECT_TRUE(std::equal(body->data, body->data + body->size, at + 4));
+    const auto lib = deserialize_library(at, framed.size(), "l.plrl");
+    ASSERT_TRUE(lib) << lib.error().message;
+    EXPECT_EQ(lib->entries.at(0).name, "A1-3");
+  }
+}
+
+// A frame whose checksum holds over a body too short to be a FlatBuffers
+// buffer: the identifier test must not read past it (found by fuzzing).
+TEST(Library, AnEmptyBodyIsRefusedBeforeItsIdentifierIsRead) {
+  const std::vector<std::uint8_t> none;
+  const auto framed = frame(none.data(), 0);
+  const auto back = deserialize_library(framed.data(), framed.size(), "l.plrl");
+  ASSERT_FALSE(back);
+  EXPECT_EQ(back.error().message, "l.plrl: bytes 4..4: 0 bytes, too short for a library");
 }
 
 TEST(Library, CorruptByteIsRefusedAsAChecksumMismatch) {
