@@ -92,16 +92,7 @@ plr::Expected<EvaluationSettings> EvaluationSettings::load(
   if (auto n = top.find("workers").integer(1, 256)) s.workers = static_cast<unsigned>(*n);
   if (auto v = top.find("timeout_s").number(1, 1e7)) s.timeout_s = *v;
   if (auto v = top.find("max_distance").number(0, 1e9)) s.max_distance = *v;
-  if (auto v = top.find("h_min").number(0, 10)) s.h.h_min = *v;
-  if (auto v = top.find("d_min").number(0, 20)) s.h.d_min = *v;
-  const yaml::Node obs = top.find("observation");
-  if (obs.present()) {
-    auto o = sim::ObservationParams::from_json(obs.to_json());
-    if (o)
-      s.observation = *o;
-    else
-      obs.error(o.error().message);
-  }
+  sim::read_strategy_settings(top, s.h, s.observation);
   if (!doc->ok()) return doc->error();
   if (auto ok = s.h.check(); !ok) return ok.error();
   return s;

@@ -1,5 +1,7 @@
 #include "plr/sim/hardcoded_strategy.hpp"
 
+#include <plr/yaml_reader.hpp>
+
 #include <algorithm>
 #include <cmath>
 
@@ -36,8 +38,8 @@ std::vector<Action> hardcoded_ranking(const SceneAnalysis& scene, const Hardcode
       if (std::find(picks.begin(), picks.end(), a) == picks.end()) picks.push_back(a);
     }
   std::vector<Action> sweeps;
-  for (Height h : {sweeping ? height(first) : Height::kLow, Height::kLow, Height::kMid,
-                   Height::kHigh}) {
+  for (Height h :
+       {sweeping ? height(first) : Height::kLow, Height::kLow, Height::kMid, Height::kHigh}) {
     const Action a = make_sweep(h);
     if (std::find(sweeps.begin(), sweeps.end(), a) == sweeps.end()) sweeps.push_back(a);
   }
@@ -45,6 +47,19 @@ std::vector<Action> hardcoded_ranking(const SceneAnalysis& scene, const Hardcode
   const auto& rest = sweeping ? picks : sweeps;
   out.insert(out.end(), rest.begin(), rest.end());
   return out;
+}
+
+void read_strategy_settings(const yaml::Map& top, HardcodedParams& h,
+                            ObservationParams& observation) {
+  if (auto v = top.find("h_min").number(0, 10)) h.h_min = *v;
+  if (auto v = top.find("d_min").number(0, 20)) h.d_min = *v;
+  const yaml::Node obs = top.find("observation");
+  if (!obs.present()) return;
+  auto o = ObservationParams::from_json(obs.to_json());
+  if (o)
+    observation = *o;
+  else
+    obs.error(o.error().message);
 }
 
 }  // namespace plr::sim

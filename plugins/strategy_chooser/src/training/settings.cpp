@@ -110,16 +110,7 @@ plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::pa
     for (const yaml::Node& v : n.list("a list of integers", 1, 64))
       if (auto i = v.integer(-30, 30)) grid->push_back(static_cast<int>(*i));
   }
-  if (auto v = top.find("h_min").number(0, 10)) s.h.h_min = *v;
-  if (auto v = top.find("d_min").number(0, 20)) s.h.d_min = *v;
-  const yaml::Node obs = top.find("observation");
-  if (obs.present()) {
-    auto o = sim::ObservationParams::from_json(obs.to_json());
-    if (o)
-      s.observation = *o;
-    else
-      obs.error(o.error().message);
-  }
+  sim::read_strategy_settings(top, s.h, s.observation);
   if (!doc->ok()) return doc->error();
   if (auto ok = s.h.check(); !ok) return ok.error();
   return s;

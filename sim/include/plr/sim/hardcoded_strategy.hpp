@@ -13,6 +13,10 @@
 #include "plr/sim/observation.hpp"
 #include "plr/sim/strategy.hpp"
 
+namespace plr::yaml {
+class Map;
+}
+
 namespace plr::sim {
 
 struct HardcodedParams {
@@ -24,6 +28,12 @@ struct HardcodedParams {
   // Whether the values are usable; the error names the parameter.
   plr::Status check() const;
 };
+
+// H's thresholds (`h_min`, `d_min`) and the observation classes
+// (`observation`) where a config's top level gives them; a bad value is
+// recorded on the map's document with its location.
+void read_strategy_settings(const yaml::Map& top, HardcodedParams& h,
+                            ObservationParams& observation);
 
 // H's action for the scene in front of the robot (which must not be empty).
 Action hardcoded_action(const SceneAnalysis& scene, const HardcodedParams& params);
