@@ -60,16 +60,31 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--record-topics", run.record_topics, "Topics to record ('*' wildcard)")
       ->delimiter(',');
 
+  const auto dds_options = [](CLI::App* cmd, DdsToolOptions& o) {
+    cmd->add_option("--domain", o.domain, "DDS domain")->capture_default_str();
+    cmd->add_option("--interface", o.interfaces, "Network interfaces for DDS (default: lo)");
+    cmd->add_option("--security", o.security_dir, "DDS Security material of this tool");
+  };
+
   RunOptions record;
+  RemoteRecordOptions remote_record_options;
+  std::vector<std::string> record_args;
   auto* record_cmd = app.add_subcommand(
-      "record", "Run a pipeline and record chosen topics to an MCAP file (= run --record)");
-  record_cmd->add_option("config", record.config, "Pipeline config (YAML)")->required();
-  record_cmd->add_option("file", record.record_file, "The MCAP file to write")->required();
+      "record",
+      "Record chosen topics to an MCAP file: of a pipeline it runs (CONFIG FILE, = run "
+      "--record), or of a running kernel over DDS (--remote KERNEL FILE)");
+  record_cmd->add_option("args", record_args, "CONFIG FILE, or FILE with --remote")
+      ->required()
+      ->expected(1, 2);
   record_cmd->add_option("--topics", record.record_topics, "Topics ('*' wildcard; default all)")
       ->delimiter(',');
   record_cmd->add_option("--set", record.overrides, "Override a config value");
   record_cmd->add_option("--duration", record.duration_s, "Stop after this many seconds");
   record_cmd->add_option("--report", record.report_dir, "Folder for the run's report");
+  record_cmd->add_option("--remote", remote_record_options.kernel,
+                         "Record what this running kernel exports on DDS (id, pipeline@hostname, "
+                         "pipeline name, or '*' for every kernel)");
+  dds_options(record_cmd, remote_record_options.dds);
 
   RunOptions replay;
   auto* replay_cmd = app.add_subcommand(
@@ -106,11 +121,6 @@ int main(int argc, char** argv) {
   swap_cmd->add_option("--pipeline", swap.pipeline,
                        "Pipeline name (default: the only one running)");
   RemoteCommandOptions remote;
-  const auto dds_options = [](CLI::App* cmd, DdsToolOptions& o) {
-    cmd->add_option("--domain", o.domain, "DDS domain")->capture_default_str();
-    cmd->add_option("--interface", o.interfaces, "Network interfaces for DDS (default: lo)");
-    cmd->add_option("--security", o.security_dir, "DDS Security material of this tool");
-  };
   const auto remote_options = [&](CLI::App* cmd) {
     cmd->add_option("--remote", remote.kernel,
                     "On this kernel over DDS (id, pipeline@hostname or pipeline name)");
@@ -151,7 +161,25 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   if (*run_cmd) return run_pipeline(run);
-  if (*record_cmd) return run_pipeline(record);
+  if (*record_cmd) {
+    if (!remote_record_options.kernel.empty()) {
+      if (record_args.size() != 1) {
+        std::cerr << "plr: record --remote: give only the file to write\n";
+        return 2;
+      }
+      remote_record_options.file = record_args[0];
+      remote_record_options.topics = record.record_topics;
+      remote_record_options.duration_s = record.duration_s;
+      return remote_record(remote_record_options);
+    }
+    if (record_args.size() != 2) {
+      std::cerr << "plr: record: give the pipeline config and the file to write (or --remote)\n";
+      return 2;
+    }
+    record.config = record_args[0];
+    record.record_file = record_args[1];
+    return run_pipeline(record);
+  }
   if (*replay_cmd) return run_pipeline(replay);
   if (*validate_cmd) return validate(validate_config, validate_overrides);
   if (*plugins_cmd) return list_plugins(plugins);

@@ -1,7 +1,6 @@
 #include "monitor.hpp"
 
-#include "dds_bridge.hpp"
-#include "envelope.h"
+#include "dds_tool.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -30,77 +29,6 @@ int fail(const std::string& message) {
   std::cerr << "plr: " << message << "\n";
   return 1;
 }
-
-DdsConfig to_config(const DdsToolOptions& o) {
-  DdsConfig c;
-  c.enabled = true;
-  c.domain = o.domain;
-  c.interfaces = o.interfaces;
-  c.security_dir = o.security_dir;
-  return c;
-}
-
-// A participant with readers (and writers) on the kernel's control plane.
-class Tool {
- public:
-  // The whole Cyclone instance goes, threads included: a receive thread still
-  // decrypting at exit would use OpenSSL after its exit handler freed it.
-  ~Tool() { dds_delete(DDS_CYCLONEDDS_HANDLE); }
-  Status open(const DdsToolOptions& o) {
-    auto p = open_participant(to_config(o));
-    if (!p) return p.error();
-    participant_ = *p;
-    return {};
-  }
-  dds_entity_t reader(const char* topic, std::int32_t depth, bool transient) {
-    return endpoint(topic, depth, transient, false);
-  }
-  dds_entity_t writer(const char* topic, std::int32_t depth, bool transient) {
-    return endpoint(topic, depth, transient, true);
-  }
-
-  // Valid samples, sender checked; `gone` gets kernels whose instance died.
-  template <class Fn>
-  void take(dds_entity_t reader, Fn&& fn, std::set<std::string>* gone = nullptr) {
-    void* samples[32];
-    dds_sample_info_t infos[32];
-    for (;;) {
-      samples[0] = nullptr;
-      const auto n = dds_take(reader, samples, infos, 32, 32);
-      if (n <= 0) return;
-      for (int i = 0; i < n; ++i) {
-        const auto& e = *static_cast<const plr_dds_Envelope*>(samples[i]);
-        const bool sane = e.kernel && ::strnlen(e.kernel, 129) <= 128 && e.target && e.name &&
-                          (e.payload._length == 0 || e.payload._buffer);
-        if (!sane) {
-          ++invalid;
-          continue;
-        }
-        if (!infos[i].valid_data) {
-          if (gone && infos[i].instance_state != DDS_IST_ALIVE) gone->insert(e.kernel);
-          continue;
-        }
-        fn(e);
-      }
-      dds_return_loan(reader, samples, n);
-    }
-  }
-
-  std::uint64_t invalid = 0;
-
- private:
-  dds_entity_t endpoint(const char* topic, std::int32_t depth, bool transient, bool writer) {
-    const auto t = dds_create_topic(participant_, &plr_dds_Envelope_desc, topic, nullptr, nullptr);
-    if (t < 0) return t;
-    dds_qos_t* q = control_qos(depth, transient);
-    const auto e = writer ? dds_create_writer(participant_, t, q, nullptr)
-                          : dds_create_reader(participant_, t, q, nullptr);
-    dds_delete_qos(q);
-    return e;
-  }
-
-  dds_entity_t participant_ = 0;
-};
 
 nlohmann::json parse_payload(const plr_dds_Envelope& e) {
   if (e.payload._length > kMaxJsonPayload) return nlohmann::json::value_t::discarded;
@@ -167,7 +95,7 @@ std::string render(const std::map<std::string, nlohmann::json>& kernels, int dom
 }  // namespace
 
 int monitor(const MonitorOptions& options) {
-  Tool tool;
+  DdsTool tool;
   if (auto s = tool.open(options.dds); !s) return fail(s.error().message);
   const auto telemetry = tool.reader(kDdsTelemetryTopic, 1, true);
   const auto announce = tool.reader(kDdsAnnounceTopic, 1, false);
@@ -235,21 +163,8 @@ int monitor(const MonitorOptions& options) {
   return 0;
 }
 
-namespace {
-
-// "demo@box:12" answers to itself, "demo@box" and "demo".
-bool names_kernel(const std::string& id, const std::string& wanted) {
-  if (id == wanted) return true;
-  const auto colon = id.rfind(':');
-  const auto at = id.find('@');
-  return (colon != std::string::npos && id.substr(0, colon) == wanted) ||
-         (at != std::string::npos && id.substr(0, at) == wanted);
-}
-
-}  // namespace
-
 int remote_command(const RemoteCommandOptions& options) {
-  Tool tool;
+  DdsTool tool;
   if (auto s = tool.open(options.dds); !s) return fail(s.error().message);
   const auto announce = tool.reader(kDdsAnnounceTopic, 1, false);
   const auto results = tool.reader(kDdsResultTopic, 16, true);

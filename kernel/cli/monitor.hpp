@@ -1,6 +1,8 @@
 // Remote tools over Cyclone DDS: `plr monitor` (read-only: kernels, nodes,
-// topics, rates from every kernel's telemetry) and `plr swap|pause|resume
-// --remote` (commands the target kernel refuses unless remote control is on).
+// topics, rates from every kernel's telemetry), `plr record --remote`
+// (read-only: the topics a running kernel exports, into an MCAP file) and
+// `plr swap|pause|resume --remote` (commands the target kernel refuses
+// unless remote control is on).
 #pragma once
 
 #include <string>
@@ -30,7 +32,18 @@ struct RemoteCommandOptions {
   std::string plugin;
 };
 
+// Records the topics kernels export on DDS (remote.dds.export) into an MCAP
+// file, as `plr run --record` does on the bus, until Ctrl-C or `duration_s`.
+struct RemoteRecordOptions {
+  DdsToolOptions dds;
+  std::string kernel;  // as RemoteCommandOptions::kernel; "*": every kernel
+  std::string file;
+  std::vector<std::string> topics;  // bus topic names, '*' wildcard; empty: all
+  double duration_s = 0.0;          // 0: until interrupted
+};
+
 int monitor(const MonitorOptions& options);
+int remote_record(const RemoteRecordOptions& options);
 int remote_command(const RemoteCommandOptions& options);
 
 }  // namespace plr::kernel

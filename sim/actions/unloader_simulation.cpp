@@ -113,7 +113,8 @@ UnloaderSimulation::~UnloaderSimulation() = default;
 UnloaderSimulation::UnloaderSimulation(UnloaderSimulation&&) noexcept = default;
 UnloaderSimulation& UnloaderSimulation::operator=(UnloaderSimulation&&) noexcept = default;
 
-plr::Expected<Executed> UnloaderSimulation::execute(const Motion& motion) {
+plr::Expected<Executed> UnloaderSimulation::execute(const Motion& motion,
+                                                    const PeriodObserver& observer) {
   Impl& m = *impl_;
   // A non-finite point would reach the contact model and Simbody as NaN poses.
   for (std::size_t i = 0; i < motion.points.size(); ++i) {
@@ -147,6 +148,7 @@ plr::Expected<Executed> UnloaderSimulation::execute(const Motion& motion) {
     const bool now = m.touches_trailer(q);
     if (now && !touching) ++out.robot_trailer_contacts;
     touching = now;
+    if (observer) observer(q);
   };
   m.apply_suction(motion.before, motion.cups_open);
   // The base's drive against what the boxes push back on the robot: the

@@ -19,6 +19,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <thread>
 #include <tuple>
 
 namespace plr::simulator {
@@ -33,7 +34,8 @@ class SimulatorNode : public Node {
  protected:
   Status on_configure() override {
     params().allow_only({"urdf", "octree_resolution", "control_period_s", "belt_speed",
-                         "checkpoint_dir", "max_settle_s", "carry_max_s"});
+                         "checkpoint_dir", "max_settle_s", "carry_max_s", "frame_rate_hz",
+                         "real_time_factor"});
     auto robot = sim::load_robot(params().get<std::string>("urdf", ""));
     if (!robot) return make_error(PLR_ERR_INVALID, "param 'urdf': " + robot.error().message);
     model_.emplace(std::move(*robot));
@@ -43,6 +45,8 @@ class SimulatorNode : public Node {
     checkpoint_dir_ = params().get<std::string>("checkpoint_dir", "");
     max_settle_ = params().get<double>("max_settle_s", 6.0);
     carry_max_ = params().get<double>("carry_max_s", 4.0);
+    frame_rate_ = params().get<double>("frame_rate_hz", 10.0);
+    real_time_factor_ = params().get<double>("real_time_factor", 0.0);
     // Bounds, so no value makes memory or time grow without end: an octree at
     // 0.1 mm of a trailer does not fit in memory, and at a control period of
     // 1e-7 s an action never ended.
@@ -51,7 +55,9 @@ class SimulatorNode : public Node {
           std::tuple{"control_period_s", period_, 0.001, 0.1},
           std::tuple{"belt_speed", belt_speed_, 0.0, 5.0},
           std::tuple{"max_settle_s", max_settle_, 0.0, 60.0},
-          std::tuple{"carry_max_s", carry_max_, 0.0, 60.0}}) {
+          std::tuple{"carry_max_s", carry_max_, 0.0, 60.0},
+          std::tuple{"frame_rate_hz", frame_rate_, 0.0, 100.0},
+          std::tuple{"real_time_factor", real_time_factor_, 0.0, 1000.0}}) {
       if (!(value >= lo && value <= hi))
         return make_error(
             PLR_ERR_INVALID,
@@ -179,7 +185,7 @@ class SimulatorNode : public Node {
     auto motion = actions::decode_execute_request(r);
     if (!motion) return make_error(PLR_ERR_INVALID, motion.error().message);
     const auto wall_start = std::chrono::steady_clock::now();
-    auto done = sim_->execute(*motion);
+    auto done = sim_->execute(*motion, frames(wall_start));
     if (!done) return make_error(done.error().code, done.error().message);
     for (const auto& e : done->suction)
       log().info("box {} {} at t={:.2f} s: the cups had to hold {:.0f} N, can hold {:.0f} N",
@@ -196,6 +202,29 @@ class SimulatorNode : public Node {
     encode_execute_outcome(*done, static_cast<std::uint32_t>(sim_->truth().boxes.size()), out);
     publish_state();
     return {};
+  }
+
+  // During a motion: the world published at most frame_rate_hz times a
+  // second of wall time, so a live view moves with the robot rather than
+  // jumping from motion to motion; with a real_time_factor the motion is
+  // also held to that pace (1: as fast as the real robot would move).
+  actions::UnloaderSimulation::PeriodObserver frames(
+      std::chrono::steady_clock::time_point wall_start) {
+    if (frame_rate_ <= 0.0 && real_time_factor_ <= 0.0) return {};
+    const double sim_start = sim_->time();
+    return [this, wall_start, sim_start,
+            last = std::chrono::steady_clock::time_point{}](const sim::JointVector& q) mutable {
+      using Seconds = std::chrono::duration<double>;
+      if (real_time_factor_ > 0.0)
+        std::this_thread::sleep_until(
+            wall_start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                             Seconds((sim_->time() - sim_start) / real_time_factor_)));
+      const auto now = std::chrono::steady_clock::now();
+      if (frame_rate_ > 0.0 && now - last >= Seconds(1.0 / frame_rate_)) {
+        last = now;
+        publish_state({q, sim_->held()});
+      }
+    };
   }
 
   Status snapshot(const std::string& name, flatbuffers::FlatBufferBuilder& out) {
@@ -229,9 +258,13 @@ class SimulatorNode : public Node {
     return {};
   }
 
-  void publish_state() {
+  void publish_state() { publish_state(robot_state()); }
+
+  void publish_state(const RobotState& robot) {
     flatbuffers::FlatBufferBuilder w;
-    if (observe(false, w)) (void)world_pub_.publish(w);
+    build_world_state(w, sim_->truth(), robot, octree_, resolution_, boxes_unloaded(), false,
+                      static_cast<std::int64_t>(sim_->time() * 1e9));
+    (void)world_pub_.publish(w);
     flatbuffers::FlatBufferBuilder p;
     p.Finish(msg::CreateProgress(p, sim_->time(), boxes_total_, boxes_unloaded()));
     (void)progress_pub_.publish(p);
@@ -246,6 +279,8 @@ class SimulatorNode : public Node {
   double belt_speed_ = 0.8;
   double max_settle_ = 6.0;
   double carry_max_ = 4.0;
+  double frame_rate_ = 10.0;
+  double real_time_factor_ = 0.0;
   std::string checkpoint_dir_;
   std::unique_ptr<actions::UnloaderSimulation> sim_;
   std::string octree_;

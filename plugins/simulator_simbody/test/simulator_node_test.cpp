@@ -7,6 +7,7 @@
 #include <plr/messages.hpp>
 #include <plr/testing/fake_kernel.hpp>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -21,7 +22,7 @@ using testing::NodeOptions;
 class SimulatorService : public ::testing::Test {
  protected:
   void SetUp() override {
-    auto n = kernel_.load_node(SIMULATOR_SO, NodeOptions().with_params("{}"));
+    auto n = kernel_.load_node(SIMULATOR_SO, NodeOptions().with_params(params()));
     ASSERT_TRUE(n) << n.error().message;
     node_ = *n;
     ASSERT_TRUE(node_->configure());
@@ -64,6 +65,7 @@ class SimulatorService : public ::testing::Test {
   }
 
   static std::vector<double> home() { return {0.0, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0}; }
+  virtual std::string params() const { return "{}"; }
 
   FakeKernel kernel_;
   std::optional<testing::NodeHandle> node_;
@@ -185,6 +187,47 @@ TEST_F(SimulatorService, RestoreThroughTheServiceGoesBackInTime) {
   EXPECT_EQ(unknown.error().message, "no snapshot named 'never-saved'");
 }
 
+// A live view moves with the robot: the world is published during a motion,
+// not only at its end, and a motion can be held to real time.
+class SimulatorLiveFrames : public SimulatorService {
+ protected:
+  std::string params() const override { return R"({"frame_rate_hz": 20, "real_time_factor": 1})"; }
+};
+
+TEST_F(SimulatorLiveFrames, TheWorldIsPublishedWhileTheBaseDrivesInRealTime) {
+  ASSERT_TRUE(reset("", SMALL_WORLD));
+  kernel_.clear_published();
+  std::vector<double> forward = home();
+  forward[0] = 0.6;
+  const auto start = std::chrono::steady_clock::now();
+  const auto out = execute({home(), forward}, {0.0, 1.0});
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ASSERT_TRUE(out) << out.error().message;
+  EXPECT_GE(wall, 0.95);  // 1 s of motion at real time
+
+  // About 20 frames during the motion and one at its end; the base moves forward through them.
+  const auto frames = kernel_.published("world");
+  ASSERT_GE(frames.size(), 8u);
+  double base = -1.0;
+  std::int64_t stamp = -1;
+  for (const auto& f : frames) {
+    const auto* w = f.as<msg::WorldState>();
+    ASSERT_NE(w, nullptr);
+    ASSERT_EQ(w->boxes()->size(), 30u);
+    const double x = w->robot()->positions()->Get(0);
+    EXPECT_GE(x, base);
+    EXPECT_GT(w->stamp_ns(), stamp);
+    base = x;
+    stamp = w->stamp_ns();
+  }
+  const double middle =
+      frames[frames.size() / 2].as<msg::WorldState>()->robot()->positions()->Get(0);
+  EXPECT_GT(middle, 0.1);
+  EXPECT_LT(middle, 0.5);
+  EXPECT_DOUBLE_EQ(base, 0.6);
+}
+
 // control_period_s: 1e-7 made sim/execute never return; an octree at 0.1 mm
 // grew until the process was killed.
 TEST(SimulatorParams, RatesAndResolutionsAreBounded) {
@@ -192,7 +235,9 @@ TEST(SimulatorParams, RatesAndResolutionsAreBounded) {
        {std::pair{R"({"control_period_s": 1e-7})",
                   "param 'control_period_s': must be between 0.001 and 0.1, got 1e-07"},
         std::pair{R"({"octree_resolution": 0.0001})",
-                  "param 'octree_resolution': must be between 0.01 and 0.5, got 0.0001"}}) {
+                  "param 'octree_resolution': must be between 0.01 and 0.5, got 0.0001"},
+        std::pair{R"({"frame_rate_hz": 1e6})",
+                  "param 'frame_rate_hz': must be between 0 and 100, got 1000000"}}) {
     FakeKernel kernel;
     auto node = kernel.load_node(SIMULATOR_SO, NodeOptions().with_params(params));
     ASSERT_TRUE(node) << node.error().message;

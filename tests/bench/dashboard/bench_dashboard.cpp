@@ -1,7 +1,8 @@
 // bench_dashboard: what the web monitor (plugins/monitor_web) costs the
 // pipeline's process. An in-process kernel gets a small unloading job's
-// traffic on its bus (a 30-box world, the executor's state with a 60-point
-// curve, progress and clock, each at 10 Hz: more than a real run sends),
+// traffic on its bus (an A1-sized world of 170 boxes with a 16 m trailer's
+// octree, as the simulator publishes it during every motion, the executor's
+// state with a 60-point curve, progress and clock, each at 10 Hz),
 // once without and once with the monitor pushing the dashboard at 10 Hz to a
 // connected page and streaming two topics to a Foxglove client. The cost is
 // the process's CPU time minus the feeder's and the clients' own threads,
@@ -103,16 +104,16 @@ class Feeder {
       std::this_thread::sleep_until(next);
       flatbuffers::FlatBufferBuilder w;
       std::vector<msg::BoxState> boxes;
-      for (std::uint32_t i = 0; i < 30; ++i)
-        boxes.emplace_back(
-            i, msg::Vec3(0.4, 0.4, 0.4),
-            msg::Pose(msg::Vec3(14.0 + 0.4 * (i % 3), -1.0 + 0.4 * (i % 6), 0.2 + 0.4 * (i / 6)),
-                      msg::Quat(0, 0, 0, 1)),
-            0.0);
+      for (std::uint32_t i = 0; i < kBoxes; ++i)
+        boxes.emplace_back(i, msg::Vec3(0.4, 0.4, 0.4),
+                           msg::Pose(msg::Vec3(14.0 - 0.4 * (i / 36), -1.0 + 0.4 * (i % 6),
+                                               0.2 + 0.4 * ((i / 6) % 6)),
+                                     msg::Quat(0, 0, 0, 1)),
+                           0.0);
       const std::vector<double> q{0.001 * tick, 0.1, 0.2, 0.3, 0.4, 0.0, 0.0, 0.0};
       const auto robot = msg::CreateJointStateDirect(w, &q);
       const msg::Vec3 trailer(2.5, 2.7, 16.0);
-      w.Finish(msg::CreateWorldStateDirect(w, 0, &trailer, nullptr, 0.05, &boxes, robot, nullptr,
+      w.Finish(msg::CreateWorldStateDirect(w, 0, &trailer, &octree_, 0.05, &boxes, robot, nullptr,
                                            tick / 10, false));
       publish(world_, w);
       flatbuffers::FlatBufferBuilder s;
@@ -130,8 +131,11 @@ class Feeder {
     }
   }
 
+  static constexpr std::uint32_t kBoxes = 170;
   kernel::Bus& bus_;
   double hz_;
+  // The size of a 16 m trailer's octree at 5 cm (the monitor does not read it).
+  const std::vector<std::uint8_t> octree_ = std::vector<std::uint8_t>(57'000, 0x55);
   kernel::testing::TestEndpoint endpoint_{"feeder"};
   std::uint64_t world_ = 0, state_ = 0, progress_ = 0, clock_ = 0;
   std::atomic<bool> stop_{false};

@@ -7,6 +7,7 @@
 #include <plr/expected.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -82,9 +83,14 @@ class UnloaderSimulation {
   UnloaderSimulation(UnloaderSimulation&&) noexcept;
   UnloaderSimulation& operator=(UnloaderSimulation&&) noexcept;
 
+  // Called after every control period of a motion with the robot's
+  // configuration then (q() is the motion's end only once it returns): what
+  // a live view of the motion draws.
+  using PeriodObserver = std::function<void(const sim::JointVector& q)>;
+
   // Runs a motion. Refused (with the reason) when its first point is not
   // where the robot is, or its times decrease: a controller would refuse it.
-  plr::Expected<Executed> execute(const Motion& motion);
+  plr::Expected<Executed> execute(const Motion& motion, const PeriodObserver& observer = {});
 
   const sim::RobotModel& robot() const;
   sim::World truth() const;      // boxes still in the trailer, with masses

@@ -32,6 +32,8 @@ class BareKernel {
   BareKernel(const BareKernel&) = delete;
   BareKernel& operator=(const BareKernel&) = delete;
 
+  // Before open(): how `topic` goes out (e.g. reliable).
+  void set_topic(TopicSettings topic) { config_.topics.push_back(std::move(topic)); }
   // Joins the DDS domain.
   Status open() {
     auto b = DdsBridge::create(
