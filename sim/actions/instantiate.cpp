@@ -148,6 +148,27 @@ bool has_sealable_face(const sim::Box& box) {
   return side && std::abs(R(2, up_axis)) >= std::cos(kMaxFaceTilt);
 }
 
+std::vector<std::uint32_t> leaning_on(const sim::World& world,
+                                      const std::vector<std::uint32_t>& group) {
+  constexpr double kTouch = 0.02;
+  std::vector<sim::Bounds> held;
+  for (const auto& box : world.boxes)
+    if (std::find(group.begin(), group.end(), box.id) != group.end())
+      held.push_back(sim::bounds(box));
+  std::vector<std::uint32_t> out;
+  for (const auto& box : world.boxes) {
+    if (has_sealable_face(box) || std::find(group.begin(), group.end(), box.id) != group.end())
+      continue;
+    const sim::Bounds b = sim::bounds(box);
+    if (std::any_of(held.begin(), held.end(), [&](const sim::Bounds& h) {
+          return b.x0 < h.x1 + kTouch && h.x0 < b.x1 + kTouch && b.y0 < h.y1 + kTouch &&
+                 h.y0 < b.y1 + kTouch && b.z0 < h.z1 + kTouch && h.z0 < b.z1 + kTouch;
+        }))
+      out.push_back(box.id);
+  }
+  return out;
+}
+
 std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::SceneAnalysis& scene,
                                            sim::Action action, const sim::ObservationParams& obs,
                                            const sim::RobotModel& robot, const Geometry& g,
