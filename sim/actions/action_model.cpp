@@ -476,9 +476,11 @@ class Run {
                         history->second.failures + 1, o_.grip_attempts, chosen->cups,
                         drops > 0 ? fmt::format(", carried at 1/{:.0f} of the speed", scale) : ""));
       const Slowed slowed(time_scale_, scale);
-      step("lift", PlanMode::kArmCartesian, pose(chosen->lift), Suction::kKeep, Suction::kKeep);
+      const auto leaning = leaning_on(observe().world, chosen->boxes);
+      step("lift", PlanMode::kArmCartesian, pose(chosen->lift), Suction::kKeep, Suction::kKeep,
+           leaning);
       const bool out = step("retract", PlanMode::kArmCartesian, pose(chosen->retract),
-                            Suction::kKeep, Suction::kKeep);
+                            Suction::kKeep, Suction::kKeep, leaning);
       if (!out) {
         const std::string why = "not pulled out: " + step_failure_;
         // Still in the wall: no drop-off can be planned from here. Set the

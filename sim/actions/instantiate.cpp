@@ -148,6 +148,27 @@ bool has_sealable_face(const sim::Box& box) {
   return side && std::abs(R(2, up_axis)) >= std::cos(kMaxFaceTilt);
 }
 
+std::vector<std::uint32_t> leaning_on(const sim::World& world,
+                                      const std::vector<std::uint32_t>& group) {
+  constexpr double kTouch = 0.02;
+  std::vector<sim::Bounds> held;
+  for (const auto& box : world.boxes)
+    if (std::find(group.begin(), group.end(), box.id) != group.end())
+      held.push_back(sim::bounds(box));
+  std::vector<std::uint32_t> out;
+  for (const auto& box : world.boxes) {
+    if (has_sealable_face(box) || std::find(group.begin(), group.end(), box.id) != group.end())
+      continue;
+    const sim::Bounds b = sim::bounds(box);
+    if (std::any_of(held.begin(), held.end(), [&](const sim::Bounds& h) {
+          return b.x0 < h.x1 + kTouch && h.x0 < b.x1 + kTouch && b.y0 < h.y1 + kTouch &&
+                 h.y0 < b.y1 + kTouch && b.z0 < h.z1 + kTouch && h.z0 < b.z1 + kTouch;
+        }))
+      out.push_back(box.id);
+  }
+  return out;
+}
+
 std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::SceneAnalysis& scene,
                                            sim::Action action, const sim::ObservationParams& obs,
                                            const sim::RobotModel& robot, const Geometry& g,
@@ -480,21 +501,38 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     // Lifted, then pulled out until clear of what it rested on: the
     // drop-off move after that swings freely.
     // A group against a side wall is lifted away from it too: dragged along
-    // it, the held boxes would press into it.
-    double y0 = b[i].y0, y1 = b[i].y1;
+    // it, the held boxes would press into it. It moves no further than
+    // halfway to the box standing beside it on the other side, which it
+    // would press into instead (C s12: 3 cm into a flush neighbour).
+    double x0 = b[i].x0, x1 = b[i].x1, y0 = b[i].y0, y1 = b[i].y1, z0 = b[i].z0, z1 = b[i].z1;
     for (auto j : best->group) {
+      x0 = std::min(x0, b[j].x0);
+      x1 = std::max(x1, b[j].x1);
       y0 = std::min(y0, b[j].y0);
       y1 = std::max(y1, b[j].y1);
+      z0 = std::min(z0, b[j].z0);
+      z1 = std::max(z1, b[j].z1);
     }
     const double half = world.trailer.width / 2;
-    const double off_wall =
-        std::max(0.0, kMargin - (half + y0)) - std::max(0.0, kMargin - (half - y1));
+    double off_wall = std::max(0.0, kMargin - (half + y0)) - std::max(0.0, kMargin - (half - y1));
+    for (std::size_t j = 0; j < count && off_wall != 0.0; ++j) {
+      if (std::find(best->group.begin(), best->group.end(), j) != best->group.end() ||
+          !(b[j].x0 < x1 && x0 < b[j].x1 && b[j].z0 < z1 + best->lift && z0 < b[j].z1))
+        continue;
+      const double room = off_wall > 0 ? b[j].y0 - y1 : y0 - b[j].y1;
+      const bool beside = off_wall > 0 ? b[j].y0 + b[j].y1 > y0 + y1 : b[j].y0 + b[j].y1 < y0 + y1;
+      if (beside)
+        off_wall = std::copysign(std::min(std::abs(off_wall), std::max(0.0, room / 2)), off_wall);
+    }
     c.lift = {c.grasp.position + Eigen::Vector3d(0, off_wall, best->lift), plate_yaw};
     // Pulled out along a turned face's normal, the load also moves sideways:
-    // no further than the side walls let it and the plate.
+    // no further than the side walls let it and the plate, and never pushed
+    // further off a wall than the lift took it.
     Eigen::Vector3d retract = c.lift.position - best->out_depth * n;
-    const double lo = std::max(-half + kMargin - y0, -ylim - c.grasp.position.y());
-    const double hi = std::min(half - kMargin - y1, ylim - c.grasp.position.y());
+    const double lo =
+        std::min(off_wall, std::max(-half + kMargin - y0, -ylim - c.grasp.position.y()));
+    const double hi =
+        std::max(off_wall, std::min(half - kMargin - y1, ylim - c.grasp.position.y()));
     if (lo <= hi)
       retract.y() = c.grasp.position.y() + std::clamp(retract.y() - c.grasp.position.y(), lo, hi);
     c.retract = {retract, plate_yaw};

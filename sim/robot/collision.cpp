@@ -415,22 +415,26 @@ struct CollisionChecker::Impl {
     }
   }
 
-  // Whether an axis-aligned box lies in the trailer's exact inner volume,
-  // or above the floor behind its open rear: then it cannot touch the shell,
+  // Whether an enclosing box lies in the trailer's exact inner volume, or
+  // above the floor behind its open rear: then it cannot touch the shell,
   // whose leaves round a wall off the octree's grid outwards, into the
   // trailer (a 2.35 m container's side walls by 2.5 cm each, its 2.39 m
-  // ceiling by 4 cm), where boxes packed against the wall stand.
-  bool inside_trailer(const fcl::AABBd& a) const {
-    if (a.min_.z() < 0.0) return false;
-    if (a.max_.x() <= 0.0) return true;
+  // ceiling by 4 cm), where boxes packed against the wall stand. Bounded by
+  // the box's own corners: FCL's AABB of a rotated object is the cube around
+  // its bounding sphere, which pokes a held box tilted by a degree through
+  // the wall it stands against.
+  bool inside_trailer(const fcl::OBBd& box) const {
+    const Eigen::Vector3d half = box.axis.cwiseAbs() * box.extent;
+    const Eigen::Vector3d lo = box.To - half, hi = box.To + half;
+    if (lo.z() < 0.0) return false;
+    if (hi.x() <= 0.0) return true;
     const double w = 0.5 * inner.width;
-    return a.max_.x() <= inner.depth && a.min_.y() >= -w && a.max_.y() <= w &&
-           a.max_.z() <= inner.height;
+    return hi.x() <= inner.depth && lo.y() >= -w && hi.y() <= w && hi.z() <= inner.height;
   }
 
   // `box`: o's enclosing box.
   bool hits_octree(const fcl::CollisionObjectd* o, const fcl::OBBd& box) const {
-    if (inside_trailer(o->getAABB()) || !trailer->grid.may_hit(box, o->getAABB())) return false;
+    if (inside_trailer(box) || !trailer->grid.may_hit(box, o->getAABB())) return false;
     // With voxel-sized cells that was the exact test for a box; other
     // shapes, only enclosed by their box, go on to FCL's octree test.
     return (o->getNodeType() == fcl::GEOM_BOX && trailer->grid.voxel_sized()) ||

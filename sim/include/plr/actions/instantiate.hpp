@@ -67,6 +67,13 @@ sim::World without(const sim::World& world, const std::vector<std::uint32_t>& id
 // on a face, not tilted on an edge.
 bool has_sealable_face(const sim::Box& box);
 
+// Boxes with no face the plate seals on that touch (within 2 cm of their
+// bounds) one of `group`: tilted, leaning on it. pick_candidates does not
+// count them as resting on the group (they slide off what comes out under
+// them), so its lift and pull-out push them aside rather than avoid them.
+std::vector<std::uint32_t> leaning_on(const sim::World& world,
+                                      const std::vector<std::uint32_t>& group);
+
 struct PickCandidate {
   std::uint32_t box = 0;  // the box the plate is put on
   // Every box the plate seals on at the grasp, `box` first, all in the

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "plr/sim/generators.hpp"
@@ -272,6 +273,45 @@ TEST(ActionModel, ABoxThatCannotBePulledOutIsGivenUp) {
   EXPECT_EQ(tried, options().grip_attempts);
   ASSERT_TRUE(f.memory.grips.count(7));
   EXPECT_TRUE(f.memory.grips.at(7).given_up);
+}
+
+// A slab tilted on its edge (no face the plate seals on) lies from a lower
+// box onto the top edge of the box beside it. The candidate rule lets that
+// box be taken (the slab slides off what comes out under it); its lift and
+// pull-out push the slab aside. (Before: they were planned around the slab
+// and failed, as "held box 62 - box 57" did in C s12.)
+TEST(ActionModel, ABoxWithATiltedBoxLeaningOnItIsPulledOut) {
+  sim::World w;
+  w.trailer.depth = 8.0;
+  w.boxes.push_back(box(1, 6.0, 0.0, 0.0));
+  sim::Box low = box(2, 6.0, -0.41, 0.0);
+  low.size.z() = 0.3;
+  low.pose.translation().z() = 0.15;
+  w.boxes.push_back(low);
+  // From box 2's top (z 0.3) up over box 1's edge (y -0.2, z 0.4).
+  sim::Box slab = box(3, 6.0, 0.0, 0.0, 2.0);
+  slab.size = {0.4, 0.3, 0.06};
+  // Its bottom face on box 1's edge 2 cm short of its end: it reaches 2 cm
+  // over box 1, under the 3 cm that counts as standing on it.
+  const double tilt = std::asin(0.1 / 0.28);
+  slab.pose.linear() = Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  slab.pose.translation() =
+      Eigen::Vector3d(6.2, -0.2 - 0.03 * std::sin(tilt) - 0.13 * std::cos(tilt),
+                      0.4 + 0.03 * std::cos(tilt) - 0.13 * std::sin(tilt));
+  w.boxes.push_back(slab);
+  ASSERT_FALSE(has_sealable_face(slab));
+  Fixture f(w);
+  const ActionModel model(robot(), options());
+  std::vector<std::string> notes;
+  Reporter reporter;
+  reporter.note = [&](const std::string& n) { notes.push_back(n); };
+  // The pick region that takes box 1 (the slab's high edge makes it a pile).
+  const sim::Action pick = sim::make_pick(sim::Height::kHigh, sim::Side::kCenter);
+  const auto out = model.run(pick, f.backend, f.memory, reporter);
+  ASSERT_TRUE(out) << out.error().message;
+  EXPECT_TRUE(out->applicable) << out->why;
+  EXPECT_GE(out->boxes, 1u) << ::testing::PrintToString(notes);
+  EXPECT_EQ(out->robot_trailer_contacts, 0u);
 }
 
 // H's first actions on A1 seed 1, once on an idle machine and once with every

@@ -384,6 +384,42 @@ TEST(PickCandidates, ATurnedBoxAgainstASideWallIsPulledOutInsideTheTrailer) {
   }
 }
 
+// A box against a side wall is lifted and pulled out away from the wall, but
+// no further than halfway to the box beside it: 3 cm into a neighbour 4 mm
+// away, every IK solution of the lift collided with it (C s12, boxes 60 and
+// 55). Without the neighbour it moves off the wall as before.
+TEST(PickCandidates, ABoxAgainstASideWallIsNotLiftedIntoItsNeighbour) {
+  sim::World w = trailer_world();
+  const double half = w.trailer.width / 2;
+  for (const double sign : {1.0, -1.0}) {
+    const sim::Box at_wall =
+        sim::testing::make_box(1, 6.3, sign * (half - 0.301), 0.0, {0.55, 0.6, 0.5});
+    // Set back 5 cm, out of the cups' reach: not taken with it.
+    const sim::Box beside =
+        sim::testing::make_box(2, 6.35, sign * (half - 0.605 - 0.15), 0.0, {0.55, 0.3, 0.5});
+    for (const bool with_neighbour : {true, false}) {
+      w.boxes = {at_wall};
+      if (with_neighbour) w.boxes.push_back(beside);
+      const auto all = candidates(w);
+      const PickCandidate* c = find(all, 1);
+      ASSERT_NE(c, nullptr) << sign;
+      ASSERT_EQ(c->boxes, std::vector<std::uint32_t>{1}) << sign;
+      const double lifted = sign * (c->lift.position.y() - c->grasp.position.y());
+      const double pulled = sign * (c->retract.position.y() - c->grasp.position.y());
+      if (with_neighbour) {
+        const double room = sim::bounds(at_wall).y0 - sim::bounds(beside).y1;
+        const double gap = sign > 0 ? room : sim::bounds(beside).y0 - sim::bounds(at_wall).y1;
+        EXPECT_GE(lifted, -gap / 2 - 1e-9) << sign;
+        EXPECT_GE(pulled, -gap / 2 - 1e-9) << sign;
+        EXPECT_LE(lifted, 0.0) << sign;
+      } else {
+        EXPECT_LT(lifted, -0.02) << sign;
+        EXPECT_LT(pulled, -0.02) << sign;
+      }
+    }
+  }
+}
+
 TEST(PickCandidates, ATurnedBoxBesideASideWallIsApproachedWithThePlateInsideTheTrailer) {
   // Turned 0.2 rad, its face towards the wall: backed off along the face's
   // normal to the pre-grasp, a plate at the wall would go into it.

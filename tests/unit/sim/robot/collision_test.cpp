@@ -8,6 +8,7 @@
 #include <octomap/octomap.h>
 
 #include <algorithm>
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <random>
@@ -288,6 +289,26 @@ TEST(Collision, AHeldBoxAgainstAContainerWallOffTheOctreeGridIsClearOfIt) {
   JointVector back = q;
   back[plr::sim::kBaseX] -= 0.3;
   EXPECT_TRUE(held_at(side - 0.25, 1.0).is_motion_valid(q, back));
+}
+
+// The grip turns a box a few degrees (C seed 12: 6.6 degrees about z) while it
+// stays against the wall; held so, it is still clear of the shell.
+TEST(Collision, AHeldBoxTurnedAgainstAContainerWallIsClearOfIt) {
+  World w;
+  w.trailer = {2.35, 2.39, 12.0};
+  const JointVector q = home();
+  const double side = 0.5 * w.trailer.width;
+  const double turn = 0.115;  // rad
+  const auto held_at = [&](double gap) {
+    Box b = box(7, 6.0, 0.0, 1.0, 0.5);
+    b.pose.linear() = Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    b.pose.translation().y() = side - 0.25 * (std::cos(turn) + std::sin(turn)) - gap;
+    CollisionChecker cc(robot(), w);
+    cc.attach_box(b, q);
+    return cc;
+  };
+  EXPECT_TRUE(held_at(0.001).is_valid(q)) << held_at(0.001).describe_collision(q);
+  EXPECT_EQ(held_at(-0.01).describe_collision(q), "held box 7 - trailer");
 }
 
 TEST(Collision, AgreesWithFclAloneOnRandomStates) {
