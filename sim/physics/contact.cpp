@@ -262,8 +262,10 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
       const std::size_t bj = static_cast<std::size_t>(j);
       const Body& b = bodies[bj];
       if (j == i || (b.mode == Mode::kAwake && j < i)) continue;
+      // Near the box itself: its world-aligned bounds reach further when it
+      // is turned, and woke boxes it could not touch.
       if (fast && b.mode == Mode::kAsleep &&
-          !disjoint(alo - margin, ahi + margin, broad_.lo(bj), broad_.hi(bj))) {
+          !separated(a.box.pose, 0.5 * a.box.size, b.box.pose, 0.5 * b.box.size, kWakeMargin)) {
         wake.push_back(j);
       }
       if (disjoint(alo, ahi, broad_.lo(bj), broad_.hi(bj))) continue;
@@ -318,7 +320,11 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
     const Body& h = bodies[k];
     if (h.mode != Mode::kHeld || corner_speed(h) <= 1e-6) continue;
     broad_.query(broad_.lo(k) - margin, broad_.hi(k) + margin, BroadPhase::kSleeping, near_);
-    wake.insert(wake.end(), near_.begin(), near_.end());
+    for (const int j : near_) {
+      const Body& b = bodies[static_cast<std::size_t>(j)];
+      if (!separated(h.box.pose, 0.5 * h.box.size, b.box.pose, 0.5 * b.box.size, kWakeMargin))
+        wake.push_back(j);
+    }
   }
   std::sort(state.pairs.begin(), state.pairs.end(),
             [](const PairState& x, const PairState& y) { return x.key < y.key; });
