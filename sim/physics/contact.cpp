@@ -207,7 +207,7 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
                        const std::vector<Mover>& links, double dt, std::vector<Wrench>& wrenches,
                        std::vector<int>& wake) {
   std::vector<Body>& bodies = state.bodies;
-  wrenches.assign(bodies.size(), Wrench{});
+  clear_wrenches(wrenches, bodies.size(), moving);
   merged_.clear();
   std::set_union(moved_.begin(), moved_.end(), moving.begin(), moving.end(),
                  std::back_inserter(merged_));

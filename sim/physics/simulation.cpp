@@ -432,7 +432,7 @@ struct Simulation::Impl {
       update_loads(dt);
     } else {
       state.pairs.clear();
-      wrenches.assign(state.bodies.size(), Wrench{});
+      detail::clear_wrenches(wrenches, state.bodies.size(), moving_bodies());
     }
 
     if (!slots.empty()) {
