@@ -217,7 +217,7 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
   dampers_.clear();
   link_force_.assign(links.size(), Eigen::Vector3d::Zero());
   belt_force_.assign(links.size(), 0.0);
-  broad_.update(bodies);
+  broad_.update(bodies, moving);
   const auto corner_speed = [](const Body& b) { return b.v.norm() + b.w.norm() * b.radius; };
   const auto deepest = [&]() {
     double depth = 0.0;

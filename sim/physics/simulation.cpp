@@ -279,6 +279,7 @@ struct Simulation::Impl {
     b.mode = Mode::kGone;
     if (was_awake) rebuild = true;
     moving_stale = true;
+    contacts.box_removed();
     // What rested on or leaned against it must notice that it is gone.
     const Eigen::Vector3d e =
         b.box.pose.linear().cwiseAbs() * (0.5 * b.box.size) + Eigen::Vector3d::Constant(0.02);
