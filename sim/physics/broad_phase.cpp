@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <iterator>
 
 namespace plr::sim::detail {
 namespace {
@@ -51,31 +52,53 @@ void BroadPhase::update(const std::vector<Body>& bodies) {
   hi_.resize(n);
   range_.resize(n);
   kind_.resize(n, 0);
+  moving_.clear();
   for (std::size_t i = 0; i < n; ++i) {
-    const Body& b = bodies[i];
-    const int body = static_cast<int>(i);
-    const std::uint8_t kind = b.mode == Mode::kGone     ? 0
-                              : b.mode == Mode::kAsleep ? kSleeping
-                                                        : kMoving;
-    if (kind == kSleeping && kind_[i] == kSleeping) continue;  // has not moved
-    if (kind == 0) {
-      if (kind_[i] != 0) erase(body, range_[i]);
-      kind_[i] = 0;
-      continue;
-    }
-    const Eigen::Vector3d e = b.box.pose.linear().cwiseAbs() * (0.5 * b.box.size);
-    lo_[i] = b.box.pose.translation() - e;
-    hi_[i] = b.box.pose.translation() + e;
-    const Range r{cell_of(lo_[i]), cell_of(hi_[i])};
-    if (kind_[i] == 0) {
-      insert(body, r);
-    } else if (r != range_[i]) {
-      erase(body, range_[i]);
-      insert(body, r);
-    }
-    range_[i] = r;
-    kind_[i] = kind;
+    update_body(bodies[i], i);
+    if (kind_[i] == kMoving) moving_.push_back(static_cast<int>(i));
   }
+  stale_ = false;
+}
+
+void BroadPhase::update(const std::vector<Body>& bodies, const std::vector<int>& moving) {
+  if (stale_ || kind_.size() != bodies.size()) {
+    update(bodies);
+    return;
+  }
+  visit_.clear();
+  std::set_union(moving_.begin(), moving_.end(), moving.begin(), moving.end(),
+                 std::back_inserter(visit_));
+  moving_.clear();
+  for (const int body : visit_) {
+    const auto i = static_cast<std::size_t>(body);
+    update_body(bodies[i], i);
+    if (kind_[i] == kMoving) moving_.push_back(body);
+  }
+}
+
+void BroadPhase::update_body(const Body& b, std::size_t i) {
+  const int body = static_cast<int>(i);
+  const std::uint8_t kind = b.mode == Mode::kGone     ? 0
+                            : b.mode == Mode::kAsleep ? kSleeping
+                                                      : kMoving;
+  if (kind == kSleeping && kind_[i] == kSleeping) return;  // has not moved
+  if (kind == 0) {
+    if (kind_[i] != 0) erase(body, range_[i]);
+    kind_[i] = 0;
+    return;
+  }
+  const Eigen::Vector3d e = b.box.pose.linear().cwiseAbs() * (0.5 * b.box.size);
+  lo_[i] = b.box.pose.translation() - e;
+  hi_[i] = b.box.pose.translation() + e;
+  const Range r{cell_of(lo_[i]), cell_of(hi_[i])};
+  if (kind_[i] == 0) {
+    insert(body, r);
+  } else if (r != range_[i]) {
+    erase(body, range_[i]);
+    insert(body, r);
+  }
+  range_[i] = r;
+  kind_[i] = kind;
 }
 
 void BroadPhase::query(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, unsigned which,

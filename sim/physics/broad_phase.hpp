@@ -31,6 +31,11 @@ class BroadPhase {
   // Every box's bounding box for the step starting now (a sleeping box keeps
   // the one it fell asleep with: it has not moved).
   void update(const std::vector<Body>& bodies);
+  // The same, visiting only the bodies in `moving` (ascending) and those
+  // moving at the last update: the others slept, and have not moved, unless
+  // a sleeping box was removed since (mark_stale()).
+  void update(const std::vector<Body>& bodies, const std::vector<int>& moving);
+  void mark_stale() { stale_ = true; }
   const Eigen::Vector3d& lo(std::size_t body) const { return lo_[body]; }
   const Eigen::Vector3d& hi(std::size_t body) const { return hi_[body]; }
 
@@ -54,6 +59,7 @@ class BroadPhase {
     return static_cast<std::size_t>((x * count_[1] + y) * count_[2] + z);
   }
   void insert(int body, const Range& r);
+  void update_body(const Body& b, std::size_t i);
   void erase(int body, const Range& r);
 
   Eigen::Vector3d origin_;
@@ -63,6 +69,9 @@ class BroadPhase {
   std::vector<Eigen::Vector3d> lo_, hi_;
   std::vector<Range> range_;        // a box's cells
   std::vector<std::uint8_t> kind_;  // a Which; 0: not in the grid (gone)
+  std::vector<int> moving_;         // kind kMoving at the last update, ascending
+  std::vector<int> visit_;          // scratch
+  bool stale_ = true;               // the next update visits every body
   // A query's scratch, one bit per body: met in a cell, and an answer (read
   // in index order, which sorts the answers).
   mutable std::vector<std::uint64_t> met_, hit_;

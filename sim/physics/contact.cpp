@@ -207,7 +207,7 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
                        const std::vector<Mover>& links, double dt, std::vector<Wrench>& wrenches,
                        std::vector<int>& wake) {
   std::vector<Body>& bodies = state.bodies;
-  wrenches.assign(bodies.size(), Wrench{});
+  clear_wrenches(wrenches, bodies.size(), moving);
   merged_.clear();
   std::set_union(moved_.begin(), moved_.end(), moving.begin(), moving.end(),
                  std::back_inserter(merged_));
@@ -217,7 +217,7 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
   dampers_.clear();
   link_force_.assign(links.size(), Eigen::Vector3d::Zero());
   belt_force_.assign(links.size(), 0.0);
-  broad_.update(bodies);
+  broad_.update(bodies, moving);
   const auto corner_speed = [](const Body& b) { return b.v.norm() + b.w.norm() * b.radius; };
   const auto deepest = [&]() {
     double depth = 0.0;
@@ -262,8 +262,10 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
       const std::size_t bj = static_cast<std::size_t>(j);
       const Body& b = bodies[bj];
       if (j == i || (b.mode == Mode::kAwake && j < i)) continue;
+      // Near the box itself: its world-aligned bounds reach further when it
+      // is turned, and woke boxes it could not touch.
       if (fast && b.mode == Mode::kAsleep &&
-          !disjoint(alo - margin, ahi + margin, broad_.lo(bj), broad_.hi(bj))) {
+          !separated(a.box.pose, 0.5 * a.box.size, b.box.pose, 0.5 * b.box.size, kWakeMargin)) {
         wake.push_back(j);
       }
       if (disjoint(alo, ahi, broad_.lo(bj), broad_.hi(bj))) continue;
@@ -318,7 +320,11 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
     const Body& h = bodies[k];
     if (h.mode != Mode::kHeld || corner_speed(h) <= 1e-6) continue;
     broad_.query(broad_.lo(k) - margin, broad_.hi(k) + margin, BroadPhase::kSleeping, near_);
-    wake.insert(wake.end(), near_.begin(), near_.end());
+    for (const int j : near_) {
+      const Body& b = bodies[static_cast<std::size_t>(j)];
+      if (!separated(h.box.pose, 0.5 * h.box.size, b.box.pose, 0.5 * b.box.size, kWakeMargin))
+        wake.push_back(j);
+    }
   }
   std::sort(state.pairs.begin(), state.pairs.end(),
             [](const PairState& x, const PairState& y) { return x.key < y.key; });

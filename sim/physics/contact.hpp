@@ -21,6 +21,8 @@ class Contacts {
   // Geometry cache; call when boxes or robot shapes change.
   void set_boxes(const std::vector<Body>& bodies);
   void set_links(const std::vector<LinkGeometry>& links);
+  // A box was removed (the broad phase then looks at every box once).
+  void box_removed() { broad_.mark_stale(); }
 
   // Before the fixed steps of a Simulation::step() call: each robot shape's
   // centre moves on a line from `from` to `to` during the call. Finds once

@@ -47,6 +47,17 @@ namespace {
 
 constexpr double kLoadFilter = 0.02;  // s; cups are compliant, contact spikes are not felt
 
+// A box woken by a neighbour's motion that did not disturb it stays where it
+// was and in balance; waiting the full sleep_time for it is most of what
+// such wakes cost. Balanced: the contact force differs from its weight by
+// under kBalancedForce of it, and the torque about its centre is under its
+// weight times kBalancedArm (a box whose centre of mass lies 1 cm beyond the
+// edge it rests on feels 5x that). Such a box sleeps after
+// kBalancedSleepFraction of sleep_time.
+constexpr double kBalancedForce = 0.05;
+constexpr double kBalancedArm = 0.002;  // m
+constexpr double kBalancedSleepFraction = 0.2;
+
 // A pose carried from `a` to `b` over a step() call at constant twist (v,
 // w): what does not depend on how far into the call is computed once.
 struct Path {
@@ -268,6 +279,7 @@ struct Simulation::Impl {
     b.mode = Mode::kGone;
     if (was_awake) rebuild = true;
     moving_stale = true;
+    contacts.box_removed();
     // What rested on or leaned against it must notice that it is gone.
     const Eigen::Vector3d e =
         b.box.pose.linear().cwiseAbs() * (0.5 * b.box.size) + Eigen::Vector3d::Constant(0.02);
@@ -421,7 +433,7 @@ struct Simulation::Impl {
       update_loads(dt);
     } else {
       state.pairs.clear();
-      wrenches.assign(state.bodies.size(), Wrench{});
+      detail::clear_wrenches(wrenches, state.bodies.size(), moving_bodies());
     }
 
     if (!slots.empty()) {
@@ -529,7 +541,15 @@ struct Simulation::Impl {
     if (speed < options.sleep_speed ||
         (speed < options.sleep_ring_speed && drift() < options.sleep_drift)) {
       b.still += dt;
-      if (b.still >= options.sleep_time) {
+      const auto settled = [&] {
+        const Wrench& w = wrenches[i];
+        const double weight = b.box.mass * options.gravity;
+        return speed < options.sleep_speed && drift() < options.sleep_drift &&
+               (w.force + Eigen::Vector3d(0.0, 0.0, -weight)).norm() < kBalancedForce * weight &&
+               w.torque.norm() < kBalancedArm * weight;
+      };
+      if (b.still >= options.sleep_time ||
+          (b.still >= kBalancedSleepFraction * options.sleep_time && settled())) {
         b.mode = Mode::kAsleep;
         b.v.setZero();
         b.w.setZero();

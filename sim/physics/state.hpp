@@ -93,4 +93,13 @@ struct Wrench {
   Eigen::Vector3d torque = Eigen::Vector3d::Zero();  // about the box centre
 };
 
+// A fixed step's wrenches, one per body, zero before its contacts: only the
+// moving (awake and held) bodies' entries are written and read, so only
+// those are cleared (a wall's sleeping boxes cost nothing).
+inline void clear_wrenches(std::vector<Wrench>& wrenches, std::size_t bodies,
+                           const std::vector<int>& moving) {
+  wrenches.resize(bodies);
+  for (const int i : moving) wrenches[static_cast<std::size_t>(i)] = Wrench{};
+}
+
 }  // namespace plr::sim::detail

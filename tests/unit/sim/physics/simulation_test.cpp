@@ -152,6 +152,61 @@ TEST(Physics, OverhangingBoxTipsOver) {
   EXPECT_LT(top.pose.translation().z(), 0.4);  // down beside the lower box
 }
 
+// A woken box on the verge of tipping is not balanced and must not fall
+// asleep early: its centre of mass 1 cm beyond the edge below, it tips.
+TEST(Physics, BarelyOverhangingBoxTipsOver) {
+  World w = column(1, 10.0, 0.0, 8.0);
+  w.boxes.push_back(make_box(2, {0.4, 0.3, 0.3}, {10.0 + 0.2 + 0.01, 0.0, 0.4 + 0.151}, 8.0));
+  Simulation sim(w);
+  EXPECT_GE(sim.settle(5.0), 0.0);
+  EXPECT_LT(find(sim.world(), 2).pose.translation().z(), 0.4);
+}
+
+// A fast box wakes the sleeping boxes near the box itself, not all near its
+// bounding box (which a turned box overfills).
+TEST(Physics, FastTurnedBoxWakesOnlyBoxesNearIt) {
+  World w;
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(M_PI / 4, Eigen::Vector3d::UnitZ()).matrix();
+  w.boxes.push_back(make_box(1, {0.4, 0.4, 0.4}, {10.0, 0.0, 0.2}, 8.0));
+  w.boxes.back().pose.linear() = turn;
+  // 5 mm beyond the turned box's bounding box, 25 mm from the box.
+  const double reach = 0.2 * std::sqrt(2.0);
+  w.boxes.push_back(make_box(2, {0.4, 0.4, 0.4}, {10.0 + reach + 0.005 + 0.2, 0.23, 0.2}, 8.0));
+  Simulation sim(w);
+  ASSERT_GE(sim.settle(2.0), 0.0);
+  // A paddle pushes the turned box along its face that looks at box 2.
+  const Eigen::Vector3d along = Eigen::Vector3d(1.0, -1.0, 0.0).normalized();
+  LinkGeometry paddle;
+  paddle.size = {0.05, 0.3, 0.2};
+  paddle.pose.linear() = Eigen::AngleAxisd(-M_PI / 4, Eigen::Vector3d::UnitZ()).matrix();
+  const Eigen::Vector3d start = Eigen::Vector3d(10.0, 0.0, 0.2) - (0.2 + 0.025 + 0.02) * along;
+  int most_awake = 0;
+  for (int k = 0; k <= 30; ++k) {
+    paddle.pose.translation() = start + 0.005 * k * along;
+    sim.set_robot_links({paddle});
+    sim.step(0.01);
+    most_awake = std::max(most_awake, sim.stats().awake);
+  }
+  EXPECT_GT(find(sim.world(), 1).pose.translation().x(), 10.05);  // pushed well past box 2
+  EXPECT_EQ(most_awake, 1);
+}
+
+// A box woken by a neighbour's removal that does not disturb it sleeps again
+// well before sleep_time.
+TEST(Physics, UndisturbedWokenBoxSleepsSoon) {
+  World w = column(1, 10.0, 0.0);
+  w.boxes.push_back(make_box(2, {0.4, 0.4, 0.4}, {10.41, 0.0, 0.2}, 8.0));
+  Simulation sim(w);
+  ASSERT_GE(sim.settle(2.0), 0.0);
+  sim.remove_box(1);
+  ASSERT_FALSE(sim.at_rest());  // the neighbour 1 cm away was woken
+  const double slept = sim.settle(1.0);
+  ASSERT_GE(slept, 0.0);
+  EXPECT_LT(slept, 0.5 * PhysicsOptions{}.sleep_time);
+  EXPECT_LT((find(sim.world(), 2).pose.translation() - Eigen::Vector3d(10.41, 0.0, 0.2)).norm(),
+            1e-3);
+}
+
 TEST(Physics, RemovingTheBottomBoxDropsTheColumn) {
   Simulation sim(column(4));
   ASSERT_GE(sim.settle(2.0), 0.0);
