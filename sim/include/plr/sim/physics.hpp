@@ -65,7 +65,10 @@ struct PhysicsOptions {
   double box_damping_ratio = 4.0;
   bool sleeping = true;
   double sleep_speed = 0.01;  // m/s at the box's corners
-  double sleep_time = 0.25;   // s slow before a box freezes
+  // s slow before a box freezes; a fifth of it for one that also stays
+  // within sleep_drift and in balance (contact force within 5 % of its
+  // weight, torque under its weight x 2 mm): most wakes do not disturb a box.
+  double sleep_time = 0.25;
   // Also slow: up to sleep_ring_speed while the corners stay within
   // sleep_drift of where they were when the box became slow: a box ringing on
   // its contact springs. One really moving at sleep_speed or more leaves that
