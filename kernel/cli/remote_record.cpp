@@ -67,6 +67,7 @@ class RemoteRecorder {
 
   Status take() {
     for (const auto& [name, reader] : readers_) {
+      if (reader <= 0) continue;  // could not be read: said once when found
       Status s;
       tool_.take(reader, [&](const plr_dds_Envelope& e, const dds_sample_info_t& info) {
         if (s) s = record(e, info);
