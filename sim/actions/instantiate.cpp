@@ -34,6 +34,11 @@ constexpr double kSquare = 0.03;  // rad: faces turned less than this are taken 
 // settled box leans a little, and a box outside the region the plate might
 // take must keep the pose from being chosen.
 constexpr double kSealMargin = 0.01;
+// m: the highest lift off a tilted support (a box sunk deeper into what is
+// under it is not pulled out), and what it clears the support's top by
+// beyond kClearance.
+constexpr double kMaxLift = 0.15;
+constexpr double kLiftSlack = 0.005;
 
 sim::Height height_class(double top, double mid, double high) {
   if (top >= high) return sim::Height::kHigh;
@@ -416,6 +421,15 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
         depth = std::max(depth, b[j].x1 - b[j].x0);
       }
       grip.lift = std::max(g.retract_lift, g.nose_top + kMargin - z0);
+      // A tilted box rests on a tilted top (a leaning column): their
+      // outlines overlap in height by more than a flat stack's, and the
+      // group comes out only once lifted clear of what it rests on.
+      for (auto j : grip.group)
+        for (std::size_t k = 0; k < count; ++k)
+          if (std::find(grip.group.begin(), grip.group.end(), k) == grip.group.end() &&
+              b[k].z0 < b[j].z0 && separation(outline[j], outline[k]) < -kMargin)
+            grip.lift = std::max(grip.lift,
+                                 std::min(kMaxLift, b[k].z1 - b[j].z0 + kClearance + kLiftSlack));
       grip.out_depth = std::max(2 * f.half_d, depth) + kMargin;
       bool blocked = false;
       for (auto j : grip.group) {

@@ -103,25 +103,25 @@ SceneAnalysis analyse(const World& world, const ObservationParams& p) {
   }
 
   std::vector<std::size_t> first_wall, front_pile;
+  // Boxes with no wall box in front of them across the trailer (a column of
+  // the wall nothing stands before, a box lying before it) are in front
+  // whatever their depth: a few boxes left standing in front of part of the
+  // wall would otherwise make them the whole first wall, and the rest of the
+  // wall and what lies before it unreachable to every pick region. A lower
+  // wall across the whole width in front of a higher one still hides it.
+  auto exposed = [&](std::size_t i) {
+    constexpr double kOverlap = 0.05;
+    for (std::size_t j = 0; j < n; ++j) {
+      if (j != i && is_wall[j] && b[j].x1 <= b[i].x0 + kOverlap && b[j].y0 + kOverlap < b[i].y1 &&
+          b[i].y0 + kOverlap < b[j].y1)
+        return false;
+    }
+    return true;
+  };
   if (!a.wall.empty()) {
     a.wall_near_x = std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < n; ++i)
       if (is_wall[i]) a.wall_near_x = std::min(a.wall_near_x, b[i].x0);
-    // Wall boxes with no wall box in front of them across the trailer (a
-    // column of the wall nothing stands before) belong to it too: a few
-    // boxes left standing in front of part of the wall would otherwise make
-    // them the whole first wall, and the rest of the wall unreachable to
-    // every pick region. A lower wall across the whole width in front of a
-    // higher one still hides it.
-    auto exposed = [&](std::size_t i) {
-      constexpr double kOverlap = 0.05;
-      for (std::size_t j = 0; j < n; ++j) {
-        if (j != i && is_wall[j] && b[j].x1 <= b[i].x0 + kOverlap && b[j].y0 + kOverlap < b[i].y1 &&
-            b[i].y0 + kOverlap < b[j].y1)
-          return false;
-      }
-      return true;
-    };
     for (std::size_t i = 0; i < n; ++i) {
       if (is_wall[i] && (b[i].x0 <= a.wall_near_x + p.wall_depth || exposed(i))) {
         first_wall.push_back(i);
@@ -134,7 +134,7 @@ SceneAnalysis analyse(const World& world, const ObservationParams& p) {
     const double cx = (b[i].x0 + b[i].x1) / 2;
     // Pile boxes level with the first wall (a column picked down to the
     // floor) are reachable too; those behind it are not.
-    if (!is_wall[i] && (a.wall.empty() || cx < a.wall_near_x + p.wall_depth)) {
+    if (!is_wall[i] && (a.wall.empty() || cx < a.wall_near_x + p.wall_depth || exposed(i))) {
       front_pile.push_back(i);
       a.front_pile.push_back(boxes[i].id);
     }

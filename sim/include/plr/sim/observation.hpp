@@ -6,8 +6,9 @@
 // its footprint, itself included) tops out below h_pile belongs to the pile,
 // otherwise to a wall. The first wall is the wall boxes whose front face lies
 // within wall_depth of the nearest wall face; the pile that counts is the one
-// in front of it or level with it (centres before wall face + wall_depth). Sides follow the frame
-// of world.hpp: y > 0 is left.
+// in front of it or level with it (centres before wall face + wall_depth).
+// A box no wall box stands in front of, across the trailer, counts too,
+// however deep. Sides follow the frame of world.hpp: y > 0 is left.
 #pragma once
 
 #include <plr/msg/world_generated.h>

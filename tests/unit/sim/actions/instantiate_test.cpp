@@ -123,6 +123,27 @@ TEST(PickCandidates, ABoxThatCannotComeOutOverTheOneInFrontIsNotAPickPoint) {
   EXPECT_NE(find(candidates(w), 1), nullptr);
 }
 
+TEST(PickCandidates, ABoxOfALeaningColumnIsLiftedClearOfTheBoxUnderIt) {
+  // A column of four leaning 9.4 degrees towards the robot (A1 seed 6): the
+  // tilted tops overlap in height by 6.5 cm, more than the usual lift.
+  sim::World w = trailer_world();
+  const double tilt = 9.4 * M_PI / 180;
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(-tilt, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  for (std::uint32_t k = 0; k < 4; ++k) {
+    sim::Box b = sim::testing::make_box(k + 1, 10.2, 0.0, 0.0);
+    b.pose.linear() = r;
+    b.pose.translation() = Eigen::Vector3d(10.4, 0.0, 0.0) + (k + 0.5) * 0.4 * r.col(2);
+    w.boxes.push_back(b);
+  }
+  const auto all = candidates(w);
+  const PickCandidate* top = find(all, 4);
+  ASSERT_NE(top, nullptr);
+  const std::uint32_t lowest = *std::min_element(top->boxes.begin(), top->boxes.end());
+  ASSERT_GT(lowest, 1u);
+  const double lift = top->lift.position.z() - top->grasp.position.z();
+  EXPECT_GT(sim::bounds(w.boxes[lowest - 1]).z0 + lift, sim::bounds(w.boxes[lowest - 2]).z1);
+}
+
 TEST(PickCandidates, ABoxRestingOnTheTargetKeepsItInPlace) {
   sim::World w = trailer_world();
   w.boxes.push_back(sim::testing::make_box(1, 10.2, 0.0, 0.0));

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace plr::sim {
@@ -153,6 +154,24 @@ TEST(Observation, SecondWallIsNotTheFirst) {
   EXPECT_NEAR(a.wall_height, 0.8, 1e-9);
   ASSERT_TRUE(a.observation);
   EXPECT_EQ(height(*a.observation), Height::kLow);
+}
+
+TEST(Observation, ABoxLyingBeforeTheWallBesideAColumnStandingFurtherOutIsInFront) {
+  // A wall across the trailer, one column of it standing 1.2 m further out
+  // on the left, and a box lying on the floor before the wall on the right
+  // (A1 seed 6: a leaning column kept two such boxes out of every region).
+  World w;
+  add_wall(w, 12.0, 6, 5);
+  add_wall(w, 10.8, 1, 5, 1.0);
+  w.boxes.push_back(box(100, 11.75, -0.8, 0.0));
+  const auto a = analyse(w, kParams);
+  EXPECT_NEAR(a.wall_near_x, 10.8, 1e-9);
+  EXPECT_NE(std::find(a.front_pile.begin(), a.front_pile.end(), 100u), a.front_pile.end());
+  // Behind a wall box across its width, it stays out of reach.
+  add_wall(w, 11.0, 1, 4, -0.8);
+  const auto hidden = analyse(w, kParams);
+  EXPECT_EQ(std::find(hidden.front_pile.begin(), hidden.front_pile.end(), 100u),
+            hidden.front_pile.end());
 }
 
 TEST(Observation, RotatedBoxesUseTheirWorldBounds) {
