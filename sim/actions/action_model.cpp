@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <optional>
+#include <unordered_map>
 #include <unordered_set>
 
 namespace plr::actions {
@@ -19,6 +20,22 @@ double PlanTimeModel::seconds(PlanMode mode, std::uint64_t expansions) const {
   const auto m = static_cast<std::size_t>(mode);
   if (m >= per_query_s.size()) return 0.0;
   return per_query_s[m] + per_expansion_s[m] * static_cast<double>(expansions);
+}
+
+std::uint32_t boxes_shifted(const sim::World& before, const sim::World& after) {
+  constexpr double kMoved = 0.05, kTurned = 0.2;  // m, rad
+  std::unordered_map<std::uint32_t, const sim::Box*> was;
+  for (const auto& b : before.boxes) was.emplace(b.id, &b);
+  std::uint32_t n = 0;
+  for (const auto& b : after.boxes) {
+    const auto it = was.find(b.id);
+    if (it == was.end()) continue;
+    const Eigen::AngleAxisd turn(it->second->pose.linear().transpose() * b.pose.linear());
+    if ((b.pose.translation() - it->second->pose.translation()).norm() > kMoved ||
+        std::abs(turn.angle()) > kTurned)
+      ++n;
+  }
+  return n;
 }
 
 plr::Status ActionOptions::check() const {
@@ -108,6 +125,7 @@ class Run {
 
   Outcome go() {
     Perceived w0 = observe();
+    const sim::World start = w0.world;
     unloaded_at_start_ = w0.unloaded;
     if (!w0.held.empty()) {
       let_go();
@@ -126,6 +144,7 @@ class Run {
       sweep(w0);
     const Perceived end = observe();
     out_.boxes = end.unloaded - unloaded_at_start_;
+    out_.shifted = boxes_shifted(start, end.world);
     if (end.sim_time_s > 0) out_.sim_time_s = end.sim_time_s;
     if (!out_.applicable) out_.exec_s = o_.not_applicable_s;
     out_.robot_time_s = out_.exec_s + out_.plan_model_s;

@@ -32,6 +32,7 @@ void RunRules::record(sim::Action action, const Outcome& outcome) {
     return;
   }
   ++idle_;
+  if (outcome.shifted > 0) excluded_.clear();
   if (!outcome.applicable || !outcome.failed_grasp)
     excluded_.insert(static_cast<std::uint8_t>(action));
 }

@@ -117,6 +117,10 @@ struct Outcome {
   bool applicable = true;
   std::string why;
   std::uint32_t boxes = 0;  // boxes that left the trailer
+  // Boxes still in the trailer that it moved more than 5 cm or turned more
+  // than 0.2 rad: an action that unloaded nothing may still have changed
+  // what the others can do.
+  std::uint32_t shifted = 0;
   // When each left, in robot seconds after the action's start.
   std::vector<double> unloaded_at_s;
   double robot_time_s = 0.0;  // exec_s + plan_model_s
@@ -129,6 +133,10 @@ struct Outcome {
   double sim_time_s = 0.0;    // the world's clock afterwards (0 if unknown)
   std::vector<QueryRecord> queries;
 };
+
+// Boxes of `before` still in `after` that moved more than 5 cm or turned
+// more than 0.2 rad (Outcome::shifted).
+std::uint32_t boxes_shifted(const sim::World& before, const sim::World& after);
 
 // What an action tells its caller while it runs: each step as it starts
 // ("approach", "drop-off"), for a live display, and what is worth a log line

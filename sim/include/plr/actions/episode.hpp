@@ -31,7 +31,9 @@ struct RunLimits {
 // The run goes on while some action may still move a box. An action that
 // moved nothing is not tried again before progress, unless its grip failed:
 // the grip memory then makes the next attempt differ (more cups, a slower
-// carry) and gives the box up in the end.
+// carry) and gives the box up in the end. One that moved boxes without
+// unloading any counts as progress for the others: in the changed scene,
+// each may be tried again (max_idle_actions still ends the run).
 class RunRules {
  public:
   explicit RunRules(RunLimits limits = {}) : limits_(limits) {}

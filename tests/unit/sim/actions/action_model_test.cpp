@@ -162,5 +162,17 @@ TEST(ActionModel, APickOfSeveralBoxesHoldsWhenLightAndNotWhenHeavy) {
   EXPECT_GE(lost, 1);
 }
 
+TEST(Outcome, CountsTheBoxesThatMovedOrTurnedButStayed) {
+  sim::World before = block(4.0), after = block(4.0);
+  ASSERT_GE(before.boxes.size(), 4u);
+  EXPECT_EQ(boxes_shifted(before, after), 0u);
+  after.boxes[0].pose.translation().x() += 0.04;  // settled a little: not counted
+  after.boxes[1].pose.translation().z() -= 0.3;   // fell
+  after.boxes[2].pose.linear() =
+      Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()).toRotationMatrix();  // tipped
+  after.boxes.pop_back();                                                   // unloaded: not counted
+  EXPECT_EQ(boxes_shifted(before, after), 2u);
+}
+
 }  // namespace
 }  // namespace plr::actions

@@ -59,6 +59,24 @@ TEST(RunRules, AnActionThatMovedNothingIsLeftOutUntilProgress) {
   EXPECT_EQ(rules.actions(), 4u);
 }
 
+TEST(RunRules, AnActionThatShiftedBoxesLetsTheOthersBeTriedAgain) {
+  // A2 seed 7: a sweep shook five boxes off the robot and moved them, but
+  // unloaded none; the low sweep, excluded before, then moved a box.
+  RunRules rules;
+  rules.record(sim::Action::SweepLow, moved(0));
+  rules.record(sim::Action::SweepMid, moved(0));
+  Outcome shook = moved(0);
+  shook.shifted = 5;
+  rules.record(sim::Action::SweepHigh, shook);
+  EXPECT_FALSE(rules.excluded(sim::Action::SweepLow));
+  EXPECT_FALSE(rules.excluded(sim::Action::SweepMid));
+  EXPECT_TRUE(rules.excluded(sim::Action::SweepHigh));
+  // Still idle: the idle limit ends a run that only shuffles boxes.
+  RunRules limited(RunLimits{.max_idle_actions = 3});
+  for (int k = 0; k < 3; ++k) limited.record(sim::Action::SweepHigh, shook);
+  EXPECT_TRUE(limited.stop(10));
+}
+
 TEST(RunRules, StopsWhenEmptyAllExcludedIdleOrAtTheLimit) {
   EXPECT_EQ(RunRules().stop(0), "trailer empty");
   EXPECT_FALSE(RunRules().stop(3).has_value());
