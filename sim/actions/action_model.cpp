@@ -410,6 +410,7 @@ class Run {
   // ---- Pick ----------------------------------------------------------------
 
   void pick(const Perceived& seen) {
+    retry_where_a_neighbour_left(seen.world);
     Perceived w0 = seen;
     w0.world = without(seen.world, riding(seen, memory_));
     const auto scene = sim::analyse(w0.world, o_.observation);
@@ -582,8 +583,40 @@ class Run {
     else
       return true;
     h.given_up = true;
+    h.neighbours = neighbours_of(c.box);
     note(fmt::format("box {} given up: {}", c.box, h.why));
     return false;
+  }
+
+  // The boxes within kNear of a box's bounds, now.
+  std::set<std::uint32_t> neighbours_of(std::uint32_t id) {
+    constexpr double kNear = 0.3;  // m
+    const sim::World world = observe().world;
+    const auto it = std::find_if(world.boxes.begin(), world.boxes.end(),
+                                 [&](const sim::Box& b) { return b.id == id; });
+    std::set<std::uint32_t> out;
+    if (it == world.boxes.end()) return out;
+    const sim::Bounds a = sim::bounds(*it);
+    for (const auto& box : world.boxes) {
+      const sim::Bounds b = sim::bounds(box);
+      if (box.id != id && b.x0 < a.x1 + kNear && a.x0 < b.x1 + kNear && b.y0 < a.y1 + kNear &&
+          a.y0 < b.y1 + kNear && b.z0 < a.z1 + kNear && a.z0 < b.z1 + kNear)
+        out.insert(box.id);
+    }
+    return out;
+  }
+
+  void retry_where_a_neighbour_left(const sim::World& world) {
+    std::unordered_set<std::uint32_t> present;
+    for (const auto& b : world.boxes) present.insert(b.id);
+    std::erase_if(memory_.grips, [&](const auto& entry) {
+      const GripHistory& h = entry.second;
+      const bool retry =
+          h.given_up && std::any_of(h.neighbours.begin(), h.neighbours.end(),
+                                    [&](std::uint32_t n) { return !present.count(n); });
+      if (retry) note(fmt::format("box {} tried afresh: a box beside it has left", entry.first));
+      return retry;
+    });
   }
 
   // A load the plate could not bring to the nose is let go where it is (it

@@ -41,8 +41,10 @@ flatbuffers::Offset<msg::ActionMemory> build(flatbuffers::FlatBufferBuilder& fbb
                                              const Memory& memory) {
   std::vector<flatbuffers::Offset<msg::GripRecord>> grips;
   for (const auto& [id, g] : memory.grips) {
+    const std::vector<std::uint32_t> neighbours(g.neighbours.begin(), g.neighbours.end());
     grips.push_back(msg::CreateGripRecord(fbb, id, g.failures, g.drops, g.cups, g.given_up,
-                                          fbb.CreateString(g.last), fbb.CreateString(g.why)));
+                                          fbb.CreateString(g.last), fbb.CreateString(g.why),
+                                          fbb.CreateVector(neighbours)));
   }
   std::vector<flatbuffers::Offset<msg::UnreachedRecord>> unreached;
   for (const auto& [id, why] : memory.unreached) {
@@ -78,6 +80,7 @@ plr::Expected<Memory> from_message(const msg::ActionMemory& m, const std::string
       const std::string where = fmt::format("{}: memory.grips[{}]", origin, i);
       if (auto s = check_text(g->last(), where + ".last"); !s) return s.error();
       if (auto s = check_text(g->why(), where + ".why"); !s) return s.error();
+      if (auto s = check_count(g->neighbours(), where + ".neighbours"); !s) return s.error();
       if (g->failures() < 0 || g->drops() < 0 || g->cups() < 0)
         return plr::make_error(PLR_ERR_INVALID, where + ": counts must be >= 0");
       GripHistory h;
@@ -87,6 +90,7 @@ plr::Expected<Memory> from_message(const msg::ActionMemory& m, const std::string
       h.given_up = g->given_up();
       h.last = text(g->last());
       h.why = text(g->why());
+      if (g->neighbours()) h.neighbours.insert(g->neighbours()->begin(), g->neighbours()->end());
       out.grips.emplace(g->id(), std::move(h));
     }
   }

@@ -84,6 +84,10 @@ struct GripHistory {
   int cups = 0;   // cups the last failed grasp pose covered
   bool given_up = false;
   std::string last, why;  // the last failure; why no more attempts are made
+  // The boxes around it when it was given up: once one of them has left the
+  // trailer, what held it back may be gone (A2 seed 2: a retract into a
+  // neighbour since unloaded), and it is tried afresh.
+  std::set<std::uint32_t> neighbours;
 };
 
 // What the robot has learnt about this trailer's boxes, kept with the world

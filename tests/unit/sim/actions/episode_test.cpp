@@ -291,6 +291,17 @@ TEST(ActionModel, ABoxThatCannotBePulledOutIsGivenUp) {
   EXPECT_EQ(tried, options().grip_attempts);
   ASSERT_TRUE(f.memory.grips.count(7));
   EXPECT_TRUE(f.memory.grips.at(7).given_up);
+  // The box it stands on is remembered; once a box beside it has left the
+  // trailer (here: one said to have been beside it), it is tried afresh.
+  EXPECT_TRUE(f.memory.grips.at(7).neighbours.count(6));
+  f.memory.grips.at(7).neighbours.insert(99);
+  const auto again = model.run(sim::make_pick(sim::Height::kHigh, sim::Side::kCenter), f.backend,
+                               f.memory, reporter);
+  ASSERT_TRUE(again) << again.error().message;
+  EXPECT_TRUE(again->applicable);
+  EXPECT_TRUE(std::any_of(notes.begin(), notes.end(), [](const std::string& n) {
+    return n.find("box 7 tried afresh") != std::string::npos;
+  }));
 }
 
 // A slab tilted on its edge (no face the plate seals on) lies from a lower
