@@ -90,8 +90,9 @@ TEST(SegmentConfig, AServiceHoldsTheLargerOfRequestAndReplyAndTwoChannelsPerOthe
             6u);
 }
 
-// What the simulator sends on `world`: a 16 m trailer's walls at 5 cm make an
-// octree of about 100 KiB; 250 boxes. And the largest the bound is for.
+// More than the simulator sends on `world` (env C: 157 boxes and the octree
+// of a 16 m trailer's walls, 93,528 bytes): 250 boxes and a 160 KiB octree.
+// And the largest the bound is for.
 TEST(SegmentConfig, ALargeWorldCrossesTheWorldTopicsRingAndALargerOneIsRefused) {
   const auto c = config();
   const auto geometry =
