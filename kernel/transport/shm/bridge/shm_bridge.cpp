@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cstring>
 
 namespace plr::kernel {
@@ -19,7 +20,7 @@ using namespace std::chrono_literals;
 // Error replies travel as this type: one status byte, then the reason text.
 constexpr std::uint64_t kErrorType = fnv1a("plr.transport.Error");
 
-// Why a message too large for its slots is refused, once per topic or service.
+// Why a message too large for its slots is refused.
 std::string too_large(const char* what, const std::string& name, std::size_t size,
                       std::size_t slot) {
   return fmt::format(
@@ -337,7 +338,7 @@ void send_reply(ShmBridge::Server* server, const shm::ReplyTo& to, shm::MessageT
                 const std::uint8_t* data, std::size_t size) {
   std::unique_lock lock(server->m);
   auto loan = server->server->loan_reply(to, size, 1s);
-  if (!loan && loan.error() == shm::Error::kTooLarge) {
+  if (!loan && loan.error() == shm::Error::kTooLarge && type.type_id != kErrorType) {
     // The caller hears why instead of waiting for its timeout.
     lock.unlock();
     const auto why = too_large("service", server->service, size, server->slot_size);
@@ -354,6 +355,7 @@ void send_error(ShmBridge::Server* server, const shm::ReplyTo& to, plr_status st
                 const std::string& why) {
   std::string payload(1, static_cast<char>(status));
   payload += why;
+  payload.resize(std::min(payload.size(), server->slot_size));  // slots of a few bytes
   send_reply(server, to, {kErrorType, 1}, reinterpret_cast<const std::uint8_t*>(payload.data()),
              payload.size());
 }

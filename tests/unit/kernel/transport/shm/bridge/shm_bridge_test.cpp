@@ -137,12 +137,13 @@ struct Answer {
 
 // A call from host main to `blob` on host b (two bridges in this process)
 // with a request of `request_bytes`; what it was answered, once b serves it.
-Answer* call_blob(Bus& bus, Endpoint& caller, std::size_t request_bytes, Answer& answer) {
+Answer* call_blob(Bus& bus, Endpoint& caller, std::size_t request_bytes, Answer& answer,
+                  const std::string& service = "blob") {
   const auto type = MessageTraits<msg::NextStrategyRequest>::type_id();
   for (int i = 0; i < 500; ++i) {
     answer.done = false;
     auto s =
-        bus.call(&caller, "blob", type, blob(request_bytes, 2), 5s, &Answer::on, &answer, nullptr);
+        bus.call(&caller, service, type, blob(request_bytes, 2), 5s, &Answer::on, &answer, nullptr);
     if (!s && s.error().message.find("no provider") != std::string::npos) {
       std::this_thread::sleep_for(10ms);  // b's segment is not up yet
       continue;
@@ -157,7 +158,7 @@ Answer* call_blob(Bus& bus, Endpoint& caller, std::size_t request_bytes, Answer&
 }
 
 TEST(BridgeLimits, AMessageLargerThanItsServicesSlotsIsAClearErrorNotATimeout) {
-  auto c = config_with("  blob: {slot_size: 1024}\n");
+  auto c = config_with("  blob: {slot_size: 1024}\n  tiny: {slot_size: 100}\n");
   ASSERT_TRUE(c.has_value()) << c.error().message;
   const std::string run = shm::test::unique_run_id();
   Bus bus_main([&](const std::string& t) { return c->topic(t); });
@@ -170,6 +171,7 @@ TEST(BridgeLimits, AMessageLargerThanItsServicesSlotsIsAClearErrorNotATimeout) {
   BlobServer server{&bus_b, 4000};
   const auto type = MessageTraits<msg::NextStrategyRequest>::type_id();
   ASSERT_TRUE(bus_b.provide(&provider, "blob", type, type, &BlobServer::on, &server));
+  ASSERT_TRUE(bus_b.provide(&provider, "tiny", type, type, &BlobServer::on, &server));
   bus_b.set_live(&provider, true);
 
   Answer reply_too_large;
@@ -187,6 +189,12 @@ TEST(BridgeLimits, AMessageLargerThanItsServicesSlotsIsAClearErrorNotATimeout) {
   EXPECT_EQ(request_too_large.status, PLR_ERR_INVALID);
   EXPECT_NE(request_too_large.error.find("exceeds its 1024-byte slots"), std::string::npos)
       << request_too_large.error;
+
+  // Slots smaller than the reason itself: the caller gets as much of it as fits.
+  Answer tiny;
+  ASSERT_NE(call_blob(bus_main, caller, 16, tiny, "tiny"), nullptr);
+  EXPECT_EQ(tiny.status, PLR_ERR_INVALID);
+  EXPECT_EQ(tiny.error.rfind("shm: service 'tiny': a message of ", 0), 0u) << tiny.error;
 
   server.reply_bytes = 100;
   Answer fits;
