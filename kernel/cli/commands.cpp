@@ -6,6 +6,7 @@
 #include "plugin_loader.hpp"
 #include "recorder.hpp"
 #include "replayer.hpp"
+#include "shm_need.hpp"
 #include "supervisor.hpp"
 #include "variables.hpp"
 
@@ -55,6 +56,9 @@ int fail(const std::string& message, int code = 1) {
 int fail(const Error& e) {
   return fail(e.message, exit_code(e.code));
 }
+
+// Where POSIX shared memory lives (shm_open), whose room a run needs.
+constexpr const char* kShmDir = "/dev/shm";
 
 // How a run ended, as report.json's `run.ended` says it.
 enum class Ending {
@@ -343,6 +347,24 @@ int run_pipeline(const RunOptions& options) {
   if (main_host) {
     if (const auto n = shm::reclaim_stale_segments(); n > 0)
       spdlog::info("removed {} shared-memory segments of dead runs", n);
+    // Refused here, before any host starts, rather than by a host that
+    // cannot make its segment (which still says so, for what is not counted).
+    if (!children.empty()) {
+      PluginLoader loader(plugin_search_paths(*config));
+      auto need = shm_need(*config, loader);
+      if (!need) return not_started(need.error());
+      auto room = free_bytes(kShmDir);
+      if (room && *room < need->total)
+        return not_started(make_error(
+            PLR_ERR_UNAVAILABLE,
+            fmt::format("{}: the run needs {} ({} B) of {} and {} ({} B) is free: give {} more "
+                        "room (docker run --shm-size) or lower topics' depth or slot_size",
+                        config->file, format_bytes(need->total), need->total, kShmDir,
+                        format_bytes(*room), *room, kShmDir)));
+      if (!room) spdlog::warn("cannot check the room in {}: {}", kShmDir, room.error().message);
+      spdlog::info("{} of {} for {} segments", format_bytes(need->total), kShmDir,
+                   need->segments.size());
+    }
     if (const auto us = config->cpu_wake_latency_us) {
       auto r = shm::WakeLatencyRequest::hold(*us);
       if (r) {
@@ -532,7 +554,31 @@ int run_pipeline(const RunOptions& options) {
   return end.exit_code;
 }
 
-int validate(const std::string& file, const std::vector<std::string>& overrides) {
+namespace {
+
+// "/dev/shm: 80.1 MiB (83976192 B) in 16 segments" and, verbose, one line per segment.
+void print_shm_need(const ShmNeed& need, bool verbose) {
+  if (need.segments.empty() && need.undeclared.empty()) {
+    std::cout << "/dev/shm: none (one host: its nodes share the bus in memory)\n";
+    return;
+  }
+  std::cout << fmt::format("/dev/shm: {} ({} B) in {} segments\n", format_bytes(need.total),
+                           need.total, need.segments.size());
+  if (verbose)
+    for (const auto& s : need.segments)
+      std::cout << fmt::format("  {:<8} {:<7} {:<24} {:>5} x {:>9} B  {:>10}\n", s.host,
+                               s.service ? "service" : "topic", s.name, s.slots, s.slot_size,
+                               format_bytes(s.bytes));
+  for (const auto& n : need.undeclared)
+    std::cout << fmt::format(
+        "  node '{}': its plug-in declares no topics or services (plr/interface.hpp): not "
+        "counted\n",
+        n);
+}
+
+}  // namespace
+
+int validate(const std::string& file, const std::vector<std::string>& overrides, bool verbose) {
   auto config = load(file, overrides);
   if (!config) return fail(config.error());
   PluginLoader loader(plugin_search_paths(*config));
@@ -547,8 +593,11 @@ int validate(const std::string& file, const std::vector<std::string>& overrides)
     }
   }
   if (code != 0) return code;
+  auto need = shm_need(*config, loader);
+  if (!need) return fail(need.error());
   std::cout << fmt::format("{}: ok ({} nodes, {} hosts)\n", file, config->nodes.size(),
                            config->hosts.size());
+  print_shm_need(*need, verbose);
   return 0;
 }
 

@@ -43,7 +43,10 @@ struct SwapOptions {
 int exit_code(plr_status code);
 
 int run_pipeline(const RunOptions& options);
-int validate(const std::string& config, const std::vector<std::string>& overrides);
+// Checks the config and its plug-ins and prints the run's /dev/shm need
+// (each segment with `verbose`).
+int validate(const std::string& config, const std::vector<std::string>& overrides,
+             bool verbose = false);
 int list_plugins(const PluginsOptions& options);
 int swap_plugin(const SwapOptions& options);
 // `cmd` is "pause" or "resume".

@@ -107,6 +107,9 @@ int main(int argc, char** argv) {
   validate_cmd->add_option("config", validate_config, "Pipeline config (YAML)")->required();
   validate_cmd->add_option("--set", validate_overrides, "Override a config value")
       ->type_name("KEY=VALUE");
+  bool validate_verbose = false;
+  validate_cmd->add_flag("-v,--verbose", validate_verbose,
+                         "Each shared-memory segment of the run, with its size");
 
   PluginsOptions plugins;
   auto* plugins_cmd = app.add_subcommand("plugins", "List the plug-ins found in the search paths");
@@ -181,7 +184,7 @@ int main(int argc, char** argv) {
     return run_pipeline(record);
   }
   if (*replay_cmd) return run_pipeline(replay);
-  if (*validate_cmd) return validate(validate_config, validate_overrides);
+  if (*validate_cmd) return validate(validate_config, validate_overrides, validate_verbose);
   if (*plugins_cmd) return list_plugins(plugins);
   if (*swap_cmd && !remote.kernel.empty()) {
     remote.cmd = "swap";

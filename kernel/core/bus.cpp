@@ -294,7 +294,7 @@ Status Bus::provide(Endpoint* owner, const std::string& service, std::uint64_t r
   providers.push_back(
       {owner, request_type, reply_type, fn, user, (flags & PLR_SERVICE_QUICK) != 0});
   for (auto* l : links_)
-    if (owner != &l->link_endpoint()) l->service_provided(service);
+    if (owner != &l->link_endpoint()) l->service_provided(service, request_type, reply_type);
   return {};
 }
 
@@ -522,20 +522,21 @@ void Bus::remove_endpoint(Endpoint* e) {
 
 void Bus::attach(Link* link) {
   std::vector<std::tuple<std::string, std::uint64_t, std::uint32_t, bool>> topics;
-  std::vector<std::string> services;
+  std::vector<std::tuple<std::string, std::uint64_t, std::uint64_t>> services;
   {
     std::lock_guard lock(m_);
     links_.push_back(link);
     for (const auto& [name, t] : topics_)
       topics.emplace_back(name, t->type_id, t->schema_version, !t->subs.empty());
     for (const auto& [name, providers] : services_)
-      if (!providers.empty()) services.push_back(name);
+      if (!providers.empty())
+        services.emplace_back(name, providers.front().request_type, providers.front().reply_type);
   }
   for (const auto& [name, type, version, subscribed] : topics) {
     link->topic_advertised(name, type, version);
     if (subscribed) link->topic_subscribed(name, type);
   }
-  for (const auto& s : services) link->service_provided(s);
+  for (const auto& [name, request, reply] : services) link->service_provided(name, request, reply);
 }
 
 void Bus::detach(Link* link) {

@@ -51,7 +51,8 @@ class Link {
   virtual void topic_advertised(const std::string& topic, std::uint64_t type_id,
                                 std::uint32_t schema_version) = 0;
   virtual void topic_subscribed(const std::string& topic, std::uint64_t type_id) = 0;
-  virtual void service_provided(const std::string& service) = 0;
+  virtual void service_provided(const std::string& service, std::uint64_t request_type,
+                                std::uint64_t reply_type) = 0;
   // Sends call `id` to a remote provider; false when there is none. The link
   // answers through Bus::respond.
   virtual bool forward_call(const std::string& service, const MsgRef& request,

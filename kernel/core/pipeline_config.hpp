@@ -35,11 +35,13 @@ enum class TopicPolicy { KeepLast, Reliable };
 struct TopicSettings {
   std::string name;
   TopicPolicy policy = TopicPolicy::KeepLast;
-  std::size_t depth = 64;           // queued messages per subscriber
-  std::size_t slot_size = 1 << 20;  // bytes, for shared memory
-  bool busy_poll = false;           // shared-memory readers spin instead of sleeping
-  std::uint32_t spin_us = 0;        // shared-memory readers spin this long, then sleep
-  yaml::Location where;             // of its key, for error messages
+  std::size_t depth = 64;  // queued messages per subscriber
+  // Bytes per message, for shared memory and DDS; unset: the bound of the
+  // topic's (or service's) message types (slot_size.hpp).
+  std::optional<std::size_t> slot_size;
+  bool busy_poll = false;     // shared-memory readers spin instead of sleeping
+  std::uint32_t spin_us = 0;  // shared-memory readers spin this long, then sleep
+  yaml::Location where;       // of its key, for error messages
 };
 
 struct NodeConfig {

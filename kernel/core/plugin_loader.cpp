@@ -22,6 +22,11 @@ PluginLibrary::~PluginLibrary() {
   if (handle_ != nullptr) dlclose(handle_);
 }
 
+const plr_interface* PluginLibrary::declared_interface() const {
+  auto fn = reinterpret_cast<plr_interface_fn>(dlsym(handle_, PLR_INTERFACE_SYMBOL));
+  return fn != nullptr ? fn() : nullptr;
+}
+
 PluginLoader::PluginLoader(std::vector<std::string> search_paths)
     : paths_(std::move(search_paths)) {}
 

@@ -24,6 +24,9 @@ class PluginLibrary {
   const plr_plugin_descriptor& descriptor() const { return *descriptor_; }
   const std::string& path() const { return path_; }
   std::string name() const { return descriptor_->name; }
+  // What its nodes advertise and provide (plr/interface.hpp); nullptr when
+  // the plug-in declares nothing.
+  const plr_interface* declared_interface() const;
 
  private:
   void* handle_;

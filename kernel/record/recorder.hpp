@@ -36,7 +36,7 @@ class Recorder final : public Link, public Endpoint {
   void topic_advertised(const std::string& topic, std::uint64_t type_id,
                         std::uint32_t schema_version) override;
   void topic_subscribed(const std::string&, std::uint64_t) override {}
-  void service_provided(const std::string&) override {}
+  void service_provided(const std::string&, std::uint64_t, std::uint64_t) override {}
   bool forward_call(const std::string&, const MsgRef&, std::uint64_t) override { return false; }
 
   // Endpoint

@@ -4,6 +4,7 @@
 
 #include <flatbuffers/reflection_generated.h>
 
+#include <charconv>
 #include <map>
 #include <string_view>
 
@@ -19,6 +20,17 @@ std::string_view stem(std::string_view path) {
   if (const auto slash = path.rfind('/'); slash != std::string_view::npos)
     path.remove_prefix(slash + 1);
   return path.substr(0, path.rfind('.'));
+}
+
+// The table's `max_bytes` attribute; 0 when absent or not a positive number.
+std::size_t declared_max_bytes(const reflection::Object& object) {
+  if (object.attributes() == nullptr) return 0;
+  const auto* kv = object.attributes()->LookupByKey("max_bytes");
+  if (kv == nullptr || kv->value() == nullptr) return 0;
+  std::size_t value = 0;
+  const auto text = kv->value()->string_view();
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  return ec == std::errc() && end == text.data() + text.size() ? value : 0;
 }
 
 struct Registry {
@@ -45,7 +57,8 @@ Registry load() {
           object->declaration_file() == nullptr ||
           stem(object->declaration_file()->string_view()) == stem(plr_schema_files[i].name);
       const auto id = fnv1a(name);
-      auto [it, fresh] = r.by_id.try_emplace(id, MessageSchema{name, bytes, id});
+      auto [it, fresh] =
+          r.by_id.try_emplace(id, MessageSchema{name, bytes, id, declared_max_bytes(*object)});
       if (!fresh && declared_here) it->second.bfbs = bytes;
     }
   }

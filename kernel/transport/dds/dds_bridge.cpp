@@ -1,6 +1,7 @@
 #include "dds_bridge.hpp"
 
 #include "envelope_check.hpp"
+#include "slot_size.hpp"
 
 #include <dds/ddsc/dds_statistics.h>
 #include <fmt/format.h>
@@ -179,7 +180,7 @@ DdsBridge::Reader* DdsBridge::add_reader(dds_entity_t topic, const dds_qos_t* qo
   r->kind = static_cast<ReaderKind>(kind);
   r->topic = std::move(bus_topic);
   r->type_id = type_id;
-  r->max_size = config_.topic(r->topic).slot_size;
+  r->max_size = slot_size(config_.topic(r->topic), {type_id});
   // Samples are taken in Cyclone's receive thread: no hand-off to a thread of ours.
   Reader* raw = r.get();
   dds_listener_t* listener = dds_create_listener(raw);
@@ -208,7 +209,7 @@ void DdsBridge::topic_subscribed(const std::string& topic, std::uint64_t type_id
   node_thread_.post([=, this] { import_topic(topic, type_id); });
 }
 
-void DdsBridge::service_provided(const std::string& service) {
+void DdsBridge::service_provided(const std::string& service, std::uint64_t, std::uint64_t) {
   if (!matches_any(config_.dds.export_patterns, service)) return;
   std::lock_guard lock(m_);
   served_.insert(service);
@@ -367,7 +368,7 @@ void DdsBridge::on_request(const Sample& sample) {
   if (!served)
     return send_error(PLR_ERR_UNAVAILABLE,
                       fmt::format("kernel '{}' does not export service '{}'", kernel_id_, service));
-  if (e.type_id == 0 || e.payload._length > config_.topic(service).slot_size) {
+  if (e.type_id == 0 || e.payload._length > slot_size(config_.topic(service), {e.type_id})) {
     invalid("bad request type or size", e.kernel);
     return send_error(PLR_ERR_INVALID, "request refused: bad type or size");
   }
@@ -443,7 +444,7 @@ void DdsBridge::on_reply(const Sample& sample) {
     return;
   }
   // Replies carry whatever type the provider set (possibly none); the SDK verifies them.
-  if (e.payload._length > config_.topic(call.service).slot_size) {
+  if (e.payload._length > slot_size(config_.topic(call.service), {e.type_id})) {
     invalid("reply larger than the service's slot_size", e.kernel);
     (void)bus_.respond(call.bus_id, PLR_ERR_INVALID, nullptr,
                        fmt::format("invalid reply from kernel '{}'", e.kernel));

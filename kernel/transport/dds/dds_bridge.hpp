@@ -64,7 +64,8 @@ class DdsBridge final : public Endpoint, public Link {
   void topic_advertised(const std::string& topic, std::uint64_t type_id,
                         std::uint32_t schema_version) override;
   void topic_subscribed(const std::string& topic, std::uint64_t type_id) override;
-  void service_provided(const std::string& service) override;
+  void service_provided(const std::string& service, std::uint64_t request_type,
+                        std::uint64_t reply_type) override;
   bool forward_call(const std::string& service, const MsgRef& request, std::uint64_t id) override;
 
   const std::string& kernel_id() const { return kernel_id_; }

@@ -1,6 +1,7 @@
 // Demo: counts up, publishes each value on `count`, asks the `double` service
 // for twice the value, and publishes the answer on `doubled`. Stops after
 // `limit` values (0 = forever) and announces on `pipeline/done` that it is finished.
+#include <plr/interface.hpp>
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
@@ -91,3 +92,5 @@ class CounterNode : public plr::Node {
 
 PLR_PLUGIN(CounterNode, "demo_counter", "1.0.0", PLR_KIND_OTHER,
            "Demo: publishes a count and asks a service to double it")
+PLR_INTERFACE(plr::topic<plr::msg::Count>("count"), plr::topic<plr::msg::Count>("doubled"),
+              plr::topic<plr::msg::PipelineDone>("pipeline/done"))

@@ -1,4 +1,5 @@
 // Demo: serves `double` (value -> 2 x value) and counts the values it saw on `count`.
+#include <plr/interface.hpp>
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
@@ -43,3 +44,4 @@ class DoublerNode : public plr::Node {
 
 PLR_PLUGIN(DoublerNode, "demo_doubler", "1.0.0", PLR_KIND_OTHER,
            "Demo: serves `double` and counts what it hears on `count`")
+PLR_INTERFACE(plr::service<plr::msg::DoubleRequest, plr::msg::DoubleReply>("double"))

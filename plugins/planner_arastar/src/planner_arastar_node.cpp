@@ -1,6 +1,8 @@
 // Plug-in: the ARA* lattice planner (plr/planning/lattice_planner.hpp)
 // behind the `plan` service. Parameter `lattice`: a lattice file (the
 // shipped robots/unloader_lattice.yaml by default).
+#include <plr/interface.hpp>
+#include <plr/messages.hpp>
 #include <plr/plugin.hpp>
 
 #include "plr/planning/lattice_planner.hpp"
@@ -39,3 +41,4 @@ class PlannerArastarNode final : public plr::planning::PlannerNode {
 
 PLR_PLUGIN(PlannerArastarNode, "planner_arastar", "0.2.0", PLR_KIND_PLANNER,
            "ARA* lattice motion planner (modes M1-M6) serving `plan`")
+PLR_INTERFACE(plr::service<plr::msg::PlanRequest, plr::msg::PlanResponse>("plan"))

@@ -1,4 +1,6 @@
 // Plug-in: RRTConnect (OMPL) with shortcutting behind the `plan` service.
+#include <plr/interface.hpp>
+#include <plr/messages.hpp>
 #include <plr/plugin.hpp>
 
 #include "ompl_planner.hpp"
@@ -21,3 +23,4 @@ class PlannerOmplNode final : public plr::planning::PlannerNode {
 
 PLR_PLUGIN(PlannerOmplNode, "planner_ompl", "0.2.0", PLR_KIND_PLANNER,
            "RRTConnect motion planner (modes M1-M5; M6 escape) serving `plan`")
+PLR_INTERFACE(plr::service<plr::msg::PlanRequest, plr::msg::PlanResponse>("plan"))

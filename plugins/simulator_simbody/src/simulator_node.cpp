@@ -7,6 +7,7 @@
 
 #include <plr/actions/motion_messages.hpp>
 #include <plr/actions/unloader_simulation.hpp>
+#include <plr/interface.hpp>
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
@@ -297,3 +298,10 @@ class SimulatorNode : public Node {
 
 PLR_PLUGIN(plr::simulator::SimulatorNode, "simulator_simbody", "0.1.0", PLR_KIND_SIMULATOR,
            "Simbody physics of a trailer of boxes, the robot, suction and conveyor")
+PLR_INTERFACE(plr::topic<plr::msg::WorldState>("world"), plr::topic<plr::msg::Progress>("progress"),
+              plr::topic<plr::msg::Clock>("clock"),
+              plr::service<plr::msg::ResetRequest, plr::msg::WorldState>("sim/reset"),
+              plr::service<plr::msg::ObserveRequest, plr::msg::WorldState>("sim/observe"),
+              plr::service<plr::msg::ExecuteRequest, plr::msg::ExecuteOutcome>("sim/execute"),
+              plr::service<plr::msg::SnapshotRequest, plr::msg::SnapshotReply>("sim/snapshot"),
+              plr::service<plr::msg::SnapshotRequest, plr::msg::SnapshotReply>("sim/restore"))

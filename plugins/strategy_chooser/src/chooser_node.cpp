@@ -3,6 +3,7 @@
 // model M that says whether NN's strategy or H runs from here. H is asked
 // through the bus (its node serves `hardcoded_service`); the reply says
 // which was chosen and why (NN's distance, M's margin).
+#include <plr/interface.hpp>
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
@@ -130,3 +131,5 @@ class StrategyChooser : public plr::Node {
 
 PLR_PLUGIN(StrategyChooser, "strategy_chooser", "1.0.0", PLR_KIND_CHOOSER,
            "Strategy chooser: the nearest library strategy or H, as an SVM decides")
+PLR_INTERFACE(
+    plr::service<plr::msg::NextStrategyRequest, plr::msg::NextStrategyReply>("strategy/next"))

@@ -9,6 +9,7 @@
 #include <plr/actions/action_model.hpp>
 #include <plr/actions/episode.hpp>
 #include <plr/atomic_file.hpp>
+#include <plr/interface.hpp>
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
@@ -661,3 +662,6 @@ class ExecutorNode : public plr::Node {
 
 PLR_PLUGIN(plr::executor::ExecutorNode, "strategy_executor", "2.0.0", PLR_KIND_EXECUTOR,
            "Walks strategies; runs each abstract action with the action model over the bus")
+PLR_INTERFACE(plr::topic<plr::msg::Statistics>("executor/status"),
+              plr::topic<plr::msg::ExecutorState>("executor/state"),
+              plr::topic<plr::msg::PipelineDone>("pipeline/done"))

@@ -9,6 +9,7 @@
 #include <plr/messages.hpp>
 
 #include <algorithm>
+#include <plr/interface.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
 
@@ -77,3 +78,7 @@ class HardcodedStrategy : public plr::Node {
 
 PLR_PLUGIN(HardcodedStrategy, "strategy_hardcoded", "1.0.0", PLR_KIND_CHOOSER,
            "Strategy H: sweep a deep pile, else pick from a high enough wall")
+// Under a chooser it serves another name: a remap of strategy/next, which the
+// count of a run's shared memory follows (its `service` param is not seen).
+PLR_INTERFACE(
+    plr::service<plr::msg::NextStrategyRequest, plr::msg::NextStrategyReply>("strategy/next"))

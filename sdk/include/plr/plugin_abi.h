@@ -153,6 +153,29 @@ typedef struct plr_plugin_descriptor {
 
 typedef const plr_plugin_descriptor* (*plr_plugin_entry_fn)(void);
 
+/* What a plug-in's nodes publish and serve, declared by an optional second
+ * symbol (plr/interface.hpp writes it): the kernel sizes a run's shared
+ * memory from it before starting anything. Names are the plug-in's own
+ * (before the config's remaps); types are fully qualified FlatBuffers table
+ * names ("plr.msg.WorldState"). */
+#define PLR_INTERFACE_SYMBOL "plr_plugin_interface"
+
+typedef enum plr_port_kind { PLR_PORT_TOPIC = 1, PLR_PORT_SERVICE = 2 } plr_port_kind;
+
+typedef struct plr_port {
+  plr_port_kind kind;
+  const char* name;
+  const char* type;       /* a topic's message; a service's request */
+  const char* reply_type; /* a service's reply; NULL for a topic */
+} plr_port;
+
+typedef struct plr_interface {
+  size_t port_count;
+  const plr_port* ports;
+} plr_interface;
+
+typedef const plr_interface* (*plr_interface_fn)(void);
+
 static inline const char* plr_kind_name(plr_kind kind) {
   switch (kind) {
     case PLR_KIND_PLANNER:

@@ -3,6 +3,7 @@
 // embeds and what a Foxglove client is sent to decode a topic.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -13,6 +14,8 @@ struct MessageSchema {
   std::string name;       // fully qualified table name, "plr.msg.WorldState"
   std::string_view bfbs;  // the reflection schema of the file declaring it
   std::uint64_t type_id;  // MessageTraits<T>::type_id()
+  // The table's declared largest message (attribute max_bytes); 0: none.
+  std::size_t max_bytes = 0;
 };
 
 // The schema of a message type by its type id; nullptr when the SDK has no such table.

@@ -88,7 +88,9 @@ inline pid_t spawn(const std::vector<std::string>& argv, const std::string& log)
   const std::string out = log.empty() ? "/dev/null" : log;
   const pid_t pid = ::fork();
   if (pid == 0) {
-    std::freopen(out.c_str(), "w", stdout);
+    // Both appending: neither overwrites what the other wrote.
+    if (std::FILE* f = std::fopen(out.c_str(), "w")) std::fclose(f);
+    std::freopen(out.c_str(), "a", stdout);
     std::freopen(out.c_str(), "a", stderr);
     std::vector<char*> args;
     for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));

@@ -1,11 +1,14 @@
 #include "shm_bridge.hpp"
 
+#include "segment_config.hpp"
+
 #include <plr/message.hpp>
 #include <plr/shm/shm.hpp>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cstring>
 
 namespace plr::kernel {
@@ -17,14 +20,13 @@ using namespace std::chrono_literals;
 // Error replies travel as this type: one status byte, then the reason text.
 constexpr std::uint64_t kErrorType = fnv1a("plr.transport.Error");
 
-shm::TopicConfig shm_topic_config(const TopicSettings& t) {
-  shm::TopicConfig c;
-  c.slot_count = static_cast<std::uint32_t>(std::max<std::size_t>(t.depth, 2));
-  c.slot_size = static_cast<std::uint32_t>(t.slot_size);
-  c.policy = t.policy == TopicPolicy::Reliable ? shm::Policy::kReliable : shm::Policy::kKeepLast;
-  c.wait_mode = t.busy_poll ? shm::WaitMode::kPolling : shm::WaitMode::kBlocking;
-  c.spin_us = t.spin_us;
-  return c;
+// Why a message too large for its slots is refused.
+std::string too_large(const char* what, const std::string& name, std::size_t size,
+                      std::size_t slot) {
+  return fmt::format(
+      "shm: {} '{}': a message of {} bytes exceeds its {}-byte slots (the bound of its "
+      "message type; topics.{}.slot_size sets another)",
+      what, name, size, slot, name);
 }
 
 bool peer_gone(shm::Error e) {
@@ -80,9 +82,11 @@ struct SlotLoan final : MsgLoan {
 
 struct ShmBridge::Outgoing {
   ShmBridge* bridge = nullptr;
+  std::string topic;
   std::shared_ptr<Writer> writer;
   shm::MessageType type;
   shm::Timeout wait = shm::kNoWait;
+  bool told_too_large = false;  // under writer->m
 
   // Messages not built in one of our slots: copied into one, once.
   static void on_local(void* user, const plr_msg* msg) {
@@ -96,8 +100,13 @@ struct ShmBridge::Outgoing {
         self->type, {reinterpret_cast<const std::byte*>(v.data), v.size}, self->wait);
     if (r) {
       w.copied.fetch_add(1, std::memory_order_relaxed);
-    } else {
-      self->bridge->send_failures_.fetch_add(1, std::memory_order_relaxed);
+      return;
+    }
+    self->bridge->send_failures_.fetch_add(1, std::memory_order_relaxed);
+    if (r.error() == shm::Error::kTooLarge && !self->told_too_large) {
+      self->told_too_large = true;
+      spdlog::error("{}; other hosts do not get it",
+                    too_large("topic", self->topic, v.size, w.publisher.config().slot_size));
     }
   }
 };
@@ -112,6 +121,7 @@ struct ShmBridge::Incoming {
 
 struct ShmBridge::Server {
   std::string service;
+  std::size_t slot_size = 0;
   std::mutex m;  // the shm server is used by one thread at a time
   std::optional<shm::ServiceServer> server;
   std::thread thread;
@@ -172,9 +182,10 @@ void ShmBridge::topic_subscribed(const std::string& topic, std::uint64_t type_id
   node_thread_.post([=, this] { import_topic(topic, type_id); });
 }
 
-void ShmBridge::service_provided(const std::string& service) {
+void ShmBridge::service_provided(const std::string& service, std::uint64_t request_type,
+                                 std::uint64_t reply_type) {
   if (peers_.empty()) return;
-  node_thread_.post([=, this] { serve(service); });
+  node_thread_.post([=, this] { serve(service, request_type, reply_type); });
 }
 
 void ShmBridge::export_topic(const std::string& topic, std::uint64_t type_id,
@@ -187,7 +198,7 @@ void ShmBridge::export_topic(const std::string& topic, std::uint64_t type_id,
   auto pub = shm::PublisherBuilder()
                  .run_id(run_id_)
                  .topic(segment(host_, topic))
-                 .config(shm_topic_config(settings))
+                 .config(topic_segment_config(settings, type_id))
                  .create();
   if (!pub) {
     const auto e =
@@ -198,7 +209,7 @@ void ShmBridge::export_topic(const std::string& topic, std::uint64_t type_id,
     return;
   }
   auto out = std::make_unique<Outgoing>(
-      Outgoing{this, std::make_shared<Writer>(std::move(*pub)), {type_id, version}});
+      Outgoing{this, topic, std::make_shared<Writer>(std::move(*pub)), {type_id, version}});
   if (settings.policy == TopicPolicy::Reliable) out->wait = Bus::reliable_wait;
   auto* raw = out.get();
   {
@@ -291,16 +302,16 @@ void ShmBridge::read_remote_topic(Incoming* in) {
   }
 }
 
-void ShmBridge::serve(const std::string& service) {
+void ShmBridge::serve(const std::string& service, std::uint64_t request_type,
+                      std::uint64_t reply_type) {
   std::lock_guard lock(m_);
   if (servers_.count(service)) return;
+  const auto geometry =
+      service_segment_config(config_.topic(service), request_type, reply_type, peers_.size() + 1);
   auto created = shm::ServiceServerBuilder()
                      .run_id(run_id_)
                      .service(segment(host_, service))
-                     .config(shm::ServiceConfig{
-                         .slot_count = 4,
-                         .slot_size = static_cast<std::uint32_t>(config_.topic(service).slot_size),
-                         .max_clients = 16})
+                     .config(geometry)
                      .create();
   if (!created) {
     const auto e =
@@ -311,6 +322,7 @@ void ShmBridge::serve(const std::string& service) {
   }
   auto s = std::make_unique<Server>();
   s->service = service;
+  s->slot_size = geometry.slot_size;
   s->server.emplace(std::move(*created));
   auto* raw = s.get();
   s->thread = std::thread([this, raw] { serve_loop(raw); });
@@ -319,10 +331,21 @@ void ShmBridge::serve(const std::string& service) {
 
 namespace {
 
+void send_error(ShmBridge::Server* server, const shm::ReplyTo& to, plr_status status,
+                const std::string& why);
+
 void send_reply(ShmBridge::Server* server, const shm::ReplyTo& to, shm::MessageType type,
                 const std::uint8_t* data, std::size_t size) {
-  std::lock_guard lock(server->m);
+  std::unique_lock lock(server->m);
   auto loan = server->server->loan_reply(to, size, 1s);
+  if (!loan && loan.error() == shm::Error::kTooLarge && type.type_id != kErrorType) {
+    // The caller hears why instead of waiting for its timeout.
+    lock.unlock();
+    const auto why = too_large("service", server->service, size, server->slot_size);
+    spdlog::error("{}", why);
+    send_error(server, to, PLR_ERR_INVALID, why);
+    return;
+  }
   if (!loan) return;  // the caller left or died; nobody is waiting
   std::memcpy(loan->data(), data, size);
   (void)server->server->send_reply(std::move(*loan), to, type, 0, size);
@@ -332,6 +355,7 @@ void send_error(ShmBridge::Server* server, const shm::ReplyTo& to, plr_status st
                 const std::string& why) {
   std::string payload(1, static_cast<char>(status));
   payload += why;
+  payload.resize(std::min(payload.size(), server->slot_size));  // slots of a few bytes
   send_reply(server, to, {kErrorType, 1}, reinterpret_cast<const std::uint8_t*>(payload.data()),
              payload.size());
 }
@@ -402,6 +426,12 @@ bool ShmBridge::forward_call(const std::string& service, const MsgRef& request, 
   const auto v = msg_view(request.msg);
   std::lock_guard lock(client->m);
   auto loan = client->client->loan_request(v.size, 1s);
+  if (!loan && loan.error() == shm::Error::kTooLarge) {
+    (void)bus_.respond(id, PLR_ERR_INVALID, nullptr,
+                       too_large("service", service, v.size, client->client->config().slot_size) +
+                           fmt::format(" (host '{}')", client->host));
+    return true;
+  }
   if (!loan) {
     (void)bus_.respond(id, PLR_ERR_UNAVAILABLE, nullptr,
                        fmt::format("service '{}' on host '{}': {}", service, client->host,

@@ -39,7 +39,8 @@ class ShmBridge final : public Endpoint, public Link {
   void topic_advertised(const std::string& topic, std::uint64_t type_id,
                         std::uint32_t schema_version) override;
   void topic_subscribed(const std::string& topic, std::uint64_t type_id) override;
-  void service_provided(const std::string& service) override;
+  void service_provided(const std::string& service, std::uint64_t request_type,
+                        std::uint64_t reply_type) override;
   bool forward_call(const std::string& service, const MsgRef& request, std::uint64_t id) override;
   // A slot of the topic's segment while another host reads it.
   plr_msg* loan(const std::string& topic, std::size_t capacity, std::uint8_t** data) override;
@@ -60,7 +61,7 @@ class ShmBridge final : public Endpoint, public Link {
  private:
   void export_topic(const std::string& topic, std::uint64_t type_id, std::uint32_t version);
   void import_topic(const std::string& topic, std::uint64_t type_id);
-  void serve(const std::string& service);
+  void serve(const std::string& service, std::uint64_t request_type, std::uint64_t reply_type);
   void read_remote_topic(Incoming* in);
   void serve_loop(Server* server);
   void reply_loop(Client* client);

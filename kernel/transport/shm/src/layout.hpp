@@ -13,6 +13,7 @@ namespace plr::shm::detail {
 inline constexpr std::uint64_t kMagic = 0x316d68732d726c70ULL;  // "plr-shm1"
 inline constexpr std::uint32_t kLayoutVersion = 2;
 inline constexpr std::size_t kLine = 64;
+inline constexpr std::size_t kPage = 4096;  // tmpfs hands out whole pages
 inline constexpr std::uint32_t kMaxSlots = 4096;
 inline constexpr std::uint32_t kMaxSlotSize = 1u << 30;
 inline constexpr std::uint32_t kMaxSubscribers = 62;  // one reader bit each in a 64-bit word

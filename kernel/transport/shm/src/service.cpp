@@ -141,6 +141,11 @@ ServiceServer::~ServiceServer() {
   impl_->segment.unlink();
 }
 
+std::size_t segment_bytes(const ServiceConfig& c) noexcept {
+  const RingGeometry g{c.slot_count, c.slot_size, 1, Policy::kReliable, c.wait_mode, 0};
+  return detail::align_up(segment_bytes(c.max_clients, g), detail::kPage);
+}
+
 Result<ServiceServer> ServiceServerBuilder::create() const {
   if (!valid_run_id(run_id_) || !valid_endpoint_name(service_) || config_.max_clients < 1 ||
       config_.max_clients > detail::kMaxClients) {

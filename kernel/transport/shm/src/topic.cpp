@@ -97,6 +97,12 @@ Publisher::~Publisher() {
   impl_->segment.unlink();
 }
 
+std::size_t segment_bytes(const TopicConfig& c) noexcept {
+  const RingGeometry g{c.slot_count, c.slot_size, c.max_subscribers,
+                       c.policy,     c.wait_mode, c.spin_us};
+  return detail::align_up(kRingOffset + Ring::bytes(g), detail::kPage);
+}
+
 Result<Publisher> PublisherBuilder::create() const {
   if (!valid_run_id(run_id_) || !valid_endpoint_name(topic_)) {
     return Error::kInvalidArgument;

@@ -116,27 +116,64 @@ TEST(RunCleanup, KillDashNineOfTheSupervisorAndAHostTogetherLeavesNoSegment) {
   EXPECT_TRUE(eventually([&] { return processes_of(run) == 0; }, 5s));
 }
 
-// Docker's default /dev/shm is 64 MB; a run's segments need more. The host
-// died of SIGBUS and `plr run` said only that it did not start its nodes.
-TEST(RunCleanup, ATooSmallDevShmIsAClearErrorBeforeTheRun) {
-  if (geteuid() != 0) GTEST_SKIP() << "needs root for a private /dev/shm";
-  const std::string config = ::testing::TempDir() + "small_shm.yaml";
-  std::ofstream(config) << "hosts:\n  b: {restart: never}\n"
-                           "nodes:\n"
-                           "  counter: {plugin: demo_counter, params: {period_ms: 2}}\n"
-                           "  doubler: {plugin: demo_doubler, host: b, params: {factor: 2}}\n";
-  // A mount namespace of its own, with a 4 MiB /dev/shm.
-  const std::string log = ::testing::TempDir() + "small_shm.log";
-  const pid_t pid =
-      test::spawn({"/usr/bin/unshare", "-m", "sh", "-c",
-                   "mount -t tmpfs -o size=4m tmpfs /dev/shm && exec " + kPlr + " run " + config +
-                       " --duration 5 --report " + ::testing::TempDir() + "small_shm_report"},
-                  log);
+// `plr run CONFIG` in a mount namespace of its own whose /dev/shm holds
+// `size` (tmpfs -o size=); its exit code, and what it printed into `text`.
+int run_with_dev_shm(const std::string& name, const std::string& size, const std::string& yaml,
+                     std::string* text) {
+  const std::string config = ::testing::TempDir() + name + ".yaml";
+  std::ofstream(config) << yaml;
+  const std::string log = ::testing::TempDir() + name + ".log";
+  const pid_t pid = test::spawn(
+      {"/usr/bin/unshare", "-m", "sh", "-c",
+       "mount -t tmpfs -o size=" + size + " tmpfs /dev/shm && exec " + kPlr + " run " + config +
+           " --duration 5 --report " + ::testing::TempDir() + name + "_report"},
+      log);
   const int code = test::wait_child(pid);
   std::ifstream in(log);
-  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  text->assign(std::istreambuf_iterator<char>(in), {});
+  return code;
+}
+
+// Docker's default /dev/shm is 64 MB; the run's segments took 1.2 GiB. The
+// host died of SIGBUS and `plr run` said only that it did not start its
+// nodes. Now the run counts its need first and no host starts.
+TEST(RunCleanup, ARunIsRefusedBeforeAnyHostStartsWhenDevShmHasLessRoomThanItNeeds) {
+  if (geteuid() != 0) GTEST_SKIP() << "needs root for a private /dev/shm";
+  std::string text;
+  const int code =
+      run_with_dev_shm("short_shm", "4m",
+                       "hosts:\n  b: {restart: never}\n"
+                       "nodes:\n"
+                       "  counter: {plugin: demo_counter, params: {period_ms: 2}}\n"
+                       "  doubler: {plugin: demo_doubler, host: b, params: {factor: 2}}\n",
+                       &text);
   EXPECT_EQ(code, 4) << text;
-  EXPECT_NE(text.find("shm: cannot serve 'double': no room in /dev/shm"), std::string::npos)
+  // "plr: <file>: the run needs 8.33 MiB (8732672 B) of /dev/shm and 4.00 MiB (4194304 B) is
+  // free: give /dev/shm more room ..."
+  EXPECT_NE(text.find("short_shm.yaml: the run needs "), std::string::npos) << text;
+  EXPECT_NE(text.find(" B) of /dev/shm and 4.00 MiB (4194304 B) is free"), std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("host 'b' started"), std::string::npos) << "no host starts\n" << text;
+  EXPECT_EQ(text.find("cannot serve"), std::string::npos) << text;
+}
+
+// What the need does not count (a plug-in that declares nothing, here the
+// test probe with a 64 MiB topic) still fails at its segment, by name.
+TEST(RunCleanup, ASegmentWithoutRoomIsStillAClearErrorOfItsHost) {
+  if (geteuid() != 0) GTEST_SKIP() << "needs root for a private /dev/shm";
+  std::string text;
+  const int code = run_with_dev_shm("small_shm", "16m",
+                                    "plugin_paths: [" PLR_TEST_PLUGIN_DIR ", " PLR_DEMO_PLUGIN_DIR
+                                    "]\n"
+                                    "hosts:\n  b: {restart: never}\n"
+                                    "nodes:\n"
+                                    "  counter: {plugin: demo_counter, params: {period_ms: 2}}\n"
+                                    "  probe: {plugin: test_probe, host: b}\n"
+                                    "topics:\n  lifecycle: {slot_size: 1048576}\n",
+                                    &text);
+  EXPECT_EQ(code, 4) << text;
+  EXPECT_NE(text.find("shm: cannot export topic 'lifecycle': no room in /dev/shm"),
+            std::string::npos)
       << text;
 }
 

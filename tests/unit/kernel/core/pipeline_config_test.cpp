@@ -112,7 +112,7 @@ TEST(PipelineConfig, DefaultsForOptionalKeys) {
   EXPECT_EQ(t.name, "any/topic");
   EXPECT_EQ(t.policy, TopicPolicy::KeepLast);
   EXPECT_EQ(t.depth, 64u);
-  EXPECT_EQ(t.slot_size, std::size_t{1} << 20);
+  EXPECT_FALSE(t.slot_size) << "unset: sized from the message types";
   EXPECT_FALSE(c.dds.enabled);
 }
 

@@ -133,4 +133,7 @@ class ServiceClientBuilder {
   std::string run_id_, service_;
 };
 
+// Bytes of /dev/shm the segment of a service with this config takes (whole pages).
+std::size_t segment_bytes(const ServiceConfig& config) noexcept;
+
 }  // namespace plr::shm

@@ -190,4 +190,7 @@ class SubscriberBuilder {
   std::string run_id_, topic_;
 };
 
+// Bytes of /dev/shm the segment of a topic with this config takes (whole pages).
+std::size_t segment_bytes(const TopicConfig& config) noexcept;
+
 }  // namespace plr::shm

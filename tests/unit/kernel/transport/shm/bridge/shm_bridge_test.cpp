@@ -48,13 +48,14 @@ Expected<PipelineConfig> config_with(const std::string& topics) {
 }
 
 // The geometry a reader of `<host main>/<topic>` sees, once the bridge made it.
-shm::TopicConfig exported(const PipelineConfig& config, const std::string& topic) {
+shm::TopicConfig exported(const PipelineConfig& config, const std::string& topic,
+                          std::uint64_t type_id = 7) {
   const std::string run = shm::test::unique_run_id();
   Bus bus([&](const std::string& t) { return config.topic(t); });
   ShmBridge bridge(bus, config, "main", {"main", "b"}, run);
   bus.attach(&bridge);
   TestEndpoint ep("publisher");
-  EXPECT_TRUE(bus.advertise(&ep, topic, 7, 1).has_value());
+  EXPECT_TRUE(bus.advertise(&ep, topic, type_id, 1).has_value());
   shm::TopicConfig seen;
   for (int i = 0; i < 500; ++i) {
     auto sub = shm::SubscriberBuilder().run_id(run).topic("main/" + topic).create();
@@ -85,6 +86,124 @@ TEST(BridgeConfig, WaitModesComeFromTheTopicsSettings) {
   EXPECT_EQ(plain.wait_mode, shm::WaitMode::kBlocking);
   EXPECT_EQ(plain.spin_us, 0u);
   EXPECT_EQ(plain.policy, shm::Policy::kReliable);
+}
+
+TEST(BridgeConfig, SlotsAreSizedFromTheTopicsMessageTypeUnlessTheConfigSetsThem) {
+  auto c = config_with("  fixed: {slot_size: 3000}\n");
+  ASSERT_TRUE(c.has_value()) << c.error().message;
+  EXPECT_EQ(exported(*c, "world", MessageTraits<msg::WorldState>::type_id()).slot_size, 512u * 1024)
+      << "WorldState's max_bytes";
+  EXPECT_EQ(exported(*c, "progress", MessageTraits<msg::Progress>::type_id()).slot_size, 256u);
+  EXPECT_EQ(exported(*c, "fixed", MessageTraits<msg::WorldState>::type_id()).slot_size, 3000u);
+}
+
+plr_msg* blob(std::size_t bytes, std::uint8_t value) {
+  flatbuffers::FlatBufferBuilder fbb;
+  const std::vector<std::uint8_t> data(bytes, value);
+  fbb.Finish(msg::CreateNextStrategyRequestDirect(fbb, &data));
+  return msg_copy(fbb.GetBufferPointer(), fbb.GetSize(),
+                  MessageTraits<msg::NextStrategyRequest>::type_id(), 1, 0);
+}
+
+// A provider on host b answers `blob` with `reply_bytes` bytes.
+struct BlobServer {
+  Bus* bus;
+  std::size_t reply_bytes;
+  static void on(void* user, const plr_msg*, std::uint64_t token) {
+    auto* self = static_cast<BlobServer*>(user);
+    (void)self->bus->respond(token, PLR_OK, blob(self->reply_bytes, 1), "");
+  }
+};
+
+struct Answer {
+  std::mutex m;
+  std::condition_variable cv;
+  bool done = false;
+  plr_status status = PLR_OK;
+  std::string error;
+  static void on(void* user, plr_status status, const plr_msg*, const char* error) {
+    auto* self = static_cast<Answer*>(user);
+    std::lock_guard lock(self->m);
+    self->done = true;
+    self->status = status;
+    self->error = error != nullptr ? error : "";
+    self->cv.notify_all();
+  }
+  bool wait(std::chrono::milliseconds limit) {
+    std::unique_lock lock(m);
+    return cv.wait_for(lock, limit, [&] { return done; });
+  }
+};
+
+// A call from host main to `blob` on host b (two bridges in this process)
+// with a request of `request_bytes`; what it was answered, once b serves it.
+Answer* call_blob(Bus& bus, Endpoint& caller, std::size_t request_bytes, Answer& answer,
+                  const std::string& service = "blob") {
+  const auto type = MessageTraits<msg::NextStrategyRequest>::type_id();
+  for (int i = 0; i < 500; ++i) {
+    answer.done = false;
+    auto s =
+        bus.call(&caller, service, type, blob(request_bytes, 2), 5s, &Answer::on, &answer, nullptr);
+    if (!s && s.error().message.find("no provider") != std::string::npos) {
+      std::this_thread::sleep_for(10ms);  // b's segment is not up yet
+      continue;
+    }
+    if (!s) {
+      ADD_FAILURE() << s.error().message;
+      return nullptr;
+    }
+    return answer.wait(10s) ? &answer : nullptr;
+  }
+  return nullptr;
+}
+
+TEST(BridgeLimits, AMessageLargerThanItsServicesSlotsIsAClearErrorNotATimeout) {
+  auto c = config_with("  blob: {slot_size: 1024}\n  tiny: {slot_size: 100}\n");
+  ASSERT_TRUE(c.has_value()) << c.error().message;
+  const std::string run = shm::test::unique_run_id();
+  Bus bus_main([&](const std::string& t) { return c->topic(t); });
+  Bus bus_b([&](const std::string& t) { return c->topic(t); });
+  ShmBridge main_bridge(bus_main, *c, "main", {"main", "b"}, run);
+  ShmBridge b_bridge(bus_b, *c, "b", {"main", "b"}, run);
+  bus_main.attach(&main_bridge);
+  bus_b.attach(&b_bridge);
+  TestEndpoint provider("provider"), caller("caller");
+  BlobServer server{&bus_b, 4000};
+  const auto type = MessageTraits<msg::NextStrategyRequest>::type_id();
+  ASSERT_TRUE(bus_b.provide(&provider, "blob", type, type, &BlobServer::on, &server));
+  ASSERT_TRUE(bus_b.provide(&provider, "tiny", type, type, &BlobServer::on, &server));
+  bus_b.set_live(&provider, true);
+
+  Answer reply_too_large;
+  const auto start = std::chrono::steady_clock::now();
+  ASSERT_NE(call_blob(bus_main, caller, 16, reply_too_large), nullptr);
+  EXPECT_LT(std::chrono::steady_clock::now() - start, 4s) << "answered, not timed out";
+  EXPECT_EQ(reply_too_large.status, PLR_ERR_INVALID);
+  EXPECT_NE(reply_too_large.error.find("service 'blob': a message of "), std::string::npos)
+      << reply_too_large.error;
+  EXPECT_NE(reply_too_large.error.find("exceeds its 1024-byte slots"), std::string::npos)
+      << reply_too_large.error;
+
+  Answer request_too_large;
+  ASSERT_NE(call_blob(bus_main, caller, 4000, request_too_large), nullptr);
+  EXPECT_EQ(request_too_large.status, PLR_ERR_INVALID);
+  EXPECT_NE(request_too_large.error.find("exceeds its 1024-byte slots"), std::string::npos)
+      << request_too_large.error;
+
+  // Slots smaller than the reason itself: the caller gets as much of it as fits.
+  Answer tiny;
+  ASSERT_NE(call_blob(bus_main, caller, 16, tiny, "tiny"), nullptr);
+  EXPECT_EQ(tiny.status, PLR_ERR_INVALID);
+  EXPECT_EQ(tiny.error.rfind("shm: service 'tiny': a message of ", 0), 0u) << tiny.error;
+
+  server.reply_bytes = 100;
+  Answer fits;
+  ASSERT_NE(call_blob(bus_main, caller, 16, fits), nullptr);
+  EXPECT_EQ(fits.status, PLR_OK) << fits.error;
+
+  bus_b.remove_endpoint(&provider);
+  bus_main.detach(&main_bridge);
+  bus_b.detach(&b_bridge);
 }
 
 TEST(BridgeConfig, SpinBudgetOutOfRangeIsRefusedWithOneLine) {
