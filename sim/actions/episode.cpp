@@ -29,12 +29,21 @@ void RunRules::record(sim::Action action, const Outcome& outcome) {
   if (outcome.boxes > 0) {
     excluded_.clear();
     idle_ = 0;
+    rounds_ = 0;
+    shifted_ = false;
     return;
   }
   ++idle_;
-  if (outcome.shifted > 0) excluded_.clear();
+  shifted_ = shifted_ || outcome.shifted > 0;
   if (!outcome.applicable || !outcome.failed_grasp)
     excluded_.insert(static_cast<std::uint8_t>(action));
+  if (excluded_.size() == static_cast<std::size_t>(sim::kNumActions) && shifted_ &&
+      rounds_ < kExtraRounds) {
+    excluded_.clear();
+    idle_ = 0;
+    shifted_ = false;
+    ++rounds_;
+  }
 }
 
 bool RunRules::excluded(sim::Action action) const {

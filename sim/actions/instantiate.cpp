@@ -30,6 +30,9 @@ constexpr double kProud = 0.015;  // m a neighbour may stand out of the face (th
 // cups seal up to about 0.26 rad).
 constexpr double kMaxFaceTilt = 0.2;
 constexpr double kSquare = 0.03;  // rad: faces turned less than this are taken square to the axis
+// rad: the furthest off the trailer's axis a face is approached (the wrist
+// turns the plate that far).
+constexpr double kMaxSideFace = 1.2;
 // m past the cups' reach at which a face still counts as sealed on: a
 // settled box leans a little, and a box outside the region the plate might
 // take must keep the pose from being chosen.
@@ -237,6 +240,35 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
   std::vector<std::optional<Face>> faces(count);
   for (std::size_t i = 0; i < count; ++i)
     if (wall.count(world.boxes[i].id) || front.count(world.boxes[i].id)) faces[i] = face_of(i);
+  // The face square to the robot, then the other side face of a box turned
+  // well off the trailer's axis where it still looks towards the robot (at
+  // most kMaxSideFace off the axis).
+  auto faces_to_try = [&](std::size_t i) {
+    std::vector<Face> out{*faces[i]};
+    const auto& box = world.boxes[i];
+    const Eigen::Matrix3d R = box.pose.linear();
+    int up_axis = 0;
+    for (int k = 1; k < 3; ++k)
+      if (std::abs(R(2, k)) > std::abs(R(2, up_axis))) up_axis = k;
+    for (int k = 0; k < 3; ++k) {
+      Eigen::Vector3d n = R.col(k);
+      n.z() = 0;
+      if (k == up_axis || n.norm() < 0.5) continue;
+      n = n.normalized() * (n.x() < 0 ? -1.0 : 1.0);
+      if (n.dot(out.front().n) > std::cos(kMaxFaceTilt) ||
+          std::atan2(std::abs(n.y()), n.x()) > kMaxSideFace)
+        continue;
+      Face f;
+      f.n = n;
+      f.lateral = Eigen::Vector3d(-n.y(), n.x(), 0.0);
+      f.half_d = box.size[k] / 2;
+      f.half_w = box.size[3 - k - up_axis] / 2;
+      f.half_up = box.size[up_axis] / 2;
+      f.centre = box.pose.translation() - f.half_d * n;
+      out.push_back(f);
+    }
+    return out;
+  };
 
   auto near = [](double a0, double a1, double b0, double b1) {
     return a0 - kClearance < b1 && b0 < a1 + kClearance;
@@ -275,288 +307,303 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       if (rejected) rejected->push_back({box.id, "no face the plate seals on"});
       continue;
     }
-    const Face& f = *faces[i];
-    const Eigen::Vector3d& n = f.n;
-    const Eigen::Vector3d& lateral = f.lateral;
-    const Eigen::Vector3d& face_centre = f.centre;
-    const double plate_yaw = std::atan2(n.y(), n.x());
-    const double half_w = f.half_w, half_up = f.half_up;
-    const double y = box.pose.translation().y();
+    // The face square to the robot first; where nothing can be taken
+    // through it, another side face that still looks towards the robot
+    // (a box turned in a heap), the box alone.
+    std::string first_refusal;
+    bool taken = false;
+    const auto alternatives = faces_to_try(i);
+    for (std::size_t a = 0; a < alternatives.size(); ++a) {
+      const Face& f = alternatives[a];
+      const bool alternative = a > 0;
+      auto member_face = [&](std::size_t j) -> const Face& { return j == i ? f : *faces[j]; };
+      const Eigen::Vector3d& n = f.n;
+      const Eigen::Vector3d& lateral = f.lateral;
+      const Eigen::Vector3d& face_centre = f.centre;
+      const double plate_yaw = std::atan2(n.y(), n.x());
+      const double half_w = f.half_w, half_up = f.half_up;
+      const double y = box.pose.translation().y();
 
-    // Plate centred on the face, kept inside the trailer and off the floor;
-    // turned, its body's back corner reaches further out.
-    const double ylim =
-        world.trailer.width / 2 - pw * std::abs(n.x()) - plate_depth * std::abs(n.y()) - kMargin;
-    const double zc =
-        std::clamp(face_centre.z(), ph + kFloorGap, world.trailer.height - ph - kMargin);
-    const Eigen::Vector3d face(face_centre.x(), face_centre.y(), zc);
-    // The plate is wider than many boxes: the corridor it moves through to
-    // the face must be clear of every other box. Where a neighbour is in the
-    // way, the plate slides off centre as long as it still covers most of
-    // the face.
-    auto slides = [&](double half_extent) {
-      std::vector<double> out{0.0};
-      for (double d = kSlide; d <= half_extent - kCovered + 1e-9; d += kSlide) {
-        out.push_back(d);
-        out.push_back(-d);
+      // Plate centred on the face, kept inside the trailer and off the floor;
+      // turned, its body's back corner reaches further out.
+      const double ylim =
+          world.trailer.width / 2 - pw * std::abs(n.x()) - plate_depth * std::abs(n.y()) - kMargin;
+      const double zc =
+          std::clamp(face_centre.z(), ph + kFloorGap, world.trailer.height - ph - kMargin);
+      const Eigen::Vector3d face(face_centre.x(), face_centre.y(), zc);
+      // The plate is wider than many boxes: the corridor it moves through to
+      // the face must be clear of every other box. Where a neighbour is in the
+      // way, the plate slides off centre as long as it still covers most of
+      // the face.
+      auto slides = [&](double half_extent) {
+        std::vector<double> out{0.0};
+        for (double d = kSlide; d <= half_extent - kCovered + 1e-9; d += kSlide) {
+          out.push_back(d);
+          out.push_back(-d);
+        }
+        return out;
+      };
+      // The plate moves in to the face through a corridor (its outline along
+      // the face's normal) that must be free. It stops grasp_gap short of the
+      // face; a settled wall is not flush, so also grasp_gap short of any
+      // neighbour in the corridor that stands out. The cups reach the face
+      // across kProud of extra gap.
+      const double half_h = (b[i].z1 - b[i].z0) / 2;
+      auto plate_at = [&](double dy, double dz) {
+        Eigen::Vector3d p = face + dy * lateral;
+        p.y() = std::clamp(p.y(), -ylim, ylim);
+        p.z() = std::clamp(face.z() + dz, ph + kFloorGap, world.trailer.height - ph - kMargin);
+        return p;
+      };
+      auto cups_on = [&](std::size_t j, const Eigen::Vector3d& p) {
+        const Face& fj = member_face(j);
+        return covered_cups(g, fj.half_w, fj.half_up, (p - fj.centre).dot(lateral),
+                            p.z() - fj.centre.z());
+      };
+      // Plate offsets (across, up) from the face's centre, in the order tried:
+      // on the face, then centred on its edges, where it may take the
+      // neighbours there too.
+      std::vector<std::pair<double, double>> offsets;
+      for (const double dz : slides(half_h))
+        for (const double dy : slides(half_w)) offsets.emplace_back(dy, dz);
+      for (const double dz : {0.0, half_up, -half_up})
+        for (const double dy : {0.0, half_w, -half_w})
+          if (dy != 0.0 || dz != 0.0) offsets.emplace_back(dy, dz);
+      const bool fewer = most_cups.count(box.id) > 0;
+      if (fewer) {
+        // Half a cup pitch off centre puts two columns (or rows) of cups on a
+        // face the centred grid covers with one.
+        const double across = 0.5 * g.cups.extent.y() / g.cups.cups_y;
+        const double up = 0.5 * g.cups.extent.x() / g.cups.cups_x;
+        for (const double dz : {0.0, up, -up})
+          for (const double dy : {0.0, across, -across}) offsets.emplace_back(dy, dz);
       }
-      return out;
-    };
-    // The plate moves in to the face through a corridor (its outline along
-    // the face's normal) that must be free. It stops grasp_gap short of the
-    // face; a settled wall is not flush, so also grasp_gap short of any
-    // neighbour in the corridor that stands out. The cups reach the face
-    // across kProud of extra gap.
-    const double half_h = (b[i].z1 - b[i].z0) / 2;
-    auto plate_at = [&](double dy, double dz) {
-      Eigen::Vector3d p = face + dy * lateral;
-      p.y() = std::clamp(p.y(), -ylim, ylim);
-      p.z() = std::clamp(face.z() + dz, ph + kFloorGap, world.trailer.height - ph - kMargin);
-      return p;
-    };
-    auto cups_on = [&](std::size_t j, const Eigen::Vector3d& p) {
-      const Face& fj = *faces[j];
-      return covered_cups(g, fj.half_w, fj.half_up, (p - fj.centre).dot(lateral),
-                          p.z() - fj.centre.z());
-    };
-    // Plate offsets (across, up) from the face's centre, in the order tried:
-    // on the face, then centred on its edges, where it may take the
-    // neighbours there too.
-    std::vector<std::pair<double, double>> offsets;
-    for (const double dz : slides(half_h))
-      for (const double dy : slides(half_w)) offsets.emplace_back(dy, dz);
-    for (const double dz : {0.0, half_up, -half_up})
-      for (const double dy : {0.0, half_w, -half_w})
-        if (dy != 0.0 || dz != 0.0) offsets.emplace_back(dy, dz);
-    const bool fewer = most_cups.count(box.id) > 0;
-    if (fewer) {
-      // Half a cup pitch off centre puts two columns (or rows) of cups on a
-      // face the centred grid covers with one.
-      const double across = 0.5 * g.cups.extent.y() / g.cups.cups_y;
-      const double up = 0.5 * g.cups.extent.x() / g.cups.cups_x;
-      for (const double dz : {0.0, up, -up})
-        for (const double dy : {0.0, across, -across}) offsets.emplace_back(dy, dz);
-    }
-    // Each plate pose the corridor allows: the boxes it seals on (all in the
-    // region, else the pose is not taken), which must come out together.
-    struct Grip {
-      std::vector<std::size_t> group;  // the box first
-      std::vector<int> cups;
-      Eigen::Vector3d at_face;
-      double back = 0;      // plate surface to the face at the grasp
-      double pregrasp = 0;  // plate to the face before the approach
-      double lift = 0, out_depth = 0;
-    };
-    std::optional<Grip> best;
-    // Why the plate centred on the face was not taken: what the caller is
-    // told if no other pose is taken either. Worded only if asked for.
-    std::string refused;
-    auto refuse = [&](const auto& why) {
-      if (rejected && refused.empty()) refused = why();
-    };
-    for (const auto& [dy, dz] : offsets) {
-      const Eigen::Vector3d p = plate_at(dy, dz);
-      // In the plate's corridor, what reaches the face stops the plate short
-      // of it (by more than the cups reach, the pose is not taken); what
-      // stands further out leaves the plate less room before the face (a
-      // nearer pre-grasp; too little room, and the pose is not taken).
-      double back = g.grasp_gap, room = g.pregrasp_distance;
-      std::size_t proud = count, before = count;
-      for (std::size_t j = 0; j < count; ++j) {
-        if (j == i || !near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1)) continue;
-        const auto span = span_in_band(outline[j], p.head<2>(), n.head<2>(), pw);
-        if (!span || span->min >= 0.0) continue;
-        if (span->max > -kProud - kClearance) {
-          if (g.grasp_gap - span->min > back) proud = j;
-          back = std::max(back, g.grasp_gap - span->min);
-        } else if (-span->max - kClearance < room) {
-          before = j;
-          room = -span->max - kClearance;
+      // Each plate pose the corridor allows: the boxes it seals on (all in the
+      // region, else the pose is not taken), which must come out together.
+      struct Grip {
+        std::vector<std::size_t> group;  // the box first
+        std::vector<int> cups;
+        Eigen::Vector3d at_face;
+        double back = 0;      // plate surface to the face at the grasp
+        double pregrasp = 0;  // plate to the face before the approach
+        double lift = 0, out_depth = 0;
+      };
+      std::optional<Grip> best;
+      // Why the plate centred on the face was not taken: what the caller is
+      // told if no other pose is taken either. Worded only if asked for.
+      std::string refused;
+      auto refuse = [&](const auto& why) {
+        if (rejected && refused.empty()) refused = why();
+      };
+      for (const auto& [dy, dz] : offsets) {
+        const Eigen::Vector3d p = plate_at(dy, dz);
+        // In the plate's corridor, what reaches the face stops the plate short
+        // of it (by more than the cups reach, the pose is not taken); what
+        // stands further out leaves the plate less room before the face (a
+        // nearer pre-grasp; too little room, and the pose is not taken).
+        double back = g.grasp_gap, room = g.pregrasp_distance;
+        std::size_t proud = count, before = count;
+        for (std::size_t j = 0; j < count; ++j) {
+          if (j == i || !near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1)) continue;
+          const auto span = span_in_band(outline[j], p.head<2>(), n.head<2>(), pw);
+          if (!span || span->min >= 0.0) continue;
+          if (span->max > -kProud - kClearance) {
+            if (g.grasp_gap - span->min > back) proud = j;
+            back = std::max(back, g.grasp_gap - span->min);
+          } else if (-span->max - kClearance < room) {
+            before = j;
+            room = -span->max - kClearance;
+          }
+        }
+        if (back - g.grasp_gap > kProud) {
+          refuse([&] {
+            return fmt::format("box {} stands out before its face", world.boxes[proud].id);
+          });
+          continue;
+        }
+        if (room < kMinPregrasp) {
+          refuse([&] {
+            return fmt::format("box {} leaves the plate no room before it", world.boxes[before].id);
+          });
+          continue;
+        }
+        Grip grip;
+        grip.at_face = p;
+        grip.back = back;
+        grip.pregrasp = room;
+        const Eigen::Vector3d surface = p - back * n;
+        const int own = cups_on(i, p);
+        if (own == 0) {
+          refuse([] { return std::string("no whole cup on its face"); });
+          continue;
+        }
+        grip.group.push_back(i);
+        grip.cups.push_back(own);
+        // Every other box of the region whose face the cups reach (with a
+        // margin: a settled box may lean) and that whole cups cover. The cups
+        // over a box of another region stay closed (cups_open): it stays.
+        for (std::size_t j = 0; j < count; ++j) {
+          if (j == i || alternative || !in_region[j] || !faces[j] ||
+              !near(p.y() - pw, p.y() + pw, b[j].y0, b[j].y1) ||
+              !near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1))
+            continue;
+          const double gap = (faces[j]->centre - surface).dot(n);
+          if (std::abs(gap) > g.cups.reach + kSealMargin) continue;
+          const int k = cups_on(j, p);
+          if (k == 0) continue;
+          grip.group.push_back(j);
+          grip.cups.push_back(k);
+        }
+        // The group is lifted off what it rests on (and over the lowered
+        // nose) before it comes out: nothing but its own boxes may rest on it.
+        double z0 = b[i].z0, depth = 0;
+        for (auto j : grip.group) {
+          z0 = std::min(z0, b[j].z0);
+          depth = std::max(depth, b[j].x1 - b[j].x0);
+        }
+        grip.lift = std::max(g.retract_lift, g.nose_top + kMargin - z0);
+        // A tilted box rests on a tilted top (a leaning column): their
+        // outlines overlap in height by more than a flat stack's, and the
+        // group comes out only once lifted clear of what it rests on.
+        for (auto j : grip.group)
+          for (std::size_t k = 0; k < count; ++k)
+            if (std::find(grip.group.begin(), grip.group.end(), k) == grip.group.end() &&
+                b[k].z0 < b[j].z0 && separation(outline[j], outline[k]) < -kMargin)
+              grip.lift = std::max(grip.lift,
+                                   std::min(kMaxLift, b[k].z1 - b[j].z0 + kClearance + kLiftSlack));
+        grip.out_depth = std::max(2 * f.half_d, depth) + kMargin;
+        bool blocked = false;
+        for (auto j : grip.group) {
+          // Lifted, nothing may stand over it; pulled out, each box (it may be
+          // wider than the plate) passes over what stands in front of it.
+          // Neighbours beside it, flush with it, are not in the way.
+          const auto over = in_the_way(grip.group, outline[j], b[j].z1, b[j].z1 + grip.lift, false);
+          const auto out =
+              over ? over
+                   : in_the_way(grip.group, swept(outline[j], -grip.out_depth * n.head<2>()),
+                                b[j].z0 + grip.lift, b[j].z1 + grip.lift, true);
+          if (!out) continue;
+          refuse([&] {
+            const auto k = world.boxes[*out].id, id = world.boxes[j].id;
+            return over ? fmt::format("box {} rests on box {}", k, id)
+                        : fmt::format("box {} is in the way out of box {}", k, id);
+          });
+          blocked = true;
+          break;
+        }
+        if (blocked) continue;
+        // More boxes at once first, then more cups on the box that has the
+        // fewest (the cups' force is shared by cups), then more in all; after
+        // a failed grip, fewer boxes and more cups on the box itself.
+        auto fewest = [](const Grip& x) { return *std::min_element(x.cups.begin(), x.cups.end()); };
+        auto total = [](const Grip& x) {
+          int n = 0;
+          for (int k : x.cups) n += k;
+          return n;
+        };
+        auto rank = [&](const Grip& x) {
+          const int n = static_cast<int>(x.group.size());
+          return fewer ? std::make_tuple(-n, x.cups.front(), total(x))
+                       : std::make_tuple(n, fewest(x), total(x));
+        };
+        if (!best || rank(grip) > rank(*best)) best = std::move(grip);
+      }
+      if (!best) {
+        if (first_refusal.empty()) first_refusal = refused;
+        continue;
+      }
+      PickCandidate c;
+      c.box = box.id;
+      for (auto j : best->group) c.boxes.push_back(world.boxes[j].id);
+      c.box_cups = best->cups;
+      c.cups = best->cups.front();
+      const Eigen::Vector3d& at_face = best->at_face;
+      c.grasp = {at_face - best->back * n, plate_yaw};
+      // Backed off along a turned face's normal, the plate also moves sideways:
+      // near a side wall, only as far as the wall lets it.
+      Eigen::Vector3d pregrasp = at_face - best->pregrasp * n;
+      pregrasp.y() = std::clamp(pregrasp.y(), -ylim, ylim);
+      c.pregrasp = {pregrasp, plate_yaw};
+      // The valves: the cup grid runs down the plate by rows, across by columns.
+      const sim::SuctionPlate& grid = g.cups;
+      c.cups_open.assign(static_cast<std::size_t>(grid.cups_x * grid.cups_y), false);
+      for (int r = 0; r < grid.cups_x; ++r) {
+        for (int k = 0; k < grid.cups_y; ++k) {
+          const Eigen::Vector3d cup =
+              at_face +
+              (0.5 - (r + 0.5) / grid.cups_x) * grid.extent.x() * Eigen::Vector3d::UnitZ() +
+              ((k + 0.5) / grid.cups_y - 0.5) * grid.extent.y() * lateral;
+          c.cups_open[static_cast<std::size_t>(r * grid.cups_y + k)] =
+              std::any_of(best->group.begin(), best->group.end(), [&](std::size_t j) {
+                const Face& fj = member_face(j);
+                return std::abs((cup - fj.centre).dot(lateral)) <= fj.half_w - grid.cup_radius &&
+                       std::abs(cup.z() - fj.centre.z()) <= fj.half_up - grid.cup_radius;
+              });
         }
       }
-      if (back - g.grasp_gap > kProud) {
-        refuse([&] {
-          return fmt::format("box {} stands out before its face", world.boxes[proud].id);
-        });
-        continue;
-      }
-      if (room < kMinPregrasp) {
-        refuse([&] {
-          return fmt::format("box {} leaves the plate no room before it", world.boxes[before].id);
-        });
-        continue;
-      }
-      Grip grip;
-      grip.at_face = p;
-      grip.back = back;
-      grip.pregrasp = room;
-      const Eigen::Vector3d surface = p - back * n;
-      const int own = cups_on(i, p);
-      if (own == 0) {
-        refuse([] { return std::string("no whole cup on its face"); });
-        continue;
-      }
-      grip.group.push_back(i);
-      grip.cups.push_back(own);
-      // Every other box of the region whose face the cups reach (with a
-      // margin: a settled box may lean) and that whole cups cover. The cups
-      // over a box of another region stay closed (cups_open): it stays.
-      for (std::size_t j = 0; j < count; ++j) {
-        if (j == i || !in_region[j] || !faces[j] ||
-            !near(p.y() - pw, p.y() + pw, b[j].y0, b[j].y1) ||
-            !near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1))
-          continue;
-        const double gap = (faces[j]->centre - surface).dot(n);
-        if (std::abs(gap) > g.cups.reach + kSealMargin) continue;
-        const int k = cups_on(j, p);
-        if (k == 0) continue;
-        grip.group.push_back(j);
-        grip.cups.push_back(k);
-      }
-      // The group is lifted off what it rests on (and over the lowered
-      // nose) before it comes out: nothing but its own boxes may rest on it.
-      double z0 = b[i].z0, depth = 0;
-      for (auto j : grip.group) {
+      // Base: the arm at its preferred reach, the lowered nose short of every
+      // box. A plate low enough to meet the lowered nose stays
+      // ahead of its tip at the pre-grasp (nose_clearance covers the plate's
+      // body): turned off the trailer's axis, by its leading corner.
+      const double by_reach = face.x() - g.pick_reach + g.arm_yaw_offset;
+      const double by_nose = nearest - g.conveyor_length - g.nose_clearance;
+      const double plate_back = c.pregrasp.position.x() - pw * std::abs(n.y());
+      const double by_plate = c.pregrasp.position.z() - ph < g.nose_top
+                                  ? plate_back - g.conveyor_length - g.nose_clearance
+                                  : by_reach;
+      c.base_x = std::min({by_reach, by_nose, by_plate});
+      sim::JointVector at = current;
+      at[sim::kBaseX] = c.base_x;
+      // Lifted, then pulled out until clear of what it rested on: the
+      // drop-off move after that swings freely.
+      // A group against a side wall is lifted away from it too: dragged along
+      // it, the held boxes would press into it. It moves no further than
+      // halfway to the box standing beside it on the other side, which it
+      // would press into instead (C s12: 3 cm into a flush neighbour).
+      double x0 = b[i].x0, x1 = b[i].x1, y0 = b[i].y0, y1 = b[i].y1, z0 = b[i].z0, z1 = b[i].z1;
+      for (auto j : best->group) {
+        x0 = std::min(x0, b[j].x0);
+        x1 = std::max(x1, b[j].x1);
+        y0 = std::min(y0, b[j].y0);
+        y1 = std::max(y1, b[j].y1);
         z0 = std::min(z0, b[j].z0);
-        depth = std::max(depth, b[j].x1 - b[j].x0);
+        z1 = std::max(z1, b[j].z1);
       }
-      grip.lift = std::max(g.retract_lift, g.nose_top + kMargin - z0);
-      // A tilted box rests on a tilted top (a leaning column): their
-      // outlines overlap in height by more than a flat stack's, and the
-      // group comes out only once lifted clear of what it rests on.
-      for (auto j : grip.group)
-        for (std::size_t k = 0; k < count; ++k)
-          if (std::find(grip.group.begin(), grip.group.end(), k) == grip.group.end() &&
-              b[k].z0 < b[j].z0 && separation(outline[j], outline[k]) < -kMargin)
-            grip.lift = std::max(grip.lift,
-                                 std::min(kMaxLift, b[k].z1 - b[j].z0 + kClearance + kLiftSlack));
-      grip.out_depth = std::max(2 * f.half_d, depth) + kMargin;
-      bool blocked = false;
-      for (auto j : grip.group) {
-        // Lifted, nothing may stand over it; pulled out, each box (it may be
-        // wider than the plate) passes over what stands in front of it.
-        // Neighbours beside it, flush with it, are not in the way.
-        const auto over = in_the_way(grip.group, outline[j], b[j].z1, b[j].z1 + grip.lift, false);
-        const auto out =
-            over ? over
-                 : in_the_way(grip.group, swept(outline[j], -grip.out_depth * n.head<2>()),
-                              b[j].z0 + grip.lift, b[j].z1 + grip.lift, true);
-        if (!out) continue;
-        refuse([&] {
-          const auto k = world.boxes[*out].id, id = world.boxes[j].id;
-          return over ? fmt::format("box {} rests on box {}", k, id)
-                      : fmt::format("box {} is in the way out of box {}", k, id);
-        });
-        blocked = true;
-        break;
+      const double half = world.trailer.width / 2;
+      double off_wall = std::max(0.0, kMargin - (half + y0)) - std::max(0.0, kMargin - (half - y1));
+      for (std::size_t j = 0; j < count && off_wall != 0.0; ++j) {
+        if (std::find(best->group.begin(), best->group.end(), j) != best->group.end() ||
+            !(b[j].x0 < x1 && x0 < b[j].x1 && b[j].z0 < z1 + best->lift && z0 < b[j].z1))
+          continue;
+        const double room = off_wall > 0 ? b[j].y0 - y1 : y0 - b[j].y1;
+        const bool beside =
+            off_wall > 0 ? b[j].y0 + b[j].y1 > y0 + y1 : b[j].y0 + b[j].y1 < y0 + y1;
+        if (beside)
+          off_wall = std::copysign(std::min(std::abs(off_wall), std::max(0.0, room / 2)), off_wall);
       }
-      if (blocked) continue;
-      // More boxes at once first, then more cups on the box that has the
-      // fewest (the cups' force is shared by cups), then more in all; after
-      // a failed grip, fewer boxes and more cups on the box itself.
-      auto fewest = [](const Grip& x) { return *std::min_element(x.cups.begin(), x.cups.end()); };
-      auto total = [](const Grip& x) {
-        int n = 0;
-        for (int k : x.cups) n += k;
-        return n;
-      };
-      auto rank = [&](const Grip& x) {
-        const int n = static_cast<int>(x.group.size());
-        return fewer ? std::make_tuple(-n, x.cups.front(), total(x))
-                     : std::make_tuple(n, fewest(x), total(x));
-      };
-      if (!best || rank(grip) > rank(*best)) best = std::move(grip);
-    }
-    if (!best) {
-      if (rejected) rejected->push_back({box.id, refused});
-      continue;
-    }
-    PickCandidate c;
-    c.box = box.id;
-    for (auto j : best->group) c.boxes.push_back(world.boxes[j].id);
-    c.box_cups = best->cups;
-    c.cups = best->cups.front();
-    const Eigen::Vector3d& at_face = best->at_face;
-    c.grasp = {at_face - best->back * n, plate_yaw};
-    // Backed off along a turned face's normal, the plate also moves sideways:
-    // near a side wall, only as far as the wall lets it.
-    Eigen::Vector3d pregrasp = at_face - best->pregrasp * n;
-    pregrasp.y() = std::clamp(pregrasp.y(), -ylim, ylim);
-    c.pregrasp = {pregrasp, plate_yaw};
-    // The valves: the cup grid runs down the plate by rows, across by columns.
-    const sim::SuctionPlate& grid = g.cups;
-    c.cups_open.assign(static_cast<std::size_t>(grid.cups_x * grid.cups_y), false);
-    for (int r = 0; r < grid.cups_x; ++r) {
-      for (int k = 0; k < grid.cups_y; ++k) {
-        const Eigen::Vector3d cup =
-            at_face + (0.5 - (r + 0.5) / grid.cups_x) * grid.extent.x() * Eigen::Vector3d::UnitZ() +
-            ((k + 0.5) / grid.cups_y - 0.5) * grid.extent.y() * lateral;
-        c.cups_open[static_cast<std::size_t>(r * grid.cups_y + k)] =
-            std::any_of(best->group.begin(), best->group.end(), [&](std::size_t j) {
-              const Face& fj = *faces[j];
-              return std::abs((cup - fj.centre).dot(lateral)) <= fj.half_w - grid.cup_radius &&
-                     std::abs(cup.z() - fj.centre.z()) <= fj.half_up - grid.cup_radius;
-            });
-      }
-    }
-    // Base: the arm at its preferred reach, the lowered nose short of every
-    // box. A plate low enough to meet the lowered nose stays
-    // ahead of its tip at the pre-grasp (nose_clearance covers the plate's
-    // body): turned off the trailer's axis, by its leading corner.
-    const double by_reach = face.x() - g.pick_reach + g.arm_yaw_offset;
-    const double by_nose = nearest - g.conveyor_length - g.nose_clearance;
-    const double plate_back = c.pregrasp.position.x() - pw * std::abs(n.y());
-    const double by_plate = c.pregrasp.position.z() - ph < g.nose_top
-                                ? plate_back - g.conveyor_length - g.nose_clearance
-                                : by_reach;
-    c.base_x = std::min({by_reach, by_nose, by_plate});
-    sim::JointVector at = current;
-    at[sim::kBaseX] = c.base_x;
-    // Lifted, then pulled out until clear of what it rested on: the
-    // drop-off move after that swings freely.
-    // A group against a side wall is lifted away from it too: dragged along
-    // it, the held boxes would press into it. It moves no further than
-    // halfway to the box standing beside it on the other side, which it
-    // would press into instead (C s12: 3 cm into a flush neighbour).
-    double x0 = b[i].x0, x1 = b[i].x1, y0 = b[i].y0, y1 = b[i].y1, z0 = b[i].z0, z1 = b[i].z1;
-    for (auto j : best->group) {
-      x0 = std::min(x0, b[j].x0);
-      x1 = std::max(x1, b[j].x1);
-      y0 = std::min(y0, b[j].y0);
-      y1 = std::max(y1, b[j].y1);
-      z0 = std::min(z0, b[j].z0);
-      z1 = std::max(z1, b[j].z1);
-    }
-    const double half = world.trailer.width / 2;
-    double off_wall = std::max(0.0, kMargin - (half + y0)) - std::max(0.0, kMargin - (half - y1));
-    for (std::size_t j = 0; j < count && off_wall != 0.0; ++j) {
-      if (std::find(best->group.begin(), best->group.end(), j) != best->group.end() ||
-          !(b[j].x0 < x1 && x0 < b[j].x1 && b[j].z0 < z1 + best->lift && z0 < b[j].z1))
+      c.lift = {c.grasp.position + Eigen::Vector3d(0, off_wall, best->lift), plate_yaw};
+      // Pulled out along a turned face's normal, the load also moves sideways:
+      // no further than the side walls let it and the plate, and never pushed
+      // further off a wall than the lift took it.
+      Eigen::Vector3d retract = c.lift.position - best->out_depth * n;
+      const double lo =
+          std::min(off_wall, std::max(-half + kMargin - y0, -ylim - c.grasp.position.y()));
+      const double hi =
+          std::max(off_wall, std::min(half - kMargin - y1, ylim - c.grasp.position.y()));
+      if (lo <= hi)
+        retract.y() = c.grasp.position.y() + std::clamp(retract.y() - c.grasp.position.y(), lo, hi);
+      c.retract = {retract, plate_yaw};
+      if (!reachable(robot, c.grasp, at) || !reachable(robot, c.pregrasp, at)) {
+        if (rejected && first_refusal.empty())
+          first_refusal =
+              fmt::format("no arm pose reaches its face from base x {:.2f} m", c.base_x);
         continue;
-      const double room = off_wall > 0 ? b[j].y0 - y1 : y0 - b[j].y1;
-      const bool beside = off_wall > 0 ? b[j].y0 + b[j].y1 > y0 + y1 : b[j].y0 + b[j].y1 < y0 + y1;
-      if (beside)
-        off_wall = std::copysign(std::min(std::abs(off_wall), std::max(0.0, room / 2)), off_wall);
+      }
+      ranked.push_back({c, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
+      taken = true;
+      break;
     }
-    c.lift = {c.grasp.position + Eigen::Vector3d(0, off_wall, best->lift), plate_yaw};
-    // Pulled out along a turned face's normal, the load also moves sideways:
-    // no further than the side walls let it and the plate, and never pushed
-    // further off a wall than the lift took it.
-    Eigen::Vector3d retract = c.lift.position - best->out_depth * n;
-    const double lo =
-        std::min(off_wall, std::max(-half + kMargin - y0, -ylim - c.grasp.position.y()));
-    const double hi =
-        std::max(off_wall, std::min(half - kMargin - y1, ylim - c.grasp.position.y()));
-    if (lo <= hi)
-      retract.y() = c.grasp.position.y() + std::clamp(retract.y() - c.grasp.position.y(), lo, hi);
-    c.retract = {retract, plate_yaw};
-    if (!reachable(robot, c.grasp, at) || !reachable(robot, c.pregrasp, at)) {
-      if (rejected)
-        rejected->push_back(
-            {box.id, fmt::format("no arm pose reaches its face from base x {:.2f} m", c.base_x)});
-      continue;
-    }
-    ranked.push_back({c, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
+    if (!taken && rejected) rejected->push_back({box.id, first_refusal});
   }
   // Nearest first: a box behind others is reached over them, which the arm
   // plans slowly and the held box may not clear; within reach of the front,

@@ -31,9 +31,11 @@ struct RunLimits {
 // The run goes on while some action may still move a box. An action that
 // moved nothing is not tried again before progress, unless its grip failed:
 // the grip memory then makes the next attempt differ (more cups, a slower
-// carry) and gives the box up in the end. One that moved boxes without
-// unloading any counts as progress for the others: in the changed scene,
-// each may be tried again (max_idle_actions still ends the run).
+// carry) and gives the box up in the end. When every action has been
+// tried and some moved boxes without unloading any, the scene is no longer
+// the one the first were tried on: all are tried once more (at most
+// kExtraRounds times before progress), each round with its own
+// max_idle_actions.
 class RunRules {
  public:
   explicit RunRules(RunLimits limits = {}) : limits_(limits) {}
@@ -49,8 +51,12 @@ class RunRules {
   std::uint64_t actions() const { return actions_; }
 
  private:
+  static constexpr int kExtraRounds = 2;
+
   RunLimits limits_;
   std::set<std::uint8_t> excluded_;
+  bool shifted_ = false;  // an action of this round moved boxes
+  int rounds_ = 0;        // extra rounds since the last progress
   std::uint64_t actions_ = 0, idle_ = 0;
   double robot_time_s_ = 0.0;
 };

@@ -59,22 +59,37 @@ TEST(RunRules, AnActionThatMovedNothingIsLeftOutUntilProgress) {
   EXPECT_EQ(rules.actions(), 4u);
 }
 
-TEST(RunRules, AnActionThatShiftedBoxesLetsTheOthersBeTriedAgain) {
+TEST(RunRules, WhenAllWereTriedAndSomeShiftedBoxesAllAreTriedAgain) {
   // A2 seed 7: a sweep shook five boxes off the robot and moved them, but
   // unloaded none; the low sweep, excluded before, then moved a box.
   RunRules rules;
-  rules.record(sim::Action::SweepLow, moved(0));
-  rules.record(sim::Action::SweepMid, moved(0));
   Outcome shook = moved(0);
   shook.shifted = 5;
+  rules.record(sim::Action::SweepLow, moved(0));
   rules.record(sim::Action::SweepHigh, shook);
-  EXPECT_FALSE(rules.excluded(sim::Action::SweepLow));
-  EXPECT_FALSE(rules.excluded(sim::Action::SweepMid));
+  // Within a round, what was tried stays excluded.
+  EXPECT_TRUE(rules.excluded(sim::Action::SweepLow));
   EXPECT_TRUE(rules.excluded(sim::Action::SweepHigh));
-  // Still idle: the idle limit ends a run that only shuffles boxes.
-  RunRules limited(RunLimits{.max_idle_actions = 3});
-  for (int k = 0; k < 3; ++k) limited.record(sim::Action::SweepHigh, shook);
-  EXPECT_TRUE(limited.stop(10));
+  auto try_the_rest = [](RunRules& r) {
+    std::vector<sim::Action> rest;
+    for (int a = 0; a < sim::kNumActions; ++a)
+      if (!r.excluded(static_cast<sim::Action>(a))) rest.push_back(static_cast<sim::Action>(a));
+    for (const auto a : rest) r.record(a, moved(0));
+  };
+  try_the_rest(rules);
+  EXPECT_TRUE(rules.fresh());
+  EXPECT_FALSE(rules.stop(10));
+  // A round in which nothing moved ends the run.
+  try_the_rest(rules);
+  EXPECT_TRUE(rules.stop(10));
+  // Rounds that keep shuffling boxes end after kExtraRounds.
+  RunRules shuffling;
+  for (int round = 0; round < 10 && !shuffling.stop(10); ++round) {
+    shuffling.record(sim::Action::SweepHigh, shook);
+    try_the_rest(shuffling);
+  }
+  EXPECT_TRUE(shuffling.stop(10));
+  EXPECT_LE(shuffling.actions(), 3u * sim::kNumActions);
 }
 
 TEST(RunRules, StopsWhenEmptyAllExcludedIdleOrAtTheLimit) {

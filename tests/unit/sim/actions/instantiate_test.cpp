@@ -144,6 +144,24 @@ TEST(PickCandidates, ABoxOfALeaningColumnIsLiftedClearOfTheBoxUnderIt) {
   EXPECT_GT(sim::bounds(w.boxes[lowest - 1]).z0 + lift, sim::bounds(w.boxes[lowest - 2]).z1);
 }
 
+TEST(PickCandidates, ATurnedBoxHiddenOnOneFaceIsTakenByItsOtherFace) {
+  // A box turned 40 degrees in a heap: a lower box stands before the face
+  // square to the robot, the other side face looks towards the robot too.
+  sim::World w = trailer_world();
+  sim::Box turned = sim::testing::make_box(1, 10.3, 0.0, 0.0, {0.4, 0.6, 0.4});
+  turned.pose.linear() =
+      Eigen::AngleAxisd(40 * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  w.boxes.push_back(turned);
+  w.boxes.push_back(sim::testing::make_box(2, 9.92, -0.32, 0.0, {0.3, 0.3, 0.3}));
+  const auto action = sim::make_pick(sim::Height::kHigh, sim::Side::kCenter);
+  const auto all = candidates(w, action);
+  const PickCandidate* c = find(all, 1);
+  ASSERT_NE(c, nullptr);
+  EXPECT_EQ(c->boxes, std::vector<std::uint32_t>{1});
+  // The plate faces the other face: turned 50 degrees the other way.
+  EXPECT_NEAR(c->grasp.yaw, -50 * M_PI / 180, 1e-6);
+}
+
 TEST(PickCandidates, ABoxRestingOnTheTargetKeepsItInPlace) {
   sim::World w = trailer_world();
   w.boxes.push_back(sim::testing::make_box(1, 10.2, 0.0, 0.0));
