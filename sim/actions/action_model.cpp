@@ -425,7 +425,7 @@ class Run {
     std::vector<PickRejection> rejected;
     for (auto& c : pick_candidates(w0.world, scene, action_, o_.observation, robot_, g_, w0.q,
                                    o_.pick_candidates + given_up, failed, &rejected))
-      if (candidates.size() < o_.pick_candidates && worth_another_grip(c))
+      if (candidates.size() < o_.pick_candidates && worth_another_grip(c, w0.world))
         candidates.push_back(std::move(c));
     // A box the cups did not hold is tried again only after the others.
     std::stable_partition(candidates.begin(), candidates.end(),
@@ -571,7 +571,7 @@ class Run {
   // Whether a box whose grip failed before is worth another attempt from
   // this candidate; gives it up when not: after grip_attempts failures, or
   // when the cups refused its weight and no plate pose covers more of them.
-  bool worth_another_grip(const PickCandidate& c) {
+  bool worth_another_grip(const PickCandidate& c, const sim::World& world) {
     const auto it = memory_.grips.find(c.box);
     if (it == memory_.grips.end()) return true;
     GripHistory& h = it->second;
@@ -583,26 +583,21 @@ class Run {
     else
       return true;
     h.given_up = true;
-    h.neighbours = neighbours_of(c.box);
+    h.neighbours = neighbours_of(world, c.box);
     note(fmt::format("box {} given up: {}", c.box, h.why));
     return false;
   }
 
-  // The boxes within kNear of a box's bounds, now.
-  std::set<std::uint32_t> neighbours_of(std::uint32_t id) {
+  // The boxes within kNear of a box's bounds.
+  static std::set<std::uint32_t> neighbours_of(const sim::World& world, std::uint32_t id) {
     constexpr double kNear = 0.3;  // m
-    const sim::World world = observe().world;
     const auto it = std::find_if(world.boxes.begin(), world.boxes.end(),
                                  [&](const sim::Box& b) { return b.id == id; });
     std::set<std::uint32_t> out;
     if (it == world.boxes.end()) return out;
     const sim::Bounds a = sim::bounds(*it);
-    for (const auto& box : world.boxes) {
-      const sim::Bounds b = sim::bounds(box);
-      if (box.id != id && b.x0 < a.x1 + kNear && a.x0 < b.x1 + kNear && b.y0 < a.y1 + kNear &&
-          a.y0 < b.y1 + kNear && b.z0 < a.z1 + kNear && a.z0 < b.z1 + kNear)
-        out.insert(box.id);
-    }
+    for (const auto& box : world.boxes)
+      if (box.id != id && sim::within(a, sim::bounds(box), kNear)) out.insert(box.id);
     return out;
   }
 

@@ -103,10 +103,8 @@ std::vector<std::uint32_t> boxes_touching(const sim::World& world, const sim::Ro
   std::vector<std::uint32_t> out;
   for (const auto& box : world.boxes) {
     const auto b = sim::bounds(box);
-    if (std::any_of(shapes.begin(), shapes.end(), [&](const sim::Bounds& n) {
-          return b.x0 < n.x1 + kTouch && n.x0 < b.x1 + kTouch && b.y0 < n.y1 + kTouch &&
-                 n.y0 < b.y1 + kTouch && b.z0 < n.z1 + kTouch && n.z0 < b.z1 + kTouch;
-        }))
+    if (std::any_of(shapes.begin(), shapes.end(),
+                    [&](const sim::Bounds& n) { return sim::within(b, n, kTouch); }))
       out.push_back(box.id);
   }
   return out;
@@ -168,10 +166,8 @@ std::vector<std::uint32_t> leaning_on(const sim::World& world,
     if (has_sealable_face(box) || std::find(group.begin(), group.end(), box.id) != group.end())
       continue;
     const sim::Bounds b = sim::bounds(box);
-    if (std::any_of(held.begin(), held.end(), [&](const sim::Bounds& h) {
-          return b.x0 < h.x1 + kTouch && h.x0 < b.x1 + kTouch && b.y0 < h.y1 + kTouch &&
-                 h.y0 < b.y1 + kTouch && b.z0 < h.z1 + kTouch && h.z0 < b.z1 + kTouch;
-        }))
+    if (std::any_of(held.begin(), held.end(),
+                    [&](const sim::Bounds& h) { return sim::within(b, h, kTouch); }))
       out.push_back(box.id);
   }
   return out;

@@ -83,6 +83,11 @@ Bounds bounds(const Box& box) {
           c.y() + half.y(), c.z() - half.z(), c.z() + half.z()};
 }
 
+bool within(const Bounds& a, const Bounds& b, double gap) {
+  return a.x0 < b.x1 + gap && b.x0 < a.x1 + gap && a.y0 < b.y1 + gap && b.y0 < a.y1 + gap &&
+         a.z0 < b.z1 + gap && b.z0 < a.z1 + gap;
+}
+
 SceneAnalysis analyse(const World& world, const ObservationParams& p) {
   SceneAnalysis a;
   const auto& boxes = world.boxes;

@@ -53,6 +53,8 @@ struct Bounds {
   double x0 = 0, x1 = 0, y0 = 0, y1 = 0, z0 = 0, z1 = 0;
 };
 Bounds bounds(const Box& box);
+// Whether two bounds come closer than `gap` on every axis (overlap: gap 0).
+bool within(const Bounds& a, const Bounds& b, double gap);
 
 struct SceneAnalysis {
   std::vector<std::uint32_t> pile;        // every pile box
