@@ -236,7 +236,9 @@ plr::Expected<Episode> run_strategies(const ActionModel& model, Backend& backend
     e.robot_time_s += out->robot_time_s;
     e.robot_trailer_contacts += out->robot_trailer_contacts;
     e.failed_grasps += out->failed_grasp ? 1 : 0;
-    if (on_step) on_step(EpisodeStep{from, action, *scene.observation, *out, std::move(notes)});
+    if (on_step)
+      on_step(EpisodeStep{from, action, *scene.observation, scene.wall_height, scene.pile_height,
+                          scene.pile_depth, *out, std::move(notes)});
   }
 }
 

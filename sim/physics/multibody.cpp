@@ -11,23 +11,6 @@
 namespace plr::sim::detail {
 namespace {
 
-// Adds the contact wrenches computed outside Simbody (FCL penalty contact).
-class BufferedForce : public SimTK::Force::Custom::Implementation {
- public:
-  BufferedForce(const std::vector<SimTK::MobilizedBodyIndex>* index,
-                const std::vector<SimTK::SpatialVec>* wrench)
-      : index_(index), wrench_(wrench) {}
-  void calcForce(const SimTK::State&, SimTK::Vector_<SimTK::SpatialVec>& body_forces,
-                 SimTK::Vector_<SimTK::Vec3>&, SimTK::Vector&) const override {
-    for (std::size_t i = 0; i < index_->size(); ++i) body_forces[(*index_)[i]] += (*wrench_)[i];
-  }
-  SimTK::Real calcPotentialEnergy(const SimTK::State&) const override { return 0.0; }
-
- private:
-  const std::vector<SimTK::MobilizedBodyIndex>* index_;
-  const std::vector<SimTK::SpatialVec>* wrench_;
-};
-
 SimTK::Vec3 to_simtk(const Eigen::Vector3d& v) {
   return SimTK::Vec3(v.x(), v.y(), v.z());
 }
@@ -37,14 +20,22 @@ Eigen::Vector3d to_eigen(const SimTK::Vec3& v) {
 
 }  // namespace
 
+// The boxes are free bodies without constraints: their accelerations come
+// from the tree's O(n) forward dynamics with the forces applied directly
+// (weight and the contact wrenches computed outside Simbody), not from a
+// force subsystem and the constrained system's solve, which cost most of a
+// step for nothing.
 struct Multibody::Impl {
   std::unique_ptr<SimTK::MultibodySystem> system;
   SimTK::SimbodyMatterSubsystem* matter = nullptr;
   std::unique_ptr<SimTK::SimbodyMatterSubsystem> matter_owner;
-  std::unique_ptr<SimTK::GeneralForceSubsystem> forces;
   std::vector<SimTK::MobilizedBody::Free> bodies;
   std::vector<SimTK::MobilizedBodyIndex> index;
-  std::vector<SimTK::SpatialVec> wrench;
+  std::vector<SimTK::SpatialVec> weight;          // per body
+  SimTK::Vector_<SimTK::SpatialVec> body_forces;  // per Simbody body, Ground first
+  SimTK::Vector mobility_forces;                  // none
+  SimTK::Vector udot;
+  SimTK::Vector_<SimTK::SpatialVec> body_accelerations;
   SimTK::State state;
   SimTK::Vector qdot;
   // Each body's first q and u in the state's coordinates.
@@ -77,17 +68,14 @@ void Multibody::build(const std::vector<FreeBody>& bodies, double gravity, doubl
   m.system = std::make_unique<SimTK::MultibodySystem>();
   m.matter_owner = std::make_unique<SimTK::SimbodyMatterSubsystem>(*m.system);
   m.matter = m.matter_owner.get();
-  m.forces = std::make_unique<SimTK::GeneralForceSubsystem>(*m.system);
-  SimTK::Force::Gravity(*m.forces, *m.matter, SimTK::Vec3(0, 0, -gravity));
   for (const FreeBody& b : bodies) {
     const SimTK::Vec3 half = to_simtk(0.5 * b.size);
     SimTK::Body::Rigid body(SimTK::MassProperties(
         b.mass, SimTK::Vec3(0), SimTK::UnitInertia::brick(half[0], half[1], half[2])));
     m.bodies.emplace_back(m.matter->Ground(), SimTK::Transform(), body, SimTK::Transform());
     m.index.push_back(m.bodies.back().getMobilizedBodyIndex());
+    m.weight.emplace_back(SimTK::Vec3(0), SimTK::Vec3(0, 0, -gravity * b.mass));
   }
-  m.wrench.assign(bodies.size(), SimTK::SpatialVec(SimTK::Vec3(0), SimTK::Vec3(0)));
-  SimTK::Force::Custom(*m.forces, new BufferedForce(&m.index, &m.wrench));
   m.state = m.system->realizeTopology();
   m.system->realizeModel(m.state);
   m.state.setTime(time);
@@ -116,6 +104,11 @@ void Multibody::build(const std::vector<FreeBody>& bodies, double gravity, doubl
     m.q0.push_back(mb.getFirstQIndex(m.state));
     m.u0.push_back(mb.getFirstUIndex(m.state));
   }
+  m.body_forces.resize(m.matter->getNumBodies());
+  m.body_forces.setToZero();
+  for (std::size_t i = 0; i < m.index.size(); ++i) m.body_forces[m.index[i]] = m.weight[i];
+  m.mobility_forces.resize(m.state.getNU());
+  m.mobility_forces.setToZero();
   m.u_next.resize(static_cast<std::size_t>(m.state.getNU()));
   m.kick.assign(static_cast<std::size_t>(m.state.getNU()), 0.0);
   impl_ = std::move(next);
@@ -148,7 +141,9 @@ void Multibody::read(int i, Eigen::Isometry3d& pose, Eigen::Vector3d& v, Eigen::
 }
 
 void Multibody::set_wrench(int i, const Eigen::Vector3d& force, const Eigen::Vector3d& torque) {
-  impl_->wrench[static_cast<std::size_t>(i)] = SimTK::SpatialVec(to_simtk(torque), to_simtk(force));
+  Impl& m = *impl_;
+  const auto k = static_cast<std::size_t>(i);
+  m.body_forces[m.index[k]] = m.weight[k] + SimTK::SpatialVec(to_simtk(torque), to_simtk(force));
 }
 
 void Multibody::add_velocity(int i, const Eigen::Vector3d& dv, const Eigen::Vector3d& dw) {
@@ -165,13 +160,15 @@ void Multibody::add_velocity(int i, const Eigen::Vector3d& dv, const Eigen::Vect
 void Multibody::step(double dt) {
   Impl& m = *impl_;
   SimTK::State& s = m.state;
-  m.system->realize(s, SimTK::Stage::Acceleration);
+  m.system->realize(s, SimTK::Stage::Dynamics);
+  m.matter->calcAccelerationIgnoringConstraints(s, m.mobility_forces, m.body_forces, m.udot,
+                                                m.body_accelerations);
   // Adding the kick here rather than to the state keeps the state realized
   // to Velocity between steps (no second velocity realization per step).
   const std::size_t nu = m.u_next.size();
   {
     const double* u = data(s.getU());
-    const double* udot = data(s.getUDot());
+    const double* udot = data(m.udot);
     for (std::size_t i = 0; i < nu; ++i) m.u_next[i] = u[i] + m.kick[i] + dt * udot[i];
   }
   if (m.kicked) {

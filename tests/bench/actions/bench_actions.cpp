@@ -143,6 +143,7 @@ bool same(const Result& a, const Result& b) {
 struct Run {
   Outcome outcome;
   double wall_s = 0.0, cpu_s = 0.0;
+  double plan_s = 0.0, physics_s = 0.0;  // of wall_s
 };
 
 // Per family and action: every run, by state and particle.
@@ -238,7 +239,7 @@ Result result_of(const UnloaderSimulation& s, const Outcome& o) {
 struct FamilyFigures {
   std::map<Action, Cell> cells;
   std::vector<double> applicable_per_state, distinct_per_state;
-  std::vector<std::string> observations;
+  std::vector<std::string> observations, state_names;
   int states = 0;
 };
 
@@ -266,6 +267,7 @@ void run_state(Context& c, const State& st, std::size_t index, const Options& o,
         std::exit(1);
       }
       Memory memory = st.memory;
+      const InProcessStats before = backend.stats();
       const auto t0 = Clock::now();
       const double cpu0 = thread_cpu_s();
       auto out = c.model.run(a, backend, memory);
@@ -276,7 +278,9 @@ void run_state(Context& c, const State& st, std::size_t index, const Options& o,
                      out.error().message.c_str());
         std::exit(1);
       }
-      fig.cells[a].runs.back().push_back(Run{*out, wall, cpu});
+      const InProcessStats& after = backend.stats();
+      fig.cells[a].runs.back().push_back(
+          Run{*out, wall, cpu, after.plan_s - before.plan_s, after.execute_s - before.execute_s});
       if (p == 0) {
         results.push_back(result_of(simulation, *out));
         applicable += out->applicable ? 1 : 0;
@@ -295,6 +299,8 @@ void run_state(Context& c, const State& st, std::size_t index, const Options& o,
   fig.applicable_per_state.push_back(applicable);
   fig.distinct_per_state.push_back(static_cast<double>(kinds.size()));
   fig.observations.push_back(st.observation);
+  fig.state_names.push_back("seed " + std::to_string(st.seed) + " after " +
+                            std::to_string(st.after) + " H actions");
   ++fig.states;
   c.add(backend);
 }
@@ -374,8 +380,15 @@ void print_row(const std::string& name, const Figures& f) {
               fixed(f.rtf, 0).c_str());
 }
 
-bool is_wall(EnvFamily f) {
-  return f == EnvFamily::kA1 || f == EnvFamily::kA2;
+// Medians over the states observed as a wall: (applicable, distinct).
+std::pair<double, double> wall_state_medians(const FamilyFigures& fig) {
+  std::vector<double> applicable, distinct;
+  for (std::size_t i = 0; i < fig.observations.size(); ++i) {
+    if (fig.observations[i].rfind("wall", 0) != 0) continue;
+    applicable.push_back(fig.applicable_per_state[i]);
+    distinct.push_back(fig.distinct_per_state[i]);
+  }
+  return {median(applicable), median(distinct)};
 }
 
 int usage() {
@@ -492,6 +505,25 @@ int main(int argc, char** argv) {
     }
   }
   const double rtf = median(rtf_ab), cpu_rtf = median(cpu_rtf_ab);
+  // Where a pick's and a sweep's wall time goes (A1 and B1, applicable runs).
+  struct KindTime {
+    std::vector<double> wall, plan, physics, rtf;
+  };
+  std::map<std::string, KindTime> by_kind;
+  for (const EnvFamily f : {EnvFamily::kA1, EnvFamily::kB1}) {
+    if (!figs.count(f)) continue;
+    for (const auto& [a, cell] : figs[f].cells)
+      for (const auto& particles : cell.runs)
+        for (const Run& r : particles) {
+          if (!r.outcome.applicable || !(r.wall_s > 0)) continue;
+          KindTime& k =
+              by_kind[plr::sim::kind(a) == plr::sim::ActionKind::kPick ? "pick" : "sweep"];
+          k.wall.push_back(1e3 * r.wall_s);
+          k.plan.push_back(1e3 * r.plan_s);
+          k.physics.push_back(1e3 * r.physics_s);
+          k.rtf.push_back(r.outcome.robot_time_s / r.wall_s);
+        }
+  }
 
   // Where the wall time of the action runs went.
   InProcessStats s = c.stats;
@@ -537,11 +569,27 @@ int main(int argc, char** argv) {
       fam["observations"] = fig.observations;
       fam["applicable_actions_per_state"] = number(median(fig.applicable_per_state));
       fam["distinct_outcomes_per_state"] = number(median(fig.distinct_per_state));
+      const auto [wall_applicable, wall_distinct] = wall_state_medians(fig);
+      fam["wall_states"] = {{"applicable_actions", number(wall_applicable)},
+                            {"distinct_outcomes", number(wall_distinct)}};
+      nlohmann::json per_state = nlohmann::json::array();
+      for (std::size_t i = 0; i < fig.observations.size(); ++i)
+        per_state.push_back({{"state", fig.state_names[i]},
+                             {"observation", fig.observations[i]},
+                             {"applicable_actions", fig.applicable_per_state[i]},
+                             {"distinct_outcomes", fig.distinct_per_state[i]}});
+      fam["per_state"] = per_state;
       fam["actions"] = per_action;
       out["families"][std::string(to_string(f))] = fam;
     }
     out["real_time_factor_A1_B1"] = number(rtf);
     out["real_time_factor_cpu_A1_B1"] = number(cpu_rtf);
+    for (const auto& [name, k] : by_kind)
+      time["per_" + name] = {{"runs", k.wall.size()},
+                             {"wall_ms_median", number(median(k.wall))},
+                             {"plan_ms_median", number(median(k.plan))},
+                             {"physics_ms_median", number(median(k.physics))},
+                             {"real_time_factor", number(median(k.rtf))}};
     out["time"] = time;
     out["targets"] = {{"mass_sensitivity_A2_B1", kTargetSensitivity},
                       {"distinct_of_12_on_wall_states", kTargetDistinct},
@@ -570,15 +618,28 @@ int main(int argc, char** argv) {
     const bool sens_target = f == EnvFamily::kA2 || f == EnvFamily::kB1;
     std::printf("  mass sensitivity %s%s\n", pct(total.sensitivity).c_str(),
                 sens_target ? "   (target >= 30%)" : "");
-    std::printf("  per state (median): %s of %zu actions applicable, %s distinct outcomes%s\n",
+    std::printf("  per state (median): %s of %zu actions applicable, %s distinct outcomes\n",
                 fixed(median(fig.applicable_per_state), 1).c_str(), o.actions.size(),
-                fixed(median(fig.distinct_per_state), 1).c_str(),
-                is_wall(f) ? "   (target >= 8 of 12 on a wall state)" : "");
+                fixed(median(fig.distinct_per_state), 1).c_str());
+    const auto [wall_applicable, wall_distinct] = wall_state_medians(fig);
+    if (std::isfinite(wall_applicable))
+      std::printf("  wall states (median): %s applicable, %s distinct   (target >= %.0f of 12)\n",
+                  fixed(wall_applicable, 1).c_str(), fixed(wall_distinct, 1).c_str(),
+                  kTargetDistinct);
+    for (std::size_t i = 0; i < fig.observations.size(); ++i)
+      std::printf("    %-32s %-18s %4.0f applicable %4.0f distinct\n", fig.state_names[i].c_str(),
+                  fig.observations[i].c_str(), fig.applicable_per_state[i],
+                  fig.distinct_per_state[i]);
   }
   std::printf(
       "\nreal-time factor, median over A1 and B1 actions: %sx   (target >= 100x)\n"
       "  (robot time / wall time of each run; / the run's thread CPU time: %sx)\n",
       fixed(rtf, 0).c_str(), fixed(cpu_rtf, 0).c_str());
+  for (const auto& [name, k] : by_kind)
+    std::printf("  %-5s %4zu runs: median %s ms wall (planner %s ms, physics %s ms), %sx\n",
+                name.c_str(), k.wall.size(), fixed(median(k.wall), 0).c_str(),
+                fixed(median(k.plan), 0).c_str(), fixed(median(k.physics), 0).c_str(),
+                fixed(median(k.rtf), 0).c_str());
   const double backend_s = s.checker_s + s.plan_s + s.sample_s + s.execute_s + s.observe_s;
   std::printf(
       "\nwall time of the action runs (%.1f s), collision checker %s:\n"

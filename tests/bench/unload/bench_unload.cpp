@@ -103,6 +103,9 @@ nlohmann::json run(const Job& job) {
       model, backend, plr::sim::HardcodedParams{}, {}, [&](const plr::actions::EpisodeStep& s) {
         steps.push_back({{"action", plr::sim::to_string(s.action)},
                          {"observation", plr::sim::to_string(s.observation)},
+                         {"wall_height", s.wall_height},
+                         {"pile_height", s.pile_height},
+                         {"pile_depth", s.pile_depth},
                          {"applicable", s.outcome.applicable},
                          {"why", s.outcome.why},
                          {"boxes", s.outcome.boxes},
@@ -175,6 +178,11 @@ nlohmann::json summarize(const std::vector<nlohmann::json>& runs, EnvFamily fami
   std::uint64_t collisions = 0, below = 0;
   std::map<std::string, int> stops;
   std::map<std::string, std::uint64_t> left;
+  // How often H met each structure and height class (its steps' observations).
+  std::map<std::string, std::uint64_t> seen;
+  for (const char* structure : {"pile", "wall"})
+    for (const char* height : {"low", "mid", "high"})
+      seen[fmt::format("{}/{}", structure, height)] = 0;
   std::string worst;
   double worst_fraction = 2;
   for (const auto& r : runs) {
@@ -197,6 +205,11 @@ nlohmann::json summarize(const std::vector<nlohmann::json>& runs, EnvFamily fami
     collisions += r.value("robot_trailer_collisions", 0u);
     if (r.contains("left_by_reason"))
       for (const auto& [k, v] : r["left_by_reason"].items()) left[k] += v.get<std::uint64_t>();
+    if (r.contains("steps"))
+      for (const auto& step : r["steps"]) {
+        const std::string o = step.value("observation", "");
+        if (const auto cut = o.rfind('/'); cut != std::string::npos) ++seen[o.substr(0, cut)];
+      }
   }
   double mean = 0;
   for (double f : fractions) mean += f;
@@ -210,7 +223,8 @@ nlohmann::json summarize(const std::vector<nlohmann::json>& runs, EnvFamily fami
           {"boxes_per_robot_s", seconds > 0 ? boxes / seconds : 0.0},
           {"robot_trailer_collisions", collisions},
           {"stop_reasons", stops},
-          {"left_by_reason", left}};
+          {"left_by_reason", left},
+          {"observations", seen}};
 }
 
 void print_table(const nlohmann::json& families) {
@@ -224,6 +238,19 @@ void print_table(const nlohmann::json& families) {
                 f["worst"].get<std::string>().c_str(), f["runs_below_target"].get<int>(),
                 f["robot_time_s_median"].is_number() ? f["robot_time_s_median"].get<double>() : 0.0,
                 f["boxes_per_robot_s"].get<double>(), f["robot_trailer_collisions"].get<int>());
+  }
+  // ObservationParams split what H meets: every structure's three height
+  // classes should occur on every family that has that structure.
+  if (!families.empty()) {
+    std::printf("\nobservations H met (actions):\n%-6s", "family");
+    for (const auto& [cls, n] : families.begin()->at("observations").items())
+      std::printf(" %10s", cls.c_str());
+    std::printf("\n");
+    for (const auto& [name, f] : families.items()) {
+      std::printf("%-6s", name.c_str());
+      for (const auto& [cls, n] : f["observations"].items()) std::printf(" %10d", n.get<int>());
+      std::printf("\n");
+    }
   }
   std::printf("\nwhy runs stopped / why boxes were left:\n");
   for (const auto& [name, f] : families.items()) {

@@ -88,6 +88,8 @@ struct EpisodeStep {
   std::string source;  // where the action's strategy came from (StrategyChoice)
   sim::Action action{};
   sim::Observation observation{};
+  // The raw figures the observation was classified from (SceneAnalysis).
+  double wall_height = 0, pile_height = 0, pile_depth = 0;
   Outcome outcome;
   std::vector<std::string> notes;  // the action's log lines (Reporter::note)
 };
