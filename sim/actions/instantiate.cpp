@@ -183,6 +183,11 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
   std::unordered_set<std::uint32_t> front(scene.front_pile.begin(), scene.front_pile.end());
   const std::size_t count = world.boxes.size();
   std::vector<sim::Bounds> b(count);
+  // The nearest box the lowered nose must stay short of: not one above the
+  // nose (lying on the robot's arm, or leaning out over it), nor one lying
+  // on the robot, which rides along with it (A1 s2: a box left on the arm
+  // after a shake kept the base 2.5 m short of everything).
+  const std::vector<std::uint32_t> on_robot = boxes_on_robot(world, robot, current);
   double nearest = std::numeric_limits<double>::infinity();
   // The action's region: boxes of the first wall or front pile of its
   // height class (a box's top against the wall or pile thresholds) and
@@ -191,7 +196,9 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
   for (std::size_t i = 0; i < count; ++i) {
     const auto& box = world.boxes[i];
     b[i] = sim::bounds(box);
-    nearest = std::min(nearest, b[i].x0);
+    if (b[i].z0 < g.nose_top + kMargin &&
+        std::find(on_robot.begin(), on_robot.end(), box.id) == on_robot.end())
+      nearest = std::min(nearest, b[i].x0);
     const bool is_wall = wall.count(box.id) > 0;
     if (!is_wall && !front.count(box.id)) continue;
     const auto cls = is_wall ? height_class(b[i].z1, obs.wall_mid, obs.wall_high)

@@ -162,6 +162,28 @@ TEST(PickCandidates, ATurnedBoxHiddenOnOneFaceIsTakenByItsOtherFace) {
   EXPECT_NEAR(c->grasp.yaw, -50 * M_PI / 180, 1e-6);
 }
 
+TEST(PickCandidates, BoxesAboveTheNoseDoNotKeepTheBaseBack) {
+  // A box lying on the robot's body beside the turret and one hanging out
+  // over the floor before the wall (A1 s2: a box tilted on the arm, 1.3 m
+  // up): the lowered nose passes under both, so the base comes as close to
+  // the wall as without them.
+  sim::World w = trailer_world();
+  for (std::uint32_t k = 0; k < 3; ++k)
+    w.boxes.push_back(sim::testing::make_box(k + 1, 10.2, 0.0, 0.4 * k));
+  const auto obs = sim::testing::small_scene_observation();
+  const auto scene = sim::analyse(w, obs);
+  const double base_x = 8.0;
+  const auto action = sim::make_pick(sim::Height::kMid, sim::Side::kCenter);
+  const auto clear = pick_candidates(w, scene, action, obs, robot(), {}, home(base_x), 1000, {});
+  ASSERT_NE(find(clear, 3), nullptr);
+  w.boxes.push_back(sim::testing::make_box(9, base_x - 1.3, 0.35, 0.55));
+  w.boxes.push_back(sim::testing::make_box(10, 9.5, -0.7, 0.8));
+  ASSERT_EQ(boxes_on_robot(w, robot(), home(base_x)), std::vector<std::uint32_t>{9});
+  const auto c = pick_candidates(w, scene, action, obs, robot(), {}, home(base_x), 1000, {});
+  ASSERT_NE(find(c, 3), nullptr);
+  EXPECT_EQ(find(c, 3)->base_x, find(clear, 3)->base_x);
+}
+
 TEST(PickCandidates, ABoxRestingOnTheTargetKeepsItInPlace) {
   sim::World w = trailer_world();
   w.boxes.push_back(sim::testing::make_box(1, 10.2, 0.0, 0.0));
