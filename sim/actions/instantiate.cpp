@@ -67,6 +67,20 @@ bool reachable(const sim::RobotModel& robot, const sim::PlateTarget& t,
   return !robot.arm_ik(t, seed).empty();
 }
 
+// The box axis nearest the vertical.
+int up_axis(const Eigen::Matrix3d& R) {
+  int up = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::abs(R(2, k)) > std::abs(R(2, up))) up = k;
+  return up;
+}
+
+// A box axis made horizontal and unit, pointing into the trailer (+x).
+Eigen::Vector3d inward(Eigen::Vector3d axis) {
+  axis.z() = 0;
+  return axis.normalized() * (axis.x() < 0 ? -1.0 : 1.0);
+}
+
 }  // namespace
 
 int covered_cups(const Geometry& g, double half_across, double half_up, double across, double up) {
@@ -145,13 +159,9 @@ sim::World without(const sim::World& world, const std::vector<std::uint32_t>& id
 
 bool has_sealable_face(const sim::Box& box) {
   const Eigen::Matrix3d R = box.pose.linear();
-  int up_axis = 0;
   bool side = false;
-  for (int k = 0; k < 3; ++k) {
-    if (std::abs(R(2, k)) > std::abs(R(2, up_axis))) up_axis = k;
-    side = side || std::abs(R(2, k)) < kMaxFaceTilt;
-  }
-  return side && std::abs(R(2, up_axis)) >= std::cos(kMaxFaceTilt);
+  for (int k = 0; k < 3; ++k) side = side || std::abs(R(2, k)) < kMaxFaceTilt;
+  return side && std::abs(R(2, up_axis(R))) >= std::cos(kMaxFaceTilt);
 }
 
 std::vector<std::uint32_t> leaning_on(const sim::World& world,
@@ -215,30 +225,32 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     Eigen::Vector3d n, lateral, centre;
     double half_d = 0, half_w = 0, half_up = 0;
   };
+  // The face whose normal is box axis `axis` (n: that axis made horizontal,
+  // pointing into the trailer).
+  auto face_along = [](const sim::Box& box, int axis, int up, const Eigen::Vector3d& n) {
+    Face f;
+    f.n = n;
+    f.lateral = Eigen::Vector3d(-n.y(), n.x(), 0.0);
+    f.half_d = box.size[axis] / 2;
+    f.half_w = box.size[3 - axis - up] / 2;
+    f.half_up = box.size[up] / 2;
+    f.centre = box.pose.translation() - f.half_d * n;
+    return f;
+  };
   auto face_of = [&](std::size_t i) -> std::optional<Face> {
     const auto& box = world.boxes[i];
+    if (!has_sealable_face(box)) return std::nullopt;
     const Eigen::Matrix3d R = box.pose.linear();
-    int normal_axis = -1, up_axis = 0;
-    for (int k = 0; k < 3; ++k) {
-      if (std::abs(R(2, k)) > std::abs(R(2, up_axis))) up_axis = k;
+    int normal_axis = -1;
+    for (int k = 0; k < 3; ++k)
       if (std::abs(R(2, k)) < kMaxFaceTilt &&
           (normal_axis < 0 || std::abs(R(0, k)) > std::abs(R(0, normal_axis))))
         normal_axis = k;
-    }
-    if (!has_sealable_face(box)) return std::nullopt;
-    Face f;
-    f.n = R.col(normal_axis);
-    f.n.z() = 0;
-    f.n = f.n.normalized() * (f.n.x() < 0 ? -1.0 : 1.0);
+    Eigen::Vector3d n = inward(R.col(normal_axis));
     // A settled wall's few milliradians are not worth turning the plate for:
     // turned, it would lead with a corner.
-    if (std::abs(f.n.y()) < kSquare) f.n = Eigen::Vector3d::UnitX();
-    f.lateral = Eigen::Vector3d(-f.n.y(), f.n.x(), 0.0);
-    f.half_d = box.size[normal_axis] / 2;
-    f.half_w = box.size[3 - normal_axis - up_axis] / 2;
-    f.half_up = box.size[up_axis] / 2;
-    f.centre = box.pose.translation() - f.half_d * f.n;
-    return f;
+    if (std::abs(n.y()) < kSquare) n = Eigen::Vector3d::UnitX();
+    return face_along(box, normal_axis, up_axis(R), n);
   };
   std::vector<std::optional<Face>> faces(count);
   for (std::size_t i = 0; i < count; ++i)
@@ -250,25 +262,14 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     std::vector<Face> out{*faces[i]};
     const auto& box = world.boxes[i];
     const Eigen::Matrix3d R = box.pose.linear();
-    int up_axis = 0;
-    for (int k = 1; k < 3; ++k)
-      if (std::abs(R(2, k)) > std::abs(R(2, up_axis))) up_axis = k;
+    const int up = up_axis(R);
     for (int k = 0; k < 3; ++k) {
-      Eigen::Vector3d n = R.col(k);
-      n.z() = 0;
-      if (k == up_axis || n.norm() < 0.5) continue;
-      n = n.normalized() * (n.x() < 0 ? -1.0 : 1.0);
+      if (k == up || R.col(k).head<2>().norm() < 0.5) continue;
+      const Eigen::Vector3d n = inward(R.col(k));
       if (n.dot(out.front().n) > std::cos(kMaxFaceTilt) ||
           std::atan2(std::abs(n.y()), n.x()) > kMaxSideFace)
         continue;
-      Face f;
-      f.n = n;
-      f.lateral = Eigen::Vector3d(-n.y(), n.x(), 0.0);
-      f.half_d = box.size[k] / 2;
-      f.half_w = box.size[3 - k - up_axis] / 2;
-      f.half_up = box.size[up_axis] / 2;
-      f.centre = box.pose.translation() - f.half_d * n;
-      out.push_back(f);
+      out.push_back(face_along(box, k, up, n));
     }
     return out;
   };
