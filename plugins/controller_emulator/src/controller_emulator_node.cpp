@@ -6,6 +6,7 @@
 #include "joint_trajectory_controller.hpp"
 
 #include <plr/actions/unloader_simulation.hpp>
+#include <plr/interface.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
 #include <plr/ros2/domain.hpp>
@@ -388,3 +389,5 @@ class ControllerEmulatorNode : public Node {
 PLR_PLUGIN(plr::emulator::ControllerEmulatorNode, "controller_emulator", "0.1.0",
            PLR_KIND_SIMULATOR,
            "A ros2_control joint trajectory controller emulated over DDS with ROS 2 types")
+// It speaks ROS 2 types over its own DDS participant, not on the bus.
+PLR_INTERFACE()

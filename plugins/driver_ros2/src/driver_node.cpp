@@ -11,6 +11,7 @@
 
 #include <plr/msg/driver_generated.h>
 #include <plr/actions/motion_messages.hpp>
+#include <plr/interface.hpp>
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
@@ -506,3 +507,5 @@ class DriverNode : public Node {
 
 PLR_PLUGIN(plr::driver::DriverNode, "driver_ros2", "0.1.0", PLR_KIND_DRIVER,
            "Drives a ros2_control joint trajectory controller over DDS (ROS 2 types)")
+PLR_INTERFACE(plr::topic<plr::msg::Statistics>("driver/status"),
+              plr::service<plr::msg::ExecuteRequest, plr::msg::ExecuteOutcome>("sim/execute"))

@@ -6,6 +6,7 @@
 #include "web_server.hpp"
 
 #include <plr/embedded_file.hpp>
+#include <plr/interface.hpp>
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
@@ -247,3 +248,5 @@ class MonitorWebNode final : public Node, public WebHandler {
 
 PLR_PLUGIN(plr::monitor_web::MonitorWebNode, "monitor_web", "1.0.0", PLR_KIND_MONITOR,
            "Live web dashboard and Foxglove WebSocket server (read-only)")
+// It only listens on the bus, and serves over its own HTTP/WebSocket port.
+PLR_INTERFACE()

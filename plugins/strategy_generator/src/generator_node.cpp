@@ -10,6 +10,7 @@
 // library's strategies and replays the journal: the search repeats itself
 // without simulating anything twice and ends with the same strategy.
 #include <plr/atomic_file.hpp>
+#include <plr/interface.hpp>
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
@@ -322,3 +323,5 @@ class GeneratorNode : public Node {
 PLR_PLUGIN(
     GeneratorNode, "strategy_generator", "1.0.0", PLR_KIND_GENERATOR,
     "Generates the strategy library L: POMHDP over simulated mass particles, in worker processes")
+// Its workers are processes fed over pipes (truck/worker_pool.hpp), not bus peers.
+PLR_INTERFACE(plr::topic<plr::msg::PipelineDone>("pipeline/done"))

@@ -1,6 +1,7 @@
 // A minimal PLR node to start from: one parameter (`gain`), one topic in
 // (`input`), one topic out (`scaled`) and one service (`scale`). Copy the
 // folder, rename the plug-in, and replace the logic.
+#include <plr/interface.hpp>
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
@@ -67,3 +68,5 @@ class TemplateNode : public plr::Node {
 
 PLR_PLUGIN(TemplateNode, "template_node", "0.1.0", PLR_KIND_OTHER,
            "Template: scales counts by a gain")
+PLR_INTERFACE(plr::topic<plr::msg::Count>("scaled"),
+              plr::service<plr::msg::DoubleRequest, plr::msg::DoubleReply>("scale"))

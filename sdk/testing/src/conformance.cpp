@@ -217,6 +217,41 @@ void refuses_unknown_parameter(const ConformanceOptions& o) {
   PLR_ASSERT_OK(good->cleanup());
 }
 
+bool declared(const plr_interface& interface, const Offer& offer) {
+  for (std::size_t i = 0; i < interface.port_count; ++i) {
+    const plr_port& p = interface.ports[i];
+    if (p.kind != offer.kind || p.name == nullptr || p.type == nullptr || offer.name != p.name ||
+        fnv1a(p.type) != offer.type_id)
+      continue;
+    if (p.kind == PLR_PORT_TOPIC) return true;
+    if (p.reply_type != nullptr && fnv1a(p.reply_type) == offer.reply_type_id) return true;
+  }
+  return false;
+}
+
+// The kernel sizes a run's shared memory from the declaration before any
+// node starts: a topic or service offered but not declared gets no room.
+void declares_what_it_offers(const ConformanceOptions& o) {
+  FakeKernel k(quiet());
+  auto plugin = k.load(o.plugin_path);
+  ASSERT_TRUE(plugin) << plugin.error().message;
+  ASSERT_NE(plugin->interface, nullptr)
+      << "no PLR_INTERFACE(...): declare the topics the node advertises and the services it "
+         "provides (PLR_INTERFACE() when there are none)";
+  auto node = k.create(*plugin, NodeOptions().with_params(o.params_json));
+  ASSERT_TRUE(node) << node.error().message;
+  PLR_ASSERT_OK(node->configure());
+  PLR_ASSERT_OK(node->activate());
+  exercise(k);
+  PLR_ASSERT_OK(node->deactivate());
+  PLR_ASSERT_OK(node->cleanup());
+  for (const Offer& offer : k.offers()) {
+    EXPECT_TRUE(declared(*plugin->interface, offer))
+        << (offer.kind == PLR_PORT_TOPIC ? "topic '" : "service '") << offer.name
+        << "' is offered but not declared with its message types in PLR_INTERFACE(...)";
+  }
+}
+
 }  // namespace
 
 void register_conformance_tests(const ConformanceOptions& options) {
@@ -228,6 +263,7 @@ void register_conformance_tests(const ConformanceOptions& options) {
       {"DeactivateIdempotent", &deactivate_idempotent},
       {"NoLeaks", &no_leaks},
       {"RefusesUnknownParameter", &refuses_unknown_parameter},
+      {"DeclaresWhatItOffers", &declares_what_it_offers},
   };
   for (const auto& [name, body] : checks) {
     ::testing::RegisterTest(

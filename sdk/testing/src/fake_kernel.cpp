@@ -168,6 +168,7 @@ struct Kernel {
   std::map<std::string, std::vector<Sample>> requests;
   std::vector<LogLine> logs;
   std::vector<Rejection> rejections;
+  std::vector<Offer> offers;
   std::uint64_t next_id = 1;
 
   Msg* alloc(std::size_t capacity) {
@@ -315,6 +316,7 @@ plr_status h_advertise(void* ctx, const char* topic, std::uint64_t type_id,
   if (!type_fits(k, lock, *s, name, type_id, "advertise")) return PLR_ERR_INVALID;
   *publisher = k.next_id++;
   k.pubs.emplace(*publisher, Kernel::Pub{s, name, type_id, schema_version});
+  k.offers.push_back({s->name, PLR_PORT_TOPIC, name, type_id, 0});
   return PLR_OK;
 }
 
@@ -413,6 +415,7 @@ plr_status h_provide_flags(void* ctx, const char* service, std::uint64_t request
     return PLR_ERR_INVALID;
   }
   providers.push_back({s, request_type, reply_type, fn, user, {}});
+  k.offers.push_back({s->name, PLR_PORT_SERVICE, name, request_type, reply_type});
   return PLR_OK;
 }
 
@@ -772,7 +775,8 @@ Expected<PluginRef> FakeKernel::load(const std::string& path) {
     return make_error(PLR_ERR_INVALID, error);
   }
   k_->libraries.push_back(lib);
-  return PluginRef{d, path};
+  auto declared = reinterpret_cast<plr_interface_fn>(dlsym(lib, PLR_INTERFACE_SYMBOL));
+  return PluginRef{d, path, declared != nullptr ? declared() : nullptr};
 }
 
 Expected<NodeHandle> FakeKernel::create(const PluginRef& plugin, NodeOptions options) {
@@ -915,6 +919,11 @@ std::vector<Sample> FakeKernel::requests(const std::string& service) const {
 bool FakeKernel::has_provider(const std::string& service) const {
   std::lock_guard lock(k_->m);
   return k_->services.count(service) > 0;
+}
+
+std::vector<Offer> FakeKernel::offers() const {
+  std::lock_guard lock(k_->m);
+  return k_->offers;
 }
 
 std::shared_ptr<detail::CallState> FakeKernel::start_call(

@@ -1,5 +1,6 @@
 // Deliberately broken plug-ins, one flaw each (BROKEN_*): the conformance
 // suite must catch every one of them.
+#include <plr/interface.hpp>
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
@@ -58,6 +59,11 @@ class Broken : public plr::Node {
     params().allow_only({"rate"});
     rate_ = params().get<int>("rate", 1);
 #endif
+#ifdef BROKEN_INTERFACE
+    // Advertised, and left out of the declaration below.
+    if (auto undeclared = ctx().advertise<plr::msg::Count>("undeclared"); !undeclared)
+      return undeclared.error();
+#endif
 #ifdef BROKEN_LEAK
     std::uint8_t* data = nullptr;
     kept = ctx().api()->msg_alloc(ctx().api()->ctx, 8, &data);
@@ -72,5 +78,6 @@ class Broken : public plr::Node {
 }  // namespace
 
 PLR_PLUGIN(Broken, PLUGIN_NAME, "0.0.1", PLR_KIND_OTHER, "broken on purpose")
+PLR_INTERFACE()
 
 #endif

@@ -1,7 +1,8 @@
 // The conformance suite every plug-in passes: a GoogleTest harness that loads
 // the plug-in's library into a FakeKernel and checks its descriptor, its life
 // cycle (order, repetition, refusals, idempotent deactivate), that it leaks
-// nothing, and that it refuses parameters it does not know.
+// nothing, that it refuses parameters it does not know, and that it declares
+// (PLR_INTERFACE) every topic and service it offers.
 //
 // From CMake, use plr_add_conformance_test(<plugin target> [PARAMS <json>]).
 // By hand: plr_conformance <plugin.so> [<params json>] [gtest flags].

@@ -107,6 +107,17 @@ struct Rejection {
 struct PluginRef {
   const plr_plugin_descriptor* descriptor = nullptr;
   std::string path;
+  // What the plug-in declares it offers (plr/interface.hpp); nullptr: nothing declared.
+  const plr_interface* interface = nullptr;
+};
+
+// A topic a node advertised or a service it provided, under its resolved name.
+struct Offer {
+  std::string node;
+  plr_port_kind kind = PLR_PORT_TOPIC;
+  std::string name;
+  std::uint64_t type_id = 0;        // a topic's message; a service's request
+  std::uint64_t reply_type_id = 0;  // a service's reply; 0 for a topic
 };
 
 namespace detail {
@@ -254,6 +265,9 @@ class FakeKernel {
   // Requests the nodes sent to `service` (fake or node-provided), in order.
   std::vector<Sample> requests(const std::string& service) const;
   bool has_provider(const std::string& service) const;
+  // Every topic advertised and service provided by a node so far, in order
+  // (kept after the node withdraws them).
+  std::vector<Offer> offers() const;
 
   // Calls a service as the test. A node's handler runs at the next spin().
   template <class Req, class Rep>
