@@ -238,23 +238,24 @@ class DriverNode : public Node {
                                 joint_states_name_, age, watchdog_s_));
 
     // A trajectory from t = 0 must start where the joints are: the
-    // controller would jump to its first point.
+    // controller would jump to its first point. A simulated world can hold
+    // the robot elsewhere than the joints (restored from a checkpoint after a
+    // crash, say) and the plan came from it: the controller first goes there.
     if (motion.points.front().time_s == 0.0) {
-      for (int j = 0; j < sim::kNumJoints; ++j) {
-        const auto& names = state->sample.names;
-        const auto it = std::find(names.begin(), names.end(), sim::kJointNames[j]);
-        if (it == names.end())
-          return refuse(PLR_ERR_STATE, fmt::format("joint state on {} has no joint {}: nothing "
-                                                   "is sent",
-                                                   joint_states_name_, sim::kJointNames[j]));
-        const double off = std::abs(motion.points.front().position[j] -
-                                    state->sample.position[it - names.begin()]);
-        if (off > start_tolerance_)
-          return refuse(PLR_ERR_STATE,
-                        fmt::format("refused before sending: the trajectory starts {:.4f} from "
-                                    "joint {} (start tolerance {:.4f})",
-                                    off, sim::kJointNames[j], start_tolerance_));
+      auto at_joints = starts_at_joints(motion, state->sample);
+      if (!at_joints && simulated_world()) {
+        log().warn("{}: bringing the controller to the world's robot state first",
+                   at_joints.error().message);
+        const auto moved = realign_with_world();
+        if (!moved)
+          return refuse(PLR_ERR_STATE, "refused before sending: " + at_joints.error().message +
+                                           "; " + moved.error().message);
+        log().info("the controller reached the world's robot state in {:.2f} s", *moved);
+        const auto now = client_.latest_state();
+        at_joints = now ? starts_at_joints(motion, now->sample) : at_joints;
       }
+      if (!at_joints)
+        return refuse(PLR_ERR_STATE, "refused before sending: " + at_joints.error().message);
     }
     GoalRun run = run_goal(goal_of(motion));
     if (!run.sent) return refuse(run.code, run.failure);
@@ -266,9 +267,36 @@ class DriverNode : public Node {
       run.failure += "; " + world.error().message;
     }
     if (!run.failure.empty()) return refuse(run.code, run.failure);
-    if (flatbuffers::GetRoot<msg::ExecuteOutcome>(out.GetBufferPointer())->stalled())
-      realign_with_world();
+    if (flatbuffers::GetRoot<msg::ExecuteOutcome>(out.GetBufferPointer())->stalled() &&
+        simulated_world()) {
+      if (auto moved = realign_with_world(); !moved)
+        log().error("after the world stalled the base: {}", moved.error().message);
+      else
+        log().warn(
+            "the world stalled the base: the controller was brought back to the "
+            "world's robot state in {:.2f} s",
+            *moved);
+    }
     (void)responder.reply(out);
+  }
+
+  // Whether the trajectory starts where `joints` are (within start_tolerance), or how far off.
+  Status starts_at_joints(const actions::Motion& motion,
+                          const ros2::JointStateSample& joints) const {
+    for (int j = 0; j < sim::kNumJoints; ++j) {
+      const auto it = std::find(joints.names.begin(), joints.names.end(), sim::kJointNames[j]);
+      if (it == joints.names.end())
+        return make_error(PLR_ERR_STATE, fmt::format("joint state on {} has no joint {}",
+                                                     joint_states_name_, sim::kJointNames[j]));
+      const double off =
+          std::abs(motion.points.front().position[j] - joints.position[it - joints.names.begin()]);
+      if (off > start_tolerance_)
+        return make_error(PLR_ERR_STATE,
+                          fmt::format("the trajectory starts {:.4f} from joint {} (start "
+                                      "tolerance {:.4f})",
+                                      off, sim::kJointNames[j], start_tolerance_));
+    }
+    return {};
   }
 
   struct GoalRun {
@@ -361,21 +389,26 @@ class DriverNode : public Node {
     return run;
   }
 
-  // The world stopped the base (its boxes pushed back harder than the drive
-  // can push) where the emulated joints, which feel no boxes, went on. Brings
-  // the controller back to where the world holds the robot, to within 1e-5,
-  // so that the next trajectory, planned from the world's state, starts where
-  // the joints are. A real robot stalls by itself; this is for a simulated world.
-  void realign_with_world() {
-    if (world_observe_.empty()) return;
+  // A world that follows the joints (world_execute) and tells where it holds
+  // the robot (world_observe).
+  bool simulated_world() const { return !world_execute_.empty() && !world_observe_.empty(); }
+
+  // Brings the controller to where the world holds the robot, to within
+  // 1e-5, so that a trajectory planned from the world's state starts where
+  // the joints are; returns how long the move took. Needed where the world
+  // is simulated: it stops the base where its boxes push back harder than the
+  // drive can push (the emulated joints feel no boxes and go on), and it can
+  // be restored from a checkpoint. A real robot's world follows the joints.
+  Expected<double> realign_with_world() {
     flatbuffers::FlatBufferBuilder req;
     req.Finish(msg::CreateObserveRequest(req, false));
     auto w = ctx().call<msg::ObserveRequest, msg::WorldState>(world_observe_, req, 30s).get();
     const auto state = client_.latest_state();
     if (!w || !w.value()->robot() || !w.value()->robot()->positions() ||
         w.value()->robot()->positions()->size() != sim::kNumJoints || !state)
-      return log().error("{}: no robot state to realign the controller with after a stall",
-                         world_observe_);
+      return make_error(PLR_ERR_STATE, world_observe_ +
+                                           ": no robot state to bring the "
+                                           "controller to");
     std::vector<double> target(w.value()->robot()->positions()->begin(),
                                w.value()->robot()->positions()->end());
     // Rest to rest in T with a cubic: peak velocity 1.5 d/T, peak acceleration 6 d/T^2.
@@ -383,7 +416,9 @@ class DriverNode : public Node {
     for (int j = 0; j < sim::kNumJoints; ++j) {
       const auto it =
           std::find(state->sample.names.begin(), state->sample.names.end(), sim::kJointNames[j]);
-      if (it == state->sample.names.end()) return;
+      if (it == state->sample.names.end())
+        return make_error(PLR_ERR_STATE, fmt::format("joint state on {} has no joint {}",
+                                                     joint_states_name_, sim::kJointNames[j]));
       const double d =
           std::abs(target[j] - state->sample.position[it - state->sample.names.begin()]);
       const sim::JointLimits& l = robot_->limits(j);
@@ -399,11 +434,8 @@ class DriverNode : public Node {
     g.goal_time_tolerance_s = 2.0;
     const GoalRun run = run_goal(g);
     if (!run.failure.empty())
-      return log().error("realigning the controller with the world after a stall: {}", run.failure);
-    log().warn(
-        "the world stalled the base: the controller was brought back to the world's "
-        "robot state in {:.2f} s",
-        duration * 1.2);
+      return make_error(run.code, "bringing the controller to the world's robot: " + run.failure);
+    return duration * 1.2;
   }
 
   void forget(const ros2::GoalId& id) {
