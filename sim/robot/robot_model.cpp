@@ -107,6 +107,29 @@ void check_tree(const TiXmlElement& robot, const std::string& source) {
   }
 }
 
+// The line of the first byte that is not well-formed UTF-8, or a NUL, if
+// any. TinyXML 2.6 steps over a multi-byte sequence by its lead byte's
+// length: one cut short at the end made it read past the text (fuzzing).
+std::optional<std::size_t> line_of_bad_utf8(const std::string& xml) {
+  std::size_t line = 1;
+  const std::size_t n = xml.size();
+  for (std::size_t i = 0; i < n;) {
+    const auto b = static_cast<unsigned char>(xml[i]);
+    if (b == '\n') ++line;
+    if (b == 0) return line;
+    const std::size_t length = b < 0x80                 ? 1
+                               : b >= 0xC2 && b <= 0xDF ? 2
+                               : b >= 0xE0 && b <= 0xEF ? 3
+                               : b >= 0xF0 && b <= 0xF4 ? 4
+                                                        : 0;
+    if (length == 0 || i + length > n) return line;
+    for (std::size_t k = 1; k < length; ++k)
+      if ((static_cast<unsigned char>(xml[i + k]) & 0xC0) != 0x80) return line;
+    i += length;
+  }
+  return std::nullopt;
+}
+
 // The line of the first element nested deeper than `max_depth`, if any. A
 // scan of tags only (comments, declarations and quoted attribute values
 // skipped), so nothing recursive runs on the text before it is bounded.
@@ -191,6 +214,8 @@ plr::Expected<RobotModel> RobotModel::from_urdf_string(const std::string& xml,
 RobotModel RobotModel::parse_urdf(const std::string& xml, const std::string& source) {
   if (xml.size() > kMaxUrdfBytes)
     fail(source, "larger than " + std::to_string(kMaxUrdfBytes) + " bytes");
+  if (const auto line = line_of_bad_utf8(xml))
+    fail(source, "line " + std::to_string(*line) + ": not UTF-8 text");
   // TinyXML and urdfdom recurse once per level: 60,000 levels overflowed the stack.
   if (const auto line = line_nested_deeper(xml, kMaxUrdfDepth))
     fail(source, "line " + std::to_string(*line) + ": elements nested deeper than " +

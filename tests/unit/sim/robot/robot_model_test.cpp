@@ -162,6 +162,18 @@ TEST(RobotModel, DeepNestingIsRefusedBeforeParsing) {
   EXPECT_EQ(error_of(flat).find("nested deeper"), std::string::npos) << error_of(flat);
 }
 
+// TinyXML read past the text for a multi-byte UTF-8 sequence cut short at
+// its end (fuzzing, ASan: heap-buffer-overflow in TiXmlBase::ReadName).
+TEST(RobotModel, TextThatIsNotUtf8IsRefusedBeforeParsing) {
+  const std::string head = "<robot name='r'>\n<link name='a'/>\n<link ";
+  EXPECT_EQ(error_of(head + "\xDA"), "bad.urdf: line 3: not UTF-8 text");
+  EXPECT_EQ(error_of(head + "name='\xE5\x80'/></robot>"), "bad.urdf: line 3: not UTF-8 text");
+  EXPECT_EQ(error_of(head + std::string("name='b'/>\0</robot>", 19)),
+            "bad.urdf: line 3: not UTF-8 text");
+  // Well-formed multi-byte text passes this check (and fails later, or not at all).
+  EXPECT_EQ(error_of(head + "name='\xC3\xA9'/></robot>").find("UTF-8"), std::string::npos);
+}
+
 // urdfdom leaked the model it built for joints that do not make a tree (fuzzing).
 TEST(RobotModel, JointsThatDoNotMakeATreeAreRefused) {
   const std::string head = "<robot name='r'><link name='a'/><link name='b'/>";
