@@ -224,4 +224,33 @@ plr::Expected<JointStateSample> decode(const sensor_msgs_msg_dds__JointState_& i
   return js;
 }
 
+void encode(const IoCommand& io, std_msgs_msg_dds__Float64MultiArray_& out) {
+  std::vector<double> v = {io.vacuum ? 1.0 : 0.0, io.conveyor ? 1.0 : 0.0};
+  for (bool open : io.cups_open) v.push_back(open ? 1.0 : 0.0);
+  allocate(out.layout.dim, 1);
+  out.layout.dim._buffer[0].label = wire_string("io");
+  out.layout.dim._buffer[0].size = static_cast<std::uint32_t>(v.size());
+  out.layout.dim._buffer[0].stride = static_cast<std::uint32_t>(v.size());
+  out.layout.data_offset = 0;
+  put(out.data, v);
+}
+
+plr::Expected<IoCommand> decode(const std_msgs_msg_dds__Float64MultiArray_& in) {
+  auto v = take(in.data, "io.data");
+  if (!v) return v.error();
+  if (v->size() < 2)
+    return plr::make_error(
+        PLR_ERR_INVALID,
+        fmt::format("io.data: {} values, the vacuum and the conveyor at least", v->size()));
+  for (std::size_t i = 0; i < v->size(); ++i)
+    if ((*v)[i] != 0.0 && (*v)[i] != 1.0)
+      return plr::make_error(PLR_ERR_INVALID,
+                             fmt::format("io.data[{}]: {} is neither 0 nor 1", i, (*v)[i]));
+  IoCommand io;
+  io.vacuum = (*v)[0] == 1.0;
+  io.conveyor = (*v)[1] == 1.0;
+  for (std::size_t i = 2; i < v->size(); ++i) io.cups_open.push_back((*v)[i] == 1.0);
+  return io;
+}
+
 }  // namespace plr::ros2

@@ -1,8 +1,9 @@
 // A robot's joint trajectory controller as ros2_control runs it, emulated in
 // its own process and reached only over DDS with ROS 2's types and names
-// (sim/ros2): the FollowJointTrajectory action server and joint_states. Its
-// clock runs `time_scale` times faster than the wall clock; faults are
-// requested on a std_msgs/String topic (see README.md).
+// (sim/ros2): the FollowJointTrajectory action server and joint_states, and
+// the I/O outputs a forward_command_controller would set. Its clock runs
+// `time_scale` times faster than the wall clock; faults are requested on a
+// std_msgs/String topic (see README.md).
 #include "joint_trajectory_controller.hpp"
 
 #include <plr/actions/unloader_simulation.hpp>
@@ -14,6 +15,7 @@
 #include <plr/ros2/wire.hpp>
 #include <plr/sim/robot_model.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstring>
@@ -45,14 +47,15 @@ class ControllerEmulatorNode : public Node {
 
  protected:
   Status on_configure() override {
-    params().allow_only({"action", "joint_states", "fault_topic", "domain_id", "loopback_only",
-                         "time_scale", "lag_s", "period_s", "initial_positions"});
+    params().allow_only({"action", "joint_states", "fault_topic", "io_commands", "domain_id",
+                         "loopback_only", "time_scale", "lag_s", "period_s", "initial_positions"});
     action_ = params().get<std::string>("action", "/unloader_controller/follow_joint_trajectory");
     joint_states_ = params().get<std::string>("joint_states", "/joint_states");
     fault_topic_ = params().get<std::string>("fault_topic", "/unloader_controller/inject_fault");
+    io_topic_ = params().get<std::string>("io_commands", "/io_controller/commands");
     for (const auto& [key, name] :
          {std::pair{"action", action_}, std::pair{"joint_states", joint_states_},
-          std::pair{"fault_topic", fault_topic_}})
+          std::pair{"fault_topic", fault_topic_}, std::pair{"io_commands", io_topic_}})
       if (auto ok = cm::check_name(name); !ok)
         return make_error(PLR_ERR_INVALID, fmt::format("param '{}': {}", key, ok.error().message));
     const auto domain = params().get<int>("domain_id", 0);
@@ -144,13 +147,16 @@ class ControllerEmulatorNode : public Node {
                           cm::default_qos());
     fault_ =
         reader(cm::topic_name(fault_topic_), &std_msgs_msg_dds__String__desc, cm::default_qos());
+    // As a forward_command_controller for the I/O, which takes the last command on joining.
+    io_ = reader(cm::topic_name(io_topic_), &std_msgs_msg_dds__Float64MultiArray__desc,
+                 cm::status_qos());
     for (dds_entity_t e : {goal_req_, goal_rep_, result_req_, result_rep_, cancel_req_, cancel_rep_,
-                           feedback_, status_, joint_state_, fault_})
+                           feedback_, status_, joint_state_, fault_, io_})
       if (e < 0)
         return make_error(PLR_ERR_INTERNAL, fmt::format("DDS endpoint for action '{}': {}", action_,
                                                         dds_strretcode(e)));
     waitset_ = dds_create_waitset(participant_);
-    for (dds_entity_t r : {goal_req_, result_req_, cancel_req_, fault_}) {
+    for (dds_entity_t r : {goal_req_, result_req_, cancel_req_, fault_, io_}) {
       const dds_entity_t cond = dds_create_readcondition(r, DDS_ANY_STATE);
       dds_waitset_attach(waitset_, cond, 0);
     }
@@ -211,7 +217,19 @@ class ControllerEmulatorNode : public Node {
                                                        [&](const auto& req) { cancel_goal(req); });
     take_all<std_msgs_msg_dds__String_>(fault_,
                                         [&](const auto& m) { inject(m.data ? m.data : ""); });
+    take_all<std_msgs_msg_dds__Float64MultiArray_>(io_, [&](const auto& m) { set_io(m); });
     answer_waiting();
+  }
+
+  // The I/O outputs follow the last command; each change is logged.
+  void set_io(const std_msgs_msg_dds__Float64MultiArray_& m) {
+    auto io = cm::decode(m);
+    if (!io) return log().warn("I/O command on {} refused: {}", io_topic_, io.error().message);
+    if (io_state_ == *io) return;
+    io_state_ = *io;
+    log().info("I/O: vacuum {}, conveyor {}, {} of {} cup valves open", io->vacuum ? "on" : "off",
+               io->conveyor ? "running" : "stopped",
+               std::count(io->cups_open.begin(), io->cups_open.end(), true), io->cups_open.size());
   }
 
   void send_goal(const control_msgs_action_dds__FollowJointTrajectory_SendGoal_Request_& req) {
@@ -371,7 +389,9 @@ class ControllerEmulatorNode : public Node {
   ControllerOptions options_;
   std::vector<double> initial_;
   double scale_ = 1.0, period_ = 0.01;
-  dds_entity_t participant_ = 0, waitset_ = 0;
+  dds_entity_t participant_ = 0, waitset_ = 0, io_ = 0;
+  std::string io_topic_;
+  cm::IoCommand io_state_;
   dds_entity_t goal_req_ = 0, goal_rep_ = 0, result_req_ = 0, result_rep_ = 0, cancel_req_ = 0,
                cancel_rep_ = 0, feedback_ = 0, status_ = 0, joint_state_ = 0, fault_ = 0;
   std::optional<JointTrajectoryController> controller_;

@@ -49,8 +49,10 @@ void take_each(dds_entity_t reader, F&& handle) {
 plr::Status ControllerClient::open(const ClientOptions& options) {
   options_ = options;
   for (const auto& [key, name] :
-       {std::pair{"action", options.action}, std::pair{"joint_states", options.joint_states}})
-    if (auto ok = ros2::check_name(name); !ok)
+       {std::pair{"action", options.action}, std::pair{"joint_states", options.joint_states},
+        std::pair{"io_commands", options.io_commands}})
+    if (auto ok = ros2::check_name(name);
+        !ok && !(name.empty() && key == std::string("io_commands")))
       return plr::make_error(PLR_ERR_INVALID,
                              fmt::format("param '{}': {}", key, ok.error().message));
   auto p = ros2::open_participant(options.domain_id, options.loopback_only);
@@ -77,8 +79,17 @@ plr::Status ControllerClient::open(const ClientOptions& options) {
                        &control_msgs_action_dds__FollowJointTrajectory_FeedbackMessage__desc, true);
   joint_states_ = endpoint(participant_, ros2::topic_name(options.joint_states),
                            &sensor_msgs_msg_dds__JointState__desc, true);
+  if (!options.io_commands.empty()) {
+    // The last command stays with the writer: a controller that (re)joins gets it.
+    const dds_entity_t t =
+        dds_create_topic(participant_, &std_msgs_msg_dds__Float64MultiArray__desc,
+                         ros2::topic_name(options.io_commands).c_str(), nullptr, nullptr);
+    dds_qos_t* qos = ros2::status_qos();
+    io_ = t < 0 ? t : dds_create_writer(participant_, t, qos, nullptr);
+    dds_delete_qos(qos);
+  }
   for (dds_entity_t e : {goal_req_, goal_rep_, result_req_, result_rep_, cancel_req_, cancel_rep_,
-                         feedback_, joint_states_})
+                         feedback_, joint_states_, options.io_commands.empty() ? 1 : io_})
     if (e < 0) {
       close();
       return plr::make_error(PLR_ERR_INTERNAL, fmt::format("DDS endpoint for action '{}': {}",
@@ -179,11 +190,26 @@ bool ControllerClient::wait_matched(dds_entity_t writer, dds_entity_t reader,
     dds_publication_matched_status_t pub{};
     dds_subscription_matched_status_t sub{};
     dds_get_publication_matched_status(writer, &pub);
-    dds_get_subscription_matched_status(reader, &sub);
-    if (pub.current_count > 0 && sub.current_count > 0) return true;
+    if (reader != 0) dds_get_subscription_matched_status(reader, &sub);
+    if (pub.current_count > 0 && (reader == 0 || sub.current_count > 0)) return true;
     if (WallClock::now() > until) return false;
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
+}
+
+plr::Status ControllerClient::send_io(const ros2::IoCommand& io,
+                                      std::chrono::milliseconds timeout) {
+  if (options_.io_commands.empty()) return {};
+  if (!wait_matched(io_, 0, timeout))
+    return plr::make_error(PLR_ERR_UNAVAILABLE,
+                           fmt::format("no I/O controller subscribes to '{}' on ROS 2 domain {}",
+                                       options_.io_commands, options_.domain_id));
+  ros2::Wire<std_msgs_msg_dds__Float64MultiArray_> msg(&std_msgs_msg_dds__Float64MultiArray__desc);
+  ros2::encode(io, msg.msg);
+  if (const dds_return_t rc = dds_write(io_, &msg.msg); rc < 0)
+    return plr::make_error(PLR_ERR_INTERNAL, fmt::format("writing the I/O command to '{}': {}",
+                                                         options_.io_commands, dds_strretcode(rc)));
+  return {};
 }
 
 plr::Status ControllerClient::send_goal(const ros2::GoalId& id, const ros2::TrajectoryGoal& goal,

@@ -6,6 +6,7 @@
 
 #include <plr/expected.hpp>
 #include <plr/ros2/follow_joint_trajectory.hpp>
+#include <plr/ros2/io_command.hpp>
 
 #include <dds/dds.h>
 
@@ -28,6 +29,8 @@ using WallClock = std::chrono::steady_clock;
 struct ClientOptions {
   std::string action = "/unloader_controller/follow_joint_trajectory";
   std::string joint_states = "/joint_states";
+  // Where the I/O commands go (plr/ros2/io_command.hpp); empty: nowhere.
+  std::string io_commands = "/io_controller/commands";
   std::uint32_t domain_id = 0;
   bool loopback_only = false;
 };
@@ -63,6 +66,10 @@ class ControllerClient {
   std::optional<ros2::TrajectoryFeedback> feedback(const ros2::GoalId& id) const;
   // Cancels the goal: the controller holds the joints where they are.
   plr::Status cancel(const ros2::GoalId& id);
+  // Sends the I/O command once an I/O controller subscribes (it gets the
+  // last one on joining, too); an error when none does within `timeout`.
+  // Nothing to do without an `io_commands` topic.
+  plr::Status send_io(const ros2::IoCommand& io, std::chrono::milliseconds timeout);
   // Drops what is kept of a goal that is over.
   void forget(const ros2::GoalId& id);
   // Returns when something arrived, or after `d`.
@@ -71,12 +78,13 @@ class ControllerClient {
  private:
   void run();
   void take_all();
+  // Until `writer` has a subscriber and `reader` (unless 0) a publisher.
   bool wait_matched(dds_entity_t writer, dds_entity_t reader, std::chrono::milliseconds timeout);
 
   ClientOptions options_;
   dds_entity_t participant_ = 0, waitset_ = 0;
   dds_entity_t goal_req_ = 0, goal_rep_ = 0, result_req_ = 0, result_rep_ = 0, cancel_req_ = 0,
-               cancel_rep_ = 0, feedback_ = 0, joint_states_ = 0;
+               cancel_rep_ = 0, feedback_ = 0, joint_states_ = 0, io_ = 0;
   std::uint64_t client_guid_ = 0;
   std::atomic<std::int64_t> sequence_{0};
 

@@ -3,9 +3,11 @@
 // joint trajectory controller over DDS (FollowJointTrajectory, ROS 2 types and
 // names). Safety lives here: joint limits checked before anything is sent, a
 // watchdog on joint_states, an e-stop latch (topic `estop`), nothing sent
-// while not active. The motion as the joints reported it, with the suction and
-// conveyor commands, then goes to the I/O side: `world/execute` (in
-// configs/unload_robot.yaml the simulator, standing in for the trailer).
+// while not active. The suction and conveyor commands go to the I/O
+// controller (`io_commands`, plr/ros2/io_command.hpp). The motion as the
+// joints reported it, with those commands, then goes to the world:
+// `world/execute` (in configs/unload_robot.yaml the simulator, standing in
+// for the trailer).
 #include "controller_client.hpp"
 #include "limit_check.hpp"
 
@@ -16,6 +18,7 @@
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
 #include <plr/sim/robot_model.hpp>
+#include <plr/sim/suction_plate.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -30,6 +33,26 @@ namespace {
 
 using namespace std::chrono_literals;
 
+// The I/O a motion asks for before it (the cups' valves with the vacuum on;
+// the conveyor as it runs during the motion) and after it, from `now`.
+ros2::IoCommand io_before(ros2::IoCommand now, const actions::Motion& motion) {
+  now.conveyor = motion.conveyor;
+  if (motion.before == actions::Suction::kOff) now.vacuum = false;
+  if (motion.before == actions::Suction::kOn) {
+    now.vacuum = true;
+    now.cups_open.assign(now.cups_open.size(), true);
+    for (std::size_t i = 0; i < motion.cups_open.size() && i < now.cups_open.size(); ++i)
+      now.cups_open[i] = motion.cups_open[i];
+  }
+  return now;
+}
+
+ros2::IoCommand io_after(const ros2::IoCommand& now, const actions::Motion& motion) {
+  ros2::IoCommand io = io_before(now, motion);
+  if (motion.after != actions::Suction::kKeep) io.vacuum = motion.after == actions::Suction::kOn;
+  return io;
+}
+
 class DriverNode : public Node {
  public:
   using Node::Node;
@@ -43,7 +66,7 @@ class DriverNode : public Node {
     params().allow_only({"urdf", "action", "joint_states", "domain_id", "loopback_only",
                          "time_scale", "path_tolerance", "goal_tolerance", "goal_time_tolerance_s",
                          "watchdog_s", "accept_timeout_s", "limit_margin", "start_tolerance",
-                         "world_execute", "world_observe"});
+                         "world_execute", "world_observe", "io_commands"});
     auto robot = sim::load_robot(params().get<std::string>("urdf", ""));
     if (!robot) return make_error(PLR_ERR_INVALID, "param 'urdf': " + robot.error().message);
     robot_.emplace(std::move(*robot));
@@ -75,6 +98,7 @@ class DriverNode : public Node {
     ClientOptions c;
     c.action = params().get<std::string>("action", c.action);
     c.joint_states = params().get<std::string>("joint_states", c.joint_states);
+    c.io_commands = params().get<std::string>("io_commands", c.io_commands);
     c.domain_id = static_cast<std::uint32_t>(domain);
     c.loopback_only = params().get<bool>("loopback_only", false);
     joint_states_name_ = c.joint_states;
@@ -216,6 +240,8 @@ class DriverNode : public Node {
                     "e-stop engaged (" + estop_reason() + "): motion refused until it is reset");
     if (motion.points.empty()) {
       // Suction or conveyor alone: I/O only, nothing for the controller.
+      if (auto io = send_io(motion, false); !io) return refuse(io.error().code, io.error().message);
+      if (auto io = send_io(motion, true); !io) return refuse(io.error().code, io.error().message);
       flatbuffers::FlatBufferBuilder out;
       if (auto world = to_world(motion, {}, false, out); !world)
         return refuse(world.error().code, world.error().message);
@@ -257,8 +283,12 @@ class DriverNode : public Node {
       if (!at_joints)
         return refuse(PLR_ERR_STATE, "refused before sending: " + at_joints.error().message);
     }
+    if (auto io = send_io(motion, false); !io) return refuse(io.error().code, io.error().message);
     GoalRun run = run_goal(goal_of(motion));
     if (!run.sent) return refuse(run.code, run.failure);
+    // A motion that stopped early keeps its grip: what it carries stays on the plate.
+    if (run.failure.empty())
+      if (auto io = send_io(motion, true); !io) run.failure = io.error().message;
     // What the joints did goes to the world, even when the motion stopped
     // early: the robot is where it stopped, and what it carries stays on the plate.
     flatbuffers::FlatBufferBuilder out;
@@ -278,6 +308,18 @@ class DriverNode : public Node {
             *moved);
     }
     (void)responder.reply(out);
+  }
+
+  // Sends what the motion asks of the I/O before it (`after` false) or
+  // after it, unless the I/O controller has that already.
+  Status send_io(const actions::Motion& motion, bool after) {
+    std::lock_guard lock(io_m_);
+    const ros2::IoCommand io = after ? io_after(io_, motion) : io_before(io_, motion);
+    if (io == io_) return {};
+    const auto timeout = std::chrono::milliseconds(static_cast<long>(accept_timeout_s_ * 1000));
+    if (auto sent = client_.send_io(io, timeout); !sent) return sent;
+    io_ = io;
+    return {};
   }
 
   // Whether the trajectory starts where `joints` are (within start_tolerance), or how far off.
@@ -520,6 +562,12 @@ class DriverNode : public Node {
   std::optional<sim::RobotModel> robot_;
   ControllerClient client_;
   std::string joint_states_name_, world_execute_, world_observe_;
+  // The I/O last sent: vacuum off, conveyor stopped, every cup valve open.
+  std::mutex io_m_;
+  ros2::IoCommand io_{
+      false, false,
+      std::vector<bool>(
+          static_cast<std::size_t>(sim::SuctionPlate{}.cups_x* sim::SuctionPlate{}.cups_y), true)};
   double time_scale_ = 1.0, path_tolerance_ = 0.1, goal_tolerance_ = 0.01,
          goal_time_tolerance_ = 1.0, watchdog_s_ = 0.5, accept_timeout_s_ = 5.0,
          limit_margin_ = 0.05, start_tolerance_ = 0.01;

@@ -129,6 +129,15 @@ class DriverFaults : public ::testing::Test {
     return false;
   }
 
+  // Waits (real time) until `node` has logged `text`.
+  bool wait_logged(const std::string& node, const std::string& text) const {
+    for (int i = 0; i < 400; ++i) {
+      if (logged(node, text)) return true;
+      std::this_thread::sleep_for(5ms);
+    }
+    return false;
+  }
+
   int domain_ = test_domain();
   plr::testing::FakeKernel k_;
   std::optional<plr::testing::NodeHandle> driver_;
@@ -140,6 +149,59 @@ TEST_F(DriverFaults, AMotionRunsThroughTheEmulatedController) {
   ASSERT_TRUE(r) << r.error().message;
   EXPECT_TRUE(r.value()->ok());
   EXPECT_TRUE(logged("emulator", "SUCCEEDED"));
+}
+
+// The suction and the conveyor reach the I/O controller (here the emulator,
+// as a forward_command_controller) on /io_controller/commands: the vacuum and
+// the cup valves before the motion, the vacuum's release after it.
+TEST_F(DriverFaults, SuctionAndConveyorGoToTheIoControllerAroundTheMotion) {
+  flatbuffers::FlatBufferBuilder fbb;
+  std::vector<double> q(kHome, kHome + 8), zero(8, 0.0);
+  std::vector<flatbuffers::Offset<plr::msg::TrajectoryPoint>> pts = {
+      plr::msg::CreateTrajectoryPointDirect(fbb, 0.0, &q, &zero)};
+  q[0] = 0.3;
+  pts.push_back(plr::msg::CreateTrajectoryPointDirect(fbb, 1.0, &q, &zero));
+  std::vector<uint8_t> cups(20, 1);
+  for (int i = 0; i < 4; ++i) cups[static_cast<std::size_t>(i)] = 0;
+  const auto traj = plr::msg::CreateTrajectory(fbb, fbb.CreateVector(pts));
+  const auto cups_open = fbb.CreateVector(cups);
+  plr::msg::ExecuteRequestBuilder b(fbb);
+  b.add_trajectory(traj);
+  b.add_suction_before(plr::msg::Suction::On);
+  b.add_suction_after(plr::msg::Suction::Off);
+  b.add_conveyor(false);
+  b.add_cups_open(cups_open);
+  fbb.Finish(b.Finish());
+  auto r = wait(execute(fbb));
+  ASSERT_TRUE(r) << r.error().message;
+  EXPECT_TRUE(
+      wait_logged("emulator", "I/O: vacuum on, conveyor stopped, 16 of 20 cup valves open"));
+  EXPECT_TRUE(
+      wait_logged("emulator", "I/O: vacuum off, conveyor stopped, 16 of 20 cup valves open"));
+}
+
+TEST_F(DriverFaults, WithoutAnIoControllerAMotionThatNeedsOneIsRefusedBeforeSending) {
+  auto lonely = k_.load_node(
+      DRIVER_SO,
+      plr::testing::NodeOptions()
+          .with_name("lonely")
+          .with_remap("sim/execute", "lonely/execute")
+          .with_remap("driver/status", "lonely/status")
+          .with_params(R"({"loopback_only": true, "world_execute": "", "accept_timeout_s": 0.5, )"
+                       R"("io_commands": "/nobody/commands", "domain_id": )" +
+                       std::to_string(domain_) + "}"));
+  ASSERT_TRUE(lonely);
+  ASSERT_TRUE(lonely->configure());
+  ASSERT_TRUE(lonely->activate());
+  std::this_thread::sleep_for(500ms);  // its first joint state
+  auto c = k_.call_async<plr::msg::ExecuteRequest, plr::msg::ExecuteOutcome>(
+      "lonely/execute", move_base(0.3, 1.0), 30s);
+  const auto r = wait(c);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().message.find("no I/O controller subscribes to '/nobody/commands'"),
+            std::string::npos)
+      << r.error().message;
+  EXPECT_FALSE(logged("emulator", "goal"));  // the controller never heard of the motion
 }
 
 TEST_F(DriverFaults, ATrajectoryBeyondAJointLimitIsRefusedBeforeSending) {

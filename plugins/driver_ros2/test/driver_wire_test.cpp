@@ -6,6 +6,7 @@
 // sim/ros2.
 #include "control_msgs/action/FollowJointTrajectory.h"
 #include "sensor_msgs/msg/JointState.h"
+#include "std_msgs/msg/Float64MultiArray.h"
 
 #include <dds/dds.h>
 
@@ -37,6 +38,8 @@ constexpr const char* kResultRequest =
 constexpr const char* kResultReply =
     "rr/unloader_controller/follow_joint_trajectory/_action/get_resultReply";
 constexpr const char* kJointStates = "rt/joint_states";
+// The I/O, as ros2_control's forward_command_controller "io_controller" takes it.
+constexpr const char* kIoCommands = "rt/io_controller/commands";
 constexpr const char* kJoints[] = {"base_x", "arm_1",  "arm_2",  "arm_3",
                                    "arm_4",  "nose_1", "nose_2", "nose_3"};
 constexpr double kHome[] = {0.0, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0};
@@ -82,7 +85,7 @@ bool take_one(dds_entity_t reader, T& out, std::chrono::milliseconds timeout) {
   return false;
 }
 
-TEST(DriverWire, TheGoalTheDriverSendsDecodesWithTheRos2Definitions) {
+TEST(DriverWire, WhatTheDriverSendsDecodesWithTheRos2Definitions) {
   const int domain = test_domain();
   const dds_entity_t p = loopback_participant(domain);
   ASSERT_GT(p, 0);
@@ -100,27 +103,36 @@ TEST(DriverWire, TheGoalTheDriverSendsDecodesWithTheRos2Definitions) {
                &control_msgs_action_dds__FollowJointTrajectory_GetResult_Response__desc, false);
   const dds_entity_t states =
       endpoint(p, kJointStates, &sensor_msgs_msg_dds__JointState__desc, false);
-  for (dds_entity_t e : {goals, accepts, result_calls, results, states}) ASSERT_GT(e, 0);
+  const dds_entity_t io =
+      endpoint(p, kIoCommands, &std_msgs_msg_dds__Float64MultiArray__desc, true);
+  for (dds_entity_t e : {goals, accepts, result_calls, results, states, io}) ASSERT_GT(e, 0);
 
   // Joint states from the "controller", so the driver's watchdog is content.
   std::atomic<bool> publishing{true};
-  std::thread publisher([&] {
-    char* names[8];
-    for (int j = 0; j < 8; ++j) names[j] = const_cast<char*>(kJoints[j]);
-    double position[8], velocity[8] = {};
-    std::memcpy(position, kHome, sizeof position);
-    for (std::int32_t k = 0; publishing; ++k) {
-      sensor_msgs_msg_dds__JointState_ js{};
-      js.header.stamp.sec = k / 100;
-      js.header.stamp.nanosec = static_cast<std::uint32_t>(k % 100) * 10000000u;
-      js.header.frame_id = const_cast<char*>("");
-      js.name = {8, 8, names, false};
-      js.position = {8, 8, position, false};
-      js.velocity = {8, 8, velocity, false};
-      dds_write(states, &js);
-      std::this_thread::sleep_for(10ms);
+  struct Stop {
+    std::atomic<bool>& flag;
+    std::thread thread;
+    ~Stop() {
+      flag = false;
+      thread.join();
     }
-  });
+  } publisher{publishing, std::thread([&] {
+                char* names[8];
+                for (int j = 0; j < 8; ++j) names[j] = const_cast<char*>(kJoints[j]);
+                double position[8], velocity[8] = {};
+                std::memcpy(position, kHome, sizeof position);
+                for (std::int32_t k = 0; publishing; ++k) {
+                  sensor_msgs_msg_dds__JointState_ js{};
+                  js.header.stamp.sec = k / 100;
+                  js.header.stamp.nanosec = static_cast<std::uint32_t>(k % 100) * 10000000u;
+                  js.header.frame_id = const_cast<char*>("");
+                  js.name = {8, 8, names, false};
+                  js.position = {8, 8, position, false};
+                  js.velocity = {8, 8, velocity, false};
+                  dds_write(states, &js);
+                  std::this_thread::sleep_for(10ms);
+                }
+              })};
 
   plr::testing::FakeKernel k;
   auto node =
@@ -142,6 +154,18 @@ TEST(DriverWire, TheGoalTheDriverSendsDecodesWithTheRos2Definitions) {
       plr::msg::CreateExecuteRequest(fbb, plr::msg::CreateTrajectory(fbb, fbb.CreateVector(pts))));
   auto call = k.call_async<plr::msg::ExecuteRequest, plr::msg::ExecuteOutcome>("sim/execute", fbb);
   k.spin();
+
+  // Before the goal, the I/O: the conveyor runs during a motion (an
+  // ExecuteRequest's default), the vacuum stays off, all 20 cup valves open.
+  std_msgs_msg_dds__Float64MultiArray_ command{};
+  ASSERT_TRUE(take_one(io, command, 10s)) << "no I/O command on " << kIoCommands;
+  ASSERT_EQ(command.data._length, 22u);
+  EXPECT_EQ(command.data._buffer[0], 0.0) << "vacuum";
+  EXPECT_EQ(command.data._buffer[1], 1.0) << "conveyor";
+  for (std::uint32_t i = 2; i < 22; ++i) EXPECT_EQ(command.data._buffer[i], 1.0) << "cup " << i - 2;
+  ASSERT_EQ(command.layout.dim._length, 1u);
+  EXPECT_EQ(command.layout.dim._buffer[0].size, 22u);
+  dds_sample_free(&command, &std_msgs_msg_dds__Float64MultiArray__desc, DDS_FREE_CONTENTS);
 
   control_msgs_action_dds__FollowJointTrajectory_SendGoal_Request_ goal{};
   ASSERT_TRUE(take_one(goals, goal, 10s)) << "no goal on " << kGoalRequest;
@@ -188,8 +212,6 @@ TEST(DriverWire, TheGoalTheDriverSendsDecodesWithTheRos2Definitions) {
   ASSERT_TRUE(outcome) << outcome.error().message;
   EXPECT_TRUE(outcome.value()->ok());
 
-  publishing = false;
-  publisher.join();
   dds_sample_free(&goal, &control_msgs_action_dds__FollowJointTrajectory_SendGoal_Request__desc,
                   DDS_FREE_CONTENTS);
   dds_sample_free(&asked, &control_msgs_action_dds__FollowJointTrajectory_GetResult_Request__desc,

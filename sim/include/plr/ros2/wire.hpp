@@ -6,6 +6,7 @@
 
 #include <plr/expected.hpp>
 #include <plr/ros2/follow_joint_trajectory.hpp>
+#include <plr/ros2/io_command.hpp>
 
 #include <control_msgs.h>
 #include <sensor_msgs.h>
@@ -43,6 +44,10 @@ plr::Expected<TrajectoryFeedback> decode(
 
 void encode(const JointStateSample& js, sensor_msgs_msg_dds__JointState_& out);
 plr::Expected<JointStateSample> decode(const sensor_msgs_msg_dds__JointState_& in);
+
+void encode(const IoCommand& io, std_msgs_msg_dds__Float64MultiArray_& out);
+// Refuses values other than 0 and 1, and fewer than the vacuum and conveyor.
+plr::Expected<IoCommand> decode(const std_msgs_msg_dds__Float64MultiArray_& in);
 
 // A string of dds_alloc memory (freed with its struct).
 char* wire_string(const std::string& s);
