@@ -8,6 +8,7 @@
 
 #include "plr/sim/framed_file.hpp"
 #include "plr/sim/observation.hpp"
+#include "plr/sim/unaligned.hpp"
 
 namespace plr::sim {
 
@@ -81,8 +82,9 @@ plr::Expected<LibraryEntry> read_entry(const msg::LibraryEntry& m, const std::st
   }
   if (m.curve()) {
     if (m.curve()->size() > kMaxCurve) return error(where, "curve: too many points");
-    for (const msg::BoundPoint* b : *m.curve()) {
-      e.curve.push_back({b->wall_s(), b->lower(), b->upper(), b->trials()});
+    for (flatbuffers::uoffset_t i = 0; i < m.curve()->size(); ++i) {
+      const msg::BoundPoint b = element(*m.curve(), i);
+      e.curve.push_back({b.wall_s(), b.lower(), b.upper(), b.trials()});
     }
   }
   return e;

@@ -1,6 +1,7 @@
 #include "dashboard_state.hpp"
 
 #include <plr/sim/strategy.hpp>
+#include <plr/sim/unaligned.hpp>
 
 #include <Eigen/Geometry>
 
@@ -33,13 +34,14 @@ void DashboardState::update(const msg::WorldState& w) {
   j["stamp_ns"] = w.stamp_ns();
   nlohmann::json boxes = nlohmann::json::array();
   if (w.boxes())
-    for (const auto* b : *w.boxes()) {
-      const auto& p = b->pose().position();
-      const auto& q = b->pose().orientation();
+    for (flatbuffers::uoffset_t i = 0; i < w.boxes()->size(); ++i) {
+      const msg::BoxState b = sim::element(*w.boxes(), i);
+      const auto& p = b.pose().position();
+      const auto& q = b.pose().orientation();
       const Eigen::Matrix3d r = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z()).toRotationMatrix();
-      const Eigen::Vector3d size(b->size().x(), b->size().y(), b->size().z());
+      const Eigen::Vector3d size(b.size().x(), b.size().y(), b.size().z());
       auto box = aabb(Eigen::Vector3d(p.x(), p.y(), p.z()), 0.5 * r.cwiseAbs() * size);
-      box["id"] = b->id();
+      box["id"] = b.id();
       boxes.push_back(std::move(box));
     }
   j["boxes"] = std::move(boxes);
@@ -91,7 +93,10 @@ void DashboardState::update(const msg::ExecutorState& e) {
   j["strategy"] = std::move(strategy);
   nlohmann::json curve = nlohmann::json::array();
   if (e.curve())
-    for (const auto* c : *e.curve()) curve.push_back({c->robot_time_s(), c->boxes()});
+    for (flatbuffers::uoffset_t i = 0; i < e.curve()->size(); ++i) {
+      const msg::CurveSample c = sim::element(*e.curve(), i);
+      curve.push_back({c.robot_time_s(), c.boxes()});
+    }
   j["curve"] = std::move(curve);
   nlohmann::json modes = nlohmann::json::array();
   if (e.modes())
