@@ -14,6 +14,7 @@
 
 #include "plr/msg/sim_state_generated.h"
 #include "plr/sim/physics.hpp"
+#include "plr/sim/unaligned.hpp"
 #include "state.hpp"
 
 namespace plr::sim {
@@ -251,7 +252,7 @@ bool read_links(Reader& r, const flatbuffers::Vector<const msg::SimLink*>* v, co
   if (!r.count(field, v, kMaxLinks)) return false;
   out.resize(size_of(v));
   for (std::size_t i = 0; i < out.size(); ++i) {
-    if (!read_link(r, *v->Get(static_cast<flatbuffers::uoffset_t>(i)), at(field, i), out[i]))
+    if (!read_link(r, element(*v, static_cast<flatbuffers::uoffset_t>(i)), at(field, i), out[i]))
       return false;
   }
   return true;
@@ -309,14 +310,14 @@ bool read_state(Reader& r, const msg::SimulationState& m, Trailer& trailer, Phys
   const std::size_t n = size_of(m.bodies());
   s.bodies.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    if (!read_body(r, *m.bodies()->Get(static_cast<flatbuffers::uoffset_t>(i)), i, s.bodies[i]))
+    if (!read_body(r, element(*m.bodies(), static_cast<flatbuffers::uoffset_t>(i)), i, s.bodies[i]))
       return false;
   }
 
   if (!r.count("pairs", m.pairs(), kMaxPairs)) return false;
   s.pairs.resize(size_of(m.pairs()));
   for (std::size_t i = 0; i < s.pairs.size(); ++i) {
-    const msg::SimPair& p = *m.pairs()->Get(static_cast<flatbuffers::uoffset_t>(i));
+    const msg::SimPair p = element(*m.pairs(), static_cast<flatbuffers::uoffset_t>(i));
     const std::string f = at("pairs", i);
     if (static_cast<unsigned>(p.kind()) > static_cast<unsigned>(msg::SimPairKind::MAX)) {
       return r.fail(f + ".kind",
@@ -355,14 +356,14 @@ bool read_state(Reader& r, const msg::SimulationState& m, Trailer& trailer, Phys
 
   if (!r.count("unloaded", m.unloaded(), n)) return false;
   for (std::size_t i = 0; i < size_of(m.unloaded()); ++i) {
-    const msg::SimUnload& u = *m.unloaded()->Get(static_cast<flatbuffers::uoffset_t>(i));
+    const msg::SimUnload u = element(*m.unloaded(), static_cast<flatbuffers::uoffset_t>(i));
     if (!r.in_range(at("unloaded", i) + ".time", u.time(), 0, 1e9)) return false;
     s.unloaded.push_back({u.box_id(), u.time()});
   }
   if (!r.count("suction_events", m.suction_events(), kMaxSuctionEvents)) return false;
   for (std::size_t i = 0; i < size_of(m.suction_events()); ++i) {
-    const msg::SimSuctionEvent& e =
-        *m.suction_events()->Get(static_cast<flatbuffers::uoffset_t>(i));
+    const msg::SimSuctionEvent e =
+        element(*m.suction_events(), static_cast<flatbuffers::uoffset_t>(i));
     const std::string f = at("suction_events", i);
     if (static_cast<unsigned>(e.kind()) > static_cast<unsigned>(msg::SimSuctionKind::MAX)) {
       return r.fail(f + ".kind",
@@ -379,7 +380,7 @@ bool read_state(Reader& r, const msg::SimulationState& m, Trailer& trailer, Phys
   if (!r.count("belts", m.belts(), kMaxLinks)) return false;
   s.belts.resize(size_of(m.belts()));
   for (std::size_t i = 0; i < s.belts.size(); ++i) {
-    const msg::SimBeltDrive& b = *m.belts()->Get(static_cast<flatbuffers::uoffset_t>(i));
+    const msg::SimBeltDrive b = element(*m.belts(), static_cast<flatbuffers::uoffset_t>(i));
     const std::string f = at("belts", i);
     s.belts[i] = {b.drive(),      b.max_force(), b.speed_fraction(), b.min_speed_fraction(),
                   b.mean_force(), b.peak_force()};
@@ -396,7 +397,7 @@ bool read_state(Reader& r, const msg::SimulationState& m, Trailer& trailer, Phys
   if (!r.count("robot_forces", m.robot_forces(), kMaxLinks)) return false;
   s.robot_forces.resize(size_of(m.robot_forces()));
   for (std::size_t i = 0; i < s.robot_forces.size(); ++i) {
-    const msg::SimRobotForce& f = *m.robot_forces()->Get(static_cast<flatbuffers::uoffset_t>(i));
+    const msg::SimRobotForce f = element(*m.robot_forces(), static_cast<flatbuffers::uoffset_t>(i));
     if (!r.vector(at("robot_forces", i) + ".mean", f.mean(), s.robot_forces[i].mean) ||
         !r.vector(at("robot_forces", i) + ".peak", f.peak(), s.robot_forces[i].peak)) {
       return false;
