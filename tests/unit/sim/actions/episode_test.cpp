@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <set>
 
 #include "plr/sim/generators.hpp"
 
@@ -246,6 +247,40 @@ TEST(RunHardcoded, ABoxLyingOnTheNoseIsShakenOffAndTheWallUnloaded) {
   EXPECT_TRUE(std::any_of(notes.begin(), notes.end(), [](const std::string& n) {
     return n.find("9 on the robot: shaking it off") != std::string::npos;
   }));
+}
+
+// A pile too heavy to sweep out (A2 seed 3 stopped at 0/117 after six
+// sweeps that moved nothing): the drive stalls on it, a sweep that unloaded
+// nothing is not repeated before a box left, and the boxes are picked instead.
+TEST(RunHardcoded, APileNoSweepMovesIsPickedInstead) {
+  sim::World w;
+  w.trailer.depth = 8.0;
+  std::uint32_t id = 1;
+  for (double x : {4.0, 4.42, 4.84})
+    for (double y : {-0.42, 0.0, 0.42}) w.boxes.push_back(box(id++, x, y, 0.0, 60.0));
+  Fixture f(w);
+  const ActionModel model(robot(), options());
+  std::uint32_t sweeps_unloading_nothing = 0, repeated = 0;
+  std::set<sim::Action> idle;  // unloaded nothing since the last box left
+  std::string log;
+  const auto e =
+      run_hardcoded(model, f.backend, sim::HardcodedParams{}, {}, [&](const EpisodeStep& s) {
+        log += sim::to_string(s.action) + ": +" + std::to_string(s.outcome.boxes) + "\n";
+        for (const auto& n : s.notes) log += "  " + n + "\n";
+        const bool out = s.outcome.boxes > 0;
+        if (!out && s.outcome.applicable && sim::kind(s.action) == sim::ActionKind::kSweep)
+          ++sweeps_unloading_nothing;
+        if (idle.count(s.action) > 0) ++repeated;
+        if (out)
+          idle.clear();
+        else
+          idle.insert(s.action);
+      });
+  ASSERT_TRUE(e) << e.error().message;
+  EXPECT_GE(sweeps_unloading_nothing, 2u) << log;  // the world is what this test is about
+  EXPECT_EQ(repeated, 0u) << log;
+  EXPECT_EQ(e->boxes_unloaded, 9u) << e->stop_reason << "\n" << log;
+  EXPECT_EQ(e->robot_trailer_contacts, 0u);
 }
 
 // A box wedged under the raised nose (as a shake can leave one) holds the
