@@ -41,6 +41,8 @@ constexpr double kSealMargin = 0.01;
 // under it is not pulled out), and what it clears the support's top by
 // beyond kClearance.
 constexpr double kMaxLift = 0.15;
+// m between a box's top and the bottom of one resting on it (a settled stack).
+constexpr double kStacked = 0.03;
 constexpr double kLiftSlack = 0.005;
 
 sim::Height height_class(double top, double mid, double high) {
@@ -311,6 +313,20 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       if (rejected) rejected->push_back({box.id, "no face the plate seals on"});
       continue;
     }
+    // The boxes of the wall or pile stacked on this one, each resting on it
+    // or on one of them (those the plate does not seal on keep it in place).
+    std::vector<bool> stacked_on_i(count, false);
+    std::vector<std::size_t> stack{i};
+    for (std::size_t next = 0; next < stack.size(); ++next) {
+      const std::size_t k = stack[next];
+      for (std::size_t j = 0; j < count; ++j)
+        if (j != i && !stacked_on_i[j] && std::abs(b[j].z0 - b[k].z1) < kStacked &&
+            (wall.count(world.boxes[j].id) || front.count(world.boxes[j].id)) &&
+            separation(outline[k], outline[j]) < -kMargin) {
+          stacked_on_i[j] = true;
+          stack.push_back(j);
+        }
+    }
     // The face square to the robot first; where nothing can be taken
     // through it, another side face that still looks towards the robot
     // (a box turned in a heap), the box alone.
@@ -444,10 +460,13 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
         grip.group.push_back(i);
         grip.cups.push_back(own);
         // Every other box of the region whose face the cups reach (with a
-        // margin: a settled box may lean) and that whole cups cover. The cups
-        // over a box of another region stay closed (cups_open): it stays.
+        // margin: a settled box may lean) and that whole cups cover, and the
+        // boxes of the wall or pile stacked on the box itself that they cover
+        // too: the stack comes out together (the plate is as high as two
+        // typical boxes). The cups over any other box stay closed
+        // (cups_open): it stays.
         for (std::size_t j = 0; j < count; ++j) {
-          if (j == i || alternative || !in_region[j] || !faces[j] ||
+          if (j == i || alternative || !(in_region[j] || stacked_on_i[j]) || !faces[j] ||
               !near(p.y() - pw, p.y() + pw, b[j].y0, b[j].y1) ||
               !near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1))
             continue;
