@@ -3,6 +3,8 @@
 // lines, no optimality: what the planner contract takes care of (query
 // checks, judging the goal, the M6 escape, timing the path, the service)
 // it does not repeat.
+#include <plr/interface.hpp>
+#include <plr/messages.hpp>
 #include <plr/plugin.hpp>
 
 #include <array>
@@ -115,3 +117,4 @@ class PlannerBfsNode final : public plr::planning::PlannerNode {
 
 PLR_PLUGIN(PlannerBfsNode, "planner_bfs", "0.1.0", PLR_KIND_PLANNER,
            "breadth-first motion planner (M1, M3, M5) serving `plan`")
+PLR_INTERFACE(plr::service<plr::msg::PlanRequest, plr::msg::PlanResponse>("plan"))
