@@ -38,8 +38,12 @@ constexpr std::size_t kMaxSuctionEvents = 1000000;
 constexpr int kMaxCups = 100;       // per side of the cup grid
 constexpr double kMaxLength = 1e3;  // m; sizes, trailer, positions
 constexpr double kMaxMass = 1e5;    // kg
-constexpr double kMaxSpeed = 1e3;   // m/s and rad/s
-constexpr double kUnit = 1e-6;      // rotations orthonormal and quaternions unit within this
+// Smallest box side and mass: a denormal one made accelerations infinite and
+// Simbody's inertias NaN (found by fuzzing the state bytes).
+constexpr double kMinLength = 1e-3;  // m
+constexpr double kMinMass = 1e-3;    // kg
+constexpr double kMaxSpeed = 1e3;    // m/s and rad/s
+constexpr double kUnit = 1e-6;       // rotations orthonormal and quaternions unit within this
 
 msg::Vec3 to_msg(const Eigen::Vector3d& v) {
   return msg::Vec3(v.x(), v.y(), v.z());
@@ -94,6 +98,12 @@ flatbuffers::Offset<msg::SimOptions> to_msg(flatbuffers::FlatBufferBuilder& fbb,
 }
 
 // The first problem found, as "sim state: <field>: <what is wrong>".
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
 class Reader {
  public:
   bool ok() const { return error_.empty(); }
@@ -126,8 +136,10 @@ class Reader {
   }
   bool extents(const std::string& field, const msg::Vec3& v, Eigen::Vector3d& out) {
     out = from_msg(v);
-    return (out.allFinite() && (out.array() > 0.0).all() && (out.array() <= kMaxLength).all()) ||
-           fail(field, "must be 3 numbers in (0, " + number(kMaxLength) + "]");
+    return (out.allFinite() && (out.array() >= kMinLength).all() &&
+            (out.array() <= kMaxLength).all()) ||
+           fail(field,
+                "must be 3 numbers in [" + number(kMinLength) + ", " + number(kMaxLength) + "]");
   }
   bool transform(const std::string& field, const msg::SimTransform& t, Eigen::Isometry3d& out) {
     out = from_msg(t);
@@ -154,11 +166,6 @@ class Reader {
   }
 
  private:
-  static std::string number(double v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%g", v);
-    return buf;
-  }
   std::string error_;
 };
 
@@ -188,21 +195,31 @@ bool read_options(Reader& r, const msg::SimOptions& m, PhysicsOptions& o) {
   o.wake_speed = m.wake_speed();
   o.wake_depth = m.wake_depth();
   o.belt_inertia = m.belt_inertia();
-  return r.positive("options.step", o.step, 0.01) &&
-         r.in_range("options.gravity", o.gravity, 0, 100) &&
-         r.in_range("options.friction_box", o.friction_box, 0, 10) &&
-         r.in_range("options.friction_trailer", o.friction_trailer, 0, 10) &&
-         r.in_range("options.friction_robot", o.friction_robot, 0, 10) &&
-         r.positive("options.contact_omega", o.contact_omega, 1e5) &&
-         r.in_range("options.damping_ratio", o.damping_ratio, 0, 100) &&
-         r.in_range("options.box_damping_ratio", o.box_damping_ratio, 0, 100) &&
-         r.in_range("options.sleep_speed", o.sleep_speed, 0, 1e3) &&
-         r.in_range("options.sleep_time", o.sleep_time, 0, 1e3) &&
-         r.in_range("options.sleep_ring_speed", o.sleep_ring_speed, 0, 1e3) &&
-         r.in_range("options.sleep_drift", o.sleep_drift, 0, 1e3) &&
-         r.in_range("options.wake_speed", o.wake_speed, 0, 1e3) &&
-         r.in_range("options.wake_depth", o.wake_depth, 0, 1e3) &&
-         r.positive("options.belt_inertia", o.belt_inertia, 1e6);
+  if (!(r.in_range("options.step", o.step, 1e-5, 0.01) &&
+        r.in_range("options.gravity", o.gravity, 0, 100) &&
+        r.in_range("options.friction_box", o.friction_box, 0, 10) &&
+        r.in_range("options.friction_trailer", o.friction_trailer, 0, 10) &&
+        r.in_range("options.friction_robot", o.friction_robot, 0, 10) &&
+        r.in_range("options.contact_omega", o.contact_omega, 1e-3, 1e5) &&
+        r.in_range("options.damping_ratio", o.damping_ratio, 0, 100) &&
+        r.in_range("options.box_damping_ratio", o.box_damping_ratio, 0, 100) &&
+        r.in_range("options.sleep_speed", o.sleep_speed, 0, 1e3) &&
+        r.in_range("options.sleep_time", o.sleep_time, 0, 1e3) &&
+        r.in_range("options.sleep_ring_speed", o.sleep_ring_speed, 0, 1e3) &&
+        r.in_range("options.sleep_drift", o.sleep_drift, 0, 1e3) &&
+        r.in_range("options.wake_speed", o.wake_speed, 0, 1e3) &&
+        r.in_range("options.wake_depth", o.wake_depth, 0, 1e3) &&
+        r.in_range("options.belt_inertia", o.belt_inertia, 1e-6, 1e6)))
+    return false;
+  // The contacts are integrated explicitly: a contact oscillation or its
+  // damping faster than the step makes them diverge (NaN within a step).
+  if (!(o.contact_omega * o.step <= 1.0))
+    return r.fail("options.contact_omega",
+                  "times options.step must be <= 1 (got " + number(o.contact_omega * o.step) + ")");
+  return o.damping_ratio * o.contact_omega * o.step <= 1.0 ||
+         r.fail("options.damping_ratio", "times contact_omega and step must be <= 1 (got " +
+                                             number(o.damping_ratio * o.contact_omega * o.step) +
+                                             ")");
 }
 
 bool read_body(Reader& r, const msg::SimBody& m, std::size_t i, Body& b) {
@@ -217,7 +234,7 @@ bool read_body(Reader& r, const msg::SimBody& m, std::size_t i, Body& b) {
   b.capacity = m.capacity();
   b.load = m.load();
   if (!r.extents(f + ".size", m.size(), b.box.size) ||
-      !r.positive(f + ".mass", b.box.mass, kMaxMass) ||
+      !r.in_range(f + ".mass", b.box.mass, kMinMass, kMaxMass) ||
       !r.transform(f + ".pose", m.pose(), b.box.pose) ||
       !r.speed(f + ".velocity", m.velocity(), b.v) ||
       !r.speed(f + ".angular_velocity", m.angular_velocity(), b.w) ||
@@ -326,8 +343,12 @@ bool read_state(Reader& r, const msg::SimulationState& m, Trailer& trailer, Phys
     PairState& ps = s.pairs[i];
     ps.key = PairKey{p.a(), p.b(), static_cast<std::uint8_t>(p.kind())};
     ps.twist = p.twist();
-    if (!r.vector(f + ".bristle", p.bristle(), ps.bristle) || !r.finite(f + ".twist", ps.twist))
+    if (!r.vector(f + ".bristle", p.bristle(), ps.bristle) ||
+        !r.in_range(f + ".twist", ps.twist, -kMaxLength, kMaxLength))
       return false;
+    // A stretch of 1e306 m made the friction force infinite and the step NaN.
+    if (!(ps.bristle.norm() <= kMaxLength))
+      return r.fail(f + ".bristle", "longer than " + number(kMaxLength) + " m");
     // Looked up by binary search while stepping.
     if (i > 0 && !(s.pairs[i - 1].key < ps.key)) return r.fail(f, "not sorted by (a, b, kind)");
   }

@@ -85,11 +85,14 @@ plr::Status save_data_set(const DataSet& d, const std::filesystem::path& file) {
 }
 
 plr::Expected<DataSet> load_data_set(const std::filesystem::path& file) {
-  const std::string origin = file.string();
   auto bytes = sim::read_bounded_file(file, kMaxDataSetBytes + 8);
   if (!bytes) return bytes.error();
-  auto framed =
-      sim::unframe(bytes->data(), bytes->size(), kMaxDataSetBytes, "a chooser data set", origin);
+  return read_data_set(bytes->data(), bytes->size(), file.string());
+}
+
+plr::Expected<DataSet> read_data_set(const std::uint8_t* data, std::size_t size,
+                                     const std::string& origin) {
+  auto framed = sim::unframe(data, size, kMaxDataSetBytes, "a chooser data set", origin);
   if (!framed) return framed.error();
   if (!msg::ChooserDataBufferHasIdentifier(framed->data))
     return error(origin, "byte 8: not a chooser data set (identifier is not PLRD)");

@@ -59,5 +59,8 @@ struct DataSet {
 plr::Status save_data_set(const DataSet& data, const std::filesystem::path& file);
 // Errors are one line naming the file and what is wrong with it.
 plr::Expected<DataSet> load_data_set(const std::filesystem::path& file);
+// The same from a file's bytes; `origin` names them in errors.
+plr::Expected<DataSet> read_data_set(const std::uint8_t* data, std::size_t size,
+                                     const std::string& origin);
 
 }  // namespace plr::chooser

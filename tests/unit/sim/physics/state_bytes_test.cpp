@@ -273,7 +273,12 @@ TEST_F(FieldErrors, Bodies) {
   EXPECT_EQ(message_of(*t), "accepted");
   ASSERT_GE(t->bodies.size(), 5u);
   t->bodies[3] = with(t->bodies[3], std::nan(""), t->bodies[3].mode());
-  EXPECT_EQ(message_of(*t), "sim state: bodies[3].mass: must be finite, > 0 and <= 100000");
+  EXPECT_EQ(message_of(*t), "sim state: bodies[3].mass: must be in [0.001, 100000]");
+  // A denormal mass made the accelerations infinite and Simbody's inertias
+  // NaN: it threw from the first step (fuzzing).
+  t = state();
+  t->bodies[3] = with(t->bodies[3], 4.6e-308, msg::SimBodyMode::Awake);
+  EXPECT_EQ(message_of(*t), "sim state: bodies[3].mass: must be in [0.001, 100000]");
   t = state();
   t->bodies[0] = with(t->bodies[0], 1.0, static_cast<msg::SimBodyMode>(7));
   EXPECT_EQ(message_of(*t), "sim state: bodies[0].mode: unknown value 7");
@@ -304,6 +309,11 @@ TEST_F(FieldErrors, CountsAndOrder) {
   t->q.pop_back();
   EXPECT_EQ(message_of(*t).rfind("sim state: q: need 7 q and 6 u per slot", 0), 0u);
   t = state();
+  // A stretch this long made the friction force infinite (fuzzing).
+  const msg::SimPair& p = t->pairs[0];
+  t->pairs[0] = msg::SimPair(p.a(), p.b(), p.kind(), msg::Vec3(-1.2e306, 0, 0), p.twist());
+  EXPECT_EQ(message_of(*t), "sim state: pairs[0].bristle: longer than 1000 m");
+  t = state();
   t->q[0] *= 2.0;
   EXPECT_EQ(message_of(*t), "sim state: q[0]: quaternion not unit");
   t = state();
@@ -314,7 +324,10 @@ TEST_F(FieldErrors, CountsAndOrder) {
   EXPECT_EQ(message_of(*t).rfind("sim state: slots: must list exactly the awake bodies", 0), 0u);
   t = state();
   t->options->belt_inertia = 0.0;
-  EXPECT_EQ(message_of(*t), "sim state: options.belt_inertia: must be finite, > 0 and <= 1e+06");
+  EXPECT_EQ(message_of(*t), "sim state: options.belt_inertia: must be in [1e-06, 1e+06]");
+  t = state();
+  t->options->step = 1e-300;  // a step that small would never finish an action
+  EXPECT_EQ(message_of(*t), "sim state: options.step: must be in [1e-05, 0.01]");
   t = state();
   t->plate.reset();
   EXPECT_EQ(message_of(*t), "sim state: plate: plate and plate_target come together");

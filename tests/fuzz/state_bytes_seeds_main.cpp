@@ -1,7 +1,7 @@
 // Writes a few valid simulation states (Snapshot bytes) into a folder: the
-// seed corpus of sim_physics_state_bytes_fuzz.
+// seed corpus of fuzz_state_bytes (tests/fuzz/corpus/state_bytes).
 //
-//   sim_physics_state_seeds DIR
+//   fuzz_state_bytes_seeds DIR
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -26,7 +26,7 @@ bool write(const std::string& path, const Simulation& sim) {
 
 int main(int argc, char** argv) {
   if (argc != 2) {
-    std::fprintf(stderr, "usage: sim_physics_state_seeds DIR\n");
+    std::fprintf(stderr, "usage: fuzz_state_bytes_seeds DIR\n");
     return 2;
   }
   const std::string dir = argv[1];

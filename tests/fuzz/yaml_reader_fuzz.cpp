@@ -1,10 +1,6 @@
-// Fuzz target of the YAML reader: any bytes, read the way a file format
-// reads them, must end in a value or an error, never a crash or a hang.
-//
-// Built with clang and -DPLR_FUZZ=ON it is a libFuzzer binary:
-//   build-fuzz/bin/sdk_yaml_reader_fuzz tests/unit/sdk/yaml_reader_corpus
-// Otherwise a plain program that runs the files it is given once each (the
-// corpus, as a test).
+// Fuzz target: the YAML reader under every file format (plr/yaml_reader.hpp).
+// Any bytes, read the way a file format reads them, must end in a value or
+// an error, never a crash or a hang.
 #include <plr/yaml_reader.hpp>
 
 #include <cstddef>
@@ -48,34 +44,3 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (!doc->ok()) (void)doc->error();
   return 0;
 }
-
-#ifndef PLR_LIBFUZZER
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <iterator>
-#include <vector>
-
-// Runs each file given, and each file in each folder given, once.
-int main(int argc, char** argv) {
-  std::vector<std::filesystem::path> files;
-  for (int i = 1; i < argc; ++i) {
-    if (std::filesystem::is_directory(argv[i])) {
-      for (const auto& e : std::filesystem::directory_iterator(argv[i])) files.push_back(e.path());
-    } else {
-      files.emplace_back(argv[i]);
-    }
-  }
-  for (const auto& f : files) {
-    std::ifstream in(f, std::ios::binary);
-    if (!in) {
-      std::fprintf(stderr, "%s: cannot read\n", f.c_str());
-      return 1;
-    }
-    const std::vector<char> bytes{std::istreambuf_iterator<char>(in), {}};
-    LLVMFuzzerTestOneInput(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size());
-  }
-  std::printf("%zu inputs read\n", files.size());
-  return files.empty() ? 1 : 0;
-}
-#endif

@@ -1,9 +1,8 @@
-// libFuzzer target for Snapshot::from_bytes (built with -DPLR_FUZZ=ON and
-// clang). Bytes are refused with a "sim state: " message, or they make a
-// state that writes back to the same bytes' meaning and that steps.
-//
-//   sim_physics_state_seeds corpus/   # a few valid states to start from
-//   sim_physics_state_bytes_fuzz corpus/ -max_total_time=120
+// Fuzz target: the simulation state bytes (Snapshot::from_bytes), what a
+// checkpoint on disk and a simulation worker's request hold. Bytes are
+// refused with a "sim state: " message, or they make a state that writes
+// back to the same bytes' meaning and that steps. Seeds: corpus/state_bytes,
+// written by state_bytes_seeds_main.cpp.
 #include <cstdlib>
 #include <vector>
 
