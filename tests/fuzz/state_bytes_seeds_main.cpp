@@ -55,6 +55,6 @@ int main(int argc, char** argv) {
   ok = ok && write(dir + "/moving.psim", sim);
   sim.settle(2.0);
   ok = ok && write(dir + "/resting.psim", sim);
-  if (!ok) std::fprintf(stderr, "sim_physics_state_seeds: cannot write to %s\n", dir.c_str());
+  if (!ok) std::fprintf(stderr, "fuzz_state_bytes_seeds: cannot write to %s\n", dir.c_str());
   return ok ? 0 : 1;
 }
