@@ -200,8 +200,10 @@ bool ControllerClient::wait_matched(dds_entity_t writer, dds_entity_t reader,
 plr::Status ControllerClient::send_io(const ros2::IoCommand& io,
                                       std::chrono::milliseconds timeout) {
   if (options_.io_commands.empty()) return {};
+  // PLR_ERR_STATE, as the driver's other refusals: UNAVAILABLE would tell
+  // the executor that its simulator restarted.
   if (!wait_matched(io_, 0, timeout))
-    return plr::make_error(PLR_ERR_UNAVAILABLE,
+    return plr::make_error(PLR_ERR_STATE,
                            fmt::format("no I/O controller subscribes to '{}' on ROS 2 domain {}",
                                        options_.io_commands, options_.domain_id));
   ros2::Wire<std_msgs_msg_dds__Float64MultiArray_> msg(&std_msgs_msg_dds__Float64MultiArray__desc);

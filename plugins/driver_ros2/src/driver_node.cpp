@@ -287,8 +287,8 @@ class DriverNode : public Node {
     GoalRun run = run_goal(goal_of(motion));
     if (!run.sent) return refuse(run.code, run.failure);
     // A motion that stopped early keeps its grip: what it carries stays on the plate.
-    if (run.failure.empty())
-      if (auto io = send_io(motion, true); !io) run.failure = io.error().message;
+    if (auto io = run.failure.empty() ? send_io(motion, true) : Status{}; !io)
+      run.failure = io.error().message;
     // What the joints did goes to the world, even when the motion stopped
     // early: the robot is where it stopped, and what it carries stays on the plate.
     flatbuffers::FlatBufferBuilder out;
