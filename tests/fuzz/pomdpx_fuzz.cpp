@@ -5,16 +5,11 @@
 #include <string_view>
 
 #include "pomdp/pomdpx_reader.hpp"
+#include "pomdp_limits.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  plr::pomdp::ReadLimits limits;
-  limits.max_states = 2000;
-  limits.max_actions = 64;
-  limits.max_observations = 64;
-  limits.max_state_actions = 20000;
-  limits.max_entries = 200000;
   const auto m = plr::pomdp::parse_pomdpx(
-      std::string_view(reinterpret_cast<const char*>(data), size), "fuzz", limits);
+      std::string_view(reinterpret_cast<const char*>(data), size), "fuzz", fuzz_limits());
   if (!m && m.error().message.rfind("fuzz:", 0) != 0) __builtin_trap();
   return 0;
 }

@@ -42,7 +42,8 @@ class BfsPlanner final : public plr::planning::Planner {
       for (int j : joints) g[j] = jg->q[j];
       goals.push_back(g);
     } else {
-      for (const JointVector& g : checker.robot().arm_ik(std::get<PoseGoal>(q.goal).target, q.start))
+      for (const JointVector& g :
+           checker.robot().arm_ik(std::get<PoseGoal>(q.goal).target, q.start))
         if (checker.is_valid(g)) goals.push_back(g);
     }
     const auto deadline = std::chrono::steady_clock::now() +
