@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <unordered_set>
 
 #include "plr/msg/sim_state_generated.h"
 #include "plr/sim/physics.hpp"
@@ -326,9 +327,14 @@ bool read_state(Reader& r, const msg::SimulationState& m, Trailer& trailer, Phys
   if (!r.count("bodies", m.bodies(), kMaxBodies)) return false;
   const std::size_t n = size_of(m.bodies());
   s.bodies.resize(n);
+  std::unordered_set<std::uint32_t> ids;
   for (std::size_t i = 0; i < n; ++i) {
     if (!read_body(r, element(*m.bodies(), static_cast<flatbuffers::uoffset_t>(i)), i, s.bodies[i]))
       return false;
+    // Pairs, grips and unload events name boxes by id.
+    if (!ids.insert(s.bodies[i].box.id).second)
+      return r.fail(at("bodies", i) + ".id",
+                    "box " + std::to_string(s.bodies[i].box.id) + " is there twice");
   }
 
   if (!r.count("pairs", m.pairs(), kMaxPairs)) return false;

@@ -292,6 +292,16 @@ TEST_F(FieldErrors, Bodies) {
                    b.still(), b.rest(), b.grip(), b.capacity(), b.load());
   EXPECT_EQ(message_of(*t), "sim state: bodies[2].pose: rotation must be orthonormal and proper");
   t = state();
+  // Two bodies of one id, one of them where another box is: the first step
+  // threw from Simbody (NaN inertia; fuzzing).
+  t->bodies[3] =
+      msg::SimBody(t->bodies[1].id(), t->bodies[3].mode(), t->bodies[3].size(), t->bodies[3].mass(),
+                   t->bodies[3].pose(), t->bodies[3].velocity(), t->bodies[3].angular_velocity(),
+                   t->bodies[3].still(), t->bodies[3].rest(), t->bodies[3].grip(),
+                   t->bodies[3].capacity(), t->bodies[3].load());
+  EXPECT_EQ(message_of(*t), "sim state: bodies[3].id: box " + std::to_string(t->bodies[1].id()) +
+                                " is there twice");
+  t = state();
   t->bodies.resize(10001, t->bodies[0]);
   EXPECT_EQ(message_of(*t), "sim state: bodies: 10001 entries, at most 10000");
 }
