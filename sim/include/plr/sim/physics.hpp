@@ -124,6 +124,7 @@ struct PhysicsStats {
   std::int64_t body_steps = 0;          // sum over steps of awake boxes
   std::int64_t rebuilds = 0;            // Simbody systems built for a new awake set
   std::int64_t belt_limited_steps = 0;  // steps with a running belt below its speed
+  std::int64_t diverged = 0;            // boxes stopped by the divergence guard
   double wall_seconds = 0.0;            // time spent in step()
   int awake = 0, asleep = 0, held = 0, removed = 0;
 };
