@@ -14,11 +14,15 @@ namespace {
 
 constexpr std::size_t kKeptStates = 100000;
 
+// With ROS 2's default QoS unless `qos` is given (taken over).
 dds_entity_t endpoint(dds_entity_t participant, const std::string& name,
-                      const dds_topic_descriptor_t* desc, bool is_reader) {
+                      const dds_topic_descriptor_t* desc, bool is_reader,
+                      dds_qos_t* qos = ros2::default_qos()) {
   const dds_entity_t t = dds_create_topic(participant, desc, name.c_str(), nullptr, nullptr);
-  if (t < 0) return t;
-  dds_qos_t* qos = ros2::default_qos();
+  if (t < 0) {
+    dds_delete_qos(qos);
+    return t;
+  }
   const dds_entity_t e = is_reader ? dds_create_reader(participant, t, qos, nullptr)
                                    : dds_create_writer(participant, t, qos, nullptr);
   dds_delete_qos(qos);
@@ -48,11 +52,11 @@ void take_each(dds_entity_t reader, F&& handle) {
 
 plr::Status ControllerClient::open(const ClientOptions& options) {
   options_ = options;
-  for (const auto& [key, name] :
-       {std::pair{"action", options.action}, std::pair{"joint_states", options.joint_states},
-        std::pair{"io_commands", options.io_commands}})
-    if (auto ok = ros2::check_name(name);
-        !ok && !(name.empty() && key == std::string("io_commands")))
+  std::vector<std::pair<const char*, std::string>> names = {{"action", options.action},
+                                                            {"joint_states", options.joint_states}};
+  if (!options.io_commands.empty()) names.emplace_back("io_commands", options.io_commands);
+  for (const auto& [key, name] : names)
+    if (auto ok = ros2::check_name(name); !ok)
       return plr::make_error(PLR_ERR_INVALID,
                              fmt::format("param '{}': {}", key, ok.error().message));
   auto p = ros2::open_participant(options.domain_id, options.loopback_only);
@@ -79,17 +83,12 @@ plr::Status ControllerClient::open(const ClientOptions& options) {
                        &control_msgs_action_dds__FollowJointTrajectory_FeedbackMessage__desc, true);
   joint_states_ = endpoint(participant_, ros2::topic_name(options.joint_states),
                            &sensor_msgs_msg_dds__JointState__desc, true);
-  if (!options.io_commands.empty()) {
-    // The last command stays with the writer: a controller that (re)joins gets it.
-    const dds_entity_t t =
-        dds_create_topic(participant_, &std_msgs_msg_dds__Float64MultiArray__desc,
-                         ros2::topic_name(options.io_commands).c_str(), nullptr, nullptr);
-    dds_qos_t* qos = ros2::status_qos();
-    io_ = t < 0 ? t : dds_create_writer(participant_, t, qos, nullptr);
-    dds_delete_qos(qos);
-  }
+  // The last I/O command stays with the writer: a controller that (re)joins gets it.
+  if (!options.io_commands.empty())
+    io_ = endpoint(participant_, ros2::topic_name(options.io_commands),
+                   &std_msgs_msg_dds__Float64MultiArray__desc, false, ros2::status_qos());
   for (dds_entity_t e : {goal_req_, goal_rep_, result_req_, result_rep_, cancel_req_, cancel_rep_,
-                         feedback_, joint_states_, options.io_commands.empty() ? 1 : io_})
+                         feedback_, joint_states_, io_})
     if (e < 0) {
       close();
       return plr::make_error(PLR_ERR_INTERNAL, fmt::format("DDS endpoint for action '{}': {}",

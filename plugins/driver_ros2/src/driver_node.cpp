@@ -322,16 +322,26 @@ class DriverNode : public Node {
     return {};
   }
 
-  // Whether the trajectory starts where `joints` are (within start_tolerance), or how far off.
-  Status starts_at_joints(const actions::Motion& motion,
-                          const ros2::JointStateSample& joints) const {
+  // The sample's positions in the robot's joint order.
+  Expected<sim::JointVector> positions_of(const ros2::JointStateSample& joints) const {
+    sim::JointVector q;
     for (int j = 0; j < sim::kNumJoints; ++j) {
       const auto it = std::find(joints.names.begin(), joints.names.end(), sim::kJointNames[j]);
       if (it == joints.names.end())
         return make_error(PLR_ERR_STATE, fmt::format("joint state on {} has no joint {}",
                                                      joint_states_name_, sim::kJointNames[j]));
-      const double off =
-          std::abs(motion.points.front().position[j] - joints.position[it - joints.names.begin()]);
+      q[j] = joints.position[static_cast<std::size_t>(it - joints.names.begin())];
+    }
+    return q;
+  }
+
+  // Whether the trajectory starts where `joints` are (within start_tolerance), or how far off.
+  Status starts_at_joints(const actions::Motion& motion,
+                          const ros2::JointStateSample& joints) const {
+    const auto q = positions_of(joints);
+    if (!q) return q.error();
+    for (int j = 0; j < sim::kNumJoints; ++j) {
+      const double off = std::abs(motion.points.front().position[j] - (*q)[j]);
       if (off > start_tolerance_)
         return make_error(PLR_ERR_STATE,
                           fmt::format("the trajectory starts {:.4f} from joint {} (start "
@@ -455,14 +465,10 @@ class DriverNode : public Node {
                                w.value()->robot()->positions()->end());
     // Rest to rest in T with a cubic: peak velocity 1.5 d/T, peak acceleration 6 d/T^2.
     double duration = 0.1;
+    const auto q = positions_of(state->sample);
+    if (!q) return q.error();
     for (int j = 0; j < sim::kNumJoints; ++j) {
-      const auto it =
-          std::find(state->sample.names.begin(), state->sample.names.end(), sim::kJointNames[j]);
-      if (it == state->sample.names.end())
-        return make_error(PLR_ERR_STATE, fmt::format("joint state on {} has no joint {}",
-                                                     joint_states_name_, sim::kJointNames[j]));
-      const double d =
-          std::abs(target[j] - state->sample.position[it - state->sample.names.begin()]);
+      const double d = std::abs(target[static_cast<std::size_t>(j)] - (*q)[j]);
       const sim::JointLimits& l = robot_->limits(j);
       duration = std::max({duration, 1.5 * d / l.velocity, std::sqrt(6.0 * d / l.acceleration)});
     }
