@@ -196,8 +196,9 @@ bool read_options(Reader& r, const msg::SimOptions& m, PhysicsOptions& o) {
   o.wake_speed = m.wake_speed();
   o.wake_depth = m.wake_depth();
   o.belt_inertia = m.belt_inertia();
+  // The contact damping divides by gravity (the mass a contact carries).
   if (!(r.in_range("options.step", o.step, 1e-5, 0.01) &&
-        r.in_range("options.gravity", o.gravity, 0, 100) &&
+        r.in_range("options.gravity", o.gravity, 0.1, 100) &&
         r.in_range("options.friction_box", o.friction_box, 0, 10) &&
         r.in_range("options.friction_trailer", o.friction_trailer, 0, 10) &&
         r.in_range("options.friction_robot", o.friction_robot, 0, 10) &&
