@@ -430,9 +430,10 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
           if (span->max > -kProud - kClearance) {
             if (g.grasp_gap - span->min > back) proud = j;
             back = std::max(back, g.grasp_gap - span->min);
-          } else if (-span->max - kClearance < room) {
+          } else if (-span->max - kClearance - plate_depth < room) {
+            // The plate's body stands behind its surface.
             before = j;
-            room = -span->max - kClearance;
+            room = -span->max - kClearance - plate_depth;
           }
         }
         if (back - g.grasp_gap > kProud) {

@@ -261,7 +261,10 @@ TEST(PickCandidates, ABoxInFrontLeavesANearerPreGrasp) {
   const double approach = (k->grasp.position - k->pregrasp.position).norm();
   EXPECT_LT(approach, Geometry{}.pregrasp_distance);
   EXPECT_LE(k->pregrasp.position.x(), 10.0 - 0.08 + 1e-9);
-  EXPECT_GE(k->pregrasp.position.x(), 9.8);
+  // The plate's 5 cm body, behind its surface, stays clear of box 2 (B2
+  // seed 2: the pre-grasp went into a box lying in front, and the box behind
+  // it, the only one left to pick, was never taken).
+  EXPECT_GE(k->pregrasp.position.x() - 0.05, 9.8);
 }
 
 TEST(CoveredCups, CountsTheCupsWhoseRimLiesOnTheFace) {
