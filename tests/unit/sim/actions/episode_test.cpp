@@ -9,7 +9,9 @@
 #include <cstdio>
 #include <set>
 
+#include "plr/actions/instantiate.hpp"
 #include "plr/sim/generators.hpp"
+#include "plr/sim/hardcoded_strategy.hpp"
 
 #include "scene.hpp"
 
@@ -280,6 +282,43 @@ TEST(RunHardcoded, APileNoSweepMovesIsPickedInstead) {
   EXPECT_GE(sweeps_unloading_nothing, 2u) << log;  // the world is what this test is about
   EXPECT_EQ(repeated, 0u) << log;
   EXPECT_EQ(e->boxes_unloaded, 9u) << e->stop_reason << "\n" << log;
+  EXPECT_EQ(e->robot_trailer_contacts, 0u);
+}
+
+// A wall set back behind a row of boxes too shallow to sweep (as a partly
+// unloaded, stair-stepped wall leaves them; B2 seed 3 stopped at 0/82 after
+// six picks at one height found nothing reachable): the nose must stay short
+// of the row, and from there no arm pose reaches the wall. H's pick at the
+// wall's height is not applicable; the run gives way to the row's height,
+// and once the row is out, the wall is in reach.
+TEST(RunHardcoded, NothingReachableAtTheFirstHeightGivesWayToAnother) {
+  sim::World w = wall(6.2, 3, 3);
+  const std::uint32_t wall_boxes = static_cast<std::uint32_t>(w.boxes.size());
+  for (double y : {-0.41, 0.0, 0.41})
+    w.boxes.push_back(box(static_cast<std::uint32_t>(w.boxes.size() + 1), 4.0, y, 0.0));
+  Fixture f(w);
+  const ActionModel model(robot(), options());
+  const auto seen = f.backend.observe();
+  ASSERT_TRUE(seen);
+  const auto scene = model.scene(*seen, f.memory);
+  const sim::Action first = sim::hardcoded_action(scene, sim::HardcodedParams{});
+  ASSERT_EQ(sim::kind(first), sim::ActionKind::kPick);
+  std::vector<PickRejection> why;
+  EXPECT_TRUE(pick_candidates(seen->world, scene, first, options().observation, robot(), Geometry{},
+                              seen->q, 3, {}, &why)
+                  .empty());
+  ASSERT_FALSE(why.empty());
+  for (const auto& r : why) {
+    EXPECT_LE(r.box, wall_boxes);
+    EXPECT_NE(r.why.find("no arm pose reaches"), std::string::npos) << r.why;
+  }
+  std::string log;
+  const auto e =
+      run_hardcoded(model, f.backend, sim::HardcodedParams{}, {}, [&](const EpisodeStep& s) {
+        log += sim::to_string(s.action) + ": +" + std::to_string(s.outcome.boxes) + "\n";
+      });
+  ASSERT_TRUE(e) << e.error().message;
+  EXPECT_EQ(e->boxes_unloaded, e->boxes_total) << e->stop_reason << "\n" << log;
   EXPECT_EQ(e->robot_trailer_contacts, 0u);
 }
 
