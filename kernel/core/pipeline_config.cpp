@@ -318,6 +318,14 @@ yaml::Limits config_limits() {
 }
 
 // Overrides first, then the checks; nothing of the config is used before they pass.
+// Who reads a file of PLR's other formats (a hint after the error).
+std::string reader_of(const std::string& format) {
+  if (format == "plr-evaluation") return " (`plr evaluate FILE` reads it)";
+  if (format == "plr-chooser-training") return " (`plr chooser train FILE` reads it)";
+  if (format == "plr-world") return " (a simulator node's `world_file` param reads it)";
+  return "";
+}
+
 Expected<PipelineConfig> read(Expected<yaml::Document> doc, const std::string& file_name,
                               const std::vector<Override>& overrides) {
   if (!doc) return doc.error();
@@ -330,6 +338,14 @@ Expected<PipelineConfig> read(Expected<yaml::Document> doc, const std::string& f
   if (!root.is_map()) {
     root.error(root.is_null() ? "the config is empty (expected a map with a 'nodes' key)"
                               : "expected a map at the top level, got " + root.describe());
+    return doc->error();
+  }
+  // PLR's other files (an evaluation's or a training's settings, a world)
+  // say what they are: named as such rather than read as a pipeline.
+  if (const Node format = root.map().find("format"); format.present()) {
+    const std::string what = format.string("a file format name").value_or("");
+    if (!what.empty())
+      format.error(fmt::format("a '{}' file, not a pipeline config{}", what, reader_of(what)));
     return doc->error();
   }
   return doc->result(build(root, file_name));

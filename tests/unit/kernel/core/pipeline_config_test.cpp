@@ -130,6 +130,15 @@ TEST(PipelineConfig, UnknownKeySuggestsClosest) {
             "configs/x.yaml:3:24: topics.t.dpeth: unknown key 'dpeth' (did you mean 'depth'?)");
 }
 
+// configs/evaluate.yaml given to `plr validate` listed a dozen unknown keys.
+TEST(PipelineConfig, AnotherPlrFileIsNamedNotReadAsAPipeline) {
+  EXPECT_EQ(error_of("# settings\nformat: plr-evaluation\nseeds: 10\n"),
+            "configs/x.yaml:2:9: format: a 'plr-evaluation' file, not a pipeline config "
+            "(`plr evaluate FILE` reads it)");
+  EXPECT_EQ(error_of("format: plr-something\nnodes: {a: {plugin: x}}\n"),
+            "configs/x.yaml:1:9: format: a 'plr-something' file, not a pipeline config");
+}
+
 TEST(PipelineConfig, UnknownKeyWithoutNearMatchListsKnownKeys) {
   EXPECT_EQ(error_of("nodes: {a: {plugin: x}}\nwhatever: 1\n"),
             "configs/x.yaml:2:1: whatever: unknown key 'whatever' (known keys: pipeline, "
