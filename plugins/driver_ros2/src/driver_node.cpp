@@ -194,6 +194,7 @@ class DriverNode : public Node {
       estop_ = true;
       log().error("e-stop engaged ({}): halting, motion refused until reset", reason);
       cancel_active("e-stop");
+      stop_conveyor();
     } else if (estop_) {
       estop_ = false;
       log().info("e-stop reset{}{}", reason.empty() ? "" : ": ", reason);
@@ -308,6 +309,20 @@ class DriverNode : public Node {
             *moved);
     }
     (void)responder.reply(out);
+  }
+
+  // The belt stops with the robot. The vacuum stays as it is: released, it
+  // would drop a held box.
+  void stop_conveyor() {
+    std::lock_guard lock(io_m_);
+    if (!io_.conveyor) return;
+    ros2::IoCommand io = io_;
+    io.conveyor = false;
+    const auto timeout = std::chrono::milliseconds(static_cast<long>(accept_timeout_s_ * 1000));
+    if (auto sent = client_.send_io(io, timeout); !sent)
+      log().error("e-stop: the conveyor could not be stopped: {}", sent.error().message);
+    else
+      io_ = io;
   }
 
   // Sends what the motion asks of the I/O before it (`after` false) or

@@ -272,6 +272,32 @@ TEST_F(DriverFaults, EStopMidTrajectoryHaltsAndRefusesMotionUntilReset) {
   EXPECT_TRUE(again) << again.error().message;
 }
 
+// The belt stops with the robot; the vacuum stays on (a held box is not
+// dropped).
+TEST_F(DriverFaults, EStopStopsTheConveyorAndKeepsTheVacuum) {
+  flatbuffers::FlatBufferBuilder fbb;
+  std::vector<double> q(kHome, kHome + 8), zero(8, 0.0);
+  std::vector<flatbuffers::Offset<plr::msg::TrajectoryPoint>> pts = {
+      plr::msg::CreateTrajectoryPointDirect(fbb, 0.0, &q, &zero)};
+  q[0] = 0.5;
+  pts.push_back(plr::msg::CreateTrajectoryPointDirect(fbb, 2.0, &q, &zero));
+  const auto traj = plr::msg::CreateTrajectory(fbb, fbb.CreateVector(pts));
+  plr::msg::ExecuteRequestBuilder b(fbb);
+  b.add_trajectory(traj);
+  b.add_suction_before(plr::msg::Suction::On);
+  b.add_suction_after(plr::msg::Suction::Keep);
+  b.add_conveyor(true);
+  fbb.Finish(b.Finish());
+  auto c = execute(fbb);
+  ASSERT_TRUE(wait_progress(0.2));
+  ASSERT_TRUE(wait_logged("emulator", "I/O: vacuum on, conveyor running"));
+  flatbuffers::FlatBufferBuilder stop;
+  stop.Finish(plr::msg::CreateEStopDirect(stop, true, "operator"));
+  ASSERT_TRUE(k_.publish<plr::msg::EStop>("estop", stop));
+  EXPECT_FALSE(wait(c));
+  EXPECT_TRUE(wait_logged("emulator", "I/O: vacuum on, conveyor stopped"));
+}
+
 TEST_F(DriverFaults, ANewMotionPreemptsTheRunningOne) {
   auto first = execute(move_base(0.5, 3.0));
   ASSERT_TRUE(wait_progress(0.1));
