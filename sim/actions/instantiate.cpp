@@ -787,6 +787,15 @@ std::optional<SweepPlan> sweep_plan(const sim::World& world, const sim::SceneAna
       far = near + g.sweep_high_in;
       break;
   }
+  // The nose comes down (or up to its lift) before it drives in: short of
+  // every box of the scene at its height too, not only of those it sweeps
+  // (A2 seed 12: a floor layer behind the wall's foot, and the lowered scoop
+  // met the wall).
+  for (const auto& box : world.boxes) {
+    if (!front.count(box.id) && !wall.count(box.id)) continue;
+    const auto b = sim::bounds(box);
+    if (b.z0 < p.lift + g.nose_top + kMargin && b.z1 > p.lift) near = std::min(near, b.x0);
+  }
   // The sweep starts just short of what it sweeps, wherever the base stands:
   // what rides out on the scoop is carried back that far, not across the
   // trailer.

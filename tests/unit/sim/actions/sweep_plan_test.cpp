@@ -94,6 +94,33 @@ TEST(SweepPlan, TheLowSweepStopsAtTheWallBehindThePile) {
   EXPECT_NEAR(mid->end_base_x + tip, 11.0 + g.sweep_dig, 1e-9);
 }
 
+// A floor layer beside the wall's foot, further in than the wall's face (A2
+// seed 12: no sweep could lower its scoop, "goal: nose_scoop - box 80"):
+// the nose, as wide as the trailer, comes down short of the wall too.
+TEST(SweepPlan, TheNoseComesDownShortOfTheWallBesideAFloorLayerBeyondIt) {
+  sim::World w = trailer();
+  std::uint32_t id = 1;
+  for (int col = -2; col <= 0; ++col)
+    for (int row = 0; row < 4; ++row)
+      w.boxes.push_back(make_box(id++, 10.2, 0.41 * col, 0.4 * row));
+  for (double x : {10.6, 11.0}) w.boxes.push_back(make_box(id++, x, 0.82, 0));
+  const sim::SceneAnalysis scene = sim::analyse(w, [] {
+    sim::ObservationParams obs;
+    obs.h_pile = 1.35;
+    return obs;
+  }());
+  ASSERT_FALSE(scene.first_wall.empty());
+  ASSERT_FALSE(scene.front_pile.empty());
+  ASSERT_GT(scene.pile_near_x, scene.wall_near_x + 0.2);  // the world is what this is about
+  const Geometry g;
+  const double tip = g.conveyor_length + 0.3 + g.scoop_lip;
+  for (Height h : {Height::kLow, Height::kMid}) {
+    const auto p = plan(w, h);
+    ASSERT_TRUE(p) << sim::to_string(h);
+    EXPECT_LE(p->start_base_x + tip, 10.0 - g.nose_clearance + 1e-9) << sim::to_string(h);
+  }
+}
+
 TEST(SweepPlan, ABoxStrayedTowardsTheDoorIsLowSweptOnItsOwn) {
   // A box 4 m short of the floor layer: the low sweep takes it alone,
   // instead of pushing it on into the layer beyond; it stops just short of
