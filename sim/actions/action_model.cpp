@@ -58,10 +58,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// m: how far the base backs away, per try and in all, from a box lying
-// where the nose is to go (the nose reaches 1.6 m with its scoop out).
-constexpr double kBackAway = 0.4, kMaxBackAway = 1.6;
-
 // Unwinds an action when its backend fails in a way that ends it; run()
 // turns it back into the error.
 struct Aborted {
@@ -340,21 +336,6 @@ class Run {
         p = plan_goal(mode, w, goal, ignored);
       }
     }
-    // A box lying where the nose is to go (one a shake or a collapsing pile
-    // left under the raised nose): the base backs away from it, step by
-    // step up to about a nose's length, until the nose can go there.
-    for (double back = kBackAway; !p.ok && p.status == PlanStatus::kGoalInvalid &&
-                                  mode == PlanMode::kNose && !recovering_ && back <= kMaxBackAway;
-         back += kBackAway) {
-      recovering_ = true;
-      const bool backed = step("back away from what is under the nose", PlanMode::kBaseLine,
-                               joints({{sim::kBaseX, w.q[sim::kBaseX] - kBackAway}}),
-                               Suction::kKeep, Suction::kKeep, leave_out);
-      recovering_ = false;
-      if (!backed) break;
-      w = observe();
-      p = plan_goal(mode, w, goal, ignored);
-    }
     if (!p.ok) {
       note(fmt::format("{} not planned: {}", what, p.message));
       step_failure_ = what + " not planned: " + p.message;
@@ -369,12 +350,12 @@ class Run {
     // Backing away, the base is held only by what the nose pins to the
     // floor (a box wedged under it): lifted, the nose lets go, and the base
     // tries once more.
-    if (done->stalled && mode == PlanMode::kBaseLine && !recovering_ && backwards(goal, w)) {
-      recovering_ = true;
+    if (done->stalled && mode == PlanMode::kBaseLine && !freeing_ && backwards(goal, w)) {
+      freeing_ = true;
       const bool freed = step("nose up to free the base", PlanMode::kNose,
                               nose({g_.nose_lift_max, 0.0, 0.0}), Suction::kKeep, Suction::kKeep) &&
                          step(what, mode, goal, Suction::kKeep, Suction::kKeep, leave_out);
-      recovering_ = false;
+      freeing_ = false;
       return freed;
     }
     return true;
@@ -728,7 +709,7 @@ class Run {
   std::uint32_t unloaded_at_start_ = 0;
   std::vector<std::uint32_t> last_held_;
   std::string step_failure_;  // why the last step that failed did
-  bool recovering_ = false;   // freeing a stalled base, or backing the nose away from a box
+  bool freeing_ = false;      // lifting the nose to free a stalled base
   double time_scale_ = 1.0;   // of the trajectories executed: > 1 carries a dropped box slower
 };
 

@@ -322,47 +322,6 @@ TEST(RunHardcoded, NothingReachableAtTheFirstHeightGivesWayToAnother) {
   EXPECT_EQ(e->robot_trailer_contacts, 0u);
 }
 
-// A box lies on the robot's body, and a tall one stands on the floor under
-// the nose, which is raised high above it (A2 seeds 8 and 10: after a wall
-// came down over the robot, "nose home not planned: goal invalid: goal:
-// nose_conveyor - box 104", and the shake left the nose up). The shake's
-// nose poses would meet the tall box: the base backs away from it first,
-// and the shake ends with the nose home.
-TEST(ActionModel, ANoseThatCannotComeDownOverABoxBacksAwayFromIt) {
-  sim::World w = wall(6.0, 3, 1);
-  sim::JointVector q = home();
-  q[sim::kBaseX] = 2.5;
-  q[sim::kNose1] = 0.8;
-  q[sim::kNose2] = 0.0;
-  q[sim::kNose3] = 0.0;
-  w.boxes.push_back(box(9, 2.5 - 1.3, 0.35, 0.55));  // on the body, beside the turret
-  sim::Box tall = box(10, 2.5 + 0.3, 0.0, 0.0);      // 16 cm under the raised conveyor
-  tall.size.z() = 0.7;
-  tall.pose.translation().z() = 0.35;
-  w.boxes.push_back(tall);
-  UnloaderSimulation simulation(robot(), w, q);
-  InProcessBackend backend(simulation, planner());
-  const ActionModel model(robot(), options());
-  Memory memory;
-  std::vector<std::string> steps, notes;
-  Reporter reporter;
-  reporter.progress = [&](const std::string& s) { steps.push_back(s); };
-  reporter.note = [&](const std::string& n) { notes.push_back(n); };
-  const auto out =
-      model.run(sim::make_pick(sim::Height::kLow, sim::Side::kCenter), backend, memory, reporter);
-  ASSERT_TRUE(out) << out.error().message;
-  std::string log;
-  for (const auto& n : notes) log += n + "\n";
-  EXPECT_NE(std::find(steps.begin(), steps.end(), "back away from what is under the nose"),
-            steps.end())
-      << log;
-  EXPECT_TRUE(std::none_of(notes.begin(), notes.end(), [](const std::string& n) {
-    return n.find("nose up not planned") != std::string::npos ||
-           n.find("nose home not planned") != std::string::npos;
-  })) << log;
-  EXPECT_EQ(out->robot_trailer_contacts, 0u);
-}
-
 // A box wedged under the raised nose (as a shake can leave one) holds the
 // base when it backs away to start a sweep: the drive stalls at once. The
 // nose lifts off the box and the base backs away to start the sweep.
