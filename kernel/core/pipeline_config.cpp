@@ -317,7 +317,6 @@ yaml::Limits config_limits() {
   return limits;
 }
 
-// Overrides first, then the checks; nothing of the config is used before they pass.
 // Who reads a file of PLR's other formats (a hint after the error).
 std::string reader_of(const std::string& format) {
   if (format == "plr-evaluation") return " (`plr evaluate FILE` reads it)";
@@ -325,6 +324,8 @@ std::string reader_of(const std::string& format) {
   if (format == "plr-world") return " (a simulator node's `world_file` param reads it)";
   return "";
 }
+
+// Overrides first, then the checks; nothing of the config is used before they pass.
 
 Expected<PipelineConfig> read(Expected<yaml::Document> doc, const std::string& file_name,
                               const std::vector<Override>& overrides) {

@@ -318,8 +318,7 @@ class DriverNode : public Node {
     if (!io_.conveyor) return;
     ros2::IoCommand io = io_;
     io.conveyor = false;
-    const auto timeout = std::chrono::milliseconds(static_cast<long>(accept_timeout_s_ * 1000));
-    if (auto sent = client_.send_io(io, timeout); !sent)
+    if (auto sent = client_.send_io(io, to_ms(accept_timeout_s_)); !sent)
       log().error("e-stop: the conveyor could not be stopped: {}", sent.error().message);
     else
       io_ = io;
@@ -331,8 +330,7 @@ class DriverNode : public Node {
     std::lock_guard lock(io_m_);
     const ros2::IoCommand io = after ? io_after(io_, motion) : io_before(io_, motion);
     if (io == io_) return {};
-    const auto timeout = std::chrono::milliseconds(static_cast<long>(accept_timeout_s_ * 1000));
-    if (auto sent = client_.send_io(io, timeout); !sent) return sent;
+    if (auto sent = client_.send_io(io, to_ms(accept_timeout_s_)); !sent) return sent;
     io_ = io;
     return {};
   }

@@ -151,27 +151,34 @@ TEST_F(DriverFaults, AMotionRunsThroughTheEmulatedController) {
   EXPECT_TRUE(logged("emulator", "SUCCEEDED"));
 }
 
+// A base move from home by `dx` in `seconds`, with what it asks of the I/O.
+void io_motion(flatbuffers::FlatBufferBuilder& fbb, double dx, double seconds,
+               plr::msg::Suction before, plr::msg::Suction after, bool conveyor,
+               const std::vector<uint8_t>& cups_open = {}) {
+  std::vector<double> q(kHome, kHome + 8), zero(8, 0.0);
+  std::vector<flatbuffers::Offset<plr::msg::TrajectoryPoint>> pts = {
+      plr::msg::CreateTrajectoryPointDirect(fbb, 0.0, &q, &zero)};
+  q[0] += dx;
+  pts.push_back(plr::msg::CreateTrajectoryPointDirect(fbb, seconds, &q, &zero));
+  const auto traj = plr::msg::CreateTrajectory(fbb, fbb.CreateVector(pts));
+  const auto cups = cups_open.empty() ? 0 : fbb.CreateVector(cups_open);
+  plr::msg::ExecuteRequestBuilder b(fbb);
+  b.add_trajectory(traj);
+  b.add_suction_before(before);
+  b.add_suction_after(after);
+  b.add_conveyor(conveyor);
+  if (!cups_open.empty()) b.add_cups_open(cups);
+  fbb.Finish(b.Finish());
+}
+
 // The suction and the conveyor reach the I/O controller (here the emulator,
 // as a forward_command_controller) on /io_controller/commands: the vacuum and
 // the cup valves before the motion, the vacuum's release after it.
 TEST_F(DriverFaults, SuctionAndConveyorGoToTheIoControllerAroundTheMotion) {
-  flatbuffers::FlatBufferBuilder fbb;
-  std::vector<double> q(kHome, kHome + 8), zero(8, 0.0);
-  std::vector<flatbuffers::Offset<plr::msg::TrajectoryPoint>> pts = {
-      plr::msg::CreateTrajectoryPointDirect(fbb, 0.0, &q, &zero)};
-  q[0] = 0.3;
-  pts.push_back(plr::msg::CreateTrajectoryPointDirect(fbb, 1.0, &q, &zero));
   std::vector<uint8_t> cups(20, 1);
   for (int i = 0; i < 4; ++i) cups[static_cast<std::size_t>(i)] = 0;
-  const auto traj = plr::msg::CreateTrajectory(fbb, fbb.CreateVector(pts));
-  const auto cups_open = fbb.CreateVector(cups);
-  plr::msg::ExecuteRequestBuilder b(fbb);
-  b.add_trajectory(traj);
-  b.add_suction_before(plr::msg::Suction::On);
-  b.add_suction_after(plr::msg::Suction::Off);
-  b.add_conveyor(false);
-  b.add_cups_open(cups_open);
-  fbb.Finish(b.Finish());
+  flatbuffers::FlatBufferBuilder fbb;
+  io_motion(fbb, 0.3, 1.0, plr::msg::Suction::On, plr::msg::Suction::Off, false, cups);
   auto r = wait(execute(fbb));
   ASSERT_TRUE(r) << r.error().message;
   EXPECT_TRUE(
@@ -276,18 +283,7 @@ TEST_F(DriverFaults, EStopMidTrajectoryHaltsAndRefusesMotionUntilReset) {
 // dropped).
 TEST_F(DriverFaults, EStopStopsTheConveyorAndKeepsTheVacuum) {
   flatbuffers::FlatBufferBuilder fbb;
-  std::vector<double> q(kHome, kHome + 8), zero(8, 0.0);
-  std::vector<flatbuffers::Offset<plr::msg::TrajectoryPoint>> pts = {
-      plr::msg::CreateTrajectoryPointDirect(fbb, 0.0, &q, &zero)};
-  q[0] = 0.5;
-  pts.push_back(plr::msg::CreateTrajectoryPointDirect(fbb, 2.0, &q, &zero));
-  const auto traj = plr::msg::CreateTrajectory(fbb, fbb.CreateVector(pts));
-  plr::msg::ExecuteRequestBuilder b(fbb);
-  b.add_trajectory(traj);
-  b.add_suction_before(plr::msg::Suction::On);
-  b.add_suction_after(plr::msg::Suction::Keep);
-  b.add_conveyor(true);
-  fbb.Finish(b.Finish());
+  io_motion(fbb, 0.5, 2.0, plr::msg::Suction::On, plr::msg::Suction::Keep, true);
   auto c = execute(fbb);
   ASSERT_TRUE(wait_progress(0.2));
   ASSERT_TRUE(wait_logged("emulator", "I/O: vacuum on, conveyor running"));
