@@ -526,7 +526,18 @@ bool DdsBridge::send_call(RemoteCall call) {
     for (const auto& [k, p] : peers_)
       if (p.services.count(call.service) && !call.tried.count(k)) live.push_back(&k);
     if (live.empty()) return false;
-    target = *live[round_robin_++ % live.size()];
+    // The provider with the fewest of our calls waiting on it, so a slow or
+    // busy one is not handed work while another idles; ties take turns.
+    std::map<std::string, std::size_t> waiting;
+    for (const auto& [c, pending] : calls_)
+      if (pending.service == call.service) ++waiting[pending.kernel];
+    const std::size_t start = round_robin_++;
+    std::size_t best = live.size();
+    for (std::size_t k = 0; k < live.size(); ++k) {
+      const std::size_t i = (start + k) % live.size();
+      if (best == live.size() || waiting[*live[i]] < waiting[*live[best]]) best = i;
+    }
+    target = *live[best];
     corr = next_corr_++;
     call.kernel = target;
     call.sent = Clock::now();

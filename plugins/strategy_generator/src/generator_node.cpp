@@ -25,6 +25,8 @@
 #include <mutex>
 #include <thread>
 
+#include <plr/msg/generator_generated.h>
+
 #include "plr/sim/library.hpp"
 #include "plr/sim/world_io.hpp"
 #include "truck/generate.hpp"
@@ -51,6 +53,23 @@ std::string duration(double s) {
   return t >= 60 ? fmt::format("{}m{:02d}s", t / 60, t % 60) : fmt::format("{}s", t);
 }
 
+// A job with a remote worker: a call of its kernel's sim/simulate.
+class ServiceJob final : public generator::RemoteJob {
+ public:
+  explicit ServiceJob(Future<msg::WorkerFrame> call) : call_(std::move(call)) {}
+  ~ServiceJob() override { call_.cancel(); }
+  bool done() const override { return call_.ready(); }
+  Expected<std::vector<std::uint8_t>> take() override {
+    auto reply = call_.get();
+    if (!reply) return reply.error();
+    const auto v = reply->view();
+    return std::vector<std::uint8_t>(v.data, v.data + v.size);
+  }
+
+ private:
+  Future<msg::WorkerFrame> call_;
+};
+
 // The worker program beside this process's executable (build/bin).
 std::string default_worker() {
   std::error_code ec;
@@ -64,9 +83,11 @@ class GeneratorNode : public Node {
 
  protected:
   Status on_configure() override {
-    params().allow_only({"library", "checkpoint_dir", "worlds", "particles", "horizon", "epsilon1",
-                         "epsilon2", "trials", "target_gap", "seed", "seconds_per_box", "action_s",
-                         "workers", "worker_program", "observation", "progress", "max_wall_s",
+    params().allow_only({"library",          "checkpoint_dir", "worlds",          "particles",
+                         "horizon",          "epsilon1",       "epsilon2",        "trials",
+                         "target_gap",       "seed",           "seconds_per_box", "action_s",
+                         "workers",          "worker_program", "remote_workers",  "remote_service",
+                         "remote_timeout_s", "observation",    "progress",        "max_wall_s",
                          "complete_tree"});
     library_ = params().require<std::string>("library");
     checkpoint_dir_ = params().get<std::string>("checkpoint_dir", library_ + ".checkpoint");
@@ -74,6 +95,9 @@ class GeneratorNode : public Node {
     seed_ = params().get<std::uint64_t>("seed", 1);
     workers_ = params().get<int>("workers", 2);
     worker_program_ = params().get<std::string>("worker_program", default_worker());
+    remote_workers_ = params().get<int>("remote_workers", 0);
+    remote_service_ = params().get<std::string>("remote_service", "sim/simulate");
+    remote_timeout_s_ = params().get<double>("remote_timeout_s", 600);
     show_progress_ = params().get<bool>("progress", true);
     GenerateOptions& o = options_;
     o.truck.horizon = params().get<int>("horizon", o.truck.horizon);
@@ -95,6 +119,11 @@ class GeneratorNode : public Node {
     if (workers_ < 0 || workers_ > 256)
       return make_error(PLR_ERR_INVALID,
                         fmt::format("param 'workers': {} is not in 0..256", workers_));
+    if (remote_workers_ < 0 || remote_workers_ > 256)
+      return make_error(PLR_ERR_INVALID, fmt::format("param 'remote_workers': {} is not in 0..256",
+                                                     remote_workers_));
+    if (!(remote_timeout_s_ > 0) || remote_timeout_s_ > 86400)
+      return make_error(PLR_ERR_INVALID, "param 'remote_timeout_s': must be in (0, 86400]");
     if (!(o.epsilon1 >= 1) || !(o.epsilon2 >= 1))
       return make_error(PLR_ERR_INVALID, "params 'epsilon1', 'epsilon2': must be >= 1");
     if (!(o.truck.seconds_per_box > 0) || !(o.truck.action_s > 0))
@@ -178,16 +207,27 @@ class GeneratorNode : public Node {
       }
       library = std::move(*loaded);
     }
-    auto runner = generator::ActionRunner::create(observation_);
+    auto runner = generator::JobRunner::create(observation_);
     if (!runner) {
       why = runner.error().message;
       return false;
     }
     std::unique_ptr<generator::Simulator> simulator;
-    if (workers_ == 0) {
+    if (workers_ == 0 && remote_workers_ == 0) {
       simulator = std::make_unique<generator::LocalSimulator>(**runner);
     } else {
-      auto pool = generator::WorkerPool::create({worker_program_, workers_, observation_json_, 3});
+      generator::WorkerPoolOptions pool_options;
+      pool_options.command = worker_program_;
+      pool_options.workers = workers_;
+      pool_options.observation_json = observation_json_;
+      pool_options.remote_workers = remote_workers_;
+      const auto timeout = std::chrono::duration_cast<std::chrono::nanoseconds>(
+          std::chrono::duration<double>(remote_timeout_s_));
+      pool_options.remote_send = [this, timeout](const flatbuffers::FlatBufferBuilder& job) {
+        return std::make_unique<ServiceJob>(
+            ctx().call<msg::WorkerFrame, msg::WorkerFrame>(remote_service_, job, timeout));
+      };
+      auto pool = generator::WorkerPool::create(pool_options);
       if (!pool) {
         why = pool.error().message;
         return false;
@@ -272,6 +312,10 @@ class GeneratorNode : public Node {
           e.provenance.simulations, result->simulated, e.provenance.wall_s);
       ++made;
     }
+    if (const auto* pool = dynamic_cast<const generator::WorkerPool*>(simulator.get());
+        pool && remote_workers_ > 0)
+      log().info("remote workers: {} jobs answered, {} calls failed (re-issued)",
+                 pool->remote_done(), pool->remote_failures());
     why = fmt::format("library {}: {} strategies ({} made now)", library_, library.entries.size(),
                       made);
     return true;
@@ -305,8 +349,9 @@ class GeneratorNode : public Node {
     }
   }
 
-  std::string library_, checkpoint_dir_, worker_program_, observation_json_;
-  int particles_ = 5, workers_ = 2;
+  std::string library_, checkpoint_dir_, worker_program_, observation_json_, remote_service_;
+  int particles_ = 5, workers_ = 2, remote_workers_ = 0;
+  double remote_timeout_s_ = 600;
   std::uint64_t seed_ = 1;
   bool show_progress_ = true, tty_ = false;
   GenerateOptions options_;
@@ -323,5 +368,6 @@ class GeneratorNode : public Node {
 PLR_PLUGIN(
     GeneratorNode, "strategy_generator", "1.0.0", PLR_KIND_GENERATOR,
     "Generates the strategy library L: POMHDP over simulated mass particles, in worker processes")
-// Its workers are processes fed over pipes (truck/worker_pool.hpp), not bus peers.
+// Its local workers are processes fed over pipes (truck/worker_pool.hpp), not
+// bus peers; its remote ones are called as sim/simulate (remote_service).
 PLR_INTERFACE(plr::topic<plr::msg::PipelineDone>("pipeline/done"))

@@ -68,8 +68,8 @@ Problem block_problem(const std::string& name, const std::vector<double>& masses
   return p;
 }
 
-ActionRunner& runner() {
-  static auto r = ActionRunner::create(sim::testing::small_scene_observation()).value();
+JobRunner& runner() {
+  static auto r = JobRunner::create(sim::testing::small_scene_observation()).value();
   return *r;
 }
 
@@ -136,7 +136,10 @@ TEST(Generator, AWorkerKilledMidRunChangesNothing) {
   const auto alone = generate(p, o, runner(), local, nullptr);
   ASSERT_TRUE(alone) << alone.error().message;
 
-  auto pool = WorkerPool::create({PLR_SIM_WORKER, 2, p.observation_json, 3});
+  WorkerPoolOptions options;
+  options.command = PLR_SIM_WORKER;
+  options.observation_json = p.observation_json;
+  auto pool = WorkerPool::create(options);
   ASSERT_TRUE(pool) << pool.error().message;
   // SIGKILL the first worker while it simulates, once the search is past its
   // first trial (the root's batch done).

@@ -1,16 +1,21 @@
 // Strategy generation, measured: time to one strategy (5 particles,
 // horizon 6 by default) for A1 and B1 worlds with 1 and 2 local simulation
-// workers; simulated actions per second; the root's bounds at the end; the
+// workers, and with 2 local + 2 remote ones (a worker kernel in another
+// network namespace, over DDS: `plr run` of the generator node, as a user
+// runs it); simulated actions per second; the root's bounds at the end; the
 // tree's size. Each generation starts from nothing (no journal). With more
 // than one worker count, the strategies must come out the same; the bench
 // says whether they did. Then each strategy runs open loop from its own
 // world on mass particles not used for planning, against strategy H over
 // the same number of actions.
 //
-//   bench_generate [--quick] [--json] [--worlds A1:1,B1:1] [--workers 1,2]
+//   bench_generate [--quick] [--json] [--worlds A1:1,B1:1] [--workers 1,2,2+2]
 //                  [--trials N] [--particles N] [--horizon N] [--eval N]
 //                  [--partial-tree]
 //   bench_generate --library FILE [--eval N] [--json]   (evaluation only)
+// --workers: a list of L (local worker processes) or L+R (and R remote
+// workers: one worker kernel with R threads in a network namespace; on
+// loopback where namespaces are not permitted, which the output says).
 // --partial-tree: the strategy stops at beliefs no trial expanded (no
 // simulations to unroll it; with --trials 1 that measures the root's batch).
 // --quick: one full-size strategy (5 particles, horizon 6) for A1 seed 1
@@ -24,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "plr/actions/in_process.hpp"
@@ -33,6 +39,7 @@
 #include "plr/sim/library.hpp"
 #include "plr/sim/physics.hpp"
 #include "plr/sim/shipped_files.hpp"
+#include "remote_fixture.hpp"
 #include "truck/generate.hpp"
 #include "truck/worker_pool.hpp"
 
@@ -45,6 +52,25 @@ using Clock = std::chrono::steady_clock;
 struct WorldSpec {
   sim::EnvFamily family;
   std::uint64_t seed;
+};
+
+// Where the simulations run: `local` worker processes (0 with no remote
+// ones: in this process) and `remote` worker threads on "another machine".
+struct Workers {
+  int local = 1, remote = 0;
+  std::string name() const {
+    return remote > 0 ? std::to_string(local) + "+" + std::to_string(remote)
+                      : std::to_string(local);
+  }
+};
+
+// What one generation gave.
+struct Generated {
+  sim::LibraryEntry entry;
+  double wall_s = 0;
+  std::uint64_t simulated = 0;
+  double simulated_robot_s = NAN, simulated_wall_s = NAN;  // unknown over DDS
+  std::string note;
 };
 
 std::vector<std::string> split(const std::string& s) {
@@ -63,9 +89,75 @@ std::string worker_program(const char* argv0) {
   return ec ? std::string(argv0) : (self.parent_path() / "plr_sim_worker").string();
 }
 
+// A generation by `plr run` of the generator node with w.local local
+// workers and w.remote remote ones: a simulation_worker kernel with
+// w.remote threads in another network namespace, over DDS. The wall time
+// is the generator's own (its provenance), without the kernels' start.
+plr::Expected<Generated> generate_over_dds(const std::string& bin_dir, const WorldSpec& world,
+                                           const GenerateOptions& o, int particles,
+                                           const Workers& w) {
+  namespace rt = plr::remote_test;
+  namespace fs = std::filesystem;
+  rt::VethNamespace net;
+  const fs::path dir = fs::temp_directory_path() / ("bench_generate_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const int domain = 40 + ::getpid() % 60;
+  const std::string plr = bin_dir + "/plr";
+  const auto worker = rt::write_file(
+      (dir / "worker.yaml").string(),
+      fmt::format("pipeline: bench_sim_worker\nnodes:\n  worker:\n    plugin: simulation_worker\n"
+                  "    params: {{threads: {}}}\nremote:\n  dds: {{domain: {}, interfaces: [{}], "
+                  "export: [\"sim/simulate\"]}}\n",
+                  w.remote, domain, net.there));
+  rt::Proc worker_kernel(
+      net.target(), std::vector<std::string>{plr, "run", worker, "--report", (dir / "w").string()},
+      (dir / "worker.log").string());
+  if (!rt::eventually(std::chrono::seconds(30), [&] {
+        return rt::slurp(worker_kernel.log).find("running (1 nodes)") != std::string::npos;
+      }))
+    return plr::make_error(PLR_ERR_INTERNAL,
+                           "the worker kernel did not start: " + rt::slurp(worker_kernel.log));
+  const auto config = rt::write_file(
+      (dir / "generate.yaml").string(),
+      fmt::format("pipeline: bench_generate\nnodes:\n  generator:\n    plugin: strategy_generator\n"
+                  "    params:\n      library: ${{report_dir}}/library.plrl\n"
+                  "      worlds: [{{family: {}, seed: {}}}]\n      particles: {}\n"
+                  "      horizon: {}\n      trials: {}\n      epsilon1: {}\n      epsilon2: {}\n"
+                  "      seed: {}\n      complete_tree: {}\n      workers: {}\n"
+                  "      remote_workers: {}\n      progress: false\n"
+                  "remote:\n  dds: {{domain: {}, interfaces: [{}], import: [\"sim/simulate\"]}}\n",
+                  sim::to_string(world.family), world.seed, particles, o.truck.horizon, o.trials,
+                  o.epsilon1, o.epsilon2, o.seed, o.complete_tree, w.local, w.remote, domain,
+                  net.here));
+  rt::Proc generator(
+      "", std::vector<std::string>{plr, "run", config, "--report", (dir / "gen").string()},
+      (dir / "generate.log").string());
+  if (const int rc = generator.wait(std::chrono::hours(3)); rc != 0)
+    return plr::make_error(PLR_ERR_INTERNAL,
+                           fmt::format("plr run (exit {}): {}", rc, rt::slurp(generator.log)));
+  auto lib = sim::load_library(dir / "gen/library.plrl");
+  if (!lib) return lib.error();
+  if (lib->entries.size() != 1)
+    return plr::make_error(PLR_ERR_INTERNAL, "the library does not hold one strategy");
+  Generated g;
+  g.entry = std::move(lib->entries.front());
+  g.wall_s = g.entry.provenance.wall_s;
+  g.simulated = g.entry.provenance.simulations;
+  g.note = net.isolated
+               ? "remote workers in network namespace " + net.ns
+               : "namespaces not permitted (" + net.why_not + "): remote workers on loopback";
+  fs::remove_all(dir);
+  return g;
+}
+
+nlohmann::json nullable(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
+}
+
 int usage() {
   std::fprintf(stderr,
-               "usage: bench_generate [--quick] [--json] [--worlds A1:1,B1:1] [--workers 1,2]\n"
+               "usage: bench_generate [--quick] [--json] [--worlds A1:1,B1:1] [--workers 1,2,2+2]\n"
                "                      [--trials N] [--particles N] [--horizon N] [--eval N]\n"
                "                      [--partial-tree]\n"
                "       bench_generate --library FILE [--eval N] [--json]\n");
@@ -138,7 +230,7 @@ std::optional<nlohmann::json> evaluate(const std::string& name, const sim::World
 int main(int argc, char** argv) {
   bool quick = false, json = false;
   std::vector<WorldSpec> worlds{{sim::EnvFamily::kA1, 1}, {sim::EnvFamily::kB1, 1}};
-  std::vector<int> worker_counts{1, 2};
+  std::vector<Workers> worker_counts{{1, 0}, {2, 0}, {2, 2}};
   GenerateOptions o;
   int particles = 5, eval_particles = 3;
   std::string library;
@@ -159,7 +251,13 @@ int main(int argc, char** argv) {
       }
     } else if (arg == "--workers" && more) {
       worker_counts.clear();
-      for (const auto& w : split(argv[++i])) worker_counts.push_back(std::atoi(w.c_str()));
+      for (const auto& w : split(argv[++i])) {
+        const auto plus = w.find('+');
+        Workers spec{std::atoi(w.c_str()),
+                     plus == std::string::npos ? 0 : std::atoi(w.c_str() + plus + 1)};
+        if (spec.local < 0 || spec.remote < 0) return usage();
+        worker_counts.push_back(spec);
+      }
     } else if (arg == "--trials" && more) {
       o.trials = std::strtoull(argv[++i], nullptr, 10);
     } else if (arg == "--particles" && more) {
@@ -178,7 +276,7 @@ int main(int argc, char** argv) {
   }
   if (quick) {
     worlds = {{sim::EnvFamily::kA1, 1}};
-    worker_counts = {2};
+    worker_counts = {{2, 0}};
     eval_particles = 0;
   }
   if (!library.empty()) {
@@ -201,7 +299,7 @@ int main(int argc, char** argv) {
     if (json) std::printf("%s\n", nlohmann::json{{"evaluation", evals}}.dump(2).c_str());
     return 0;
   }
-  auto runner = generator::ActionRunner::create({});
+  auto runner = generator::JobRunner::create({});
   if (!runner) {
     std::fprintf(stderr, "bench_generate: %s\n", runner.error().message.c_str());
     return 1;
@@ -218,35 +316,56 @@ int main(int argc, char** argv) {
     const generator::Problem problem = generator::make_problem(w.family, w.seed, particles, o.seed);
     std::string first_strategy;
     std::optional<sim::Strategy> strategy;
-    for (const int workers : worker_counts) {
-      std::unique_ptr<generator::Simulator> simulator;
-      if (workers <= 0) {
-        simulator = std::make_unique<generator::LocalSimulator>(**runner);
+    for (const Workers& workers : worker_counts) {
+      plr::Expected<Generated> r = Generated{};
+      if (workers.remote > 0) {
+        std::fprintf(stderr, "%s, %s workers: plr run over DDS\n", problem.name.c_str(),
+                     workers.name().c_str());
+        r = generate_over_dds(std::filesystem::path(program).parent_path().string(), w, o,
+                              particles, workers);
       } else {
-        auto pool = generator::WorkerPool::create({program, workers, "{}", 3});
-        if (!pool) {
-          std::fprintf(stderr, "bench_generate: %s\n", pool.error().message.c_str());
-          return 1;
+        std::unique_ptr<generator::Simulator> simulator;
+        if (workers.local <= 0) {
+          simulator = std::make_unique<generator::LocalSimulator>(**runner);
+        } else {
+          generator::WorkerPoolOptions pool_options;
+          pool_options.command = program;
+          pool_options.workers = workers.local;
+          auto pool = generator::WorkerPool::create(pool_options);
+          if (!pool) {
+            std::fprintf(stderr, "bench_generate: %s\n", pool.error().message.c_str());
+            return 1;
+          }
+          simulator = std::move(*pool);
         }
-        simulator = std::move(*pool);
+        const auto t0 = Clock::now();
+        auto made = generator::generate(
+            problem, o, **runner, *simulator, nullptr, [&](const generator::GenerateProgress& p) {
+              std::fprintf(stderr,
+                           "\r\033[K%s, %s workers: trial %llu/%llu, %zu "
+                           "nodes, %llu sims, root [%.1f, %.1f], %.0f s",
+                           problem.name.c_str(), workers.name().c_str(),
+                           (unsigned long long)p.trials, (unsigned long long)p.trial_budget,
+                           p.nodes, (unsigned long long)p.simulated, p.lower, p.upper, p.wall_s);
+              return true;
+            });
+        std::fprintf(stderr, "\n");
+        if (made) {
+          Generated& g = *r;
+          g.entry = std::move(made->entry);
+          g.wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
+          g.simulated = made->simulated;
+          g.simulated_robot_s = made->simulated_robot_s;
+          g.simulated_wall_s = made->simulated_wall_s;
+        } else {
+          r = made.error();
+        }
       }
-      const auto t0 = Clock::now();
-      auto r = generator::generate(
-          problem, o, **runner, *simulator, nullptr, [&](const generator::GenerateProgress& p) {
-            std::fprintf(stderr,
-                         "\r\033[K%s, %d workers: trial %llu/%llu, %zu "
-                         "nodes, %llu sims, root [%.1f, %.1f], %.0f s",
-                         problem.name.c_str(), workers, (unsigned long long)p.trials,
-                         (unsigned long long)p.trial_budget, p.nodes,
-                         (unsigned long long)p.simulated, p.lower, p.upper, p.wall_s);
-            return true;
-          });
-      std::fprintf(stderr, "\n");
       if (!r) {
         std::fprintf(stderr, "bench_generate: %s\n", r.error().message.c_str());
         return 1;
       }
-      const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
+      const double wall = r->wall_s;
       const sim::LibraryEntry& e = r->entry;
       const std::string yaml = sim::format_yaml(e.strategy);
       if (first_strategy.empty()) first_strategy = yaml;
@@ -254,7 +373,10 @@ int main(int argc, char** argv) {
       out["runs"].push_back(
           {{"world", problem.name},
            {"boxes", problem.world.boxes.size()},
-           {"workers", workers},
+           {"workers", workers.local + workers.remote},
+           {"local_workers", workers.local},
+           {"remote_workers", workers.remote},
+           {"transport", workers.remote > 0 ? r->note : "pipes to local processes"},
            {"particles", particles},
            {"horizon", o.truck.horizon},
            {"wall_s", wall},
@@ -263,22 +385,23 @@ int main(int argc, char** argv) {
            {"nodes", e.strategy.nodes.size()},
            {"depth", e.strategy.depth()},
            {"simulations", r->simulated},
-           {"actions_per_s", r->simulated / wall},
+           {"actions_per_s", double(r->simulated) / wall},
            {"simulated_robot_s", r->simulated_robot_s},
-           {"real_time_factor", r->simulated_robot_s / wall},
-           {"worker_s_per_action", r->simulated_wall_s / std::max<double>(1, r->simulated)},
+           {"real_time_factor", nullable(r->simulated_robot_s / wall)},
+           {"worker_s_per_action",
+            nullable(r->simulated_wall_s / std::max<double>(1, double(r->simulated)))},
            {"lower", e.lower},
            {"upper", e.upper},
            {"same_strategy_as_first", yaml == first_strategy}});
       if (!json) {
         std::printf(
-            "%-6s %d worker(s): %6.1f s, %llu trials, %zu tree nodes (depth %zu), %llu simulated "
-            "actions (%.2f/s, %.0fx real time, %.2f s each in a worker), root [%.1f, %.1f]%s\n",
-            problem.name.c_str(), workers, wall, (unsigned long long)e.provenance.trials,
-            e.strategy.nodes.size(), e.strategy.depth(), (unsigned long long)r->simulated,
-            r->simulated / wall, r->simulated_robot_s / wall,
-            r->simulated_wall_s / std::max<double>(1, r->simulated), e.lower, e.upper,
-            yaml == first_strategy ? "" : "  DIFFERENT STRATEGY");
+            "%-6s %-3s workers: %6.1f s, %llu trials, %zu tree nodes (depth %zu), %llu simulated "
+            "actions (%.2f/s), root [%.1f, %.1f]%s%s\n",
+            problem.name.c_str(), workers.name().c_str(), wall,
+            (unsigned long long)e.provenance.trials, e.strategy.nodes.size(), e.strategy.depth(),
+            (unsigned long long)r->simulated, double(r->simulated) / wall, e.lower, e.upper,
+            yaml == first_strategy ? "" : "  DIFFERENT STRATEGY",
+            workers.remote > 0 ? ("  (" + r->note + ")").c_str() : "");
         std::fflush(stdout);
       }
     }

@@ -64,9 +64,8 @@ sim::Strategy to_strategy(const pomdp::PolicyTree& tree, const std::string& name
 }
 
 plr::Expected<GenerateResult> generate(
-    const Problem& problem, const GenerateOptions& options, ActionRunner& runner,
-    Simulator& simulator, Journal* journal,
-    const std::function<bool(const GenerateProgress&)>& on_progress) {
+    const Problem& problem, const GenerateOptions& options, JobRunner& runner, Simulator& simulator,
+    Journal* journal, const std::function<bool(const GenerateProgress&)>& on_progress) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   if (problem.particles.empty())

@@ -21,8 +21,8 @@
 #include "plr/sim/generators.hpp"
 #include "plr/sim/library.hpp"
 #include "pomdp/policy_tree.hpp"
-#include "truck/action_runner.hpp"
 #include "truck/journal.hpp"
+#include "truck/simulator.hpp"
 #include "truck/truck_model.hpp"
 
 namespace plr::generator {
@@ -79,9 +79,8 @@ struct GenerateResult {
 // actions. `on_progress` is called after every trial; returning false stops
 // the generation (PLR_ERR_CANCELLED). An error says which simulation failed.
 plr::Expected<GenerateResult> generate(
-    const Problem& problem, const GenerateOptions& options, ActionRunner& runner,
-    Simulator& simulator, Journal* journal,
-    const std::function<bool(const GenerateProgress&)>& on_progress = {});
+    const Problem& problem, const GenerateOptions& options, JobRunner& runner, Simulator& simulator,
+    Journal* journal, const std::function<bool(const GenerateProgress&)>& on_progress = {});
 
 // The policy tree with the truck's labels (observations of an empty
 // trailer end a branch).

@@ -47,10 +47,10 @@ plr::Expected<std::unique_ptr<Journal>> Journal::open(const std::filesystem::pat
     while (good + kHeader <= bytes.size()) {
       const std::uint8_t* p = bytes.data() + good;
       const std::size_t size = read_le(p, 4);
-      if (size > kMaxFrameBytes || good + kHeader + size > bytes.size()) break;
+      if (size > actions::kMaxFrameBytes || good + kHeader + size > bytes.size()) break;
       if (sim::crc32(p + 8, size + 8) != read_le(p + 4, 4)) break;
-      auto frame = decode_frame(p + kHeader, size, file.string());
-      if (!frame || frame->kind != Frame::Kind::kResult || !frame->result) break;
+      auto frame = actions::decode_frame(p + kHeader, size, file.string());
+      if (!frame || frame->kind != actions::Frame::Kind::kResult || !frame->result) break;
       j->loaded_.emplace(read_le(p + 8, 8), std::move(*frame->result));
       good += kHeader + size;
     }
@@ -71,7 +71,7 @@ Journal::~Journal() {
 }
 
 plr::Status Journal::append(std::uint64_t key, const SimOutcome& outcome) {
-  const std::vector<std::uint8_t> frame = frame_result(0, outcome);
+  const std::vector<std::uint8_t> frame = actions::frame_result(0, outcome);
   // frame_result() puts its own size in front; the record has it in its header.
   const std::size_t size = frame.size() - 4;
   std::vector<std::uint8_t> record;

@@ -13,7 +13,7 @@
 #include <memory>
 #include <unordered_map>
 
-#include "truck/sim_work.hpp"
+#include "truck/simulator.hpp"
 
 namespace plr::generator {
 

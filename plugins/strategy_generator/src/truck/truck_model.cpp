@@ -15,7 +15,7 @@ TruckModel::TruckModel(Simulator& simulator, const std::vector<SimOutcome>& root
   for (const SimOutcome& r : roots) {
     State s;
     s.bytes = r.state;
-    s.hash = state_hash(*r.state);
+    s.hash = actions::state_hash(*r.state);
     s.boxes_left = r.boxes_left;
     s.highest_stack_m = r.highest_stack_m;
     s.observation = r.observation;
@@ -42,7 +42,7 @@ bool TruckModel::is_terminal(pomdp::StateId id) const {
 }
 
 pomdp::StateId TruckModel::intern(const SimOutcome& o, int depth) const {
-  const std::uint64_t h = state_hash(*o.state);
+  const std::uint64_t h = actions::state_hash(*o.state);
   if (const auto it = index_.find({h, depth}); it != index_.end()) return it->second;
   State s;
   s.bytes = o.state;
@@ -61,7 +61,7 @@ void TruckModel::fill(const std::vector<SimRequest>& requests) const {
   std::vector<SimRequest> todo;
   std::vector<std::uint64_t> keys;
   for (const SimRequest& r : requests) {
-    const std::uint64_t key = work_key(state_hash(*r.state), r.action);
+    const std::uint64_t key = actions::work_key(actions::state_hash(*r.state), r.action);
     if (results_.count(key) || std::find(keys.begin(), keys.end(), key) != keys.end()) continue;
     keys.push_back(key);
     todo.push_back(r);
@@ -98,7 +98,7 @@ void TruckModel::prefetch(const pomdp::Belief& belief) const {
 pomdp::Step TruckModel::step(pomdp::StateId id, pomdp::ActionId action, pomdp::Rng&) const {
   if (const auto it = steps_.find({id, action}); it != steps_.end()) return it->second;
   const auto a = static_cast<sim::Action>(action);
-  const std::uint64_t key = work_key(state(id).hash, a);
+  const std::uint64_t key = actions::work_key(state(id).hash, a);
   if (!results_.count(key)) fill({{state(id).bytes, a}});
   const SimOutcome& o = results_.at(key);
   const int depth = state(id).depth + 1;

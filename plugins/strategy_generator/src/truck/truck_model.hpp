@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "pomdp/model.hpp"
-#include "truck/action_runner.hpp"
 #include "truck/journal.hpp"
+#include "truck/simulator.hpp"
 
 namespace plr::generator {
 
@@ -60,7 +60,7 @@ class TruckModel final : public pomdp::GenerativeModel {
     int observation = kEmptyObservation;
   };
 
-  // `roots`: each particle's starting state (ActionRunner::start), equally
+  // `roots`: each particle's starting state (JobRunner::start), equally
   // likely. The simulator (and journal) must outlive the model.
   TruckModel(Simulator& simulator, const std::vector<SimOutcome>& roots, TruckOptions options,
              Journal* journal = nullptr);

@@ -11,8 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "truck/action_runner.hpp"
-#include "truck/sim_work.hpp"
+#include "plr/actions/job_runner.hpp"
 
 namespace {
 
@@ -28,17 +27,17 @@ bool read_all(int fd, std::uint8_t* data, std::size_t size) {
 }
 
 // The next frame; nullopt at the end of input.
-std::optional<plr::Expected<plr::generator::Frame>> next_frame() {
+std::optional<plr::Expected<plr::actions::Frame>> next_frame() {
   std::uint8_t head[4];
   if (!read_all(0, head, 4)) return std::nullopt;
   const std::size_t size = std::size_t{head[0]} | std::size_t{head[1]} << 8 |
                            std::size_t{head[2]} << 16 | std::size_t{head[3]} << 24;
-  if (size > plr::generator::kMaxFrameBytes) {
+  if (size > plr::actions::kMaxFrameBytes) {
     return plr::make_error(PLR_ERR_INVALID, "stdin: frame of " + std::to_string(size) + " bytes");
   }
   std::vector<std::uint8_t> body(size);
   if (!read_all(0, body.data(), size)) return std::nullopt;
-  return plr::generator::decode_frame(body.data(), size, "stdin");
+  return plr::actions::decode_frame(body.data(), size, "stdin");
 }
 
 }  // namespace
@@ -48,7 +47,7 @@ int main() {
   const int out = ::dup(1);
   ::dup2(2, 1);
   auto setup = next_frame();
-  if (!setup || !*setup || (*setup)->kind != plr::generator::Frame::Kind::kSetup) {
+  if (!setup || !*setup || (*setup)->kind != plr::actions::Frame::Kind::kSetup) {
     std::fprintf(stderr, "plr_sim_worker: expected a setup frame first\n");
     return 2;
   }
@@ -59,19 +58,19 @@ int main() {
     std::fprintf(stderr, "plr_sim_worker: observation: %s\n", params.error().message.c_str());
     return 2;
   }
-  auto runner = plr::generator::ActionRunner::create(*params);
+  auto runner = plr::actions::JobRunner::create(*params);
   if (!runner) {
     std::fprintf(stderr, "plr_sim_worker: %s\n", runner.error().message.c_str());
     return 1;
   }
   while (auto frame = next_frame()) {
-    if (!*frame || (*frame)->kind != plr::generator::Frame::Kind::kJob) {
+    if (!*frame || (*frame)->kind != plr::actions::Frame::Kind::kJob) {
       std::fprintf(stderr, "plr_sim_worker: %s\n",
                    *frame ? "expected a job" : frame->error().message.c_str());
       return 2;
     }
     const auto result = (*runner)->run((*frame)->request);
-    if (!plr::generator::write_all(out, plr::generator::frame_result((*frame)->id, result))) return 0;
+    if (!plr::actions::write_all(out, plr::actions::frame_result((*frame)->id, result))) return 0;
   }
   return 0;
 }

@@ -1,8 +1,7 @@
-// What the remote tests share: running shell commands and `plr` processes
-// (optionally inside a network namespace) and reading their logs.
+// What the remote tests and benchmarks share: running shell commands and
+// `plr` processes (optionally inside a network namespace), reading their
+// logs, and a network namespace joined to this one.
 #pragma once
-
-#include <gtest/gtest.h>
 
 #include <fcntl.h>
 #include <sched.h>
@@ -21,7 +20,9 @@ namespace plr::remote_test {
 
 using namespace std::chrono_literals;
 
+#ifdef PLR_BINARY
 inline const std::string kPlr = PLR_BINARY;
+#endif
 
 // Runs `command` with sh; its exit code, stdout and stderr into `out`.
 inline int sh(const std::string& command, std::string* out = nullptr) {
@@ -111,5 +112,49 @@ bool eventually(std::chrono::milliseconds timeout, Fn&& done) {
   }
   return true;
 }
+
+// A network namespace with a veth pair to this one ("another machine"):
+// 10.78.N.1 there, 10.78.N.254 here, N from the pid. Removed again at the
+// end. Where namespaces are not permitted, `isolated` is false, `why_not`
+// says why, and both sides are on loopback.
+struct VethNamespace {
+  bool isolated = false;
+  std::string why_not, ns, veth;
+  std::string here = "lo", there = "lo";  // each side's interface
+
+  VethNamespace() {
+    const auto tag = std::to_string(::getpid() % 100000);
+    const auto subnet = "10.78." + std::to_string(::getpid() % 250);
+    ns = "plrw" + tag;
+    veth = "w" + tag;
+    const std::vector<std::string> steps = {
+        "ip netns add " + ns,
+        "ip link add " + veth + " type veth peer name plr0 netns " + ns,
+        "ip addr add " + subnet + ".254/24 dev " + veth,
+        "ip link set " + veth + " up",
+        "ip -n " + ns + " addr add " + subnet + ".1/24 dev plr0",
+        "ip -n " + ns + " link set plr0 up",
+        "ip -n " + ns + " link set lo up",
+    };
+    for (const auto& s : steps) {
+      std::string out;
+      if (sh(s, &out) != 0) {
+        why_not = s + ": " + out;
+        return;
+      }
+    }
+    isolated = true;
+    here = veth;
+    there = "plr0";
+  }
+  VethNamespace(const VethNamespace&) = delete;
+  VethNamespace& operator=(const VethNamespace&) = delete;
+  ~VethNamespace() {
+    sh("ip netns del " + ns + " 2>/dev/null");
+    sh("ip link del " + veth + " 2>/dev/null");
+  }
+  // The namespace to start a process in ("": this one).
+  std::string target() const { return isolated ? ns : ""; }
+};
 
 }  // namespace plr::remote_test

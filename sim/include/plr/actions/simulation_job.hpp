@@ -1,11 +1,15 @@
-// One unit of the generator's costly work: an abstract action simulated on
-// one state of the trailer (a particle), and what came of it; and the frames
-// that carry both to a worker process and back (sdk/schemas/generator.fbs).
+// One unit of offline work: an abstract action simulated on one state of
+// the trailer (a particle of the strategy generator), and what came of it;
+// and the frames that carry both to a worker and back
+// (sdk/schemas/generator.fbs) — over a pipe to a process on this machine, or
+// as the `sim/simulate` service of a kernel on another.
 // States are the bytes of a finished TruckState buffer
 // (plr/actions/state_bytes.hpp), kept as they are and never rebuilt.
 #pragma once
 
 #include <plr/expected.hpp>
+
+#include <flatbuffers/flatbuffers.h>
 
 #include <cstdint>
 #include <memory>
@@ -14,7 +18,7 @@
 
 #include "plr/sim/strategy.hpp"
 
-namespace plr::generator {
+namespace plr::actions {
 
 using StateBytes = std::shared_ptr<const std::vector<std::uint8_t>>;
 
@@ -40,10 +44,18 @@ struct SimOutcome {
 // A stream of frames: a 4-byte little-endian size, then that many bytes of
 // a WorkerFrame. Larger frames are refused.
 inline constexpr std::size_t kMaxFrameBytes = std::size_t{1} << 28;
+inline constexpr std::size_t kMaxObservationJson = 64 * 1024;
 
 std::vector<std::uint8_t> frame_setup(const std::string& observation_json);
 std::vector<std::uint8_t> frame_job(std::uint64_t id, const SimRequest& request);
 std::vector<std::uint8_t> frame_result(std::uint64_t id, const plr::Expected<SimOutcome>& result);
+// The same frames finished in `fbb`, without the size: the message of a
+// service call. A job for a service carries its observation parameters
+// (a service keeps no setup between calls).
+void build_job(flatbuffers::FlatBufferBuilder& fbb, std::uint64_t id, const SimRequest& request,
+               const std::string& observation_json = {});
+void build_result(flatbuffers::FlatBufferBuilder& fbb, std::uint64_t id,
+                  const plr::Expected<SimOutcome>& result);
 // Writes a whole frame to a pipe (retrying interrupted writes); false when
 // the reader is gone.
 bool write_all(int fd, const std::vector<std::uint8_t>& bytes);
@@ -53,6 +65,7 @@ struct Frame {
   std::uint64_t id = 0;
   std::string observation_json;                     // kSetup
   SimRequest request;                               // kJob
+  std::string job_observation_json;                 // kJob; empty: the setup's
   plr::Expected<SimOutcome> result = SimOutcome{};  // kResult
 };
 
@@ -70,4 +83,4 @@ bool is_truck_state(const std::uint8_t* data, std::size_t size);
 std::uint64_t state_hash(const std::vector<std::uint8_t>& state);
 std::uint64_t work_key(std::uint64_t state_hash, sim::Action action);
 
-}  // namespace plr::generator
+}  // namespace plr::actions

@@ -1,4 +1,4 @@
-#include "truck/sim_work.hpp"
+#include "plr/actions/simulation_job.hpp"
 
 #include <unistd.h>
 
@@ -8,7 +8,7 @@
 
 #include <fmt/format.h>
 
-namespace plr::generator {
+namespace plr::actions {
 
 namespace {
 
@@ -42,16 +42,29 @@ std::vector<std::uint8_t> frame_setup(const std::string& observation_json) {
   return with_size(fbb);
 }
 
-std::vector<std::uint8_t> frame_job(std::uint64_t id, const SimRequest& request) {
-  flatbuffers::FlatBufferBuilder fbb(request.state->size() + 256);
-  const auto job = msg::CreateSimJob(fbb, id, fbb.CreateVector(*request.state), request.action);
+void build_job(flatbuffers::FlatBufferBuilder& fbb, std::uint64_t id, const SimRequest& request,
+               const std::string& observation_json) {
+  const auto state = fbb.CreateVector(*request.state);
+  const auto json = observation_json.empty() ? 0 : fbb.CreateString(observation_json);
+  const auto job = msg::CreateSimJob(fbb, id, state, request.action, json);
   msg::FinishWorkerFrameBuffer(
       fbb, msg::CreateWorkerFrame(fbb, msg::WorkerMessage::SimJob, job.Union()));
+}
+
+std::vector<std::uint8_t> frame_job(std::uint64_t id, const SimRequest& request) {
+  flatbuffers::FlatBufferBuilder fbb(request.state->size() + 256);
+  build_job(fbb, id, request);
   return with_size(fbb);
 }
 
 std::vector<std::uint8_t> frame_result(std::uint64_t id, const plr::Expected<SimOutcome>& result) {
   flatbuffers::FlatBufferBuilder fbb(result && result->state ? result->state->size() + 256 : 256);
+  build_result(fbb, id, result);
+  return with_size(fbb);
+}
+
+void build_result(flatbuffers::FlatBufferBuilder& fbb, std::uint64_t id,
+                  const plr::Expected<SimOutcome>& result) {
   flatbuffers::Offset<msg::SimResult> r;
   if (!result) {
     r = msg::CreateSimResult(fbb, id, fbb.CreateString(result.error().message));
@@ -64,7 +77,6 @@ std::vector<std::uint8_t> frame_result(std::uint64_t id, const plr::Expected<Sim
   }
   msg::FinishWorkerFrameBuffer(
       fbb, msg::CreateWorkerFrame(fbb, msg::WorkerMessage::SimResult, r.Union()));
-  return with_size(fbb);
 }
 
 plr::Expected<Frame> decode_frame(const std::uint8_t* data, std::size_t size,
@@ -98,6 +110,11 @@ plr::Expected<Frame> decode_frame(const std::uint8_t* data, std::size_t size,
         return bad(origin,
                    fmt::format("job: action {} out of range", static_cast<int>(j->action())));
       out.request = {*state, j->action()};
+      if (j->observation_json()) {
+        if (j->observation_json()->size() > kMaxObservationJson)
+          return bad(origin, "job: observation_json too long");
+        out.job_observation_json = j->observation_json()->str();
+      }
       return out;
     }
     case msg::WorkerMessage::SimResult: {
@@ -159,4 +176,4 @@ bool write_all(int fd, const std::vector<std::uint8_t>& bytes) {
   return true;
 }
 
-}  // namespace plr::generator
+}  // namespace plr::actions

@@ -1,0 +1,125 @@
+// The strategy generator with its simulation workers on "other machines":
+// two worker kernels (the simulation_worker plug-in; one with two threads,
+// one with one) in a network namespace joined to this one by a veth pair,
+// serving sim/simulate over Cyclone DDS; the generator here, with no local
+// workers and 3 remote ones. The one-thread kernel is SIGKILLed mid-run. The library is the one a
+// generation with a local worker process writes. Where namespaces are not permitted the same runs
+// on loopback, and say so.
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <iostream>
+#include <regex>
+
+#include "plr/sim/library.hpp"
+#include "remote_fixture.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace plr::remote_test;
+
+std::string fingerprint(const fs::path& library) {
+  const auto lib = plr::sim::load_library(library);
+  if (!lib) return "error: " + lib.error().message;
+  std::string s;
+  for (const auto& e : lib->entries) {
+    s += fmt::format("{}\n{}[{:.17g}, {:.17g}] trials {} nodes {} simulations {}\n", e.name,
+                     plr::sim::format_yaml(e.strategy), e.lower, e.upper, e.provenance.trials,
+                     e.provenance.nodes, e.provenance.simulations);
+    for (const auto& p : e.curve)
+      s += fmt::format("{} {:.17g} {:.17g}\n", p.trials, p.lower, p.upper);
+  }
+  return s;
+}
+
+std::string generator_config(const std::string& workers, const std::string& remote) {
+  return "pipeline: generate_remote_test\n"
+         "nodes:\n"
+         "  generator:\n"
+         "    plugin: strategy_generator\n"
+         "    params:\n"
+         "      library: ${report_dir}/library.plrl\n"
+         "      checkpoint_dir: ${report_dir}/checkpoint\n"
+         "      worlds: [{family: A1, world_file: " BLOCK_WORLD
+         "}]\n"
+         "      particles: 3\n"
+         "      horizon: 3\n"
+         "      trials: 6\n"
+         "      progress: false\n"
+         "      observation: {h_pile: 0.55, pile_mid: 0.25, pile_high: 0.4, wall_mid: 1.2, "
+         "wall_high: 1.9}\n" +
+         workers + remote;
+}
+
+TEST(RemoteWorkers, AGenerationOverDdsWorkersOneKilledEqualsALocalOne) {
+  VethNamespace net;
+  if (net.isolated) {
+    std::cout << "remote_workers: worker kernels in network namespace " << net.ns << " (veth "
+              << net.veth << "), the generator here\n";
+  } else {
+    std::cout << "remote_workers: NOTE network namespaces are not permitted here (" << net.why_not
+              << "); workers and generator on loopback instead\n";
+  }
+  const std::string dir = ::testing::TempDir() + fmt::format("remote_workers_{}/", ::getpid());
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const int domain = 150 + ::getpid() % 80;
+
+  const auto local = write_file(dir + "local.yaml", generator_config("      workers: 1\n", ""));
+  {
+    Proc run("", {kPlr, "run", local, "--report", dir + "local"}, dir + "local.log");
+    ASSERT_EQ(run.wait(300s), 0) << slurp(run.log);
+  }
+  const std::string expected = fingerprint(dir + "local/library.plrl");
+  ASSERT_EQ(expected.rfind("block\n", 0), 0u) << expected;
+
+  auto worker = [&](int n, int threads) {
+    return write_file(
+        dir + fmt::format("worker{}.yaml", n),
+        fmt::format("pipeline: sim_worker{}\nnodes:\n  worker:\n    plugin: simulation_worker\n"
+                    "    params: {{threads: {}}}\nremote:\n  dds: {{domain: {}, interfaces: [{}], "
+                    "export: [\"sim/simulate\"]}}\n",
+                    n, threads, domain, net.there));
+  };
+  const std::string ns = net.target();
+  auto w1 = std::make_unique<Proc>(
+      ns, std::vector<std::string>{kPlr, "run", worker(1, 1), "--report", dir + "w1"},
+      dir + "worker1.log");
+  Proc w2(ns, {kPlr, "run", worker(2, 2), "--report", dir + "w2"}, dir + "worker2.log");
+  // Both serve before the generation starts (it would wait for them anyway).
+  for (const Proc* w : {w1.get(), &w2})
+    ASSERT_TRUE(eventually(30s, [&] {
+      return slurp(w->log).find("running (1 nodes)") != std::string::npos;
+    })) << slurp(w->log);
+
+  const auto remote =
+      write_file(dir + "remote.yaml",
+                 generator_config("      workers: 0\n      remote_workers: 3\n",
+                                  fmt::format("remote:\n  dds: {{domain: {}, interfaces: [{}], "
+                                              "import: [\"sim/simulate\"]}}\n",
+                                              domain, net.here)));
+  Proc gen("", {kPlr, "run", remote, "--report", dir + "remote"}, dir + "remote.log");
+  // The one-thread kernel is killed once the first results are in.
+  const fs::path journal = dir + "remote/checkpoint/block.journal";
+  ASSERT_TRUE(eventually(240s, [&] {
+    std::error_code ec;
+    return fs::exists(journal, ec) && fs::file_size(journal, ec) > 5000;
+  })) << slurp(gen.log);
+  ASSERT_EQ(::kill(w1->pid, SIGKILL), 0);
+  w1.reset();
+  ASSERT_EQ(gen.wait(300s), 0) << slurp(gen.log);
+  const std::string log = slurp(gen.log);
+  std::cout << "remote_workers: generator log:\n" << log;
+  EXPECT_EQ(fingerprint(dir + "remote/library.plrl"), expected);
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(log, m, std::regex(R"(remote workers: (\d+) jobs answered)")))
+      << log;
+  EXPECT_GT(std::stoi(m[1]), 0);
+  // The kill cost the calls in flight there, and they were issued again.
+  EXPECT_NE(log.find("dds: kernel 'sim_worker1@"), std::string::npos) << log;
+}
+
+}  // namespace
