@@ -163,6 +163,65 @@ TEST(Generator, AWorkerKilledMidRunChangesNothing) {
   EXPECT_EQ(fingerprint(pooled->entry), fingerprint(alone->entry));
 }
 
+// A remote worker whose calls complete at once: the first `failures` of
+// them fail as a call to a kernel that went away does; the others run the
+// job here. (The real transport, DDS between network namespaces, is
+// tests/integration/remote_workers_test.cpp.)
+class InstantRemoteJob final : public RemoteJob {
+ public:
+  InstantRemoteJob(std::vector<std::uint8_t> job, bool fail) : job_(std::move(job)), fail_(fail) {}
+  bool done() const override { return true; }
+  plr::Expected<std::vector<std::uint8_t>> take() override {
+    if (fail_)
+      return plr::make_error(PLR_ERR_UNAVAILABLE, "kernel 'w' providing 'sim/simulate' is gone");
+    auto frame = actions::decode_frame(job_.data(), job_.size(), "job");
+    if (!frame) return frame.error();
+    flatbuffers::FlatBufferBuilder fbb;
+    actions::build_result(fbb, frame->id, runner().run(frame->request));
+    return std::vector<std::uint8_t>(fbb.GetBufferPointer(),
+                                     fbb.GetBufferPointer() + fbb.GetSize());
+  }
+
+ private:
+  std::vector<std::uint8_t> job_;
+  bool fail_;
+};
+
+TEST(Generator, RemoteCallsThatFailAreIssuedAgainAndChangeNothing) {
+  GenerateOptions o;
+  o.truck.horizon = 2;
+  o.trials = 3;
+  const Problem p = block_problem("block", {4.0, 30.0});
+  LocalSimulator local(runner());
+  const auto alone = generate(p, o, runner(), local, nullptr);
+  ASSERT_TRUE(alone) << alone.error().message;
+
+  for (const int local_workers : {0, 1}) {
+    int calls = 0;
+    WorkerPoolOptions options;
+    options.command = PLR_SIM_WORKER;
+    options.workers = local_workers;
+    options.observation_json = p.observation_json;
+    options.remote_workers = 2;
+    options.remote_retry_s = 0.01;
+    options.remote_send = [&](const flatbuffers::FlatBufferBuilder& job) {
+      return std::make_unique<InstantRemoteJob>(
+          std::vector<std::uint8_t>(job.GetBufferPointer(), job.GetBufferPointer() + job.GetSize()),
+          ++calls <= 5);
+    };
+    auto pool = WorkerPool::create(options);
+    ASSERT_TRUE(pool) << pool.error().message;
+    EXPECT_EQ((*pool)->workers(), local_workers + 2);
+    const auto pooled = generate(p, o, runner(), **pool, nullptr);
+    ASSERT_TRUE(pooled) << pooled.error().message;
+    EXPECT_EQ(fingerprint(pooled->entry), fingerprint(alone->entry)) << local_workers;
+    // More failures than max_attempts, yet no job was given up: a kernel
+    // gone is not the job's fault.
+    EXPECT_EQ((*pool)->remote_failures(), 5u);
+    EXPECT_GT((*pool)->remote_done(), 0u);
+  }
+}
+
 TEST(Generator, ResumedFromItsJournalEndsWithTheSameStrategy) {
   TempDir dir;
   GenerateOptions o;
