@@ -165,7 +165,8 @@ ShmBridge::~ShmBridge() {
     if (in->thread.joinable()) in->thread.join();
   for (auto& [name, s] : servers_)
     if (s->thread.joinable()) s->thread.join();
-  for (auto& [name, c] : clients_) retired_.push_back(c);
+  for (auto& [name, by_host] : clients_)
+    for (auto& [host, c] : by_host) retired_.push_back(c);
   for (auto& c : retired_)
     if (c->thread.joinable()) c->thread.join();
 }
@@ -398,26 +399,49 @@ void ShmBridge::serve_loop(Server* server) {
 }
 
 std::shared_ptr<ShmBridge::Client> ShmBridge::client_for(const std::string& service) {
+  // How long a host not serving a service is left alone: opening a segment
+  // that is not there costs a system call per call otherwise.
+  constexpr auto kLookAgain = 100ms;
+  const auto now = std::chrono::steady_clock::now();
   std::lock_guard lock(m_);
-  auto it = clients_.find(service);
-  if (it != clients_.end()) {
-    if (!it->second->dead) return it->second;
-    retired_.push_back(it->second);
-    clients_.erase(it);
-  }
+  auto& by_host = clients_[service];
+  std::shared_ptr<Client> best;
+  std::size_t best_waiting = 0;
   for (const auto& peer : peers_) {
-    auto c = shm::ServiceClientBuilder().run_id(run_id_).service(segment(peer, service)).create();
-    if (!c) continue;
-    auto client = std::make_shared<Client>();
-    client->service = service;
-    client->host = peer;
-    client->client.emplace(std::move(*c));
-    auto* raw = client.get();
-    client->thread = std::thread([this, raw] { reply_loop(raw); });
-    clients_[service] = client;
-    return client;
+    auto it = by_host.find(peer);
+    if (it != by_host.end() && it->second->dead) {
+      retired_.push_back(it->second);
+      by_host.erase(it);
+      it = by_host.end();
+    }
+    if (it == by_host.end()) {
+      const auto key = std::make_pair(service, peer);
+      if (auto a = absent_.find(key); a != absent_.end() && now - a->second < kLookAgain) continue;
+      auto c = shm::ServiceClientBuilder().run_id(run_id_).service(segment(peer, service)).create();
+      if (!c) {
+        absent_[key] = now;
+        continue;
+      }
+      absent_.erase(key);
+      auto client = std::make_shared<Client>();
+      client->service = service;
+      client->host = peer;
+      client->client.emplace(std::move(*c));
+      auto* raw = client.get();
+      client->thread = std::thread([this, raw] { reply_loop(raw); });
+      it = by_host.emplace(peer, std::move(client)).first;
+    }
+    std::size_t waiting = 0;
+    {
+      std::lock_guard client_lock(it->second->m);
+      waiting = it->second->calls.size();
+    }
+    if (!best || waiting < best_waiting) {
+      best = it->second;
+      best_waiting = waiting;
+    }
   }
-  return nullptr;
+  return best;
 }
 
 bool ShmBridge::forward_call(const std::string& service, const MsgRef& request, std::uint64_t id) {

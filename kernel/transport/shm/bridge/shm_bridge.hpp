@@ -3,7 +3,8 @@
 // node publishes goes to a segment "<host>/<topic>" that other hosts read in
 // place; what a local node subscribes to is read from every other host's
 // segment of that topic; services a local node provides are served from
-// "<host>/<service>"; calls nobody here provides go to the host that does.
+// "<host>/<service>"; calls nobody here provides go to a host that does: of
+// several, the one with the fewest of our calls waiting on it.
 // Plug-ins see none of this: where a node runs is config.
 #pragma once
 
@@ -14,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include <atomic>
+#include <chrono>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -65,6 +67,8 @@ class ShmBridge final : public Endpoint, public Link {
   void read_remote_topic(Incoming* in);
   void serve_loop(Server* server);
   void reply_loop(Client* client);
+  // The host to call `service` on: of the hosts serving it, the one with
+  // the fewest of our calls waiting; nullptr when none does.
   std::shared_ptr<Client> client_for(const std::string& service);
 
   Bus& bus_;
@@ -79,7 +83,10 @@ class ShmBridge final : public Endpoint, public Link {
   std::map<std::string, std::unique_ptr<Outgoing>> outgoing_;
   std::map<std::string, std::unique_ptr<Incoming>> incoming_;
   std::map<std::string, std::unique_ptr<Server>> servers_;
-  std::map<std::string, std::shared_ptr<Client>> clients_;
+  // By service, then by host. A host found not serving a service is looked
+  // at again after a while (it may start to, or be restarted).
+  std::map<std::string, std::map<std::string, std::shared_ptr<Client>>> clients_;
+  std::map<std::pair<std::string, std::string>, std::chrono::steady_clock::time_point> absent_;
   std::vector<std::shared_ptr<Client>> retired_;  // clients whose server died, joined at exit
   std::atomic<bool> stop_{false};
 

@@ -4,7 +4,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <optional>
 
 #include "plr/chooser/model.hpp"
@@ -148,7 +150,8 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
       }
       const Rollout& by_nn = *runs[0];
       const Rollout& by_h = *runs[1];
-      // Ties go to H: the library strategy must earn its place.
+      const double best = std::max(by_nn.rate(), by_h.rate());
+      const bool tie = std::abs(by_nn.rate() - by_h.rate()) <= settings.tie_margin * best;
       const int label = by_nn.rate() > by_h.rate() ? kNearestLabel : kHardcodedLabel;
       Sample s{source.name,
                d.step,
@@ -161,7 +164,11 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
                by_h.boxes,
                by_h.robot_time_s};
       bool follow_nearest = label == kNearestLabel;
-      if (d.validating) {
+      if (tie) {
+        // Not a sample; the trajectory goes on as M (or, before there is
+        // one, H) would go.
+        follow_nearest = !d.validating && model && model->decide(f).nearest;
+      } else if (d.validating) {
         d.validation.push_back(s);
       } else {
         d.training.push_back(s);
@@ -173,8 +180,8 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
           "-> {}; going on with {} ({:.1f} s)",
           d.validating ? "validation" : "training", source.name, d.step,
           library->entries[nn.entry].name, nn.distance, by_nn.boxes, by_nn.robot_time_s, by_h.boxes,
-          by_h.robot_time_s, label == kNearestLabel ? "NN" : "H", follow_nearest ? "NN" : "H",
-          std::chrono::duration<double>(Clock::now() - t0).count()));
+          by_h.robot_time_s, tie ? "tie, not a sample" : label == kNearestLabel ? "NN" : "H",
+          follow_nearest ? "NN" : "H", std::chrono::duration<double>(Clock::now() - t0).count()));
       const Rollout& next = follow_nearest ? by_nn : by_h;
       ++d.step;
       if (next.actions == 0) {

@@ -64,8 +64,8 @@ plr::Expected<sim::World> WorldSource::layout() const {
 
 std::uint64_t TrainingSettings::hash(std::uint32_t library_fingerprint) const {
   std::string text = fmt::format(
-      "lib {} spw {} ra {} obs {} {} {} {} {} {} {} {} h {} {} svm {} ", library_fingerprint,
-      states_per_world, rollout_actions, observation.h_pile, observation.wall_depth,
+      "lib {} spw {} ra {} tie {} obs {} {} {} {} {} {} {} {} h {} {} svm {} ", library_fingerprint,
+      states_per_world, rollout_actions, tie_margin, observation.h_pile, observation.wall_depth,
       observation.min_pile_depth, observation.pile_mid, observation.pile_high, observation.wall_mid,
       observation.wall_high, observation.side_band, h.h_min, h.d_min, svm.folds);
   for (int c : svm.log2_c) text += fmt::format("c{} ", c);
@@ -93,7 +93,7 @@ plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::pa
   const yaml::Map top = doc->root().map(
       "chooser training settings",
       {"format", "library", "out", "train", "validation", "states_per_world", "rollout_actions",
-       "workers", "observation", "h_min", "d_min", "folds", "log2_c", "log2_gamma"});
+       "tie_margin", "workers", "observation", "h_min", "d_min", "folds", "log2_c", "log2_gamma"});
   (void)top.required("format").one_of({"plr-chooser-training"});
   if (auto l = top.required("library").string()) s.library = *l;
   if (auto o = top.required("out").string()) s.out = *o;
@@ -101,6 +101,7 @@ plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::pa
   s.validation = read_worlds(top.required("validation"));
   if (auto n = top.find("states_per_world").integer(1, 1000)) s.states_per_world = *n;
   if (auto n = top.find("rollout_actions").integer(1, 1000)) s.rollout_actions = *n;
+  if (auto n = top.find("tie_margin").number(0.0, 1.0)) s.tie_margin = *n;
   if (auto n = top.find("workers").integer(1, 64)) s.workers = static_cast<int>(*n);
   if (auto n = top.find("folds").integer(2, 100)) s.svm.folds = static_cast<int>(*n);
   for (auto [key, grid] : {std::pair{"log2_c", &s.svm.log2_c}, {"log2_gamma", &s.svm.log2_gamma}}) {

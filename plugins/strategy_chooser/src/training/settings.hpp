@@ -32,6 +32,10 @@ struct TrainingSettings {
   std::vector<WorldSource> train, validation;
   std::uint32_t states_per_world = 3;
   std::uint32_t rollout_actions = 4;
+  // Rollouts whose rates (boxes per robot-second) differ by at most this
+  // share of the larger are a tie: it says nothing about which is better,
+  // so the state is not a sample.
+  double tie_margin = 0.05;
   int workers = 2;
   sim::ObservationParams observation;
   sim::HardcodedParams h;
