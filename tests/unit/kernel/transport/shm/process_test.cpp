@@ -198,8 +198,12 @@ TEST_F(ProcessTest, SegmentsOfKilledProcessAreReclaimed) {
 
   ::kill(child, SIGKILL);
   EXPECT_EQ(test::wait_child(child), 128 + SIGKILL);
-  EXPECT_EQ(test::run_segments(run_).size(), 2u) << "kill -9 leaves the segments";
-  EXPECT_GE(reclaim_stale_segments(), 2u);
+  // Reclaiming is machine-wide: a `plr run` starting beside this test
+  // (ctest -j) may take some of the dead child's segments first. What
+  // counts is that reclaiming leaves none of them, and the live one.
+  const std::size_t left = test::run_segments(run_).size();
+  EXPECT_LE(left, 2u);
+  EXPECT_GE(reclaim_stale_segments(), left == 2 ? 2u : 0u);
   EXPECT_TRUE(test::run_segments(run_).empty());
   EXPECT_EQ(test::run_segments(other_run).size(), 1u) << "live owner's segment kept";
 }
