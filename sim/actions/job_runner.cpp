@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <chrono>
 
+#include <nlohmann/json.hpp>
+
 #include "plr/actions/state_bytes.hpp"
 
 namespace plr::actions {
@@ -16,6 +18,16 @@ plr::Expected<std::unique_ptr<JobRunner>> JobRunner::create(
   auto rig = Rig::create(std::move(options));
   if (!rig) return rig.error();
   return std::unique_ptr<JobRunner>(new JobRunner(std::move(*rig)));
+}
+
+plr::Expected<std::unique_ptr<JobRunner>> JobRunner::create(const std::string& observation_json) {
+  const auto parsed = nlohmann::json::parse(observation_json, nullptr, false);
+  if (parsed.is_discarded() || !parsed.is_object())
+    return plr::make_error(PLR_ERR_INVALID, "observation_json: not a JSON object");
+  auto params = sim::ObservationParams::from_json(parsed);
+  if (!params)
+    return plr::make_error(PLR_ERR_INVALID, "observation_json: " + params.error().message);
+  return create(*params);
 }
 
 plr::Expected<SimOutcome> JobRunner::describe(const Memory& memory) {

@@ -87,6 +87,12 @@ plr::Expected<Frame> decode_frame(const std::uint8_t* data, std::size_t size,
     return bad(origin, "frame fails verification");
   const msg::WorkerFrame* f = msg::GetWorkerFrame(data);
   Frame out;
+  auto json_of = [&](const flatbuffers::String* json, std::string& to) -> plr::Status {
+    if (json == nullptr) return {};
+    if (json->size() > kMaxObservationJson) return bad(origin, "observation_json too long");
+    to = json->str();
+    return {};
+  };
   auto state_of = [&](const flatbuffers::Vector<std::uint8_t>* v) -> plr::Expected<StateBytes> {
     if (!v) return StateBytes{};
     if (!is_truck_state(v->data(), v->size())) return bad(origin, "state: not a TruckState");
@@ -96,7 +102,8 @@ plr::Expected<Frame> decode_frame(const std::uint8_t* data, std::size_t size,
     case msg::WorkerMessage::WorkerSetup: {
       const auto* s = f->message_as_WorkerSetup();
       out.kind = Frame::Kind::kSetup;
-      out.observation_json = s->observation_json() ? s->observation_json()->str() : "{}";
+      out.observation_json = "{}";
+      if (auto ok = json_of(s->observation_json(), out.observation_json); !ok) return ok.error();
       return out;
     }
     case msg::WorkerMessage::SimJob: {
@@ -110,11 +117,7 @@ plr::Expected<Frame> decode_frame(const std::uint8_t* data, std::size_t size,
         return bad(origin,
                    fmt::format("job: action {} out of range", static_cast<int>(j->action())));
       out.request = {*state, j->action()};
-      if (j->observation_json()) {
-        if (j->observation_json()->size() > kMaxObservationJson)
-          return bad(origin, "job: observation_json too long");
-        out.job_observation_json = j->observation_json()->str();
-      }
+      if (auto ok = json_of(j->observation_json(), out.observation_json); !ok) return ok.error();
       return out;
     }
     case msg::WorkerMessage::SimResult: {

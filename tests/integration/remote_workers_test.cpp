@@ -18,26 +18,13 @@
 #include <regex>
 
 #include "plr/sim/library.hpp"
+#include "plr/sim/testing/library_fingerprint.hpp"
 #include "remote_fixture.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace plr::remote_test;
-
-std::string fingerprint(const fs::path& library) {
-  const auto lib = plr::sim::load_library(library);
-  if (!lib) return "error: " + lib.error().message;
-  std::string s;
-  for (const auto& e : lib->entries) {
-    s += fmt::format("{}\n{}[{:.17g}, {:.17g}] trials {} nodes {} simulations {}\n", e.name,
-                     plr::sim::format_yaml(e.strategy), e.lower, e.upper, e.provenance.trials,
-                     e.provenance.nodes, e.provenance.simulations);
-    for (const auto& p : e.curve)
-      s += fmt::format("{} {:.17g} {:.17g}\n", p.trials, p.lower, p.upper);
-  }
-  return s;
-}
 
 // `workers`: lines of the generator's params; `tail`: more nodes, or a
 // remote block.
@@ -69,7 +56,7 @@ const std::string& local_fingerprint(const std::string& dir) {
                                   generator_config("generate_local", "      workers: 1\n", ""));
     Proc run("", {kPlr, "run", local, "--report", dir + "local"}, dir + "local.log");
     if (run.wait(300s) != 0) return "error: " + slurp(run.log);
-    return fingerprint(dir + "local/library.plrl");
+    return plr::sim::testing::library_fingerprint(dir + "local/library.plrl");
   }();
   return made;
 }
@@ -111,7 +98,7 @@ TEST(RemoteWorkers, WorkersInHostProcessesOneKilledEqualsALocalGeneration) {
   ASSERT_EQ(gen.wait(300s), 0) << slurp(gen.log);
   const std::string log = slurp(gen.log);
   std::cout << "host_workers: generator log:\n" << log;
-  EXPECT_EQ(fingerprint(dir + "run/library.plrl"), expected);
+  EXPECT_EQ(plr::sim::testing::library_fingerprint(dir + "run/library.plrl"), expected);
   EXPECT_NE(log.find("remote workers: "), std::string::npos) << log;
 }
 
@@ -166,7 +153,7 @@ TEST(RemoteWorkers, AGenerationOverDdsWorkersOneKilledEqualsALocalOne) {
   ASSERT_EQ(gen.wait(300s), 0) << slurp(gen.log);
   const std::string log = slurp(gen.log);
   std::cout << "remote_workers: generator log:\n" << log;
-  EXPECT_EQ(fingerprint(dir + "remote/library.plrl"), expected);
+  EXPECT_EQ(plr::sim::testing::library_fingerprint(dir + "remote/library.plrl"), expected);
   std::smatch m;
   ASSERT_TRUE(std::regex_search(log, m, std::regex(R"(remote workers: (\d+) jobs answered)")))
       << log;

@@ -114,12 +114,11 @@ class SimulationWorker : public Node {
       (void)job.reply.fail(PLR_ERR_INVALID, service_ + ": the request is not a job");
       return;
     }
-    const std::string json =
-        frame->job_observation_json.empty() ? "{}" : frame->job_observation_json;
+    const std::string json = frame->observation_json.empty() ? "{}" : frame->observation_json;
     if (!r.runner || json != r.json) {
-      auto runner = make_runner(json);
+      auto runner = actions::JobRunner::create(json);
       if (!runner) {
-        (void)job.reply.fail(PLR_ERR_INVALID, runner.error().message);
+        (void)job.reply.fail(PLR_ERR_INVALID, service_ + ": job: " + runner.error().message);
         return;
       }
       r.runner = std::move(*runner);
@@ -130,15 +129,6 @@ class SimulationWorker : public Node {
     flatbuffers::FlatBufferBuilder fbb(result && result->state ? result->state->size() + 256 : 256);
     actions::build_result(fbb, frame->id, result);
     (void)job.reply.reply(fbb);
-  }
-
-  Expected<std::unique_ptr<actions::JobRunner>> make_runner(const std::string& json) const {
-    const auto parsed = nlohmann::json::parse(json, nullptr, false);
-    if (parsed.is_discarded() || !parsed.is_object())
-      return make_error(PLR_ERR_INVALID, service_ + ": job: observation_json is not a JSON object");
-    auto params = sim::ObservationParams::from_json(parsed);
-    if (!params) return make_error(PLR_ERR_INVALID, service_ + ": job: " + params.error().message);
-    return actions::JobRunner::create(*params);
   }
 
   std::string service_;

@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "plr/sim/library.hpp"
+#include "plr/sim/testing/library_fingerprint.hpp"
 
 extern char** environ;
 
@@ -62,20 +63,6 @@ std::string output(const std::string& command) {
   return out;
 }
 
-std::string fingerprint(const fs::path& library) {
-  const auto lib = plr::sim::load_library(library);
-  if (!lib) return "error: " + lib.error().message;
-  std::string s;
-  for (const auto& e : lib->entries) {
-    s += fmt::format("{}\n{}[{:.17g}, {:.17g}] trials {} nodes {} simulations {}\n", e.name,
-                     plr::sim::format_yaml(e.strategy), e.lower, e.upper, e.provenance.trials,
-                     e.provenance.nodes, e.provenance.simulations);
-    for (const auto& p : e.curve)
-      s += fmt::format("{} {:.17g} {:.17g}\n", p.trials, p.lower, p.upper);
-  }
-  return s;
-}
-
 TEST(GeneratorNode, KilledWithSigkillAndRunAgainGivesTheSameLibrary) {
   TempDir dir;
   {
@@ -98,7 +85,7 @@ TEST(GeneratorNode, KilledWithSigkillAndRunAgainGivesTheSameLibrary) {
            "wall_high: 1.9}\n";
   }
   ASSERT_EQ(wait_exit(start(dir / "generate.yaml", dir / "whole")), 0);
-  const std::string whole = fingerprint(dir / "whole/library.plrl");
+  const std::string whole = plr::sim::testing::library_fingerprint(dir / "whole/library.plrl");
   ASSERT_EQ(whole.rfind("block\n", 0), 0u) << whole;
 
   // Killed once its journal holds some results, before the strategy is done.
@@ -114,7 +101,7 @@ TEST(GeneratorNode, KilledWithSigkillAndRunAgainGivesTheSameLibrary) {
   EXPECT_EQ(wait_exit(pid), -SIGKILL);
   EXPECT_FALSE(fs::exists(dir / "killed/library.plrl"));
   ASSERT_EQ(wait_exit(start(dir / "generate.yaml", dir / "killed")), 0);
-  EXPECT_EQ(fingerprint(dir / "killed/library.plrl"), whole);
+  EXPECT_EQ(plr::sim::testing::library_fingerprint(dir / "killed/library.plrl"), whole);
   EXPECT_TRUE(fs::exists(dir / "killed/block.svg"));
   EXPECT_TRUE(fs::exists(dir / "killed/block-anytime.svg"));
 

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <thread>
 
+#include "plr/sim/testing/library_fingerprint.hpp"
 #include "plr/sim/testing/worlds.hpp"
 #include "truck/generate.hpp"
 #include "truck/svg.hpp"
@@ -73,18 +74,7 @@ JobRunner& runner() {
   return *r;
 }
 
-// Everything of an entry that does not depend on when or how fast it ran.
-std::string fingerprint(const sim::LibraryEntry& e) {
-  return fmt::format("{}\nbounds [{:.17g}, {:.17g}] trials {} nodes {} simulations {}\n",
-                     sim::format_yaml(e.strategy), e.lower, e.upper, e.provenance.trials,
-                     e.provenance.nodes, e.provenance.simulations) +
-         [&] {
-           std::string s;
-           for (const auto& p : e.curve)
-             s += fmt::format("{} {:.17g} {:.17g}\n", p.trials, p.lower, p.upper);
-           return s;
-         }();
-}
+using sim::testing::entry_fingerprint;
 
 TEST(Generator, FindsTheBestFirstActionWhichDependsOnTheMasses) {
   GenerateOptions o;
@@ -160,7 +150,7 @@ TEST(Generator, AWorkerKilledMidRunChangesNothing) {
   ASSERT_TRUE(pooled) << pooled.error().message;
   EXPECT_TRUE(killed);
   EXPECT_GE((*pool)->restarts(), 1u);
-  EXPECT_EQ(fingerprint(pooled->entry), fingerprint(alone->entry));
+  EXPECT_EQ(entry_fingerprint(pooled->entry), entry_fingerprint(alone->entry));
 }
 
 // A remote worker whose calls complete at once: the first `failures` of
@@ -214,7 +204,7 @@ TEST(Generator, RemoteCallsThatFailAreIssuedAgainAndChangeNothing) {
     EXPECT_EQ((*pool)->workers(), local_workers + 2);
     const auto pooled = generate(p, o, runner(), **pool, nullptr);
     ASSERT_TRUE(pooled) << pooled.error().message;
-    EXPECT_EQ(fingerprint(pooled->entry), fingerprint(alone->entry)) << local_workers;
+    EXPECT_EQ(entry_fingerprint(pooled->entry), entry_fingerprint(alone->entry)) << local_workers;
     // More failures than max_attempts, yet no job was given up: a kernel
     // gone is not the job's fault.
     EXPECT_EQ((*pool)->remote_failures(), 5u);
@@ -252,7 +242,7 @@ TEST(Generator, ResumedFromItsJournalEndsWithTheSameStrategy) {
   const auto resumed = generate(p, o, runner(), local, journal->get());
   ASSERT_TRUE(resumed) << resumed.error().message;
   EXPECT_LT(resumed->simulated, whole->simulated);
-  EXPECT_EQ(fingerprint(resumed->entry), fingerprint(whole->entry));
+  EXPECT_EQ(entry_fingerprint(resumed->entry), entry_fingerprint(whole->entry));
   EXPECT_NE(strategy_svg(resumed->entry.strategy)
                 .find(sim::to_string(resumed->entry.strategy.nodes[0].action)),
             std::string::npos);

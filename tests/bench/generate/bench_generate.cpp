@@ -299,7 +299,7 @@ int main(int argc, char** argv) {
     if (json) std::printf("%s\n", nlohmann::json{{"evaluation", evals}}.dump(2).c_str());
     return 0;
   }
-  auto runner = generator::JobRunner::create({});
+  auto runner = generator::JobRunner::create(sim::ObservationParams{});
   if (!runner) {
     std::fprintf(stderr, "bench_generate: %s\n", runner.error().message.c_str());
     return 1;

@@ -9,8 +9,6 @@
 #include <cstring>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "plr/actions/job_runner.hpp"
 
 namespace {
@@ -51,14 +49,7 @@ int main() {
     std::fprintf(stderr, "plr_sim_worker: expected a setup frame first\n");
     return 2;
   }
-  const auto json = nlohmann::json::parse((*setup)->observation_json, nullptr, false);
-  auto params =
-      plr::sim::ObservationParams::from_json(json.is_discarded() ? nlohmann::json() : json);
-  if (!params) {
-    std::fprintf(stderr, "plr_sim_worker: observation: %s\n", params.error().message.c_str());
-    return 2;
-  }
-  auto runner = plr::actions::JobRunner::create(*params);
+  auto runner = plr::actions::JobRunner::create((*setup)->observation_json);
   if (!runner) {
     std::fprintf(stderr, "plr_sim_worker: %s\n", runner.error().message.c_str());
     return 1;

@@ -7,6 +7,7 @@
 #include <plr/expected.hpp>
 
 #include <memory>
+#include <string>
 
 #include "plr/actions/rig.hpp"
 #include "plr/actions/simulation_job.hpp"
@@ -20,6 +21,8 @@ class JobRunner {
   // Loads the shipped robot and lattice.
   static plr::Expected<std::unique_ptr<JobRunner>> create(
       const sim::ObservationParams& observation);
+  // ... with the observation parameters as a frame carries them (JSON text).
+  static plr::Expected<std::unique_ptr<JobRunner>> create(const std::string& observation_json);
 
   plr::Expected<SimOutcome> run(const SimRequest& request);
   // The starting state of a particle: `truth` (with the particle's masses)

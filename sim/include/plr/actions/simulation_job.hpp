@@ -63,9 +63,9 @@ bool write_all(int fd, const std::vector<std::uint8_t>& bytes);
 struct Frame {
   enum class Kind { kSetup, kJob, kResult } kind = Kind::kSetup;
   std::uint64_t id = 0;
-  std::string observation_json;                     // kSetup
+  // kSetup; kJob: empty unless the job names its own (a service's jobs do)
+  std::string observation_json;
   SimRequest request;                               // kJob
-  std::string job_observation_json;                 // kJob; empty: the setup's
   plr::Expected<SimOutcome> result = SimOutcome{};  // kResult
 };
 
