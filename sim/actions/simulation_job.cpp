@@ -83,7 +83,9 @@ plr::Expected<Frame> decode_frame(const std::uint8_t* data, std::size_t size,
                                   const std::string& origin) {
   if (size > kMaxFrameBytes) return bad(origin, fmt::format("frame of {} bytes", size));
   flatbuffers::Verifier verifier(data, size);
-  if (!msg::WorkerFrameBufferHasIdentifier(data) || !msg::VerifyWorkerFrameBuffer(verifier))
+  // The identifier sits at bytes 4..8: a shorter frame has none to compare.
+  if (size < 8 || !msg::WorkerFrameBufferHasIdentifier(data) ||
+      !msg::VerifyWorkerFrameBuffer(verifier))
     return bad(origin, "frame fails verification");
   const msg::WorkerFrame* f = msg::GetWorkerFrame(data);
   Frame out;
@@ -98,6 +100,8 @@ plr::Expected<Frame> decode_frame(const std::uint8_t* data, std::size_t size,
     if (!is_truck_state(v->data(), v->size())) return bad(origin, "state: not a TruckState");
     return std::make_shared<const std::vector<std::uint8_t>>(v->begin(), v->end());
   };
+  // A union's type may be set with its table absent: verification passes that.
+  if (f->message() == nullptr) return bad(origin, "frame without a message");
   switch (f->message_type()) {
     case msg::WorkerMessage::WorkerSetup: {
       const auto* s = f->message_as_WorkerSetup();

@@ -49,18 +49,18 @@ class TrainingTest : public ::testing::Test {
         << "\nout: " << (dir_ / "out").string() << "\ntrain: ["
         << (kData / "floor_row.yaml").string() << ", " << (kData / "two_columns.yaml").string()
         << "]\nvalidation: [" << (kData / "two_columns.yaml").string()
-        << "]\nstates_per_world: 2\nrollout_actions: 1\nworkers: 2\nfolds: 2\n";
+        << "]\nstates_per_world: 2\nrollout_actions: 1\ntie_boxes: 1\nworkers: 2\nfolds: 2\n";
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  pid_t start(const std::string& out) {
+  pid_t start(const std::string& out, const std::string& also = "folds=2") {
     const pid_t pid = fork();
     if (pid == 0) {
       const std::string settings = (dir_ / "train.yaml").string(),
                         set = "out=" + (dir_ / out).string();
       freopen("/dev/null", "w", stdout);
       execl(PLR_CHOOSER_TOOL, PLR_CHOOSER_TOOL, "train", settings.c_str(), "--set", set.c_str(),
-            static_cast<char*>(nullptr));
+            "--set", also.c_str(), static_cast<char*>(nullptr));
       _exit(127);
     }
     return pid;
@@ -119,7 +119,7 @@ TEST_F(TrainingTest, AnUnknownSettingIsNamedWithItsLine) {
   std::ofstream(dir_ / "train.yaml", std::ios::app) << "rollout_action: 3\n";
   const auto s = TrainingSettings::load(dir_ / "train.yaml");
   ASSERT_FALSE(s);
-  EXPECT_NE(s.error().message.find("train.yaml:10:1"), std::string::npos) << s.error().message;
+  EXPECT_NE(s.error().message.find("train.yaml:11:1"), std::string::npos) << s.error().message;
   EXPECT_NE(s.error().message.find("rollout_action"), std::string::npos) << s.error().message;
 }
 
@@ -141,6 +141,17 @@ TEST_F(TrainingTest, ADataSetOfOtherSettingsIsNotResumed) {
     return wait_for(pid);
   }();
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1);
+}
+
+TEST_F(TrainingTest, RolloutsThatDifferByFewerThanTieBoxesAreNotSamples) {
+  // One action from each state moves a handful of boxes at most: with
+  // tie_boxes beyond that, every state is a tie and nothing is learnt.
+  const int status = wait_for(start("out", "tie_boxes=1000"));
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1);
+  const auto d = load_data_set(dir_ / "out" / "data.plrd").value();
+  EXPECT_TRUE(d.validation.empty());
+  EXPECT_TRUE(d.training.empty());
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "data.plrd"));
 }
 
 }  // namespace

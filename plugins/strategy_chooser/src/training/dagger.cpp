@@ -151,7 +151,10 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
       const Rollout& by_nn = *runs[0];
       const Rollout& by_h = *runs[1];
       const double best = std::max(by_nn.rate(), by_h.rate());
-      const bool tie = std::abs(by_nn.rate() - by_h.rate()) <= settings.tie_margin * best;
+      const auto box_difference = static_cast<std::uint32_t>(
+          std::abs(static_cast<long>(by_nn.boxes) - static_cast<long>(by_h.boxes)));
+      const bool tie = std::abs(by_nn.rate() - by_h.rate()) <= settings.tie_margin * best ||
+                       box_difference < settings.tie_boxes;
       const int label = by_nn.rate() > by_h.rate() ? kNearestLabel : kHardcodedLabel;
       Sample s{source.name,
                d.step,
@@ -180,7 +183,10 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
           "-> {}; going on with {} ({:.1f} s)",
           d.validating ? "validation" : "training", source.name, d.step,
           library->entries[nn.entry].name, nn.distance, by_nn.boxes, by_nn.robot_time_s, by_h.boxes,
-          by_h.robot_time_s, tie ? "tie, not a sample" : label == kNearestLabel ? "NN" : "H",
+          by_h.robot_time_s,
+          tie                      ? "tie, not a sample"
+          : label == kNearestLabel ? "NN"
+                                   : "H",
           follow_nearest ? "NN" : "H", std::chrono::duration<double>(Clock::now() - t0).count()));
       const Rollout& next = follow_nearest ? by_nn : by_h;
       ++d.step;

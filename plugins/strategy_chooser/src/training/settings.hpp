@@ -36,6 +36,9 @@ struct TrainingSettings {
   // share of the larger are a tie: it says nothing about which is better,
   // so the state is not a sample.
   double tie_margin = 0.05;
+  // Rollouts whose box counts differ by fewer than this are a tie too: over
+  // a few actions one box either way is one grasp's luck, not the strategy.
+  std::uint32_t tie_boxes = 2;
   int workers = 2;
   sim::ObservationParams observation;
   sim::HardcodedParams h;
