@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 
 #include "plr/actions/run_stats.hpp"
@@ -155,6 +156,23 @@ double boxes_at(const nlohmann::json& curve, double t) {
   return boxes;
 }
 
+// The robot time at which the run had unloaded `share` of its boxes; NaN
+// when it never did (by the horizon, or before it stopped).
+double time_to_share(const nlohmann::json& run, double share) {
+  const double goal = share * run.value("boxes_total", 0.0);
+  if (goal <= 0) return std::numeric_limits<double>::quiet_NaN();
+  for (const auto& p : run["curve"])
+    if (p[1].get<double>() >= goal - 1e-9) return p[0].get<double>();
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t h = v.size() / 2;
+  return v.size() % 2 ? v[h] : (v[h - 1] + v[h]) / 2;
+}
+
 nlohmann::json summarize(const EvaluationSettings& s, const std::vector<nlohmann::json>& runs,
                          bool quick) {
   const double horizon = s.max_robot_time_s;
@@ -190,8 +208,9 @@ nlohmann::json summarize(const EvaluationSettings& s, const std::vector<nlohmann
         mean.push_back(ms.mean);
         se.push_back(ms.se);
       }
-      std::vector<double> at_end, at_half, totals, walls, library_share;
+      std::vector<double> at_end, at_half, totals, walls, library_share, to_90;
       for (const auto* r : mine) {
+        if (const double t = time_to_share(*r, 0.9); std::isfinite(t)) to_90.push_back(t);
         at_end.push_back(boxes_at((*r)["curve"], horizon));
         at_half.push_back(boxes_at((*r)["curve"], horizon / 2));
         totals.push_back(r->value("boxes_total", 0.0));
@@ -199,16 +218,20 @@ nlohmann::json summarize(const EvaluationSettings& s, const std::vector<nlohmann
         const double actions = r->value("actions", 0.0);
         if (actions > 0) library_share.push_back(r->value("library_actions", 0.0) / actions);
       }
-      methods[to_string(m)] = {{"runs", mine.size()},
-                               {"failed", failed},
-                               {"mean", mean},
-                               {"se", se},
-                               {"boxes_at_horizon", to_json(mean_sd(at_end))},
-                               {"boxes_at_half", to_json(mean_sd(at_half))},
-                               {"boxes_total", to_json(mean_sd(totals))},
-                               {"library_action_share", to_json(mean_sd(library_share))},
-                               {"wall_s", to_json(mean_sd(walls))},
-                               {"stop_reasons", stops}};
+      methods[to_string(m)] = {
+          {"runs", mine.size()},
+          {"failed", failed},
+          {"mean", mean},
+          {"se", se},
+          {"boxes_at_horizon", to_json(mean_sd(at_end))},
+          {"boxes_at_half", to_json(mean_sd(at_half))},
+          {"boxes_total", to_json(mean_sd(totals))},
+          // Over the runs that got there (`n` of `runs`).
+          {"robot_s_to_90_percent",
+           {{"median", median(to_90)}, {"mean", mean_sd(to_90).mean}, {"n", to_90.size()}}},
+          {"library_action_share", to_json(mean_sd(library_share))},
+          {"wall_s", to_json(mean_sd(walls))},
+          {"stop_reasons", stops}};
     }
     // Findings: each method against H at the horizon, PLR against NN, and
     // how NN's and H's unloading split between the two halves.

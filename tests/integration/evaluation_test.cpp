@@ -202,7 +202,7 @@ TEST_F(EvaluationTest, ReportHoldsPlotsAndTablesOfItsRuns) {
   for (const auto& [env, e] : j["environments"].items())
     for (const auto& [m, d] : e["methods"].items()) {
       const auto cells = row(html, "methods", env + "/" + m);
-      ASSERT_EQ(cells.size(), 6u) << env << "/" << m;
+      ASSERT_EQ(cells.size(), 7u) << env << "/" << m;
       EXPECT_EQ(std::stoi(cells[2]), d["runs"].get<int>());
       const auto& b = d["boxes_at_horizon"];
       expect_pm(cells[3], b["mean"], b["se"], 0.1);
@@ -248,14 +248,19 @@ TEST(EvaluationSummary, MeanAndStandardErrorOfTheCurves) {
         {"action_stats",
          {{"pick", nlohmann::json::object()}, {"sweep", nlohmann::json::object()}}}};
   };
-  // Boxes at 100 s: 10 and 20; at 50 s: 4 and 0.
-  const auto j = plr::evaluation::summarize(
-      s, {result(1, {{0, 0}, {40, 4}, {90, 10}}), result(2, {{0, 0}, {60, 20}})}, false);
+  // Boxes at 100 s: 10 and 20; at 50 s: 4 and 0. 90 % of 10 boxes at 90 s;
+  // the second run never gets to 90 % of its 30.
+  auto first = result(1, {{0, 0}, {40, 4}, {90, 10}}), second = result(2, {{0, 0}, {60, 20}});
+  first["boxes_total"] = 10;
+  second["boxes_total"] = 30;
+  const auto j = plr::evaluation::summarize(s, {first, second}, false);
   const auto& h = j["environments"]["E"]["methods"]["H"];
   EXPECT_DOUBLE_EQ(h["boxes_at_horizon"]["mean"].get<double>(), 15.0);
   EXPECT_NEAR(h["boxes_at_horizon"]["se"].get<double>(), 5.0, 1e-12);
   EXPECT_DOUBLE_EQ(h["boxes_at_half"]["mean"].get<double>(), 2.0);
   EXPECT_DOUBLE_EQ(h["mean"].back().get<double>(), 15.0);
+  EXPECT_DOUBLE_EQ(h["robot_s_to_90_percent"]["median"].get<double>(), 90.0);
+  EXPECT_EQ(h["robot_s_to_90_percent"]["n"].get<int>(), 1);
   EXPECT_DOUBLE_EQ(plr::evaluation::boxes_at(nlohmann::json::array({{0, 0}, {5, 3}}), 4.99), 0.0);
 }
 

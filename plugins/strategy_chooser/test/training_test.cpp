@@ -49,7 +49,8 @@ class TrainingTest : public ::testing::Test {
         << "\nout: " << (dir_ / "out").string() << "\ntrain: ["
         << (kData / "floor_row.yaml").string() << ", " << (kData / "two_columns.yaml").string()
         << "]\nvalidation: [" << (kData / "two_columns.yaml").string()
-        << "]\nstates_per_world: 2\nrollout_actions: 1\ntie_boxes: 1\nworkers: 2\nfolds: 2\n";
+        << "]\nstates_per_world: 2\nrollout_actions: 1\ntie_boxes: 1\nworkers: 2\nfolds: 2\n"
+        << "particles: 2\nmass_prior: B1\n";
   }
   void TearDown() override { fs::remove_all(dir_); }
 
@@ -73,6 +74,11 @@ class TrainingTest : public ::testing::Test {
   std::vector<std::uint8_t> read(const fs::path& p) {
     std::ifstream in(p, std::ios::binary);
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  }
+
+  std::string read_text(const fs::path& p) {
+    const auto bytes = read(p);
+    return {bytes.begin(), bytes.end()};
   }
 
   fs::path dir_;
@@ -119,7 +125,7 @@ TEST_F(TrainingTest, AnUnknownSettingIsNamedWithItsLine) {
   std::ofstream(dir_ / "train.yaml", std::ios::app) << "rollout_action: 3\n";
   const auto s = TrainingSettings::load(dir_ / "train.yaml");
   ASSERT_FALSE(s);
-  EXPECT_NE(s.error().message.find("train.yaml:11:1"), std::string::npos) << s.error().message;
+  EXPECT_NE(s.error().message.find("train.yaml:13:1"), std::string::npos) << s.error().message;
   EXPECT_NE(s.error().message.find("rollout_action"), std::string::npos) << s.error().message;
 }
 
@@ -128,6 +134,20 @@ TEST_F(TrainingTest, AWorldThatIsNeitherAFamilyNorAFileIsRefused) {
   ASSERT_FALSE(s);
   EXPECT_NE(s.error().message.find("not a family:seed such as A1:3"), std::string::npos)
       << s.error().message;
+}
+
+TEST_F(TrainingTest, ParticlesOfAWorldFileNeedAMassPrior) {
+  const auto s = TrainingSettings::load(dir_ / "train.yaml", {"mass_prior=Z9"});
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find("mass_prior"), std::string::npos) << s.error().message;
+  std::string text = read_text(dir_ / "train.yaml");
+  text.erase(text.find("mass_prior: B1\n"));
+  std::ofstream(dir_ / "train.yaml") << text;
+  const auto without = TrainingSettings::load(dir_ / "train.yaml");
+  ASSERT_FALSE(without);
+  EXPECT_NE(without.error().message.find("floor_row.yaml is a world file; mass_prior names"),
+            std::string::npos)
+      << without.error().message;
 }
 
 TEST_F(TrainingTest, ADataSetOfOtherSettingsIsNotResumed) {

@@ -11,6 +11,7 @@
 
 #include "plr/chooser/model.hpp"
 #include "plr/chooser/nearest.hpp"
+#include "plr/sim/generators.hpp"
 #include "plr/sim/library.hpp"
 #include "training/curve_svg.hpp"
 #include "training/data_set.hpp"
@@ -40,6 +41,14 @@ double majority_share(const std::vector<Sample>& samples) {
   for (const Sample& s : samples) nearest += s.label == kNearestLabel;
   const auto n = static_cast<double>(samples.size());
   return std::max(static_cast<double>(nearest), n - static_cast<double>(nearest)) / n;
+}
+
+// The particles' seed at a state: the same at the same state of a resumed
+// training (FNV-1a of the world's name and the step).
+std::uint64_t state_seed(const std::string& world, std::uint32_t step) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char ch : world + "#" + std::to_string(step)) h = (h ^ ch) * 1099511628211ull;
+  return h;
 }
 
 plr::Error error(const std::string& what) {
@@ -128,9 +137,24 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
     if (!world_done) {
       const Features f = features(seen->world, settings.observation);
       const Nearest nn = index.nearest(d.scaling.apply(f));
-      const auto runs =
-          (*rig)->run_parallel(d.state, {{library->entries[nn.entry].strategy}, {std::nullopt}},
-                               settings.h, settings.rollout_actions, settings.workers);
+      // Pairs of rollouts (NN, H): particle 0 is the state as it is, the
+      // others draw the masses W does not show.
+      std::vector<Rig::Job> jobs;
+      const auto family = source.family() ? source.family() : settings.mass_prior;
+      for (std::uint32_t p = 0; p < settings.particles; ++p) {
+        std::vector<std::pair<std::uint32_t, double>> masses;
+        if (p > 0) {
+          // Settings refuse particles without a family to draw from.
+          const sim::World particle = sim::sample_masses(
+              seen->world, *family,
+              sim::particle_seed(state_seed(source.name, d.step), static_cast<int>(p)));
+          for (const sim::Box& b : particle.boxes) masses.emplace_back(b.id, b.mass);
+        }
+        jobs.push_back({library->entries[nn.entry].strategy, masses});
+        jobs.push_back({std::nullopt, std::move(masses)});
+      }
+      const auto runs = (*rig)->run_parallel(d.state, jobs, settings.h, settings.rollout_actions,
+                                             settings.workers);
       bool failed = false;
       for (const auto& r : runs) {
         if (!r) {
@@ -148,13 +172,17 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
         if (auto ok = save_data_set(d, data_file); !ok) return ok.error();
         continue;
       }
-      const Rollout& by_nn = *runs[0];
-      const Rollout& by_h = *runs[1];
+      Rollout by_nn, by_h;  // pooled over the particles
+      for (std::size_t i = 0; i < runs.size(); ++i) {
+        Rollout& to = i % 2 == 0 ? by_nn : by_h;
+        to.boxes += runs[i]->boxes;
+        to.robot_time_s += runs[i]->robot_time_s;
+      }
       const double best = std::max(by_nn.rate(), by_h.rate());
       const auto box_difference = static_cast<std::uint32_t>(
           std::abs(static_cast<long>(by_nn.boxes) - static_cast<long>(by_h.boxes)));
       const bool tie = std::abs(by_nn.rate() - by_h.rate()) <= settings.tie_margin * best ||
-                       box_difference < settings.tie_boxes;
+                       box_difference < settings.tie_boxes * settings.particles;
       const int label = by_nn.rate() > by_h.rate() ? kNearestLabel : kHardcodedLabel;
       Sample s{source.name,
                d.step,
@@ -188,7 +216,7 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
           : label == kNearestLabel ? "NN"
                                    : "H",
           follow_nearest ? "NN" : "H", std::chrono::duration<double>(Clock::now() - t0).count()));
-      const Rollout& next = follow_nearest ? by_nn : by_h;
+      const Rollout& next = *runs[follow_nearest ? 0 : 1];  // particle 0: the state's masses
       ++d.step;
       if (next.actions == 0) {
         world_done = true;  // nothing moves from here: the trailer is done with

@@ -94,13 +94,14 @@ plr::Expected<actions::Perceived> Rig::observe(const std::vector<std::uint8_t>& 
   return rig_->backend().observe();
 }
 
-plr::Expected<Rollout> Rig::run(const std::vector<std::uint8_t>& state,
-                                const std::optional<sim::Strategy>& strategy,
+plr::Expected<Rollout> Rig::run(const std::vector<std::uint8_t>& state, const Job& job,
                                 const sim::HardcodedParams& h, std::uint64_t max_actions) {
   auto memory = restore(state);
   if (!memory) return memory.error();
+  if (!job.masses.empty())
+    if (auto ok = rig_->simulation().set_masses(job.masses); !ok) return ok.error();
   auto run =
-      actions::run_open_loop(rig_->model(), rig_->backend(), *memory, strategy, h, max_actions);
+      actions::run_open_loop(rig_->model(), rig_->backend(), *memory, job.strategy, h, max_actions);
   if (!run) return run.error();
   return Rollout{run->actions, run->boxes, run->robot_time_s, snapshot(*memory)};
 }
@@ -132,7 +133,7 @@ std::vector<plr::Expected<Rollout>> Rig::run_parallel(const std::vector<std::uin
         // A rollout outlives no killed training: it would only hold a core.
         if (::prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || ::getppid() != parent) std::_Exit(1);
         ::close(fds[0]);
-        auto r = run(state, jobs[next].strategy, h, max_actions);
+        auto r = run(state, jobs[next], h, max_actions);
         Header head;
         std::string text;
         const std::uint8_t* payload = nullptr;

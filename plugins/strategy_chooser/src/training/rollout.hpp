@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "plr/actions/action_model.hpp"
@@ -39,16 +40,18 @@ class Rig {
   // What the robot perceives in `state`.
   plr::Expected<actions::Perceived> observe(const std::vector<std::uint8_t>& state);
 
-  // From `state`: `strategy` (nullopt: H alone) for at most `max_actions`.
-  plr::Expected<Rollout> run(const std::vector<std::uint8_t>& state,
-                             const std::optional<sim::Strategy>& strategy,
+  // A rollout: `strategy` (nullopt: H alone) from the state, its boxes
+  // given `masses` (id, kg) first (a particle; empty: the state's own).
+  struct Job {
+    std::optional<sim::Strategy> strategy;
+    std::vector<std::pair<std::uint32_t, double>> masses;
+  };
+  // From `state`, at most `max_actions` actions.
+  plr::Expected<Rollout> run(const std::vector<std::uint8_t>& state, const Job& job,
                              const sim::HardcodedParams& h, std::uint64_t max_actions);
 
   // Each job in a child process, at most `workers` at once; results in
   // the jobs' order. A child that dies is an error naming its signal.
-  struct Job {
-    std::optional<sim::Strategy> strategy;
-  };
   std::vector<plr::Expected<Rollout>> run_parallel(const std::vector<std::uint8_t>& state,
                                                    const std::vector<Job>& jobs,
                                                    const sim::HardcodedParams& h,

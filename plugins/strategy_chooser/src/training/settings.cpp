@@ -57,18 +57,23 @@ plr::Expected<sim::World> WorldSource::load() const {
   return sim::load_world(name);
 }
 
+std::optional<sim::EnvFamily> WorldSource::family() const {
+  if (const auto fs = family_seed(name)) return fs->family;
+  return std::nullopt;
+}
+
 plr::Expected<sim::World> WorldSource::layout() const {
   if (const auto fs = family_seed(name)) return sim::generate_world(fs->family, fs->seed);
   return sim::load_world(name);
 }
 
 std::uint64_t TrainingSettings::hash(std::uint32_t library_fingerprint) const {
-  std::string text =
-      fmt::format("lib {} spw {} ra {} tie {} {} obs {} {} {} {} {} {} {} {} h {} {} svm {} ",
-                  library_fingerprint, states_per_world, rollout_actions, tie_margin, tie_boxes,
-                  observation.h_pile, observation.wall_depth, observation.min_pile_depth,
-                  observation.pile_mid, observation.pile_high, observation.wall_mid,
-                  observation.wall_high, observation.side_band, h.h_min, h.d_min, svm.folds);
+  std::string text = fmt::format(
+      "lib {} spw {} ra {} tie {} {} particles {} {} obs {} {} {} {} {} {} {} {} h {} {} svm {} ",
+      library_fingerprint, states_per_world, rollout_actions, tie_margin, tie_boxes, particles,
+      mass_prior ? sim::to_string(*mass_prior) : "-", observation.h_pile, observation.wall_depth,
+      observation.min_pile_depth, observation.pile_mid, observation.pile_high, observation.wall_mid,
+      observation.wall_high, observation.side_band, h.h_min, h.d_min, svm.folds);
   for (int c : svm.log2_c) text += fmt::format("c{} ", c);
   for (int g : svm.log2_gamma) text += fmt::format("g{} ", g);
   for (const auto* list : {&train, &validation}) {
@@ -91,11 +96,11 @@ plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::pa
     doc->set(o.substr(0, eq), o.substr(eq + 1), "--set " + o.substr(0, eq));
   }
   TrainingSettings s;
-  const yaml::Map top =
-      doc->root().map("chooser training settings",
-                      {"format", "library", "out", "train", "validation", "states_per_world",
-                       "rollout_actions", "tie_margin", "tie_boxes", "workers", "observation",
-                       "h_min", "d_min", "folds", "log2_c", "log2_gamma"});
+  const yaml::Map top = doc->root().map(
+      "chooser training settings",
+      {"format", "library", "out", "train", "validation", "states_per_world", "rollout_actions",
+       "tie_margin", "tie_boxes", "particles", "mass_prior", "workers", "observation", "h_min",
+       "d_min", "folds", "log2_c", "log2_gamma"});
   (void)top.required("format").one_of({"plr-chooser-training"});
   if (auto l = top.required("library").string()) s.library = *l;
   if (auto o = top.required("out").string()) s.out = *o;
@@ -105,6 +110,13 @@ plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::pa
   if (auto n = top.find("rollout_actions").integer(1, 1000)) s.rollout_actions = *n;
   if (auto n = top.find("tie_margin").number(0.0, 1.0)) s.tie_margin = *n;
   if (auto n = top.find("tie_boxes").integer(0, 1000)) s.tie_boxes = static_cast<std::uint32_t>(*n);
+  if (auto n = top.find("particles").integer(1, 64)) s.particles = static_cast<std::uint32_t>(*n);
+  if (const yaml::Node n = top.find("mass_prior"); n.present()) {
+    if (auto name = n.string()) {
+      s.mass_prior = sim::parse_env_family(*name);
+      if (!s.mass_prior) n.error("not a family (A1, A2, B1, B2, C)");
+    }
+  }
   if (auto n = top.find("workers").integer(1, 64)) s.workers = static_cast<int>(*n);
   if (auto n = top.find("folds").integer(2, 100)) s.svm.folds = static_cast<int>(*n);
   for (auto [key, grid] : {std::pair{"log2_c", &s.svm.log2_c}, {"log2_gamma", &s.svm.log2_gamma}}) {
@@ -117,6 +129,14 @@ plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::pa
   sim::read_strategy_settings(top, s.h, s.observation);
   if (!doc->ok()) return doc->error();
   if (auto ok = s.h.check(); !ok) return ok.error();
+  if (s.particles > 1 && !s.mass_prior)
+    for (const auto* list : {&s.train, &s.validation})
+      for (const WorldSource& w : *list)
+        if (!w.family())
+          return plr::make_error(PLR_ERR_INVALID,
+                                 file.string() + ": particles: " + w.name +
+                                     " is a world file; mass_prior names the family whose "
+                                     "masses its particles draw");
   return s;
 }
 

@@ -8,10 +8,12 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "plr/chooser/model.hpp"
+#include "plr/sim/generators.hpp"
 #include "plr/sim/hardcoded_strategy.hpp"
 #include "plr/sim/observation.hpp"
 #include "plr/sim/world.hpp"
@@ -24,6 +26,8 @@ struct WorldSource {
   plr::Expected<sim::World> load() const;  // the truth, with masses
   // The world before it settles (cheap: no physics), for fitting the scaling.
   plr::Expected<sim::World> layout() const;
+  // A family:seed world's family (its mass prior); none for a file.
+  std::optional<sim::EnvFamily> family() const;
 };
 
 struct TrainingSettings {
@@ -39,6 +43,12 @@ struct TrainingSettings {
   // Rollouts whose box counts differ by fewer than this are a tie too: over
   // a few actions one box either way is one grasp's luck, not the strategy.
   std::uint32_t tie_boxes = 2;
+  // Each state is rolled out on this many mass particles, since W does not
+  // show the masses: its own and particles - 1 drawn from the prior
+  // (sim::sample_masses). The label compares the rates pooled over them.
+  std::uint32_t particles = 1;
+  // The prior of a world file's particles; a family:seed world uses its own.
+  std::optional<sim::EnvFamily> mass_prior;
   int workers = 2;
   sim::ObservationParams observation;
   sim::HardcodedParams h;
