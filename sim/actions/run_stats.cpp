@@ -108,4 +108,13 @@ nlohmann::json action_json(const ActionStats& a) {
           {"boxes_per_s", total > 0 ? static_cast<double>(a.boxes) / total : 0.0}};
 }
 
+std::optional<double> robot_time_to_share(const nlohmann::json& curve, double total, double share) {
+  const double goal = share * total;
+  if (!(goal > 0) || !curve.is_array()) return std::nullopt;
+  for (const auto& p : curve)
+    if (p.is_array() && p.size() == 2 && p[1].get<double>() >= goal - 1e-9)
+      return p[0].get<double>();
+  return std::nullopt;
+}
+
 }  // namespace plr::actions

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <map>
 
 #include "plr/actions/run_stats.hpp"
@@ -156,16 +155,6 @@ double boxes_at(const nlohmann::json& curve, double t) {
   return boxes;
 }
 
-// The robot time at which the run had unloaded `share` of its boxes; NaN
-// when it never did (by the horizon, or before it stopped).
-double time_to_share(const nlohmann::json& run, double share) {
-  const double goal = share * run.value("boxes_total", 0.0);
-  if (goal <= 0) return std::numeric_limits<double>::quiet_NaN();
-  for (const auto& p : run["curve"])
-    if (p[1].get<double>() >= goal - 1e-9) return p[0].get<double>();
-  return std::numeric_limits<double>::quiet_NaN();
-}
-
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
@@ -210,7 +199,9 @@ nlohmann::json summarize(const EvaluationSettings& s, const std::vector<nlohmann
       }
       std::vector<double> at_end, at_half, totals, walls, library_share, to_90;
       for (const auto* r : mine) {
-        if (const double t = time_to_share(*r, 0.9); std::isfinite(t)) to_90.push_back(t);
+        if (const auto t =
+                actions::robot_time_to_share((*r)["curve"], r->value("boxes_total", 0.0), 0.9))
+          to_90.push_back(*t);
         at_end.push_back(boxes_at((*r)["curve"], horizon));
         at_half.push_back(boxes_at((*r)["curve"], horizon / 2));
         totals.push_back(r->value("boxes_total", 0.0));

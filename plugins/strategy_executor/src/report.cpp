@@ -19,6 +19,7 @@ nlohmann::json to_json(const RunStats& s) {
   }
   nlohmann::json curve = nlohmann::json::array();
   for (const auto& p : s.curve) curve.push_back({p.robot_time_s, p.boxes});
+  const auto to_90 = actions::robot_time_to_share(curve, s.boxes_total, 0.9);
   nlohmann::json steps = nlohmann::json::array();
   for (const auto& r : s.steps)
     steps.push_back({{"action", r.action},
@@ -56,6 +57,7 @@ nlohmann::json to_json(const RunStats& s) {
           {"actions",
            {{"pick", actions::action_json(s.pick)}, {"sweep", actions::action_json(s.sweep)}}},
           {"curve", curve},
+          {"robot_s_to_90_percent", to_90 ? nlohmann::json(*to_90) : nlohmann::json()},
           {"steps", steps}};
 }
 

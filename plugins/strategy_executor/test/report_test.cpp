@@ -50,6 +50,9 @@ TEST(Report, JsonHasTheFiguresOfTheTables) {
   EXPECT_DOUBLE_EQ(j["actions"]["pick"]["boxes_per_s"].get<double>(), 3.0 / (1.0 + 12.0));
   EXPECT_EQ(j["stop_reason"], "trailer empty");
   EXPECT_EQ(j["curve"].size(), 2u);
+  EXPECT_TRUE(j["robot_s_to_90_percent"].is_null());  // 4 of 10 boxes
+  s.curve = {{0.0, 0}, {20.0, 4}, {31.5, 9}, {40.0, 10}};
+  EXPECT_DOUBLE_EQ(to_json(s)["robot_s_to_90_percent"].get<double>(), 31.5);
   ASSERT_EQ(j["boxes_left"].size(), 3u);
   EXPECT_EQ(j["boxes_left"][0]["reason"], "given up");
   EXPECT_EQ(j["boxes_left"][0]["detail"], "too heavy");

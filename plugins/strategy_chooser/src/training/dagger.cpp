@@ -1,6 +1,7 @@
 #include "training/dagger.hpp"
 
 #include <plr/atomic_file.hpp>
+#include <plr/message.hpp>
 
 #include <fmt/format.h>
 
@@ -44,11 +45,9 @@ double majority_share(const std::vector<Sample>& samples) {
 }
 
 // The particles' seed at a state: the same at the same state of a resumed
-// training (FNV-1a of the world's name and the step).
+// training.
 std::uint64_t state_seed(const std::string& world, std::uint32_t step) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char ch : world + "#" + std::to_string(step)) h = (h ^ ch) * 1099511628211ull;
-  return h;
+  return plr::fnv1a(world + "#" + std::to_string(step));
 }
 
 plr::Error error(const std::string& what) {

@@ -1,5 +1,6 @@
 #include "training/settings.hpp"
 
+#include <plr/message.hpp>
 #include <plr/yaml_reader.hpp>
 
 #include <fmt/format.h>
@@ -80,9 +81,7 @@ std::uint64_t TrainingSettings::hash(std::uint32_t library_fingerprint) const {
     text += "| ";
     for (const WorldSource& w : *list) text += w.name + " ";
   }
-  std::uint64_t h64 = 1469598103934665603ull;  // FNV-1a
-  for (unsigned char ch : text) h64 = (h64 ^ ch) * 1099511628211ull;
-  return h64;
+  return plr::fnv1a(text);
 }
 
 plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::path& file,

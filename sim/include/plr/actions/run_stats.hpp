@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -67,5 +68,10 @@ double boxes_per_execution(const ActionStats& stats);
 double boxes_per_success(const ActionStats& stats);
 // The degrees of freedom a mode plans (M4: its one progress variable).
 int plan_mode_dof(int mode);
+
+// The robot time at which a curve ([[robot s, boxes], ...], as report.json
+// has it) reached `share` of `total` boxes; none if it never did. Issue 21
+// compares PLR with H by the time to 90 %.
+std::optional<double> robot_time_to_share(const nlohmann::json& curve, double total, double share);
 
 }  // namespace plr::actions
