@@ -112,7 +112,8 @@ std::optional<double> robot_time_to_share(const nlohmann::json& curve, double to
   const double goal = share * total;
   if (!(goal > 0) || !curve.is_array()) return std::nullopt;
   for (const auto& p : curve)
-    if (p.is_array() && p.size() == 2 && p[1].get<double>() >= goal - 1e-9)
+    if (p.is_array() && p.size() == 2 && p[0].is_number() && p[1].is_number() &&
+        p[1].get<double>() >= goal - 1e-9)
       return p[0].get<double>();
   return std::nullopt;
 }

@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "plr/actions/run_stats.hpp"
 #include "plr/chooser/features.hpp"
 #include "plr/chooser/model.hpp"
 #include "plr/chooser/nearest.hpp"
@@ -261,6 +262,10 @@ TEST(EvaluationSummary, MeanAndStandardErrorOfTheCurves) {
   EXPECT_DOUBLE_EQ(h["mean"].back().get<double>(), 15.0);
   EXPECT_DOUBLE_EQ(h["robot_s_to_90_percent"]["median"].get<double>(), 90.0);
   EXPECT_EQ(h["robot_s_to_90_percent"]["n"].get<int>(), 1);
+  // A run file edited by hand: points that are not numbers are skipped.
+  EXPECT_EQ(plr::actions::robot_time_to_share(
+                nlohmann::json::parse(R"([[0, 0], ["x", 9], [7, 9]])"), 10, 0.9),
+            7.0);
   EXPECT_DOUBLE_EQ(plr::evaluation::boxes_at(nlohmann::json::array({{0, 0}, {5, 3}}), 4.99), 0.0);
 }
 
