@@ -207,10 +207,10 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
       }
       log(fmt::format(
           "{} {} state {}: NN {} ({:.2f}) {} boxes in {:.1f} s, H {} boxes in {:.1f} s "
-          "-> {}; going on with {} ({:.1f} s)",
+          "(over {} particles) -> {}; going on with {} ({:.1f} s)",
           d.validating ? "validation" : "training", source.name, d.step,
           library->entries[nn.entry].name, nn.distance, by_nn.boxes, by_nn.robot_time_s, by_h.boxes,
-          by_h.robot_time_s,
+          by_h.robot_time_s, settings.particles,
           tie                      ? "tie, not a sample"
           : label == kNearestLabel ? "NN"
                                    : "H",
