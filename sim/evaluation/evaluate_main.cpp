@@ -183,6 +183,10 @@ int main(int argc, char** argv) {
   if (auto ok = ev::write_report(summary, dir); !ok) die(ok.error().message);
   for (const auto& f : summary["findings"])
     std::printf("%s\n", f["text"].get<std::string>().c_str());
+  for (const auto& c : summary["claims"])
+    if (!c["holds"].get<bool>() && c.contains("why"))
+      std::printf("%s does not hold: %s\n", c["claim"].get<std::string>().c_str(),
+                  c["why"]["text"].get<std::string>().c_str());
   std::printf("report: %s\n", (dir / "report.html").c_str());
   return 0;
 }

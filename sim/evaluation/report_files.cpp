@@ -152,11 +152,13 @@ std::string report_html(const nlohmann::json& r) {
   for (const auto& f : r["findings"])
     h += "<li>" + xml_escape(f["text"].get<std::string>()) + "</li>\n";
   h += "</ul>\n<h3>The paper's claims</h3>\n<table id=\"claims\">\n<tr><th>claim</th><th>holds</th>"
-       "<th>standard errors</th></tr>\n";
+       "<th>standard errors</th><th>the data behind it</th></tr>\n";
   for (const auto& c : r["claims"])
-    h += fmt::format("<tr><td>{}</td><td>{}</td><td>{:.1f}</td></tr>\n",
-                     xml_escape(c["claim"].get<std::string>()),
-                     c["holds"].get<bool>() ? "yes" : "no", c["z"].get<double>());
+    h += fmt::format(
+        "<tr data-row=\"{0}\"><td>{0}</td><td>{1}</td><td>{2:.1f}</td><td>{3}</td></tr>\n",
+        xml_escape(c["claim"].get<std::string>()), c["holds"].get<bool>() ? "yes" : "no",
+        c["z"].get<double>(),
+        c.contains("why") ? xml_escape(c["why"]["text"].get<std::string>()) : "");
   h += "</table>\n";
 
   const auto& t1 = r["table1"];

@@ -144,6 +144,56 @@ nlohmann::json table2(const std::vector<const nlohmann::json*>& runs) {
   return out;
 }
 
+// How PLR's actions split between library strategies and H, and what each
+// unloaded per robot-second, over a method's runs: the data behind a PLR
+// that is only level with H (it can beat H only where it runs library
+// strategies, and only by as much as they beat H's actions).
+struct SourceSplit {
+  double library_actions = 0, actions = 0;
+  double library_boxes = 0, library_s = 0, hardcoded_boxes = 0, hardcoded_s = 0;
+};
+
+SourceSplit source_split(const std::vector<const nlohmann::json*>& runs) {
+  SourceSplit out;
+  for (const nlohmann::json* r : runs) {
+    if (!r->contains("steps") || !(*r)["steps"].is_array()) continue;
+    for (const auto& step : (*r)["steps"]) {
+      if (!step.is_object()) continue;
+      const bool library = step.value("source", "").rfind("library:", 0) == 0;
+      const double boxes = step.value("boxes", 0.0), seconds = step.value("robot_time_s", 0.0);
+      out.actions += 1;
+      if (library) {
+        out.library_actions += 1;
+        out.library_boxes += boxes;
+        out.library_s += seconds;
+      } else {
+        out.hardcoded_boxes += boxes;
+        out.hardcoded_s += seconds;
+      }
+    }
+  }
+  return out;
+}
+
+double rate(double boxes, double seconds) {
+  return seconds > 0 ? boxes / seconds : 0.0;
+}
+
+nlohmann::json explain_plr(const SourceSplit& plr, const SourceSplit& h) {
+  const double share = plr.actions > 0 ? plr.library_actions / plr.actions : 0.0;
+  const double lib = rate(plr.library_boxes, plr.library_s);
+  const double own = rate(plr.hardcoded_boxes, plr.hardcoded_s);
+  const double hr = rate(h.hardcoded_boxes + h.library_boxes, h.hardcoded_s + h.library_s);
+  return {{"library_action_share", share},
+          {"library_boxes_per_s", lib},
+          {"plr_hardcoded_boxes_per_s", own},
+          {"h_boxes_per_s", hr},
+          {"text", fmt::format("PLR ran library strategies for {:.0f} % of its actions, which "
+                               "unloaded {:.3f} boxes per robot-second, and H for the rest "
+                               "({:.3f}); H's own runs unloaded {:.3f}",
+                               100 * share, lib, own, hr)}};
+}
+
 }  // namespace
 
 double boxes_at(const nlohmann::json& curve, double t) {
@@ -173,6 +223,7 @@ nlohmann::json summarize(const EvaluationSettings& s, const std::vector<nlohmann
   nlohmann::json claims = nlohmann::json::array();
   for (const Environment& env : s.environments) {
     nlohmann::json methods = nlohmann::json::object();
+    std::map<std::string, std::vector<const nlohmann::json*>> runs_of;
     for (const Method m : s.methods) {
       std::vector<const nlohmann::json*> mine;
       std::size_t failed = 0;
@@ -189,6 +240,7 @@ nlohmann::json summarize(const EvaluationSettings& s, const std::vector<nlohmann
         ++stops[r.value("stop_reason", "?")];
       }
       if (mine.empty() && failed == 0) continue;
+      runs_of[to_string(m)] = mine;
       nlohmann::json mean = nlohmann::json::array(), se = nlohmann::json::array();
       for (double t : grid) {
         std::vector<double> v;
@@ -255,13 +307,17 @@ nlohmann::json summarize(const EvaluationSettings& s, const std::vector<nlohmann
         if (has(m)) {
           const double z = line(m, "H");
           if (std::string(m) == "PLR") {
+            const nlohmann::json why =
+                explain_plr(source_split(runs_of[m]), source_split(runs_of["H"]));
             claims.push_back({{"claim", fmt::format("PLR >= H on {}", env.name)},
                               {"holds", z > -2},
-                              {"z", std::isfinite(z) ? z : 0.0}});
+                              {"z", std::isfinite(z) ? z : 0.0},
+                              {"why", why}});
             if (env.family == sim::EnvFamily::kB1 || env.family == sim::EnvFamily::kB2)
               claims.push_back({{"claim", fmt::format("PLR > H on {}", env.name)},
                                 {"holds", z >= 2},
-                                {"z", std::isfinite(z) ? z : 0.0}});
+                                {"z", std::isfinite(z) ? z : 0.0},
+                                {"why", why}});
           }
         }
     }

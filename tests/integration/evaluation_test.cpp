@@ -6,6 +6,7 @@
 #include <expat.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -210,6 +211,28 @@ TEST_F(EvaluationTest, ReportHoldsPlotsAndTablesOfItsRuns) {
     }
   EXPECT_FALSE(j["findings"].empty());
   EXPECT_FALSE(j["claims"].empty());
+  // PLR against H carries its data: the share of library actions, as the
+  // run files have it, and the same sentence in the HTML.
+  for (const char* env : {"S", "T"}) {
+    double library = 0, actions = 0;
+    for (int seed : {1, 2}) {
+      const auto run = nlohmann::json::parse(read(
+          report / "runs" / (std::string(env) + "_PLR_seed" + std::to_string(seed) + ".json")));
+      for (const auto& step : run["steps"]) {
+        actions += 1;
+        library += step["source"].get<std::string>().rfind("library:", 0) == 0;
+      }
+    }
+    ASSERT_GT(actions, 0) << env;
+    const std::string claim = std::string("PLR >= H on ") + env;
+    const auto c = std::find_if(j["claims"].begin(), j["claims"].end(),
+                                [&](const auto& x) { return x["claim"] == claim; });
+    ASSERT_NE(c, j["claims"].end()) << claim;
+    EXPECT_NEAR((*c)["why"]["library_action_share"].get<double>(), library / actions, 1e-9);
+    const auto cells = row(html, "claims", std::string("PLR &gt;= H on ") + env);
+    ASSERT_EQ(cells.size(), 4u) << claim;
+    EXPECT_EQ(cells[3], (*c)["why"]["text"].get<std::string>());
+  }
 
   // Run again: nothing runs. Without one result, only that run, and it ends
   // as before (robot time is deterministic).

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "pomdp/evaluate.hpp"
@@ -334,6 +336,106 @@ TEST(Pomhdp, ParticleBeliefsOfASimulatedModel) {
   // bounds close on V* = 1 as they would on the exact model.
   EXPECT_NEAR(solver.lower(), 1.0, 0.05);
   EXPECT_LE(solver.lower(), solver.upper());
+}
+
+// Three ways to wait (0.5 each) and "go" (10, to the goal); a step counter
+// is part of the state, as in the truck model, and at step 3 only going
+// avoids the horizon's 100. V(s0) = -10. Under the zero upper bound each
+// wait looks best until its own child is proven, so a search that may wait
+// spends trial after trial on waits. A model that says a wait is dominated
+// (it only spends time) is solved in one trial.
+class WaitIsDominated final : public GenerativeModel {
+ public:
+  WaitIsDominated(const TabularModel& m, bool say) : m_(m), say_(say) {}
+  int num_actions() const override { return m_.num_actions(); }
+  int num_observations() const override { return m_.num_observations(); }
+  double discount() const override { return m_.discount(); }
+  double min_reward() const override { return m_.min_reward(); }
+  double max_reward() const override { return m_.max_reward(); }
+  Belief initial_belief() const override { return m_.initial_belief(); }
+  bool is_terminal(StateId s) const override { return m_.is_terminal(s); }
+  Step step(StateId s, ActionId a, Rng& rng) const override { return m_.step(s, a, rng); }
+  Expansion expand(const Belief& b, ActionId a, Rng& rng) const override {
+    return m_.expand(b, a, rng);
+  }
+  // The waits, as the truck model says of an action that was not applicable.
+  bool dominated(const Belief&, ActionId a) const override { return say_ && a < 3; }
+
+ private:
+  const TabularModel& m_;
+  bool say_;
+};
+
+TEST(Pomhdp, ADominatedActionIsNotSearched) {
+  const TabularModel m = parse_or_die(R"(discount: 1
+states: s0 s1 s2 s3 goal
+actions: wait1 wait2 wait3 go
+observations: here there
+T: wait1 : s0 : s1 1
+T: wait2 : s0 : s1 1
+T: wait3 : s0 : s1 1
+T: wait1 : s1 : s2 1
+T: wait2 : s1 : s2 1
+T: wait3 : s1 : s2 1
+T: wait1 : s2 : s3 1
+T: wait2 : s2 : s3 1
+T: wait3 : s2 : s3 1
+T: wait1 : s3 : goal 1
+T: wait2 : s3 : goal 1
+T: wait3 : s3 : goal 1
+T: go : * : goal 1
+T: * : goal : goal 1
+O: * : s0 : here 1
+O: * : s1 : here 1
+O: * : s2 : here 1
+O: * : s3 : here 1
+O: * : goal : there 1
+R: wait1 : * : * : * -0.5
+R: wait2 : * : * : * -0.5
+R: wait3 : * : * : * -0.5
+R: wait1 : s3 : * : * -100
+R: wait2 : s3 : * : * -100
+R: wait3 : s3 : * : * -100
+R: go : * : * : * -10
+R: * : goal : * : * 0
+start: s0
+)",
+                                      "waits");
+  const ConstantValue upper("zero", 0.0), lower("far", -200.0);
+  const WaitIsDominated with(m, true), without(m, false);
+  Pomhdp a(with, upper, lower, {});
+  a.solve(trials(1000));
+  EXPECT_EQ(a.total_trials(), 1u);
+  EXPECT_NEAR(a.upper(), -10.0, 1e-9);
+  EXPECT_NEAR(a.lower(), -10.0, 1e-9);
+  EXPECT_EQ(a.best_action(), 3);
+  Pomhdp b(without, upper, lower, {});
+  b.solve(trials(1000));
+  EXPECT_GT(b.total_trials(), a.total_trials());
+  EXPECT_NEAR(b.upper(), -10.0, 1e-6);
+}
+
+// All actions dominated: the search keeps them all rather than none.
+TEST(Pomhdp, AllActionsDominatedKeepsThemAll) {
+  const TabularModel m = parse_or_die(R"(discount: 1
+states: start goal
+actions: wait
+observations: here
+T: wait : start : start 1
+T: wait : goal : goal 1
+O: * : * : here 1
+R: wait : start : * : * -0.5
+start: start
+)",
+                                      "goal");
+  const ConstantValue upper("zero", 0.0), lower("far", -100.0);
+  const WaitIsDominated with(m, true);
+  PomhdpOptions o;
+  o.max_depth = 4;
+  Pomhdp a(with, upper, lower, {}, o);
+  a.solve(trials(3));
+  EXPECT_TRUE(std::isfinite(a.upper()));
+  EXPECT_LT(a.upper(), 0.0);
 }
 
 // POMCP on the sense model learns to sense first; its value estimate of

@@ -60,6 +60,12 @@ class GenerativeModel {
   // expansion). A model whose steps are costly may compute them all at once
   // here, in parallel; the steps must come out as they would one by one.
   virtual void prefetch(const Belief& /*belief*/) const {}
+  // True when `action` is known to be no better than the belief's best
+  // other action, so a search need not consider it: for example an action
+  // that leaves every particle exactly where it was and only spends time
+  // (the same steps after it are as good without it). Asked after
+  // prefetch(); a solver keeps all actions when every one is dominated.
+  virtual bool dominated(const Belief& /*belief*/, ActionId /*action*/) const { return false; }
 
   // How many times the default expand() simulates each particle.
   int samples_per_particle = 1;

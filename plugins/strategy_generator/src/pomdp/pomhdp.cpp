@@ -133,10 +133,20 @@ void Pomhdp::expand(std::uint32_t id) {
   // Nothing below adds nodes, so the belief stays where it is.
   const Node& n = nodes_[id];
   model_.prefetch(n.belief);
+  std::vector<bool> skip(edges.size());
+  for (ActionId a = 0; a < model_.num_actions(); ++a)
+    skip[static_cast<std::size_t>(a)] = model_.dominated(n.belief, a);
+  if (std::all_of(skip.begin(), skip.end(), [](bool b) { return b; }))
+    skip.assign(skip.size(), false);
   for (ActionId a = 0; a < model_.num_actions(); ++a) {
+    Edge& edge = edges[static_cast<std::size_t>(a)];
+    if (skip[static_cast<std::size_t>(a)]) {
+      edge.first = static_cast<std::uint32_t>(branches.size());
+      edge.pruned = true;
+      continue;
+    }
     Rng rng = expansion_rng(n.signature, a);
     const Expansion e = model_.expand(n.belief, a, rng);
-    Edge& edge = edges[static_cast<std::size_t>(a)];
     edge.reward = e.reward;
     edge.first = static_cast<std::uint32_t>(branches.size());
     double q_up = 0.0;

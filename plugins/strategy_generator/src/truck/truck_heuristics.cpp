@@ -17,8 +17,11 @@ double TruckHeuristic::value(pomdp::StateId id) const {
   const double n = s.boxes_left;
   const double beyond = o.seconds_per_box * std::max(0.0, n - k);
   switch (kind_) {
-    case Kind::kAnchor:
-      return -(o.min_action_s + o.seconds_per_box * std::max(0.0, n - o.max_boxes_per_action * k));
+    case Kind::kAnchor: {
+      const double reachable = std::min(n, o.max_boxes_per_action * k);
+      return -(std::max(o.min_action_s, o.min_seconds_per_box * reachable) +
+               o.seconds_per_box * (n - reachable));
+    }
     case Kind::kLower:
       return -(k * o.min_action_s + o.seconds_per_box * n);
     case Kind::kAnyBoxLeft:

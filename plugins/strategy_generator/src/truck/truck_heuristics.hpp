@@ -2,9 +2,10 @@
 // probability-weighted mean over the belief's particles of a per-state
 // estimate. With k actions left before the horizon, n boxes left, T the
 // terminal seconds per box and a a typical action's time:
-//   anchor (admissible): a non-goal state needs one more action, which
-//     takes at least min_action_s, and no action unloads more than m =
-//     max_boxes_per_action boxes: -(min_action_s + T * max(0, n - m * k));
+//   anchor (admissible): at most u = min(n, m * k) boxes leave before the
+//     horizon (m = max_boxes_per_action), each taking at least r =
+//     min_seconds_per_box, and a non-goal state needs one more action of
+//     at least min_action_s: -(max(min_action_s, r * u) + T * (n - u));
 //   lower (an estimate of a lower bound): every remaining action wasted,
 //     -(k * min_action_s + T * n);
 // and the paper's three, inadmissible:

@@ -95,6 +95,16 @@ void TruckModel::prefetch(const pomdp::Belief& belief) const {
   fill(requests);
 }
 
+bool TruckModel::dominated(const pomdp::Belief& belief, pomdp::ActionId action) const {
+  pomdp::Rng unused;
+  for (const pomdp::Particle& p : belief.particles()) {
+    if (is_terminal(p.state)) continue;
+    const pomdp::Step s = step(p.state, action, unused);
+    if (s.terminal || state(s.next).hash != state(p.state).hash) return false;
+  }
+  return true;
+}
+
 pomdp::Step TruckModel::step(pomdp::StateId id, pomdp::ActionId action, pomdp::Rng&) const {
   if (const auto it = steps_.find({id, action}); it != steps_.end()) return it->second;
   const auto a = static_cast<sim::Action>(action);
