@@ -158,9 +158,15 @@ SourceSplit source_split(const std::vector<const nlohmann::json*>& runs) {
   for (const nlohmann::json* r : runs) {
     if (!r->contains("steps") || !(*r)["steps"].is_array()) continue;
     for (const auto& step : (*r)["steps"]) {
-      if (!step.is_object()) continue;
-      const bool library = step.value("source", "").rfind("library:", 0) == 0;
-      const double boxes = step.value("boxes", 0.0), seconds = step.value("robot_time_s", 0.0);
+      // A run file edited by hand may hold anything: such a step counts as
+      // nothing.
+      if (!step.is_object() || !step.contains("source") || !step["source"].is_string() ||
+          !step.contains("boxes") || !step["boxes"].is_number() || !step.contains("robot_time_s") ||
+          !step["robot_time_s"].is_number())
+        continue;
+      const bool library = step["source"].get<std::string>().rfind("library:", 0) == 0;
+      const double boxes = step["boxes"].get<double>();
+      const double seconds = step["robot_time_s"].get<double>();
       out.actions += 1;
       if (library) {
         out.library_actions += 1;

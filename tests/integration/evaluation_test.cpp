@@ -292,4 +292,42 @@ TEST(EvaluationSummary, MeanAndStandardErrorOfTheCurves) {
   EXPECT_DOUBLE_EQ(plr::evaluation::boxes_at(nlohmann::json::array({{0, 0}, {5, 3}}), 4.99), 0.0);
 }
 
+// PLR against H carries the split of PLR's actions between library
+// strategies and H, and each part's boxes per robot-second.
+TEST(EvaluationSummary, PlrAgainstHSaysHowItsActionsSplit) {
+  plr::evaluation::EvaluationSettings s;
+  s.environments.push_back({"E", plr::sim::EnvFamily::kB1, false, {}});
+  s.methods = {plr::evaluation::Method::kHardcoded, plr::evaluation::Method::kPlr};
+  s.max_robot_time_s = 100;
+  auto result = [](const char* method, nlohmann::json steps) {
+    return nlohmann::json{
+        {"environment", "E"},
+        {"method", method},
+        {"seed", 1},
+        {"curve", {{0, 0}, {20, 7}}},
+        {"boxes_total", 10},
+        {"steps", steps},
+        {"planner_modes", nlohmann::json::object()},
+        {"action_stats",
+         {{"pick", nlohmann::json::object()}, {"sweep", nlohmann::json::object()}}}};
+  };
+  const auto plr = result("PLR", nlohmann::json::parse(R"([
+        {"source": "library:B1-1", "boxes": 6, "robot_time_s": 10},
+        {"source": "hardcoded", "boxes": 1, "robot_time_s": 10},
+        {"source": 5, "boxes": 40, "robot_time_s": 1},
+        {"source": "library:B1-1", "boxes": "x", "robot_time_s": 1}])"));
+  const auto h = result("H", nlohmann::json::parse(R"([
+        {"source": "hardcoded", "boxes": 2, "robot_time_s": 10}])"));
+  const auto j = plr::evaluation::summarize(s, {h, plr}, false);
+  const auto c = std::find_if(j["claims"].begin(), j["claims"].end(),
+                              [](const auto& x) { return x["claim"] == "PLR > H on E"; });
+  ASSERT_NE(c, j["claims"].end()) << j["claims"].dump();
+  const auto& why = (*c)["why"];
+  EXPECT_DOUBLE_EQ(why["library_action_share"].get<double>(), 0.5);
+  EXPECT_DOUBLE_EQ(why["library_boxes_per_s"].get<double>(), 0.6);
+  EXPECT_DOUBLE_EQ(why["plr_hardcoded_boxes_per_s"].get<double>(), 0.1);
+  EXPECT_DOUBLE_EQ(why["h_boxes_per_s"].get<double>(), 0.2);
+  EXPECT_NE(why["text"].get<std::string>().find("50 %"), std::string::npos) << why["text"];
+}
+
 }  // namespace
