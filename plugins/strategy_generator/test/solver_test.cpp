@@ -302,12 +302,11 @@ start: start
   EXPECT_EQ(solver.num_nodes(), 1u);
 }
 
-// A model known only through step(): beliefs come from simulated particles
-// (the default expand()), bounds from constants, as a simulator-backed model
-// such as the truck's would have them.
-class SimulatedOnly final : public GenerativeModel {
+// A tabular model seen through the generative interface only; the models
+// below change one thing each.
+class Forwarding : public GenerativeModel {
  public:
-  explicit SimulatedOnly(const TabularModel& m) : m_(m) { samples_per_particle = 4; }
+  explicit Forwarding(const TabularModel& m) : m_(m) {}
   int num_actions() const override { return m_.num_actions(); }
   int num_observations() const override { return m_.num_observations(); }
   double discount() const override { return m_.discount(); }
@@ -317,8 +316,16 @@ class SimulatedOnly final : public GenerativeModel {
   bool is_terminal(StateId s) const override { return m_.is_terminal(s); }
   Step step(StateId s, ActionId a, Rng& rng) const override { return m_.step(s, a, rng); }
 
- private:
+ protected:
   const TabularModel& m_;
+};
+
+// A model known only through step(): beliefs come from simulated particles
+// (the default expand()), bounds from constants, as a simulator-backed model
+// such as the truck's would have them.
+class SimulatedOnly final : public Forwarding {
+ public:
+  explicit SimulatedOnly(const TabularModel& m) : Forwarding(m) { samples_per_particle = 4; }
 };
 
 TEST(Pomhdp, ParticleBeliefsOfASimulatedModel) {
@@ -344,17 +351,9 @@ TEST(Pomhdp, ParticleBeliefsOfASimulatedModel) {
 // wait looks best until its own child is proven, so a search that may wait
 // spends trial after trial on waits. A model that says a wait is dominated
 // (it only spends time) is solved in one trial.
-class WaitIsDominated final : public GenerativeModel {
+class WaitIsDominated final : public Forwarding {
  public:
-  WaitIsDominated(const TabularModel& m, bool say) : m_(m), say_(say) {}
-  int num_actions() const override { return m_.num_actions(); }
-  int num_observations() const override { return m_.num_observations(); }
-  double discount() const override { return m_.discount(); }
-  double min_reward() const override { return m_.min_reward(); }
-  double max_reward() const override { return m_.max_reward(); }
-  Belief initial_belief() const override { return m_.initial_belief(); }
-  bool is_terminal(StateId s) const override { return m_.is_terminal(s); }
-  Step step(StateId s, ActionId a, Rng& rng) const override { return m_.step(s, a, rng); }
+  WaitIsDominated(const TabularModel& m, bool say) : Forwarding(m), say_(say) {}
   Expansion expand(const Belief& b, ActionId a, Rng& rng) const override {
     return m_.expand(b, a, rng);
   }
@@ -362,7 +361,6 @@ class WaitIsDominated final : public GenerativeModel {
   bool dominated(const Belief&, ActionId a) const override { return say_ && a < 3; }
 
  private:
-  const TabularModel& m_;
   bool say_;
 };
 
