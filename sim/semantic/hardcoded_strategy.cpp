@@ -15,8 +15,22 @@ plr::Status HardcodedParams::check() const {
   return {};
 }
 
+namespace {
+
+// The depth of pile a sweep clears: what lies before the first wall's face.
+// Short columns standing level with the wall are stacked like it; Sweep(low)
+// stops short of the wall's face and takes none of them, and a deeper sweep
+// drives into the wall and brings it down onto the scoop (A2).
+double sweepable_depth(const SceneAnalysis& scene) {
+  if (scene.front_pile.empty()) return 0.0;
+  if (scene.first_wall.empty()) return scene.pile_depth;
+  return std::max(0.0, std::min(scene.pile_far_x, scene.wall_near_x) - scene.pile_near_x);
+}
+
+}  // namespace
+
 Action hardcoded_action(const SceneAnalysis& scene, const HardcodedParams& p) {
-  if (!scene.front_pile.empty() && scene.pile_depth > p.d_min) return make_sweep(Height::kLow);
+  if (sweepable_depth(scene) > p.d_min) return make_sweep(Height::kLow);
   if (!scene.first_wall.empty() && scene.wall_height > p.h_min)
     return make_pick(scene.wall_class, scene.wall_side);
   // Only low things are left: a pile too shallow to be worth a sweep, or a

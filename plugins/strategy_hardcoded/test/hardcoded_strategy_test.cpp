@@ -106,6 +106,25 @@ TEST_F(Hardcoded, ShallowPileLeavesTheWall) {
   EXPECT_EQ(decide(w), Action::PickMidCenter);                                      // 1.6 m wall
 }
 
+// Short columns standing level with the wall's face (A2's walls have them)
+// are a pile by height (below h_pile, here 0.55 m), 0.8 m deep, but none of
+// it lies before the wall: a
+// sweep along the floor stops short of the face, and one driven deeper
+// brings the wall down. H picks from the wall.
+TEST_F(Hardcoded, ShortColumnsLevelWithTheWallArePicked) {
+  start();
+  sim::World w;
+  std::uint32_t id = 1;
+  for (double y : {-0.82, -0.41, 0.0, 0.41})
+    for (int r = 0; r < 5; ++r) w.boxes.push_back(sim::testing::make_box(id++, 10.2, y, 0.4 * r));
+  for (double x : {10.2, 10.6}) w.boxes.push_back(sim::testing::make_box(id++, x, 0.82, 0.0));
+  EXPECT_EQ(decide(w), Action::PickMidCenter);  // 2.0 m wall
+  // The same columns standing 1 m out, 0.8 m of them before the face: swept.
+  for (auto& b : w.boxes)
+    if (b.pose.translation().y() > 0.8) b.pose.translation().x() -= 1.0;
+  EXPECT_EQ(decide(w), Action::SweepLow);
+}
+
 TEST_F(Hardcoded, DMinMovesTheDecision) {
   start(R"({"d_min": 0.3})");
   sim::World w;

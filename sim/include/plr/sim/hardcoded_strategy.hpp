@@ -1,5 +1,6 @@
 // Strategy H, the paper's hardcoded strategy: boxes below h_pile are pile,
-// above it wall (ObservationParams). A pile deeper than d_min is swept along
+// above it wall (ObservationParams). A pile reaching more than d_min out
+// before the first wall's face (all of it, without a wall) is swept along
 // the floor (Sweep(low): H has one sweep, as in the paper); else, if the
 // first wall is higher than h_min, a box is picked from it, near the robot
 // and high up first. The strategy_hardcoded plug-in serves
