@@ -100,13 +100,20 @@ class Slowed {
 
 enum class Delivery { kDelivered, kNoPlace, kLost };
 
-// Boxes lying on the robot that are not part of the scene: those a shake
-// has not been tried for yet. One that a shake left where it was is most
-// likely leaning on the robot from the pile it belongs to.
-std::vector<std::uint32_t> riding(const Perceived& w, const Memory& memory,
-                                  const sim::RobotModel& robot) {
+// Boxes that are not part of the scene in front of the robot. Those lying
+// on it that a shake has not been tried for yet (one a shake left where it
+// was is most likely leaning on the robot from the pile it belongs to), and
+// those wholly behind its front edge (fallen beside or behind the base): no
+// action reaches them, and the base cannot get past them to stand behind
+// them (B2 s2: a sweep planned from behind such a box found no path).
+std::vector<std::uint32_t> set_aside(const Perceived& w, const Memory& memory,
+                                     const sim::RobotModel& robot) {
   auto out = boxes_on_robot(w.world, robot, w.q, w.held);
   std::erase_if(out, [&](std::uint32_t id) { return memory.shaken.count(id) > 0; });
+  for (const auto& box : w.world.boxes)
+    if (sim::bounds(box).x1 < w.q[sim::kBaseX] &&
+        std::find(out.begin(), out.end(), box.id) == out.end())
+      out.push_back(box.id);
   return out;
 }
 
@@ -148,7 +155,10 @@ class Run {
     if (end.sim_time_s > 0) out_.sim_time_s = end.sim_time_s;
     if (!out_.applicable) out_.exec_s = o_.not_applicable_s;
     out_.robot_time_s = out_.exec_s + out_.plan_model_s;
-    if (out_.boxes > 0) memory_.ungripped.clear();  // the world changed: worth another try
+    if (out_.boxes > 0) {  // the world changed: worth another try
+      memory_.ungripped.clear();
+      memory_.unreached.clear();
+    }
     return std::move(out_);
   }
 
@@ -375,8 +385,8 @@ class Run {
   std::vector<std::uint32_t> on_robot(const Perceived& w) const {
     return boxes_on_robot(w.world, robot_, w.q, w.held);
   }
-  std::vector<std::uint32_t> riding(const Perceived& w, const Memory& memory) const {
-    return actions::riding(w, memory, robot_);
+  std::vector<std::uint32_t> set_aside(const Perceived& w, const Memory& memory) const {
+    return actions::set_aside(w, memory, robot_);
   }
 
   // Boxes lying on the robot (fallen onto the arm, or onto the nose and not
@@ -412,7 +422,7 @@ class Run {
   void pick(const Perceived& seen) {
     retry_where_a_neighbour_left(seen.world);
     Perceived w0 = seen;
-    w0.world = without(seen.world, riding(seen, memory_));
+    w0.world = without(seen.world, set_aside(seen, memory_));
     const auto scene = sim::analyse(w0.world, o_.observation);
     std::unordered_set<std::uint32_t> failed;
     std::size_t given_up = 0;
@@ -420,13 +430,20 @@ class Run {
       failed.insert(id);
       given_up += h.given_up ? 1 : 0;
     }
-    // Boxes given up still come out of pick_candidates: ask for as many more.
+    // Boxes given up, and those no motion could be planned to since the last
+    // box left (the same queries would fail the same way, each at the cost
+    // of a search's whole budget), still come out of pick_candidates: ask
+    // for as many more.
     std::vector<PickCandidate> candidates;
     std::vector<PickRejection> rejected;
     for (auto& c : pick_candidates(w0.world, scene, action_, o_.observation, robot_, g_, w0.q,
-                                   o_.pick_candidates + given_up, failed, &rejected))
-      if (candidates.size() < o_.pick_candidates && worth_another_grip(c, w0.world))
+                                   o_.pick_candidates + given_up + memory_.unreached.size(), failed,
+                                   &rejected)) {
+      if (const auto u = memory_.unreached.find(c.box); u != memory_.unreached.end())
+        rejected.push_back({c.box, "not planned since the last box left: " + u->second});
+      else if (candidates.size() < o_.pick_candidates && worth_another_grip(c, w0.world))
         candidates.push_back(std::move(c));
+    }
     // A box the cups did not hold is tried again only after the others.
     std::stable_partition(candidates.begin(), candidates.end(),
                           [&](const PickCandidate& c) { return !memory_.ungripped.count(c.box); });
@@ -668,7 +685,7 @@ class Run {
 
   void sweep(const Perceived& seen) {
     Perceived w0 = seen;
-    w0.world = without(seen.world, riding(seen, memory_));
+    w0.world = without(seen.world, set_aside(seen, memory_));
     const auto scene = sim::analyse(w0.world, o_.observation);
     const auto plan = sweep_plan(w0.world, scene, action_, g_, o_.nose_sweep[2]);
     if (!plan) {
@@ -719,7 +736,7 @@ ActionModel::ActionModel(const sim::RobotModel& robot, ActionOptions options)
     : robot_(&robot), options_(std::move(options)) {}
 
 sim::SceneAnalysis ActionModel::scene(const Perceived& w, const Memory& memory) const {
-  auto a = sim::analyse(without(w.world, riding(w, memory, *robot_)), options_.observation);
+  auto a = sim::analyse(without(w.world, set_aside(w, memory, *robot_)), options_.observation);
   return a.observation || w.world.boxes.empty() ? a : sim::analyse(w.world, options_.observation);
 }
 

@@ -58,6 +58,8 @@ const char* to_string(LeftReason reason) {
       return "no motion planned";
     case LeftReason::kOnRobot:
       return "on the robot";
+    case LeftReason::kBehind:
+      return "behind the robot";
     case LeftReason::kNoFace:
       return "no face the plate seals on";
     case LeftReason::kOutOfReach:
@@ -141,6 +143,9 @@ std::vector<LeftBox> boxes_left(const sim::World& world, const sim::JointVector&
     } else if (std::find(on_robot.begin(), on_robot.end(), box.id) != on_robot.end()) {
       left.reason = LeftReason::kOnRobot;
       left.detail = links_under(world, box.id, model.robot(), q);
+    } else if (sim::bounds(box).x1 < q[sim::kBaseX]) {
+      left.reason = LeftReason::kBehind;
+      left.detail = fmt::format("front edge at x {:.2f} m", q[sim::kBaseX]);
     } else if (const auto u = memory.unreached.find(box.id); u != memory.unreached.end()) {
       left.reason = LeftReason::kUnplanned;
       left.detail = u->second;

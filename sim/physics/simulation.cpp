@@ -236,7 +236,9 @@ struct Simulation::Impl {
   // The nose conveyor hands boxes to the robot's body conveyor at its -x end:
   // a box lying on a belt whose trailing edge reaches that end has left the
   // trailer. Lying on it: its lowest point near the belt's surface (a box
-  // pushed along the floor in front of the base is not on the belt).
+  // pushed along the floor in front of the base is not on the belt), and
+  // part of it still over the belt (a box on the floor behind the end lies
+  // in the plane of a raised belt, not on it).
   static constexpr double kHandover = 0.05;  // m; the base's face stops a box this short of the end
   static constexpr double kOnBelt = 0.03;    // m between the box's lowest point and the belt
   // The shapes whose belt hands boxes on, with their inverse poses: the
@@ -266,14 +268,16 @@ struct Simulation::Impl {
       if (std::abs(local.y()) >= 0.5 * l.size.y() ||
           local.z() <= 0.5 * l.size.z() - kOnBelt - 1e-6 ||
           local.z() >= 0.5 * l.size.z() + kOnBelt + reach_max ||
-          local.x() - reach_max >= -0.5 * l.size.x() + kHandover + 1e-6) {
+          local.x() - reach_max >= -0.5 * l.size.x() + kHandover + 1e-6 ||
+          local.x() + reach_max <= -0.5 * l.size.x() - 1e-6) {
         continue;
       }
       const Eigen::Matrix3d r = l.pose.linear().transpose() * b.box.pose.linear();
       const Eigen::Vector3d reach = r.cwiseAbs() * (0.5 * b.box.size);
       const double above_belt = local.z() - reach.z() - 0.5 * l.size.z();
       if (local.x() - reach.x() < -0.5 * l.size.x() + kHandover &&
-          std::abs(local.y()) < 0.5 * l.size.y() && above_belt > -kOnBelt && above_belt < kOnBelt) {
+          local.x() + reach.x() > -0.5 * l.size.x() && std::abs(local.y()) < 0.5 * l.size.y() &&
+          above_belt > -kOnBelt && above_belt < kOnBelt) {
         return true;
       }
     }

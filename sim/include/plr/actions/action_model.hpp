@@ -96,7 +96,8 @@ struct GripHistory {
 struct Memory {
   std::map<std::uint32_t, GripHistory> grips;
   std::set<std::uint32_t> ungripped;  // grasps that failed since the last unloaded box
-  // Why the last pick of a box stopped before its grasp.
+  // Why the last pick of a box stopped before its grasp, since the last
+  // unloaded box: it is not tried again until another box has left.
   std::map<std::uint32_t, std::string> unreached;
   // Boxes lying on the robot that it tried to shake off: not tried again.
   std::set<std::uint32_t> shaken;

@@ -66,6 +66,7 @@ enum class LeftReason {
   kGivenUp,     // grasped and lost again and again
   kUnplanned,   // a pick point exists, but no motion to it was found
   kOnRobot,     // lying on the robot, off the trailer's floor
+  kBehind,      // wholly behind the robot's front edge: fallen beside or behind the base
   kNoFace,      // no face the vertical plate can seal on (tilted on an edge)
   kOutOfReach,  // even alone in the trailer, the arm cannot reach a face
   kBlocked,     // pickable alone: other boxes stand in the way

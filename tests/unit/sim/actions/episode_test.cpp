@@ -322,6 +322,41 @@ TEST(RunHardcoded, NothingReachableAtTheFirstHeightGivesWayToAnother) {
   EXPECT_EQ(e->robot_trailer_contacts, 0u);
 }
 
+// A box fallen beside the base, wholly behind the robot's front edge (B2 s2:
+// one lay there after a sweep, and every later sweep and pick planned the
+// base back behind it and found no path). It is not part of the scene in
+// front: the wall is unloaded from where the robot stands, and the box is
+// left, named as behind the robot.
+TEST(RunHardcoded, ABoxBehindTheRobotIsSetAsideAndNamed) {
+  sim::World w = wall(6.0, 3, 2);
+  const std::uint32_t behind = static_cast<std::uint32_t>(w.boxes.size() + 1);
+  w.boxes.push_back(box(behind, 1.0, 0.0, 0.0));
+  sim::JointVector q = home();
+  q[sim::kBaseX] = 3.0;
+  UnloaderSimulation simulation(robot(), w, q);
+  InProcessBackend backend(simulation, planner());
+  const ActionModel model(robot(), options());
+  const auto seen = backend.observe();
+  ASSERT_TRUE(seen);
+  const auto scene = model.scene(*seen, Memory{});
+  ASSERT_TRUE(scene.observation);
+  EXPECT_EQ(sim::structure(*scene.observation), sim::Structure::kWall);
+  EXPECT_EQ(std::count(scene.front_pile.begin(), scene.front_pile.end(), behind), 0);
+  std::string log;
+  const auto e =
+      run_hardcoded(model, backend, sim::HardcodedParams{}, {}, [&](const EpisodeStep& s) {
+        log += sim::to_string(s.action) + ": +" + std::to_string(s.outcome.boxes);
+        for (const auto& n : s.notes) log += "; " + n;
+        log += " base " + std::to_string(simulation.q()[sim::kBaseX]) + "\n";
+      });
+  ASSERT_TRUE(e) << e.error().message;
+  EXPECT_EQ(e->boxes_unloaded, e->boxes_total - 1) << e->stop_reason << "\n" << log;
+  ASSERT_EQ(e->left.size(), 1u);
+  EXPECT_EQ(e->left[0].id, behind);
+  EXPECT_EQ(e->left[0].reason, LeftReason::kBehind);
+  EXPECT_EQ(e->robot_trailer_contacts, 0u);
+}
+
 // A box wedged under the raised nose (as a shake can leave one) holds the
 // base when it backs away to start a sweep: the drive stalls at once. The
 // nose lifts off the box and the base backs away to start the sweep.

@@ -119,5 +119,24 @@ TEST(RobotLinks, TheScoopGetsUnderABoxAndItsBeltsCarryItOut) {
   EXPECT_EQ(sim.unloaded()[0].box_id, 1u);
 }
 
+// A belt whose surface lies level with the floor (as a raised nose's does,
+// extended behind its end): a box on the floor 1 m behind the end lies in
+// the belt's plane but not on it, and is not unloaded; one on the belt at
+// its end is.
+TEST(RobotLinks, ABoxBehindABeltsEndIsNotUnloaded) {
+  LinkGeometry belt;
+  belt.size = {2.0, 1.0, 0.05};
+  belt.pose.translation() = Eigen::Vector3d(5.0, 0.0, -0.025);
+  belt.belt_speed = 0.5;
+  Simulation behind(box_on_floor(3.0, 0.0, {0.4, 0.4, 0.3}, 8.0));
+  behind.set_robot_links({belt});
+  behind.step(0.1);
+  EXPECT_TRUE(behind.unloaded().empty());
+  Simulation at_end(box_on_floor(4.2, 0.0, {0.4, 0.4, 0.3}, 8.0));
+  at_end.set_robot_links({belt});
+  at_end.step(0.1);
+  EXPECT_EQ(at_end.unloaded().size(), 1u);
+}
+
 }  // namespace
 }  // namespace plr::sim
