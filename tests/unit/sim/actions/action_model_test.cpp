@@ -33,6 +33,46 @@ TEST(ActionModel, APickTakesABoxOutOfAWall) {
   for (const auto& q : out->queries) EXPECT_TRUE(q.answered);
 }
 
+// A pick whose motions could not be planned (here: a search budget far too
+// small for them) is not tried again until another box has left: the same
+// queries would fail the same way, each at a whole budget's cost.
+TEST(ActionModel, ABoxNoMotionWasPlannedToWaitsUntilAnotherBoxLeaves) {
+  // Columns of two at the right, in the centre and at the left.
+  sim::World w;
+  w.trailer.depth = 8.0;
+  std::uint32_t id = 1;
+  for (const double y : {-0.82, 0.0, 0.82})
+    for (const double z0 : {0.0, 0.4}) w.boxes.push_back(box(id++, 5.0, y, z0));
+  Fixture f(w);
+  ActionOptions starved_options = options();
+  starved_options.plan_expansions = 1;
+  const ActionModel starved(robot(), starved_options);
+  const sim::Action pick = sim::make_pick(Height::kLow, Side::kCenter);
+  const auto first = starved.run(pick, f.backend, f.memory);
+  ASSERT_TRUE(first) << first.error().message;
+  EXPECT_TRUE(first->applicable);
+  EXPECT_EQ(first->boxes, 0u);
+  ASSERT_FALSE(f.memory.unreached.empty());
+  const auto again = starved.run(pick, f.backend, f.memory);
+  ASSERT_TRUE(again) << again.error().message;
+  EXPECT_FALSE(again->applicable);
+  EXPECT_DOUBLE_EQ(again->robot_time_s, starved_options.not_applicable_s);
+  // A box of another region leaves: the pick is tried afresh, with the
+  // budget it needs.
+  const ActionModel model(robot(), options());
+  std::vector<std::string> notes;
+  Reporter reporter;
+  reporter.note = [&](const std::string& n) { notes.push_back(n); };
+  const auto other =
+      model.run(sim::make_pick(Height::kLow, Side::kLeft), f.backend, f.memory, reporter);
+  ASSERT_TRUE(other) << other.error().message;
+  ASSERT_GE(other->boxes, 1u) << ::testing::PrintToString(notes);
+  EXPECT_TRUE(f.memory.unreached.empty());
+  const auto afresh = model.run(pick, f.backend, f.memory);
+  ASSERT_TRUE(afresh) << afresh.error().message;
+  EXPECT_GE(afresh->boxes, 1u);
+}
+
 // Robot time is the trajectories and a model of planning work: the same
 // world and action give the same figures, whatever the machine's load.
 TEST(ActionModel, TheSameActionTwiceCostsTheSame) {
