@@ -100,19 +100,17 @@ class Slowed {
 
 enum class Delivery { kDelivered, kNoPlace, kLost };
 
-// Boxes that are not part of the scene in front of the robot. Those lying
+// Boxes that are not part of the scene in front of the robot: those lying
 // on it that a shake has not been tried for yet (one a shake left where it
 // was is most likely leaning on the robot from the pile it belongs to), and
-// those wholly behind its front edge (fallen beside or behind the base): no
-// action reaches them, and the base cannot get past them to stand behind
-// them (B2 s2: a sweep planned from behind such a box found no path).
+// those behind it (B2 s2: sweeps and picks planned the base back behind
+// such a box and found no path).
 std::vector<std::uint32_t> set_aside(const Perceived& w, const Memory& memory,
                                      const sim::RobotModel& robot) {
   auto out = boxes_on_robot(w.world, robot, w.q, w.held);
   std::erase_if(out, [&](std::uint32_t id) { return memory.shaken.count(id) > 0; });
   for (const auto& box : w.world.boxes)
-    if (sim::bounds(box).x1 < w.q[sim::kBaseX] &&
-        std::find(out.begin(), out.end(), box.id) == out.end())
+    if (behind_robot(box, w.q) && std::find(out.begin(), out.end(), box.id) == out.end())
       out.push_back(box.id);
   return out;
 }

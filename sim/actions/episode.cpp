@@ -143,7 +143,7 @@ std::vector<LeftBox> boxes_left(const sim::World& world, const sim::JointVector&
     } else if (std::find(on_robot.begin(), on_robot.end(), box.id) != on_robot.end()) {
       left.reason = LeftReason::kOnRobot;
       left.detail = links_under(world, box.id, model.robot(), q);
-    } else if (sim::bounds(box).x1 < q[sim::kBaseX]) {
+    } else if (behind_robot(box, q)) {
       left.reason = LeftReason::kBehind;
       left.detail = fmt::format("front edge at x {:.2f} m", q[sim::kBaseX]);
     } else if (const auto u = memory.unreached.find(box.id); u != memory.unreached.end()) {

@@ -126,6 +126,10 @@ std::vector<std::uint32_t> boxes_touching(const sim::World& world, const sim::Ro
   return out;
 }
 
+bool behind_robot(const sim::Box& box, const sim::JointVector& q) {
+  return sim::bounds(box).x1 < q[sim::kBaseX];
+}
+
 std::vector<std::uint32_t> boxes_on_robot(const sim::World& world, const sim::RobotModel& robot,
                                           const sim::JointVector& q,
                                           const std::vector<std::uint32_t>& held) {

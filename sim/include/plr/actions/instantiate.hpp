@@ -60,6 +60,11 @@ std::vector<std::uint32_t> boxes_on_robot(const sim::World& world, const sim::Ro
                                           const sim::JointVector& q,
                                           const std::vector<std::uint32_t>& held = {});
 
+// Whether the box lies wholly behind the robot's front edge (base_x at q):
+// fallen beside or behind the base, where no action reaches it and the base
+// cannot get past it.
+bool behind_robot(const sim::Box& box, const sim::JointVector& q);
+
 // `world` without the boxes named.
 sim::World without(const sim::World& world, const std::vector<std::uint32_t>& ids);
 
