@@ -336,6 +336,16 @@ class Run {
       for (auto id : boxes_on_nose(w))
         if (std::find(ignored.begin(), ignored.end(), id) == ignored.end()) ignored.push_back(id);
     }
+    // What lies behind the robot (fallen beside or behind the base) does not
+    // keep the base from backing up: its rear pushes it towards the door, as
+    // hard as the drive can (B2 s2, s4: a box beside the base's rear end
+    // refused every move back).
+    if (mode == PlanMode::kBaseLine) {
+      for (const auto& box : w.world.boxes)
+        if (behind_robot(box, w.q) &&
+            std::find(ignored.begin(), ignored.end(), box.id) == ignored.end())
+          ignored.push_back(box.id);
+    }
     Planned p = plan_goal(mode, w, goal, ignored);
     if (!p.ok && p.status == PlanStatus::kStartInvalid) {
       Planned escape = plan_once(PlanMode::kEscape, w, {}, {});
@@ -686,6 +696,16 @@ class Run {
     w0.world = without(seen.world, set_aside(seen, memory_));
     const auto scene = sim::analyse(w0.world, o_.observation);
     const auto plan = sweep_plan(w0.world, scene, action_, g_, o_.nose_sweep[2]);
+    if (!plan && sim::height(action_) == sim::Height::kLow && scene.front_pile.empty() &&
+        scene.first_wall.empty()) {
+      double nearest_behind = std::numeric_limits<double>::infinity();
+      for (const auto& b : seen.world.boxes)
+        if (behind_robot(b, seen.q)) nearest_behind = std::min(nearest_behind, sim::bounds(b).x0);
+      if (std::isfinite(nearest_behind)) {
+        back_out(nearest_behind);
+        return;
+      }
+    }
     if (!plan) {
       not_applicable(
           fmt::format("nothing in front for a {} sweep", sim::to_string(sim::height(action_))));
@@ -712,6 +732,20 @@ class Run {
     step("nose home", PlanMode::kNose, nose(o_.nose_home), Suction::kKeep, Suction::kKeep,
          plan->swept);
   }
+
+  // Nothing left in front, and boxes behind the robot (fallen beside or
+  // behind the base, the nearest to the door at `nearest_x`): the base backs
+  // out to the door, and past them. Its rear pushes what lies behind it out
+  // of the trailer, and what lay beside it is in front of it again.
+  void back_out(double nearest_x) {
+    note("nothing in front, boxes behind: backing out to the door");
+    step("arm clear", PlanMode::kArm, arm_clear(), Suction::kKeep, Suction::kKeep);
+    step("nose home", PlanMode::kNose, nose(o_.nose_home), Suction::kKeep, Suction::kKeep);
+    const double to = std::min(g_.base_length, nearest_x) - kBackOutMargin;
+    step("back out", PlanMode::kBaseLine, joints({{sim::kBaseX, to}}), Suction::kKeep,
+         Suction::kKeep);
+  }
+  static constexpr double kBackOutMargin = 0.03;  // m past the door, or past the nearest box
 
   const sim::RobotModel& robot_;
   const ActionOptions& o_;

@@ -34,6 +34,7 @@ struct Geometry {
   double sweep_high_in = 0.2;       // Sweep(high): scoop tip past the front face
   double nose_lift_max = 0.8;       // nose_1's upper limit
   double nose_top = 0.25;           // m, top of the lowered nose and conveyor
+  double base_length = 1.5;         // base_link behind base_x (its rear face)
   // The suction cups: the robot's grid (its x runs up the plate, its y across).
   sim::SuctionPlate cups;
   // The plate's outline is the cup field's.
