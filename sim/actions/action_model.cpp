@@ -342,9 +342,7 @@ class Run {
     // refused every move back).
     if (mode == PlanMode::kBaseLine) {
       for (const auto& box : w.world.boxes)
-        if (behind_robot(box, w.q) &&
-            std::find(ignored.begin(), ignored.end(), box.id) == ignored.end())
-          ignored.push_back(box.id);
+        if (behind_robot(box, w.q)) ignored.push_back(box.id);
     }
     Planned p = plan_goal(mode, w, goal, ignored);
     if (!p.ok && p.status == PlanStatus::kStartInvalid) {
