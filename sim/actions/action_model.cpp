@@ -329,12 +329,13 @@ class Run {
     // Boxes lying on the robot ride along with it (or fall off it): they are
     // not obstacles to its moves, nor, to nose and base moves, are those
     // the nose pushes.
+    // The planner only tests membership: a box named twice does no harm.
     std::vector<std::uint32_t> ignored = leave_out;
-    for (auto id : on_robot(w))
-      if (std::find(ignored.begin(), ignored.end(), id) == ignored.end()) ignored.push_back(id);
+    const auto riding = on_robot(w);
+    ignored.insert(ignored.end(), riding.begin(), riding.end());
     if (mode == PlanMode::kNose || mode == PlanMode::kBaseLine) {
-      for (auto id : boxes_on_nose(w))
-        if (std::find(ignored.begin(), ignored.end(), id) == ignored.end()) ignored.push_back(id);
+      const auto pushed = boxes_on_nose(w);
+      ignored.insert(ignored.end(), pushed.begin(), pushed.end());
     }
     // What lies behind the robot (fallen beside or behind the base) does not
     // keep the base from backing up: its rear pushes it towards the door, as
