@@ -28,8 +28,9 @@
 // Defaults: K = 8 (2 per seed: seeds 1-4), 5 particles, all 12 actions, a
 // state every 10 H actions. Fewer states decide too little: on A2, 3 states
 // gave 27 % mass sensitivity and 8 states 37 %. --quick: K = 1, 2 particles,
-// 3 actions (< 1 min). --every: H actions between saved states. --fresh-checker: one collision
-// checker per planning query (the backend's old behaviour), to compare.
+// 3 actions (< 1 min). --every: H actions between saved states.
+// --fresh-checker: one collision checker per planning query (the backend's
+// old behaviour), to compare.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
