@@ -326,15 +326,13 @@ class Run {
       for (auto [j, v] : goal.joints) there = there && std::abs(w.q[j] - v) < 0.01;
       if (there && before == Suction::kKeep && after == Suction::kKeep) return true;
     }
-    // Boxes lying on the robot or on its load ride along with it (or fall
-    // off it): they are not obstacles to its moves, nor, to nose and base
-    // moves, are those the nose pushes.
+    // Boxes lying on the robot ride along with it (or fall off it): they are
+    // not obstacles to its moves, nor, to nose and base moves, are those
+    // the nose pushes.
     // The planner only tests membership: a box named twice does no harm.
     std::vector<std::uint32_t> ignored = leave_out;
     const auto riding = on_robot(w);
     ignored.insert(ignored.end(), riding.begin(), riding.end());
-    const auto on_load = boxes_on_load(w.world, w.held);
-    ignored.insert(ignored.end(), on_load.begin(), on_load.end());
     if (mode == PlanMode::kNose || mode == PlanMode::kBaseLine) {
       const auto pushed = boxes_on_nose(w);
       ignored.insert(ignored.end(), pushed.begin(), pushed.end());
@@ -522,8 +520,7 @@ class Run {
                         history->second.failures + 1, o_.grip_attempts, chosen->cups,
                         drops > 0 ? fmt::format(", carried at 1/{:.0f} of the speed", scale) : ""));
       const Slowed slowed(time_scale_, scale);
-      auto leaning = leaning_on(observe().world, chosen->boxes);
-      leaning.insert(leaning.end(), chosen->riders.begin(), chosen->riders.end());
+      const auto leaning = leaning_on(observe().world, chosen->boxes);
       step("lift", PlanMode::kArmCartesian, pose(chosen->lift), Suction::kKeep, Suction::kKeep,
            leaning);
       const bool out = step("retract", PlanMode::kArmCartesian, pose(chosen->retract),
