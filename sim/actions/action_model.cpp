@@ -697,11 +697,14 @@ class Run {
     const auto plan = sweep_plan(w0.world, scene, action_, g_, o_.nose_sweep[2]);
     if (!plan && sim::height(action_) == sim::Height::kLow && scene.front_pile.empty() &&
         scene.first_wall.empty()) {
-      double nearest_behind = std::numeric_limits<double>::infinity();
-      for (const auto& b : seen.world.boxes)
-        if (behind_robot(b, seen.q)) nearest_behind = std::min(nearest_behind, sim::bounds(b).x0);
-      if (std::isfinite(nearest_behind)) {
-        back_out(nearest_behind);
+      std::optional<sim::Bounds> nearest_behind;
+      for (const auto& b : seen.world.boxes) {
+        const sim::Bounds bb = sim::bounds(b);
+        if (behind_robot(b, seen.q) && (!nearest_behind || bb.x0 < nearest_behind->x0))
+          nearest_behind = bb;
+      }
+      if (nearest_behind) {
+        back_out(*nearest_behind);
         return;
       }
     }
@@ -733,18 +736,23 @@ class Run {
   }
 
   // Nothing left in front, and boxes behind the robot (fallen beside or
-  // behind the base, the nearest to the door at `nearest_x`): the base backs
-  // out to the door, and past them. Its rear pushes what lies behind it out
-  // of the trailer, and what lay beside it is in front of it again.
-  void back_out(double nearest_x) {
+  // behind the base, `nearest` the nearest to the door): the base backs out
+  // to the door. Its rear pushes what lies behind it out of the trailer, and
+  // what lay beside it is in front of it again. A box in a side lane against
+  // the nose's rear edge is pushed ahead of it instead: with such a box
+  // within the base's length of the door, the base backs out until the box
+  // would be past the door (backed out only to where it stood, A2 s1 pushed
+  // it by its depth each time and stopped with it 22 cm inside the door).
+  void back_out(const sim::Bounds& nearest) {
     note("nothing in front, boxes behind: backing out to the door");
     step("arm clear", PlanMode::kArm, arm_clear(), Suction::kKeep, Suction::kKeep);
     step("nose home", PlanMode::kNose, nose(o_.nose_home), Suction::kKeep, Suction::kKeep);
-    const double to = std::min(g_.base_length, nearest_x) - kBackOutMargin;
+    const double to = nearest.x0 < g_.base_length ? -(nearest.x1 - nearest.x0) - kBackOutMargin
+                                                  : g_.base_length - kBackOutMargin;
     step("back out", PlanMode::kBaseLine, joints({{sim::kBaseX, to}}), Suction::kKeep,
          Suction::kKeep);
   }
-  static constexpr double kBackOutMargin = 0.03;  // m past the door, or past the nearest box
+  static constexpr double kBackOutMargin = 0.03;  // m past the door, or past the box
 
   const sim::RobotModel& robot_;
   const ActionOptions& o_;

@@ -359,6 +359,46 @@ TEST(RunHardcoded, ABoxBehindTheRobotIsSetAsideThenPushedOutOfTheDoor) {
   EXPECT_EQ(e->robot_trailer_contacts, 0u);
 }
 
+// A box standing in a side lane against the nose's rear edge, the base at
+// the door (A2 s1, after its first back-out). Backing out, the nose pushes
+// it ahead: backed out only to where the box stood, the base pushed it by
+// its depth each time, and the run stopped with it 22 cm inside the door.
+// The back-out itself takes it past the door.
+TEST(RunHardcoded, ABoxTheNosePushesIsBackedOutOfTheDoorAtOnce) {
+  sim::World w;
+  w.trailer.depth = 8.0;
+  sim::Box lane;
+  lane.id = 1;
+  lane.size = {0.46, 0.3, 0.6};
+  lane.mass = 8.0;
+  lane.pose.translation() = Eigen::Vector3d(1.22, 1.04, 0.3);
+  w.boxes.push_back(lane);
+  sim::JointVector q = home();
+  q[sim::kBaseX] = 1.47;
+  UnloaderSimulation simulation(robot(), w, q);
+  InProcessBackend backend(simulation, planner());
+  const ActionModel model(robot(), options());
+  std::string log;
+  int back_outs = 0;
+  std::uint32_t out_by_back_out = 0;
+  const auto e =
+      run_hardcoded(model, backend, sim::HardcodedParams{}, {}, [&](const EpisodeStep& s) {
+        log += sim::to_string(s.action) + ": +" + std::to_string(s.outcome.boxes);
+        for (const auto& n : s.notes) {
+          log += "; " + n;
+          if (n.find("backing out") == std::string::npos) continue;
+          ++back_outs;
+          out_by_back_out += s.outcome.boxes;
+        }
+        log += "\n";
+      });
+  ASSERT_TRUE(e) << e.error().message;
+  EXPECT_EQ(e->boxes_unloaded, 1u) << e->stop_reason << "\n" << log;
+  EXPECT_EQ(back_outs, 1) << log;
+  EXPECT_EQ(out_by_back_out, 1u) << log;
+  EXPECT_EQ(e->robot_trailer_contacts, 0u);
+}
+
 // A box left behind the robot's front edge is named so.
 TEST(BoxesLeft, ABoxBehindTheRobotsFrontEdgeIsBehindIt) {
   sim::World w = wall(6.0, 1, 1);
