@@ -110,7 +110,11 @@ TEST(Model, ATruncatedFileIsRefused) {
 TEST(Model, AModelOfOtherFeaturesIsRefused) {
   auto bytes = trained().serialize();
   flatbuffers::FlatBufferBuilder fbb;
-  auto obj = plr::msg::GetChooserModel(bytes.data() + 4)->UnPack();
+  // Through unframe: the body starts 4 bytes in, off the 8-byte boundary
+  // its doubles are read at.
+  const auto body = plr::sim::unframe(bytes.data(), bytes.size(), bytes.size(), "a model", "test");
+  ASSERT_TRUE(body) << body.error().message;
+  auto obj = plr::msg::GetChooserModel(body->data)->UnPack();
   obj->feature_version = kFeatureVersion + 1;
   plr::msg::FinishChooserModelBuffer(fbb, plr::msg::ChooserModel::Pack(fbb, obj));
   delete obj;
@@ -126,7 +130,11 @@ TEST(Model, AModelOfOtherFeaturesIsRefused) {
 TEST(Model, SupportCountsWhoseSumOverflowsAnIntAreRefused) {
   auto bytes = trained().serialize();
   flatbuffers::FlatBufferBuilder fbb;
-  auto obj = plr::msg::GetChooserModel(bytes.data() + 4)->UnPack();
+  // Through unframe: the body starts 4 bytes in, off the 8-byte boundary
+  // its doubles are read at.
+  const auto body = plr::sim::unframe(bytes.data(), bytes.size(), bytes.size(), "a model", "test");
+  ASSERT_TRUE(body) << body.error().message;
+  auto obj = plr::msg::GetChooserModel(body->data)->UnPack();
   obj->labels = {kNearestLabel, kHardcodedLabel};
   obj->class_support = {INT32_MAX, INT32_MAX};
   plr::msg::FinishChooserModelBuffer(fbb, plr::msg::ChooserModel::Pack(fbb, obj));
