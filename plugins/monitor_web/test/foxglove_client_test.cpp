@@ -102,8 +102,10 @@ TEST_F(Foxglove, AClientDecodesMessagesOfTwoTopics) {
     EXPECT_GT(read_le(m->data, 5, 8), 0u) << "receive timestamp";
     ASSERT_TRUE(decoders.count(sub)) << "unknown subscription " << sub;
     const auto& d = decoders[sub];
-    const auto* data = reinterpret_cast<const std::uint8_t*>(m->data.data() + 13);
-    const auto size = m->data.size() - 13;
+    // The payload follows a 13-byte header: read from a copy, aligned.
+    const std::string payload = m->data.substr(13);
+    const auto* data = reinterpret_cast<const std::uint8_t*>(payload.data());
+    const auto size = payload.size();
     ASSERT_TRUE(flatbuffers::Verify(d.schema(), *d.table(), data, size)) << d.schema_name;
     const auto& root = *flatbuffers::GetAnyRoot(data);
     if (sub == 7) {
