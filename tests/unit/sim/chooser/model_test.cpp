@@ -106,15 +106,20 @@ TEST(Model, ATruncatedFileIsRefused) {
   fs::remove(file);
 }
 
+// A serialized model as its object, to alter (nullptr if it does not
+// unframe). Through unframe: the body starts 4 bytes in, off the 8-byte
+// boundary its doubles are read at.
+plr::msg::ChooserModelT* unpacked(const std::vector<std::uint8_t>& bytes) {
+  const auto body = plr::sim::unframe(bytes.data(), bytes.size(), bytes.size(), "a model", "test");
+  return body ? plr::msg::GetChooserModel(body->data)->UnPack() : nullptr;
+}
+
 // A model written by a build whose features were version 0.
 TEST(Model, AModelOfOtherFeaturesIsRefused) {
   auto bytes = trained().serialize();
   flatbuffers::FlatBufferBuilder fbb;
-  // Through unframe: the body starts 4 bytes in, off the 8-byte boundary
-  // its doubles are read at.
-  const auto body = plr::sim::unframe(bytes.data(), bytes.size(), bytes.size(), "a model", "test");
-  ASSERT_TRUE(body) << body.error().message;
-  auto obj = plr::msg::GetChooserModel(body->data)->UnPack();
+  auto obj = unpacked(bytes);
+  ASSERT_NE(obj, nullptr);
   obj->feature_version = kFeatureVersion + 1;
   plr::msg::FinishChooserModelBuffer(fbb, plr::msg::ChooserModel::Pack(fbb, obj));
   delete obj;
@@ -130,11 +135,8 @@ TEST(Model, AModelOfOtherFeaturesIsRefused) {
 TEST(Model, SupportCountsWhoseSumOverflowsAnIntAreRefused) {
   auto bytes = trained().serialize();
   flatbuffers::FlatBufferBuilder fbb;
-  // Through unframe: the body starts 4 bytes in, off the 8-byte boundary
-  // its doubles are read at.
-  const auto body = plr::sim::unframe(bytes.data(), bytes.size(), bytes.size(), "a model", "test");
-  ASSERT_TRUE(body) << body.error().message;
-  auto obj = plr::msg::GetChooserModel(body->data)->UnPack();
+  auto obj = unpacked(bytes);
+  ASSERT_NE(obj, nullptr);
   obj->labels = {kNearestLabel, kHardcodedLabel};
   obj->class_support = {INT32_MAX, INT32_MAX};
   plr::msg::FinishChooserModelBuffer(fbb, plr::msg::ChooserModel::Pack(fbb, obj));
