@@ -326,13 +326,15 @@ class Run {
       for (auto [j, v] : goal.joints) there = there && std::abs(w.q[j] - v) < 0.01;
       if (there && before == Suction::kKeep && after == Suction::kKeep) return true;
     }
-    // Boxes lying on the robot ride along with it (or fall off it): they are
-    // not obstacles to its moves, nor, to nose and base moves, are those
-    // the nose pushes.
+    // Boxes lying on the robot or on its load ride along with it (or fall
+    // off it): they are not obstacles to its moves, nor, to nose and base
+    // moves, are those the nose pushes.
     // The planner only tests membership: a box named twice does no harm.
     std::vector<std::uint32_t> ignored = leave_out;
     const auto riding = on_robot(w);
     ignored.insert(ignored.end(), riding.begin(), riding.end());
+    const auto on_load = boxes_on_load(w.world, w.held);
+    ignored.insert(ignored.end(), on_load.begin(), on_load.end());
     if (mode == PlanMode::kNose || mode == PlanMode::kBaseLine) {
       const auto pushed = boxes_on_nose(w);
       ignored.insert(ignored.end(), pushed.begin(), pushed.end());
@@ -344,6 +346,22 @@ class Run {
     if (mode == PlanMode::kBaseLine) {
       for (const auto& box : w.world.boxes)
         if (behind_robot(box, w.q)) ignored.push_back(box.id);
+    }
+    // A box against the base is no obstacle to moves the base makes along
+    // the trailer when it lies against its flank, in a side lane (the flank
+    // slides past it), nor to moves that leave the base where it stands when
+    // it lies behind the front edge (nothing else goes there). A2 s9: a box
+    // the belt dropped beside the base refused every move ("start in
+    // collision: base_link - box 18").
+    const bool base_moves = mode == PlanMode::kBaseLine || mode == PlanMode::kArmBase;
+    const auto against_base = boxes_touching(w.world, robot_, w.q, {"base_link"});
+    for (const auto& box : w.world.boxes) {
+      if (std::find(against_base.begin(), against_base.end(), box.id) == against_base.end())
+        continue;
+      const sim::Bounds b = sim::bounds(box);
+      const bool flank =
+          b.y0 > g_.base_half_width - kFlankOverlap || b.y1 < -g_.base_half_width + kFlankOverlap;
+      if (base_moves ? flank : behind_robot(box, w.q)) ignored.push_back(box.id);
     }
     Planned p = plan_goal(mode, w, goal, ignored);
     if (!p.ok && p.status == PlanStatus::kStartInvalid) {
@@ -520,7 +538,8 @@ class Run {
                         history->second.failures + 1, o_.grip_attempts, chosen->cups,
                         drops > 0 ? fmt::format(", carried at 1/{:.0f} of the speed", scale) : ""));
       const Slowed slowed(time_scale_, scale);
-      const auto leaning = leaning_on(observe().world, chosen->boxes);
+      auto leaning = leaning_on(observe().world, chosen->boxes);
+      leaning.insert(leaning.end(), chosen->riders.begin(), chosen->riders.end());
       step("lift", PlanMode::kArmCartesian, pose(chosen->lift), Suction::kKeep, Suction::kKeep,
            leaning);
       const bool out = step("retract", PlanMode::kArmCartesian, pose(chosen->retract),
@@ -753,6 +772,8 @@ class Run {
          Suction::kKeep);
   }
   static constexpr double kBackOutMargin = 0.03;  // m past the door, or past the box
+  // m a box against the base's flank may reach in under its side (contact, tilt)
+  static constexpr double kFlankOverlap = 0.02;
 
   const sim::RobotModel& robot_;
   const ActionOptions& o_;

@@ -44,6 +44,10 @@ constexpr double kMaxLift = 0.15;
 // m between a box's top and the bottom of one resting on it (a settled stack).
 constexpr double kStacked = 0.03;
 constexpr double kLiftSlack = 0.005;
+// Boxes of a wall that may rest, unsealed, on a group the plate takes: one
+// rides on the load's top as it is lifted and pulled out (more would topple
+// off it), which is what makes a wall's third row from the top a pick.
+constexpr std::size_t kMaxRiders = 1;
 
 sim::Height height_class(double top, double mid, double high) {
   if (top >= high) return sim::Height::kHigh;
@@ -160,6 +164,25 @@ sim::World without(const sim::World& world, const std::vector<std::uint32_t>& id
   std::erase_if(out.boxes, [&](const sim::Box& b) {
     return std::find(ids.begin(), ids.end(), b.id) != ids.end();
   });
+  return out;
+}
+
+std::vector<std::uint32_t> boxes_on_load(const sim::World& world,
+                                         const std::vector<std::uint32_t>& held) {
+  std::vector<sim::Bounds> load;
+  for (const auto& box : world.boxes)
+    if (std::find(held.begin(), held.end(), box.id) != held.end()) load.push_back(sim::bounds(box));
+  std::vector<std::uint32_t> out;
+  if (load.empty()) return out;
+  for (const auto& box : world.boxes) {
+    if (std::find(held.begin(), held.end(), box.id) != held.end()) continue;
+    const sim::Bounds b = sim::bounds(box);
+    if (std::any_of(load.begin(), load.end(), [&](const sim::Bounds& h) {
+          return std::abs(b.z0 - h.z1) < kStacked && h.x0 < b.x1 && b.x0 < h.x1 && h.y0 < b.y1 &&
+                 b.y0 < h.y1;
+        }))
+      out.push_back(box.id);
+  }
   return out;
 }
 
@@ -302,11 +325,44 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
     }
     return std::nullopt;
   };
+  // The boxes resting on `group` that may ride on it, unsealed, as it comes
+  // out: upright wall boxes, at most kMaxRiders, each resting on the group
+  // alone and with its centre over it (else it stays behind, or tips off
+  // while the load is lifted). None where any other box rests on the group:
+  // it keeps the group in place.
+  auto riders_on = [&](const std::vector<std::size_t>& group, double lift) {
+    auto in_group = [&](std::size_t j) {
+      return std::find(group.begin(), group.end(), j) != group.end();
+    };
+    auto rests_on = [&](std::size_t top, std::size_t under) {
+      return std::abs(b[top].z0 - b[under].z1) < kStacked &&
+             separation(outline[under], outline[top]) < -kMargin;
+    };
+    std::vector<std::size_t> out;
+    for (std::size_t k = 0; k < count; ++k) {
+      if (in_group(k) ||
+          !std::any_of(group.begin(), group.end(), [&](std::size_t j) { return rests_on(k, j); }))
+        continue;
+      const Eigen::Vector3d c = world.boxes[k].pose.translation();
+      bool carried =
+          wall.count(world.boxes[k].id) > 0 && has_sealable_face(world.boxes[k]) &&
+          b[k].z1 + lift + kClearance < world.trailer.height &&
+          std::any_of(group.begin(), group.end(), [&](std::size_t j) {
+            return b[j].x0 <= c.x() && c.x() <= b[j].x1 && b[j].y0 <= c.y() && c.y() <= b[j].y1;
+          });
+      for (std::size_t m = 0; m < count && carried; ++m)
+        carried = m == k || in_group(m) || !rests_on(k, m);
+      if (!carried || out.size() == kMaxRiders) return std::vector<std::size_t>{};
+      out.push_back(k);
+    }
+    return out;
+  };
   const double pw = g.plate_half_width(), ph = g.plate_half_height();
   const double plate_depth = plate_body_depth(robot);
 
   struct Ranked {
     PickCandidate c;
+    bool ridden;
     double x_bin, top, centre_distance;
   };
   std::vector<Ranked> ranked;
@@ -406,6 +462,7 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       // region, else the pose is not taken), which must come out together.
       struct Grip {
         std::vector<std::size_t> group;  // the box first
+        std::vector<std::size_t> riders;
         std::vector<int> cups;
         Eigen::Vector3d at_face;
         double back = 0;      // plate surface to the face at the grasp
@@ -500,15 +557,18 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
               grip.lift = std::max(grip.lift,
                                    std::min(kMaxLift, b[k].z1 - b[j].z0 + kClearance + kLiftSlack));
         grip.out_depth = std::max(2 * f.half_d, depth) + kMargin;
+        grip.riders = riders_on(grip.group, grip.lift);
+        std::vector<std::size_t> moving = grip.group;
+        moving.insert(moving.end(), grip.riders.begin(), grip.riders.end());
         bool blocked = false;
-        for (auto j : grip.group) {
+        for (auto j : moving) {
           // Lifted, nothing may stand over it; pulled out, each box (it may be
           // wider than the plate) passes over what stands in front of it.
           // Neighbours beside it, flush with it, are not in the way.
-          const auto over = in_the_way(grip.group, outline[j], b[j].z1, b[j].z1 + grip.lift, false);
+          const auto over = in_the_way(moving, outline[j], b[j].z1, b[j].z1 + grip.lift, false);
           const auto out =
               over ? over
-                   : in_the_way(grip.group, swept(outline[j], -grip.out_depth * n.head<2>()),
+                   : in_the_way(moving, swept(outline[j], -grip.out_depth * n.head<2>()),
                                 b[j].z0 + grip.lift, b[j].z1 + grip.lift, true);
           if (!out) continue;
           refuse([&] {
@@ -529,10 +589,12 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
           for (int k : x.cups) n += k;
           return n;
         };
+        // A load with nothing riding on it first.
         auto rank = [&](const Grip& x) {
           const int n = static_cast<int>(x.group.size());
-          return fewer ? std::make_tuple(-n, x.cups.front(), total(x))
-                       : std::make_tuple(n, fewest(x), total(x));
+          const bool bare = x.riders.empty();
+          return fewer ? std::make_tuple(bare, -n, x.cups.front(), total(x))
+                       : std::make_tuple(bare, n, fewest(x), total(x));
         };
         if (!best || rank(grip) > rank(*best)) best = std::move(grip);
       }
@@ -543,6 +605,7 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
       PickCandidate c;
       c.box = box.id;
       for (auto j : best->group) c.boxes.push_back(world.boxes[j].id);
+      for (auto j : best->riders) c.riders.push_back(world.boxes[j].id);
       c.box_cups = best->cups;
       c.cups = best->cups.front();
       const Eigen::Vector3d& at_face = best->at_face;
@@ -627,7 +690,9 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
               fmt::format("no arm pose reaches its face from base x {:.2f} m", c.base_x);
         continue;
       }
-      ranked.push_back({c, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
+      const bool ridden = !c.riders.empty();
+      ranked.push_back(
+          {std::move(c), ridden, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
       taken = true;
       break;
     }
@@ -636,7 +701,9 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
   // Nearest first: a box behind others is reached over them, which the arm
   // plans slowly and the held box may not clear; within reach of the front,
   // high up first.
+  // A load with a box riding on it risks that box: after every other.
   std::stable_sort(ranked.begin(), ranked.end(), [](const Ranked& a, const Ranked& b) {
+    if (a.ridden != b.ridden) return b.ridden;
     if (a.x_bin != b.x_bin) return a.x_bin < b.x_bin;
     if (std::abs(a.top - b.top) > 1e-3) return a.top > b.top;
     return a.centre_distance < b.centre_distance;
@@ -785,10 +852,21 @@ std::optional<SweepPlan> sweep_plan(const sim::World& world, const sim::SceneAna
         top = std::max(top, b.z1);
       }
       if (p.swept.empty() || top < g.sweep_high_min) return std::nullopt;
-      // The scoop's tip about halfway up what is in front, driven in past its face.
+      // The scoop's tip about halfway up what is in front, driven in past its
+      // face at the scoop's height: a column leaning out towards the robot
+      // stands further in there than its overhanging top (A2 s7, 16°: driven
+      // in only past the top's face, the scoop met nothing).
       p.lift = std::clamp(top / 2 - g.nose_top, 0.0, g.nose_lift_max);
       p.lower_at_end = true;
-      far = near + g.sweep_high_in;
+      {
+        double face = std::numeric_limits<double>::infinity();
+        for (const auto& box : world.boxes) {
+          if (!front.count(box.id) && !wall.count(box.id)) continue;
+          const auto b = sim::bounds(box);
+          if (b.z0 < p.lift + g.nose_top && b.z1 > p.lift) face = std::min(face, b.x0);
+        }
+        far = (std::isfinite(face) ? face : near) + g.sweep_high_in;
+      }
       break;
   }
   // The nose comes down (or up to its lift) before it drives in: short of

@@ -35,6 +35,7 @@ struct Geometry {
   double nose_lift_max = 0.8;       // nose_1's upper limit
   double nose_top = 0.25;           // m, top of the lowered nose and conveyor
   double base_length = 1.5;         // base_link behind base_x (its rear face)
+  double base_half_width = 0.65;    // base_link across the trailer, each side of its axis
   // The suction cups: the robot's grid (its x runs up the plate, its y across).
   sim::SuctionPlate cups;
   // The plate's outline is the cup field's.
@@ -80,12 +81,22 @@ bool has_sealable_face(const sim::Box& box);
 std::vector<std::uint32_t> leaning_on(const sim::World& world,
                                       const std::vector<std::uint32_t>& group);
 
+// Boxes resting on the held load (within 3 cm above a held box's top, over
+// it): they ride along with it, and are no obstacle to its moves.
+std::vector<std::uint32_t> boxes_on_load(const sim::World& world,
+                                         const std::vector<std::uint32_t>& held);
+
 struct PickCandidate {
   std::uint32_t box = 0;  // the box the plate is put on
   // Every box the plate seals on at the grasp, `box` first, all in the
   // action's region: they come out together.
   std::vector<std::uint32_t> boxes;
   std::vector<int> box_cups;  // cups on each of `boxes`
+  // Wall boxes resting on `boxes` that the plate does not seal on: they ride
+  // on the load as it comes out (or fall off it where the physics puts
+  // them), and weigh on the cups. A candidate with riders comes after every
+  // candidate without.
+  std::vector<std::uint32_t> riders;
   double base_x = 0;
   sim::PlateTarget pregrasp, grasp, retract;
   // The boxes are first lifted straight up, off what they rest on, before

@@ -136,6 +136,23 @@ TEST(ActionModel, ASweepCarriesALowPileOut) {
   EXPECT_GE(out->boxes, 3u);
 }
 
+// A wall with a deep box on top overhanging it by 0.4 m towards the robot:
+// the raised scoop, driven in past the face it meets halfway up, pushes the
+// wall (before, it stopped past the overhang's face, 0.2 m short of the
+// wall, and moved nothing).
+TEST(ActionModel, AHighSweepUnderAnOverhangReachesTheWall) {
+  sim::World w = wall(5.0, 3, 3);
+  w.boxes.push_back(box(10, 4.6, 0.0, 1.2));
+  w.boxes.back().size = {1.0, 0.4, 0.4};
+  w.boxes.back().pose.translation().x() = 5.1;  // x 4.6 to 5.6, resting on the middle column
+  Fixture f(w);
+  const ActionModel model(robot(), options());
+  const auto out = model.run(sim::make_sweep(Height::kHigh), f.backend, f.memory);
+  ASSERT_TRUE(out) << out.error().message;
+  EXPECT_TRUE(out->applicable);
+  EXPECT_GE(out->boxes + out->shifted, 1u);
+}
+
 TEST(ActionModel, APickTakesAFlatBoxLyingOnTheFloor) {
   // 10 cm high: the plate comes down to 1.5 cm over the floor, and its
   // lowest cups seal on the box's face.
@@ -253,6 +270,56 @@ TEST(ActionModel, AStackTakenWholeHoldsWhenLightAndNotWhenHeavy) {
       EXPECT_GT(e.load, e.capacity);
     }
   EXPECT_GE(lost, 1);
+}
+
+// A column of five 0.35 m boxes: the top two are mid, the rest low. The low
+// pick's only grip is the plate on the seam of the third and fourth boxes
+// from the floor, with the top box riding on them, unsealed: its weight is
+// on the cups.
+TEST(ActionModel, ABoxRidingOnTheLoadWeighsOnTheCups) {
+  const ActionModel model(robot(), options());
+  const auto action = sim::make_pick(Height::kLow, Side::kCenter);
+  auto five = [](double rider_mass) {
+    sim::World w = column(4.0);
+    sim::Box top = w.boxes.back();
+    top.id = 5;
+    top.mass = rider_mass;
+    top.pose.translation().z() += 0.35;
+    w.boxes.push_back(top);
+    return w;
+  };
+  auto run = [&](Fixture& f) {
+    const auto out = model.run(action, f.backend, f.memory);
+    EXPECT_TRUE(out) << out.error().message;
+    EXPECT_TRUE(out->applicable) << out->why;
+    std::set<std::uint32_t> gripped;
+    bool dropped = false;
+    for (const auto& e : f.simulation.physics().suction_events()) {
+      gripped.insert(e.box_id);
+      if (e.kind == sim::SuctionEvent::Kind::kDropped) {
+        dropped = true;
+        EXPECT_GT(e.load, e.capacity);
+      }
+    }
+    EXPECT_EQ(gripped, (std::set<std::uint32_t>{3, 4}));
+    return std::make_pair(*out, dropped);
+  };
+  // A light rider comes out with the load: the column is two boxes high
+  // after the pick.
+  Fixture light(five(4.0));
+  const auto [a, light_dropped] = run(light);
+  EXPECT_FALSE(light_dropped);
+  EXPECT_EQ(a.drops, 0u);
+  EXPECT_GE(a.boxes, 1u);
+  for (const auto& b : light.simulation.truth().boxes) {
+    if (b.id != 5) continue;
+    EXPECT_LT(b.pose.translation().x(), 5.0) << "the rider stayed on the column";
+  }
+  // The same boxes under a 40 kg rider: the cups under it let go.
+  Fixture heavy(five(40.0));
+  const auto [b, heavy_dropped] = run(heavy);
+  EXPECT_TRUE(heavy_dropped);
+  EXPECT_GE(b.drops, 1u);
 }
 
 TEST(Outcome, CountsTheBoxesThatMovedOrTurnedButStayed) {

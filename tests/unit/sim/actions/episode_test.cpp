@@ -399,6 +399,30 @@ TEST(RunHardcoded, ABoxTheNosePushesIsBackedOutOfTheDoorAtOnce) {
   EXPECT_EQ(e->robot_trailer_contacts, 0u);
 }
 
+// A box in the side lane against the base's flank, its front end 0.2 m
+// ahead of the base's front edge (A2 s9: the belt dropped it there, and
+// every move was refused, "start in collision: base_link - box"): the base
+// slides past it to the sweep, and the nose comes down with it behind.
+TEST(ActionModel, ABoxAgainstTheBasesFlankKeepsNoMoveFromBeingPlanned) {
+  sim::World w = wall(6.0, 3, 2);
+  sim::Box lane = box(10, 2.8, 0.9225, 0.0);
+  lane.size = {0.4, 0.555, 0.3};
+  lane.pose.translation().z() = 0.15;
+  w.boxes.push_back(lane);
+  sim::JointVector q = home();
+  q[sim::kBaseX] = 3.0;
+  UnloaderSimulation simulation(robot(), w, q);
+  InProcessBackend backend(simulation, planner());
+  const ActionModel model(robot(), options());
+  Memory memory;
+  std::vector<std::string> notes;
+  Reporter reporter;
+  reporter.note = [&](const std::string& n) { notes.push_back(n); };
+  const auto out = model.run(sim::make_sweep(sim::Height::kMid), backend, memory, reporter);
+  ASSERT_TRUE(out) << out.error().message;
+  EXPECT_GE(out->boxes, 1u) << ::testing::PrintToString(notes);
+}
+
 // A box left behind the robot's front edge is named so.
 TEST(BoxesLeft, ABoxBehindTheRobotsFrontEdgeIsBehindIt) {
   sim::World w = wall(6.0, 1, 1);

@@ -201,6 +201,17 @@ TEST(PickCandidates, ABoxRestingOnTheTargetKeepsItInPlace) {
   EXPECT_NE(find(c, 3), nullptr);
 }
 
+TEST(BoxesOnLoad, AreThoseRestingOnAHeldBox) {
+  sim::World w = trailer_world();
+  w.boxes.push_back(sim::testing::make_box(1, 10.2, 0.0, 1.0));  // held
+  w.boxes.push_back(sim::testing::make_box(2, 10.3, 0.1, 1.4));  // on it
+  w.boxes.push_back(sim::testing::make_box(3, 10.2, 0.5, 1.0));  // beside it
+  w.boxes.push_back(sim::testing::make_box(4, 10.2, 0.5, 1.4));  // on the one beside
+  w.boxes.push_back(sim::testing::make_box(5, 10.2, 0.0, 0.6));  // under it
+  EXPECT_EQ(boxes_on_load(w, {1}), std::vector<std::uint32_t>{2});
+  EXPECT_TRUE(boxes_on_load(w, {}).empty());
+}
+
 TEST(PickCandidates, ATurnedBoxIsFacedSquarely) {
   sim::World w = trailer_world();
   sim::Box b = sim::testing::make_box(1, 10.2, 0.3, 0.0);
@@ -329,22 +340,42 @@ TEST(PickCandidates, APickTakesTheBoxesOfItsRegionAndWhatIsStackedOnThem) {
   // Four rows: every top is 1.4 m (mid), the row below 1.05 m (low).
   const sim::World w = even_wall(4);
   const sim::ObservationParams obs = sim::testing::small_scene_observation();
-  std::size_t groups = 0;
+  std::size_t groups = 0, ridden_groups = 0;
   for (auto h : kHeights)
     for (auto side : kSides) {
       const auto action = sim::make_pick(h, side);
       const auto c = candidates(w, action);
       // Nothing is high. The top row comes out with the plate on it; a box of
       // the row below only with the top box resting on it, the plate on their
-      // seam; lower rows not at all (the plate seals on two rows at most).
+      // seam. The plate seals on two rows at most: the third row's box comes
+      // out with the second (the plate on their seam) and the top box riding
+      // on them, after every candidate without a rider; the lowest not at all.
       if (h == sim::Height::kHigh) {
         EXPECT_TRUE(c.empty()) << sim::to_string(action);
         continue;
       }
       EXPECT_FALSE(c.empty()) << sim::to_string(action);
       const double own_top = h == sim::Height::kMid ? 1.4 : 1.05;
+      bool ridden = false;
       for (const auto& k : c) {
         ASSERT_EQ(k.boxes.size(), k.box_cups.size());
+        EXPECT_TRUE(!ridden || !k.riders.empty()) << "a candidate with a rider comes last";
+        ridden = !k.riders.empty();
+        if (ridden) {
+          ++ridden_groups;
+          ASSERT_EQ(h, sim::Height::kLow);
+          ASSERT_EQ(k.riders.size(), 1u);
+          ASSERT_EQ(k.boxes.size(), 2u);
+          auto top_of = [&](std::uint32_t id) {
+            return sim::bounds(*std::find_if(w.boxes.begin(), w.boxes.end(),
+                                             [&](const sim::Box& x) { return x.id == id; }))
+                .z1;
+          };
+          EXPECT_NEAR(top_of(k.box), 0.7, 1e-9);
+          EXPECT_NEAR(top_of(k.boxes[1]), 1.05, 1e-9);
+          EXPECT_NEAR(top_of(k.riders[0]), 1.4, 1e-9);
+          continue;
+        }
         EXPECT_EQ(k.boxes.front(), k.box);
         groups += k.boxes.size() > 1;
         std::size_t own = 0, on_them = 0;
@@ -380,6 +411,7 @@ TEST(PickCandidates, APickTakesTheBoxesOfItsRegionAndWhatIsStackedOnThem) {
     EXPECT_EQ(c.front().box_cups, (std::vector<int>{4, 4}));
   }
   EXPECT_GE(groups, 2u);
+  EXPECT_GE(ridden_groups, 3u) << "a rider in each third";
 }
 
 TEST(PickCandidates, TwoStackedBoxesOfOneClassComeOutTogether) {

@@ -81,6 +81,24 @@ TEST(SweepPlan, AWallAloneIsNotLowSweptButDugIntoAndPulledDown) {
   EXPECT_EQ(high->swept.size(), 25u);
 }
 
+// A wall whose top box overhangs it by 0.4 m towards the robot (as the top
+// of a column leaning out, A2 s7): the raised scoop meets the wall about
+// halfway up, so it is driven in past the face it meets there, not past the
+// overhang's (where it would stop 0.2 m short of the wall and move nothing).
+TEST(SweepPlan, TheHighSweepDigsInPastTheFaceAtTheScoopsHeightUnderAnOverhang) {
+  sim::World w = trailer();
+  add_wall(w, 12.0, 3, 3);                                           // 1.2 m high
+  w.boxes.push_back(make_box(10, 12.1, 0.0, 1.2, {1.0, 0.4, 0.4}));  // x 11.6 to 12.6
+  const auto high = plan(w, Height::kHigh);
+  ASSERT_TRUE(high);
+  const Geometry g;
+  const double tip = g.conveyor_length + 0.3 + g.scoop_lip;
+  ASSERT_GT(high->lift + g.nose_top, 0.4);  // the scoop is at the wall's second row
+  ASSERT_LT(high->lift + g.nose_top, 1.2);
+  EXPECT_NEAR(high->end_base_x + tip, 12.0 + g.sweep_high_in, 1e-9);
+  EXPECT_NEAR(high->start_base_x + tip, 11.6 - g.nose_clearance, 1e-9);
+}
+
 TEST(SweepPlan, TheLowSweepStopsAtTheWallBehindThePile) {
   sim::World w = floor_pile();
   add_wall(w, 11.0, 5, 5);
