@@ -362,7 +362,6 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
 
   struct Ranked {
     PickCandidate c;
-    bool ridden;
     double x_bin, top, centre_distance;
   };
   std::vector<Ranked> ranked;
@@ -690,9 +689,7 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
               fmt::format("no arm pose reaches its face from base x {:.2f} m", c.base_x);
         continue;
       }
-      const bool ridden = !c.riders.empty();
-      ranked.push_back(
-          {std::move(c), ridden, std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
+      ranked.push_back({std::move(c), std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
       taken = true;
       break;
     }
@@ -703,7 +700,7 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
   // high up first.
   // A load with a box riding on it risks that box: after every other.
   std::stable_sort(ranked.begin(), ranked.end(), [](const Ranked& a, const Ranked& b) {
-    if (a.ridden != b.ridden) return b.ridden;
+    if (a.c.riders.empty() != b.c.riders.empty()) return a.c.riders.empty();
     if (a.x_bin != b.x_bin) return a.x_bin < b.x_bin;
     if (std::abs(a.top - b.top) > 1e-3) return a.top > b.top;
     return a.centre_distance < b.centre_distance;
@@ -804,6 +801,16 @@ std::optional<SweepPlan> sweep_plan(const sim::World& world, const sim::SceneAna
   const double deepest = world.trailer.depth - kMargin;
   std::unordered_set<std::uint32_t> front(scene.front_pile.begin(), scene.front_pile.end());
   std::unordered_set<std::uint32_t> wall(scene.first_wall.begin(), scene.first_wall.end());
+  // The nearest face of what is in front between heights z0 and z1.
+  auto nearest_between = [&](double z0, double z1) {
+    double x = std::numeric_limits<double>::infinity();
+    for (const auto& box : world.boxes) {
+      if (!front.count(box.id) && !wall.count(box.id)) continue;
+      const auto b = sim::bounds(box);
+      if (b.z0 < z1 && b.z1 > z0) x = std::min(x, b.x0);
+    }
+    return x;
+  };
   SweepPlan p;
   double near = std::numeric_limits<double>::infinity(), far = -near, top = 0.0;
   switch (sim::height(action)) {
@@ -858,26 +865,17 @@ std::optional<SweepPlan> sweep_plan(const sim::World& world, const sim::SceneAna
       // in only past the top's face, the scoop met nothing).
       p.lift = std::clamp(top / 2 - g.nose_top, 0.0, g.nose_lift_max);
       p.lower_at_end = true;
-      {
-        double face = std::numeric_limits<double>::infinity();
-        for (const auto& box : world.boxes) {
-          if (!front.count(box.id) && !wall.count(box.id)) continue;
-          const auto b = sim::bounds(box);
-          if (b.z0 < p.lift + g.nose_top && b.z1 > p.lift) face = std::min(face, b.x0);
-        }
-        far = (std::isfinite(face) ? face : near) + g.sweep_high_in;
-      }
+      if (const double face = nearest_between(p.lift, p.lift + g.nose_top); std::isfinite(face))
+        far = face + g.sweep_high_in;
+      else
+        far = near + g.sweep_high_in;
       break;
   }
   // The nose comes down (or up to its lift) before it drives in: short of
   // every box of the scene at its height too, not only of those it sweeps
   // (A2 seed 12: a floor layer behind the wall's foot, and the lowered scoop
   // met the wall).
-  for (const auto& box : world.boxes) {
-    if (!front.count(box.id) && !wall.count(box.id)) continue;
-    const auto b = sim::bounds(box);
-    if (b.z0 < p.lift + g.nose_top + kMargin && b.z1 > p.lift) near = std::min(near, b.x0);
-  }
+  near = std::min(near, nearest_between(p.lift, p.lift + g.nose_top + kMargin));
   // The sweep starts just short of what it sweeps, wherever the base stands:
   // what rides out on the scoop is carried back that far, not across the
   // trailer.

@@ -411,14 +411,12 @@ TEST(ActionModel, ABoxAgainstTheBasesFlankKeepsNoMoveFromBeingPlanned) {
   w.boxes.push_back(lane);
   sim::JointVector q = home();
   q[sim::kBaseX] = 3.0;
-  UnloaderSimulation simulation(robot(), w, q);
-  InProcessBackend backend(simulation, planner());
+  Fixture f(q, w);
   const ActionModel model(robot(), options());
-  Memory memory;
   std::vector<std::string> notes;
   Reporter reporter;
   reporter.note = [&](const std::string& n) { notes.push_back(n); };
-  const auto out = model.run(sim::make_sweep(sim::Height::kMid), backend, memory, reporter);
+  const auto out = model.run(sim::make_sweep(sim::Height::kMid), f.backend, f.memory, reporter);
   ASSERT_TRUE(out) << out.error().message;
   EXPECT_GE(out->boxes, 1u) << ::testing::PrintToString(notes);
 }

@@ -58,6 +58,9 @@ inline sim::World wall(double x, int cols, int rows, double mass = 5.0) {
 struct Fixture {
   explicit Fixture(const sim::World& truth, InProcessOptions options = {})
       : simulation(robot(), truth), backend(simulation, planner(), options) {}
+  // The robot starting at q (its base inside the trailer).
+  Fixture(const sim::JointVector& q, const sim::World& truth)
+      : simulation(robot(), truth, q), backend(simulation, planner()) {}
   UnloaderSimulation simulation;
   InProcessBackend backend;
   Memory memory;
