@@ -12,7 +12,7 @@
 namespace plr::pomdp {
 namespace {
 
-const std::filesystem::path kShared = PLR_POMDP_BENCHMARKS;
+const std::filesystem::path kReference = PLR_POMDP_BENCHMARKS;
 const std::filesystem::path kData = PLR_POMDP_TEST_DATA;
 
 std::string cassandra_error(const char* text) {
@@ -58,16 +58,14 @@ void expect_tiger(const TabularModel& m) {
 }
 
 TEST(CassandraReader, ReadsTiger) {
-  if (!std::filesystem::exists(kShared / "Tiger.pomdp")) GTEST_SKIP() << "no " << kShared;
-  auto m = read_cassandra(kShared / "Tiger.pomdp");
+  auto m = read_cassandra(kReference / "Tiger.pomdp");
   ASSERT_TRUE(m) << m.error().message;
   expect_tiger(*m);
   EXPECT_EQ(m->action_names[1], "open-left");
 }
 
 TEST(CassandraReader, ReadsRockSample44) {
-  if (!std::filesystem::exists(kShared / "RockSample_4_4.pomdp")) GTEST_SKIP() << "no " << kShared;
-  auto m = load_model(kShared / "RockSample_4_4.pomdp");
+  auto m = load_model(kReference / "RockSample_4_4.pomdp");
   ASSERT_TRUE(m) << m.error().message;
   EXPECT_EQ(m->num_states(), 257);
   EXPECT_EQ(m->num_actions(), 9);

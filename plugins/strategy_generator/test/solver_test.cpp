@@ -114,9 +114,6 @@ R: open-right : right : * : * -100
 
 // The MHA*-style factors move halfway to 1 every epsilon_period trials.
 TEST(Pomhdp, EpsilonSchedule) {
-  if (!std::filesystem::exists(std::filesystem::path(PLR_POMDP_BENCHMARKS) / "Tiger.pomdp")) {
-    GTEST_SKIP();
-  }
   auto m = load_model(std::filesystem::path(PLR_POMDP_BENCHMARKS) / "Tiger.pomdp");
   ASSERT_TRUE(m);
   const TabularHeuristics h = make_tabular_heuristics(*m);
@@ -136,7 +133,6 @@ TEST(Pomhdp, EpsilonSchedule) {
 // way; the online policy's simulated value has 19.37 in its interval.
 TEST(Pomhdp, TigerBoundsAndValue) {
   const auto file = std::filesystem::path(PLR_POMDP_BENCHMARKS) / "Tiger.pomdp";
-  if (!std::filesystem::exists(file)) GTEST_SKIP() << "no " << file;
   auto m = load_model(file);
   ASSERT_TRUE(m) << m.error().message;
   const TabularHeuristics h = make_tabular_heuristics(*m);
@@ -173,7 +169,6 @@ TEST(Pomhdp, TigerBoundsAndValue) {
 // listen outcome is a branch with bounds and no belief.
 TEST(Pomhdp, UnvisitedChildrenAreNotNodes) {
   const auto file = std::filesystem::path(PLR_POMDP_BENCHMARKS) / "Tiger.pomdp";
-  if (!std::filesystem::exists(file)) GTEST_SKIP() << "no " << file;
   auto m = load_model(file);
   ASSERT_TRUE(m) << m.error().message;
   const TabularHeuristics h = make_tabular_heuristics(*m);
@@ -194,7 +189,6 @@ TEST(Pomhdp, UnvisitedChildrenAreNotNodes) {
 // tree made, so the graph does not grow.
 TEST(Pomhdp, LazyChildIsTheExactUpdate) {
   const auto file = std::filesystem::path(PLR_POMDP_BENCHMARKS) / "RockSample_4_4.pomdp";
-  if (!std::filesystem::exists(file)) GTEST_SKIP() << "no " << file;
   auto m = load_model(file);
   ASSERT_TRUE(m) << m.error().message;
   const TabularHeuristics h = make_tabular_heuristics(*m);
@@ -224,7 +218,6 @@ TEST(Pomhdp, LazyChildIsTheExactUpdate) {
 // target gap, long before its trial budget; a smaller target takes more.
 TEST(Pomhdp, PlanStopsAtTheTargetGap) {
   const auto file = std::filesystem::path(PLR_POMDP_BENCHMARKS) / "Tiger.pomdp";
-  if (!std::filesystem::exists(file)) GTEST_SKIP() << "no " << file;
   auto m = load_model(file);
   ASSERT_TRUE(m) << m.error().message;
   const TabularHeuristics h = make_tabular_heuristics(*m);
@@ -251,7 +244,6 @@ TEST(Pomhdp, PlanStopsAtTheTargetGap) {
 // the upper bound stuck above: a trial's path must fit.)
 TEST(Pomhdp, ReclaimKeepsBoundsAndGoesOn) {
   const auto file = std::filesystem::path(PLR_POMDP_BENCHMARKS) / "Tiger.pomdp";
-  if (!std::filesystem::exists(file)) GTEST_SKIP() << "no " << file;
   auto m = load_model(file);
   ASSERT_TRUE(m) << m.error().message;
   const TabularHeuristics h = make_tabular_heuristics(*m);
@@ -519,7 +511,6 @@ TEST(Pomhdp, WarmStartKeepsTheGraph) {
 // random stream, and a trial budget makes each search deterministic.
 TEST(Evaluate, WorkersDoNotChangeEpisodes) {
   const auto file = std::filesystem::path(PLR_POMDP_BENCHMARKS) / "Tiger.pomdp";
-  if (!std::filesystem::exists(file)) GTEST_SKIP() << "no " << file;
   auto m = load_model(file);
   ASSERT_TRUE(m) << m.error().message;
   const TabularHeuristics h = make_tabular_heuristics(*m);
