@@ -26,6 +26,7 @@ packages=(
   libboost-dev libzstd-dev zlib1g-dev
   chromium
   iproute2 openssl procps
+  munge slurmctld slurmd slurm-client
 )
 
 missing=()
