@@ -1,90 +1,25 @@
 #include "plr/actions/instantiate.hpp"
 
-#include "footprint.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
-#include <tuple>
 #include <unordered_set>
 
-#include <fmt/format.h>
+#include "pick_pipeline.hpp"
 
 namespace plr::actions {
 
 namespace {
 
-constexpr double kMargin = 0.03;     // m, footprint shrink and clearances
-constexpr double kClearance = 0.02;  // m, the plate's distance to boxes it must not touch
-// m, the plate's lowest edge above the floor: its bottom row of cups then
-// seals on a box 9.5 cm high lying flat on the floor.
-constexpr double kFloorGap = 0.015;
-constexpr double kSlide = 0.05;   // m, steps of the plate off the face's centre
-constexpr double kCovered = 0.1;  // m, the plate's centre stays this far inside the face
-// m, the nearest pre-grasp: the plate comes down between the face and
-// what stands in front of it.
-constexpr double kMinPregrasp = 0.08;
-constexpr double kProud = 0.015;  // m a neighbour may stand out of the face (the cups reach 2 cm)
-// rad: a face tilted further than this from the vertical is not taken (the
-// cups seal up to about 0.26 rad).
-constexpr double kMaxFaceTilt = 0.2;
-constexpr double kSquare = 0.03;  // rad: faces turned less than this are taken square to the axis
-// rad: the furthest off the trailer's axis a face is approached (the wrist
-// turns the plate that far).
-constexpr double kMaxSideFace = 1.2;
-// m past the cups' reach at which a face still counts as sealed on: a
-// settled box leans a little, and a box outside the region the plate might
-// take must keep the pose from being chosen.
-constexpr double kSealMargin = 0.01;
-// m: the highest lift off a tilted support (a box sunk deeper into what is
-// under it is not pulled out), and what it clears the support's top by
-// beyond kClearance.
-constexpr double kMaxLift = 0.15;
-// m between a box's top and the bottom of one resting on it (a settled stack).
-constexpr double kStacked = 0.03;
-constexpr double kLiftSlack = 0.005;
-// Boxes of a wall that may rest, unsealed, on a group the plate takes: one
-// rides on the load's top as it is lifted and pulled out (more would topple
-// off it), which is what makes a wall's third row from the top a pick.
-constexpr std::size_t kMaxRiders = 1;
-
-sim::Height height_class(double top, double mid, double high) {
-  if (top >= high) return sim::Height::kHigh;
-  if (top >= mid) return sim::Height::kMid;
-  return sim::Height::kLow;
-}
-
-sim::Side side_of(double y, const sim::World& w, const sim::ObservationParams& obs) {
-  const double band = obs.side_band * w.trailer.width / 2;
-  return y > band ? sim::Side::kLeft : (y < -band ? sim::Side::kRight : sim::Side::kCenter);
-}
-
-// The plate link's body behind its suction surface (its collision box along x).
-double plate_body_depth(const sim::RobotModel& robot) {
-  double depth = 0.0;
-  for (const auto& shape : robot.links()[static_cast<std::size_t>(robot.plate_link())].shapes)
-    if (shape.type == sim::CollisionShape::Type::kBox) depth = std::max(depth, shape.size.x());
-  return depth;
-}
+using pick::kMargin;
+using pick::kMaxFaceTilt;
+using pick::kStacked;
+using pick::up_axis;
 
 bool reachable(const sim::RobotModel& robot, const sim::PlateTarget& t,
                const sim::JointVector& seed) {
   return !robot.arm_ik(t, seed).empty();
-}
-
-// The box axis nearest the vertical.
-int up_axis(const Eigen::Matrix3d& R) {
-  int up = 0;
-  for (int k = 1; k < 3; ++k)
-    if (std::abs(R(2, k)) > std::abs(R(2, up))) up = k;
-  return up;
-}
-
-// A box axis made horizontal and unit, pointing into the trailer (+x).
-Eigen::Vector3d inward(Eigen::Vector3d axis) {
-  axis.z() = 0;
-  return axis.normalized() * (axis.x() < 0 ? -1.0 : 1.0);
 }
 
 }  // namespace
@@ -218,504 +153,45 @@ std::vector<PickCandidate> pick_candidates(const sim::World& world, const sim::S
                                            const sim::JointVector& current, std::size_t max_count,
                                            const std::unordered_set<std::uint32_t>& most_cups,
                                            std::vector<PickRejection>* rejected) {
-  std::unordered_set<std::uint32_t> wall(scene.first_wall.begin(), scene.first_wall.end());
-  std::unordered_set<std::uint32_t> front(scene.front_pile.begin(), scene.front_pile.end());
-  const std::size_t count = world.boxes.size();
-  std::vector<sim::Bounds> b(count);
-  // The nearest box the lowered nose must stay short of: not one above the
-  // nose (lying on the robot's arm, or leaning out over it), nor one lying
-  // on the robot, which rides along with it (A1 s2: a box left on the arm
-  // after a shake kept the base 2.5 m short of everything).
-  const std::vector<std::uint32_t> on_robot = boxes_on_robot(world, robot, current);
-  double nearest = std::numeric_limits<double>::infinity();
-  // The action's region: boxes of the first wall or front pile of its
-  // height class (a box's top against the wall or pile thresholds) and
-  // third of the width.
-  std::vector<bool> in_region(count, false);
-  for (std::size_t i = 0; i < count; ++i) {
-    const auto& box = world.boxes[i];
-    b[i] = sim::bounds(box);
-    if (b[i].z0 < g.nose_top + kMargin &&
-        std::find(on_robot.begin(), on_robot.end(), box.id) == on_robot.end())
-      nearest = std::min(nearest, b[i].x0);
-    const bool is_wall = wall.count(box.id) > 0;
-    if (!is_wall && !front.count(box.id)) continue;
-    const auto cls = is_wall ? height_class(b[i].z1, obs.wall_mid, obs.wall_high)
-                             : height_class(b[i].z1, obs.pile_mid, obs.pile_high);
-    in_region[i] = cls == sim::height(action) &&
-                   side_of(box.pose.translation().y(), world, obs) == sim::side(action);
-  }
-
-  // The front face: of the box's horizontal axes, the one nearest the
-  // trailer's axis gives the face's normal and the plate's yaw (the wrist
-  // turns the plate square to it). A box tilted on an edge has no face the
-  // vertical plate can seal on.
-  struct Face {
-    Eigen::Vector3d n, lateral, centre;
-    double half_d = 0, half_w = 0, half_up = 0;
-  };
-  // The face whose normal is box axis `axis` (n: that axis made horizontal,
-  // pointing into the trailer).
-  auto face_along = [](const sim::Box& box, int axis, int up, const Eigen::Vector3d& n) {
-    Face f;
-    f.n = n;
-    f.lateral = Eigen::Vector3d(-n.y(), n.x(), 0.0);
-    f.half_d = box.size[axis] / 2;
-    f.half_w = box.size[3 - axis - up] / 2;
-    f.half_up = box.size[up] / 2;
-    f.centre = box.pose.translation() - f.half_d * n;
-    return f;
-  };
-  auto face_of = [&](std::size_t i) -> std::optional<Face> {
-    const auto& box = world.boxes[i];
-    if (!has_sealable_face(box)) return std::nullopt;
-    const Eigen::Matrix3d R = box.pose.linear();
-    int normal_axis = -1;
-    for (int k = 0; k < 3; ++k)
-      if (std::abs(R(2, k)) < kMaxFaceTilt &&
-          (normal_axis < 0 || std::abs(R(0, k)) > std::abs(R(0, normal_axis))))
-        normal_axis = k;
-    Eigen::Vector3d n = inward(R.col(normal_axis));
-    // A settled wall's few milliradians are not worth turning the plate for:
-    // turned, it would lead with a corner.
-    if (std::abs(n.y()) < kSquare) n = Eigen::Vector3d::UnitX();
-    return face_along(box, normal_axis, up_axis(R), n);
-  };
-  std::vector<std::optional<Face>> faces(count);
-  for (std::size_t i = 0; i < count; ++i)
-    if (wall.count(world.boxes[i].id) || front.count(world.boxes[i].id)) faces[i] = face_of(i);
-  // The face square to the robot, then the other side face of a box turned
-  // well off the trailer's axis where it still looks towards the robot (at
-  // most kMaxSideFace off the axis).
-  auto faces_to_try = [&](std::size_t i) {
-    std::vector<Face> out{*faces[i]};
-    const auto& box = world.boxes[i];
-    const Eigen::Matrix3d R = box.pose.linear();
-    const int up = up_axis(R);
-    for (int k = 0; k < 3; ++k) {
-      if (k == up || R.col(k).head<2>().norm() < 0.5) continue;
-      const Eigen::Vector3d n = inward(R.col(k));
-      if (n.dot(out.front().n) > std::cos(kMaxFaceTilt) ||
-          std::atan2(std::abs(n.y()), n.x()) > kMaxSideFace)
-        continue;
-      out.push_back(face_along(box, k, up, n));
-    }
-    return out;
-  };
-
-  auto near = [](double a0, double a1, double b0, double b1) {
-    return a0 - kClearance < b1 && b0 < a1 + kClearance;
-  };
-  std::vector<Polygon> outline(count);
-  for (std::size_t i = 0; i < count; ++i) outline[i] = footprint(world.boxes[i]);
-  // Whether the space over `area` from z0 to z1 is free of every box but
-  // those of `group`. Outlines that only touch (flush neighbours) do not
-  // count: kMargin of overlap does.
-  // Unless `leaning_too`, a box tilted on an edge (no face the plate seals
-  // on) does not count: nothing can pick it, and it slides off what comes
-  // out under it.
-  // Returns the first box in the way.
-  auto in_the_way = [&](const std::vector<std::size_t>& group, const Polygon& area, double z0,
-                        double z1, bool leaning_too) -> std::optional<std::size_t> {
-    for (std::size_t j = 0; j < count; ++j) {
-      if (std::find(group.begin(), group.end(), j) == group.end() &&
-          (leaning_too || has_sealable_face(world.boxes[j])) && near(z0, z1, b[j].z0, b[j].z1) &&
-          separation(area, outline[j]) < -kMargin)
-        return j;
-    }
-    return std::nullopt;
-  };
-  // The boxes resting on `group` that may ride on it, unsealed, as it comes
-  // out: upright wall boxes, at most kMaxRiders, each resting on the group
-  // alone and with its centre over it (else it stays behind, or tips off
-  // while the load is lifted). None where any other box rests on the group:
-  // it keeps the group in place.
-  auto riders_on = [&](const std::vector<std::size_t>& group, double lift) {
-    auto in_group = [&](std::size_t j) {
-      return std::find(group.begin(), group.end(), j) != group.end();
-    };
-    auto rests_on = [&](std::size_t top, std::size_t under) {
-      return std::abs(b[top].z0 - b[under].z1) < kStacked &&
-             separation(outline[under], outline[top]) < -kMargin;
-    };
-    std::vector<std::size_t> out;
-    for (std::size_t k = 0; k < count; ++k) {
-      if (in_group(k) ||
-          !std::any_of(group.begin(), group.end(), [&](std::size_t j) { return rests_on(k, j); }))
-        continue;
-      const Eigen::Vector3d c = world.boxes[k].pose.translation();
-      bool carried =
-          wall.count(world.boxes[k].id) > 0 && has_sealable_face(world.boxes[k]) &&
-          b[k].z1 + lift + kClearance < world.trailer.height &&
-          std::any_of(group.begin(), group.end(), [&](std::size_t j) {
-            return b[j].x0 <= c.x() && c.x() <= b[j].x1 && b[j].y0 <= c.y() && c.y() <= b[j].y1;
-          });
-      for (std::size_t m = 0; m < count && carried; ++m)
-        carried = m == k || in_group(m) || !rests_on(k, m);
-      if (!carried || out.size() == kMaxRiders) return std::vector<std::size_t>{};
-      out.push_back(k);
-    }
-    return out;
-  };
-  const double pw = g.plate_half_width(), ph = g.plate_half_height();
-  const double plate_depth = plate_body_depth(robot);
-
-  struct Ranked {
-    PickCandidate c;
-    double x_bin, top, centre_distance;
-  };
-  std::vector<Ranked> ranked;
-  for (std::size_t i = 0; i < count; ++i) {
-    if (!in_region[i]) continue;
-    const auto& box = world.boxes[i];
-    if (!faces[i]) {
-      if (rejected) rejected->push_back({box.id, "no face the plate seals on"});
+  using namespace pick;
+  const PickScene s = query_scene(world, scene, action, obs, robot, g, current);
+  std::vector<Ranked> candidates;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (!s.in_region[i]) continue;
+    const std::uint32_t id = world.boxes[i].id;
+    if (!s.faces[i]) {
+      if (rejected) rejected->push_back({id, to_string(Refusal{Refusal::Kind::kNoFace})});
       continue;
     }
-    // The boxes of the wall or pile stacked on this one, each resting on it
-    // or on one of them (those the plate does not seal on keep it in place).
-    std::vector<bool> stacked_on_i(count, false);
-    std::vector<std::size_t> stack{i};
-    for (std::size_t next = 0; next < stack.size(); ++next) {
-      const std::size_t k = stack[next];
-      for (std::size_t j = 0; j < count; ++j)
-        if (j != i && !stacked_on_i[j] && std::abs(b[j].z0 - b[k].z1) < kStacked &&
-            (wall.count(world.boxes[j].id) || front.count(world.boxes[j].id)) &&
-            separation(outline[k], outline[j]) < -kMargin) {
-          stacked_on_i[j] = true;
-          stack.push_back(j);
-        }
-    }
+    const std::vector<bool> stacked = stacked_on(s, i);
+    const bool fewer = most_cups.count(id) > 0;
     // The face square to the robot first; where nothing can be taken
-    // through it, another side face that still looks towards the robot
-    // (a box turned in a heap), the box alone.
-    std::string first_refusal;
+    // through it, another side face that still looks towards the robot (a
+    // box turned in a heap), the box alone. What the caller is told if no
+    // face gives a candidate: why the first was refused.
+    std::optional<Refusal> first_refusal;
     bool taken = false;
-    const auto alternatives = faces_to_try(i);
-    for (std::size_t a = 0; a < alternatives.size(); ++a) {
-      const Face& f = alternatives[a];
-      const bool alternative = a > 0;
-      auto member_face = [&](std::size_t j) -> const Face& { return j == i ? f : *faces[j]; };
-      const Eigen::Vector3d& n = f.n;
-      const Eigen::Vector3d& lateral = f.lateral;
-      const Eigen::Vector3d& face_centre = f.centre;
-      const double plate_yaw = std::atan2(n.y(), n.x());
-      const double half_w = f.half_w, half_up = f.half_up;
-      const double y = box.pose.translation().y();
-
-      // Plate centred on the face, kept inside the trailer and off the floor;
-      // turned, its body's back corner reaches further out.
-      const double ylim =
-          world.trailer.width / 2 - pw * std::abs(n.x()) - plate_depth * std::abs(n.y()) - kMargin;
-      const double zc =
-          std::clamp(face_centre.z(), ph + kFloorGap, world.trailer.height - ph - kMargin);
-      const Eigen::Vector3d face(face_centre.x(), face_centre.y(), zc);
-      // The plate is wider than many boxes: the corridor it moves through to
-      // the face must be clear of every other box. Where a neighbour is in the
-      // way, the plate slides off centre as long as it still covers most of
-      // the face.
-      auto slides = [&](double half_extent) {
-        std::vector<double> out{0.0};
-        for (double d = kSlide; d <= half_extent - kCovered + 1e-9; d += kSlide) {
-          out.push_back(d);
-          out.push_back(-d);
-        }
-        return out;
-      };
-      // The plate moves in to the face through a corridor (its outline along
-      // the face's normal) that must be free. It stops grasp_gap short of the
-      // face; a settled wall is not flush, so also grasp_gap short of any
-      // neighbour in the corridor that stands out. The cups reach the face
-      // across kProud of extra gap.
-      const double half_h = (b[i].z1 - b[i].z0) / 2;
-      auto plate_at = [&](double dy, double dz) {
-        Eigen::Vector3d p = face + dy * lateral;
-        p.y() = std::clamp(p.y(), -ylim, ylim);
-        p.z() = std::clamp(face.z() + dz, ph + kFloorGap, world.trailer.height - ph - kMargin);
-        return p;
-      };
-      auto cups_on = [&](std::size_t j, const Eigen::Vector3d& p) {
-        const Face& fj = member_face(j);
-        return covered_cups(g, fj.half_w, fj.half_up, (p - fj.centre).dot(lateral),
-                            p.z() - fj.centre.z());
-      };
-      // Plate offsets (across, up) from the face's centre, in the order tried:
-      // on the face, then centred on its edges, where it may take the
-      // neighbours there too.
-      std::vector<std::pair<double, double>> offsets;
-      for (const double dz : slides(half_h))
-        for (const double dy : slides(half_w)) offsets.emplace_back(dy, dz);
-      for (const double dz : {0.0, half_up, -half_up})
-        for (const double dy : {0.0, half_w, -half_w})
-          if (dy != 0.0 || dz != 0.0) offsets.emplace_back(dy, dz);
-      const bool fewer = most_cups.count(box.id) > 0;
-      if (fewer) {
-        // Half a cup pitch off centre puts two columns (or rows) of cups on a
-        // face the centred grid covers with one.
-        const double across = 0.5 * g.cups.extent.y() / g.cups.cups_y;
-        const double up = 0.5 * g.cups.extent.x() / g.cups.cups_x;
-        for (const double dz : {0.0, up, -up})
-          for (const double dy : {0.0, across, -across}) offsets.emplace_back(dy, dz);
-      }
-      // Each plate pose the corridor allows: the boxes it seals on (all in the
-      // region, else the pose is not taken), which must come out together.
-      struct Grip {
-        std::vector<std::size_t> group;  // the box first
-        std::vector<std::size_t> riders;
-        std::vector<int> cups;
-        Eigen::Vector3d at_face;
-        double back = 0;      // plate surface to the face at the grasp
-        double pregrasp = 0;  // plate to the face before the approach
-        double lift = 0, out_depth = 0;
-      };
-      std::optional<Grip> best;
-      // Why the plate centred on the face was not taken: what the caller is
-      // told if no other pose is taken either. Worded only if asked for.
-      std::string refused;
-      auto refuse = [&](const auto& why) {
-        if (rejected && refused.empty()) refused = why();
-      };
-      for (const auto& [dy, dz] : offsets) {
-        const Eigen::Vector3d p = plate_at(dy, dz);
-        // In the plate's corridor, what reaches the face stops the plate short
-        // of it (by more than the cups reach, the pose is not taken); what
-        // stands further out leaves the plate less room before the face (a
-        // nearer pre-grasp; too little room, and the pose is not taken).
-        double back = g.grasp_gap, room = g.pregrasp_distance;
-        std::size_t proud = count, before = count;
-        for (std::size_t j = 0; j < count; ++j) {
-          if (j == i || !near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1)) continue;
-          const auto span = span_in_band(outline[j], p.head<2>(), n.head<2>(), pw);
-          if (!span || span->min >= 0.0) continue;
-          if (span->max > -kProud - kClearance) {
-            if (g.grasp_gap - span->min > back) proud = j;
-            back = std::max(back, g.grasp_gap - span->min);
-          } else if (-span->max - kClearance - plate_depth < room) {
-            // The plate's body stands behind its surface.
-            before = j;
-            room = -span->max - kClearance - plate_depth;
-          }
-        }
-        if (back - g.grasp_gap > kProud) {
-          refuse([&] {
-            return fmt::format("box {} stands out before its face", world.boxes[proud].id);
-          });
-          continue;
-        }
-        if (room < kMinPregrasp) {
-          refuse([&] {
-            return fmt::format("box {} leaves the plate no room before it", world.boxes[before].id);
-          });
-          continue;
-        }
-        Grip grip;
-        grip.at_face = p;
-        grip.back = back;
-        grip.pregrasp = room;
-        const Eigen::Vector3d surface = p - back * n;
-        const int own = cups_on(i, p);
-        if (own == 0) {
-          refuse([] { return std::string("no whole cup on its face"); });
-          continue;
-        }
-        grip.group.push_back(i);
-        grip.cups.push_back(own);
-        // Every other box of the region whose face the cups reach (with a
-        // margin: a settled box may lean) and that whole cups cover, and the
-        // boxes of the wall or pile stacked on the box itself that they cover
-        // too: the stack comes out together (the plate is as high as two
-        // typical boxes). The cups over any other box stay closed
-        // (cups_open): it stays.
-        for (std::size_t j = 0; j < count; ++j) {
-          if (j == i || alternative || !(in_region[j] || stacked_on_i[j]) || !faces[j] ||
-              !near(p.y() - pw, p.y() + pw, b[j].y0, b[j].y1) ||
-              !near(p.z() - ph, p.z() + ph, b[j].z0, b[j].z1))
-            continue;
-          const double gap = (faces[j]->centre - surface).dot(n);
-          if (std::abs(gap) > g.cups.reach + kSealMargin) continue;
-          const int k = cups_on(j, p);
-          if (k == 0) continue;
-          grip.group.push_back(j);
-          grip.cups.push_back(k);
-        }
-        // The group is lifted off what it rests on (and over the lowered
-        // nose) before it comes out: nothing but its own boxes may rest on it.
-        double z0 = b[i].z0, depth = 0;
-        for (auto j : grip.group) {
-          z0 = std::min(z0, b[j].z0);
-          depth = std::max(depth, b[j].x1 - b[j].x0);
-        }
-        grip.lift = std::max(g.retract_lift, g.nose_top + kMargin - z0);
-        // A tilted box rests on a tilted top (a leaning column): their
-        // outlines overlap in height by more than a flat stack's, and the
-        // group comes out only once lifted clear of what it rests on.
-        for (auto j : grip.group)
-          for (std::size_t k = 0; k < count; ++k)
-            if (std::find(grip.group.begin(), grip.group.end(), k) == grip.group.end() &&
-                b[k].z0 < b[j].z0 && separation(outline[j], outline[k]) < -kMargin)
-              grip.lift = std::max(grip.lift,
-                                   std::min(kMaxLift, b[k].z1 - b[j].z0 + kClearance + kLiftSlack));
-        grip.out_depth = std::max(2 * f.half_d, depth) + kMargin;
-        grip.riders = riders_on(grip.group, grip.lift);
-        std::vector<std::size_t> moving = grip.group;
-        moving.insert(moving.end(), grip.riders.begin(), grip.riders.end());
-        bool blocked = false;
-        for (auto j : moving) {
-          // Lifted, nothing may stand over it; pulled out, each box (it may be
-          // wider than the plate) passes over what stands in front of it.
-          // Neighbours beside it, flush with it, are not in the way.
-          const auto over = in_the_way(moving, outline[j], b[j].z1, b[j].z1 + grip.lift, false);
-          const auto out =
-              over ? over
-                   : in_the_way(moving, swept(outline[j], -grip.out_depth * n.head<2>()),
-                                b[j].z0 + grip.lift, b[j].z1 + grip.lift, true);
-          if (!out) continue;
-          refuse([&] {
-            const auto k = world.boxes[*out].id, id = world.boxes[j].id;
-            return over ? fmt::format("box {} rests on box {}", k, id)
-                        : fmt::format("box {} is in the way out of box {}", k, id);
-          });
-          blocked = true;
-          break;
-        }
-        if (blocked) continue;
-        // More boxes at once first, then more cups on the box that has the
-        // fewest (the cups' force is shared by cups), then more in all; after
-        // a failed grip, fewer boxes and more cups on the box itself.
-        auto fewest = [](const Grip& x) { return *std::min_element(x.cups.begin(), x.cups.end()); };
-        auto total = [](const Grip& x) {
-          int n = 0;
-          for (int k : x.cups) n += k;
-          return n;
-        };
-        // A load with nothing riding on it first.
-        auto rank = [&](const Grip& x) {
-          const int n = static_cast<int>(x.group.size());
-          const bool bare = x.riders.empty();
-          return fewer ? std::make_tuple(bare, -n, x.cups.front(), total(x))
-                       : std::make_tuple(bare, n, fewest(x), total(x));
-        };
-        if (!best || rank(grip) > rank(*best)) best = std::move(grip);
-      }
-      if (!best) {
-        if (first_refusal.empty()) first_refusal = refused;
+    const auto faces = faces_to_try(s, i);
+    for (std::size_t f = 0; f < faces.size() && !taken; ++f) {
+      const Approach a = approach(s, g, i, faces[f], f > 0);
+      std::optional<Refusal> refused;
+      const auto grip = best_grip(s, g, a, stacked, fewer, rejected ? &refused : nullptr);
+      if (!grip) {
+        if (!first_refusal) first_refusal = refused;
         continue;
       }
-      PickCandidate c;
-      c.box = box.id;
-      for (auto j : best->group) c.boxes.push_back(world.boxes[j].id);
-      for (auto j : best->riders) c.riders.push_back(world.boxes[j].id);
-      c.box_cups = best->cups;
-      c.cups = best->cups.front();
-      const Eigen::Vector3d& at_face = best->at_face;
-      c.grasp = {at_face - best->back * n, plate_yaw};
-      // Backed off along a turned face's normal, the plate also moves sideways:
-      // near a side wall, only as far as the wall lets it.
-      Eigen::Vector3d pregrasp = at_face - best->pregrasp * n;
-      pregrasp.y() = std::clamp(pregrasp.y(), -ylim, ylim);
-      c.pregrasp = {pregrasp, plate_yaw};
-      // The valves: the cup grid runs down the plate by rows, across by columns.
-      const sim::SuctionPlate& grid = g.cups;
-      c.cups_open.assign(static_cast<std::size_t>(grid.cups_x * grid.cups_y), false);
-      for (int r = 0; r < grid.cups_x; ++r) {
-        for (int k = 0; k < grid.cups_y; ++k) {
-          const Eigen::Vector3d cup =
-              at_face +
-              (0.5 - (r + 0.5) / grid.cups_x) * grid.extent.x() * Eigen::Vector3d::UnitZ() +
-              ((k + 0.5) / grid.cups_y - 0.5) * grid.extent.y() * lateral;
-          c.cups_open[static_cast<std::size_t>(r * grid.cups_y + k)] =
-              std::any_of(best->group.begin(), best->group.end(), [&](std::size_t j) {
-                const Face& fj = member_face(j);
-                return std::abs((cup - fj.centre).dot(lateral)) <= fj.half_w - grid.cup_radius &&
-                       std::abs(cup.z() - fj.centre.z()) <= fj.half_up - grid.cup_radius;
-              });
-        }
-      }
-      // Base: the arm at its preferred reach, the lowered nose short of every
-      // box. A plate low enough to meet the lowered nose stays
-      // ahead of its tip at the pre-grasp (nose_clearance covers the plate's
-      // body): turned off the trailer's axis, by its leading corner.
-      const double by_reach = face.x() - g.pick_reach + g.arm_yaw_offset;
-      const double by_nose = nearest - g.conveyor_length - g.nose_clearance;
-      const double plate_back = c.pregrasp.position.x() - pw * std::abs(n.y());
-      const double by_plate = c.pregrasp.position.z() - ph < g.nose_top
-                                  ? plate_back - g.conveyor_length - g.nose_clearance
-                                  : by_reach;
-      c.base_x = std::min({by_reach, by_nose, by_plate});
-      sim::JointVector at = current;
-      at[sim::kBaseX] = c.base_x;
-      // Lifted, then pulled out until clear of what it rested on: the
-      // drop-off move after that swings freely.
-      // A group against a side wall is lifted away from it too: dragged along
-      // it, the held boxes would press into it. It moves no further than
-      // halfway to the box standing beside it on the other side, which it
-      // would press into instead (C s12: 3 cm into a flush neighbour).
-      double x0 = b[i].x0, x1 = b[i].x1, y0 = b[i].y0, y1 = b[i].y1, z0 = b[i].z0, z1 = b[i].z1;
-      for (auto j : best->group) {
-        x0 = std::min(x0, b[j].x0);
-        x1 = std::max(x1, b[j].x1);
-        y0 = std::min(y0, b[j].y0);
-        y1 = std::max(y1, b[j].y1);
-        z0 = std::min(z0, b[j].z0);
-        z1 = std::max(z1, b[j].z1);
-      }
-      const double half = world.trailer.width / 2;
-      double off_wall = std::max(0.0, kMargin - (half + y0)) - std::max(0.0, kMargin - (half - y1));
-      for (std::size_t j = 0; j < count && off_wall != 0.0; ++j) {
-        if (std::find(best->group.begin(), best->group.end(), j) != best->group.end() ||
-            !(b[j].x0 < x1 && x0 < b[j].x1 && b[j].z0 < z1 + best->lift && z0 < b[j].z1))
-          continue;
-        const double room = off_wall > 0 ? b[j].y0 - y1 : y0 - b[j].y1;
-        const bool beside =
-            off_wall > 0 ? b[j].y0 + b[j].y1 > y0 + y1 : b[j].y0 + b[j].y1 < y0 + y1;
-        if (beside)
-          off_wall = std::copysign(std::min(std::abs(off_wall), std::max(0.0, room / 2)), off_wall);
-      }
-      c.lift = {c.grasp.position + Eigen::Vector3d(0, off_wall, best->lift), plate_yaw};
-      // Pulled out along a turned face's normal, the load also moves sideways:
-      // no further than the side walls let it and the plate, and never pushed
-      // further off a wall than the lift took it.
-      Eigen::Vector3d retract = c.lift.position - best->out_depth * n;
-      const double lo =
-          std::min(off_wall, std::max(-half + kMargin - y0, -ylim - c.grasp.position.y()));
-      const double hi =
-          std::max(off_wall, std::min(half - kMargin - y1, ylim - c.grasp.position.y()));
-      if (lo <= hi)
-        retract.y() = c.grasp.position.y() + std::clamp(retract.y() - c.grasp.position.y(), lo, hi);
-      c.retract = {retract, plate_yaw};
-      if (!reachable(robot, c.grasp, at) || !reachable(robot, c.pregrasp, at)) {
-        if (rejected && first_refusal.empty())
-          first_refusal =
-              fmt::format("no arm pose reaches its face from base x {:.2f} m", c.base_x);
+      PickCandidate c = make_candidate(s, g, a, *grip);
+      if (const auto why = reach_refusal(robot, c, current)) {
+        if (!first_refusal) first_refusal = why;
         continue;
       }
-      ranked.push_back({std::move(c), std::floor((b[i].x0 - nearest) / 0.2), b[i].z1, std::abs(y)});
+      candidates.push_back(ranked(s, i, std::move(c)));
       taken = true;
-      break;
     }
-    if (!taken && rejected) rejected->push_back({box.id, first_refusal});
+    if (!taken && rejected)
+      rejected->push_back({id, first_refusal ? to_string(*first_refusal) : std::string()});
   }
-  // Nearest first: a box behind others is reached over them, which the arm
-  // plans slowly and the held box may not clear; within reach of the front,
-  // high up first.
-  // A load with a box riding on it risks that box: after every other.
-  std::stable_sort(ranked.begin(), ranked.end(), [](const Ranked& a, const Ranked& b) {
-    if (a.c.riders.empty() != b.c.riders.empty()) return a.c.riders.empty();
-    if (a.x_bin != b.x_bin) return a.x_bin < b.x_bin;
-    if (std::abs(a.top - b.top) > 1e-3) return a.top > b.top;
-    return a.centre_distance < b.centre_distance;
-  });
-  // A group found from each of its boxes is one candidate.
-  std::vector<PickCandidate> out;
-  std::vector<std::vector<std::uint32_t>> taken;
-  for (std::size_t i = 0; i < ranked.size() && out.size() < max_count; ++i) {
-    auto ids = ranked[i].c.boxes;
-    std::sort(ids.begin(), ids.end());
-    if (std::find(taken.begin(), taken.end(), ids) != taken.end()) continue;
-    taken.push_back(std::move(ids));
-    out.push_back(ranked[i].c);
-  }
-  return out;
+  return rank(std::move(candidates), max_count);
 }
 
 std::vector<sim::PlateTarget> dropoff_targets(const sim::World& world,

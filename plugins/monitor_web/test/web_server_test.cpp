@@ -129,11 +129,11 @@ TEST(WebServer, AClientThatDoesNotReadLosesMessagesAndIsCounted) {
   const auto client = pages.wait_client();
   ASSERT_NE(client, 0u);
   const auto message = std::make_shared<const std::string>(64u << 10, 'm');
-  const auto start = std::chrono::steady_clock::now();
   int accepted = 0;
   for (int i = 0; i < 2000; ++i) accepted += server->send(client, message, true) ? 1 : 0;
-  // Nothing waited for the client: 128 MB offered in well under a second.
-  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(1));
+  // Nothing waited for the client, which never reads (a send that waited
+  // would not return): of the 128 MB offered, what its send limit and the
+  // socket's buffers do not hold is dropped.
   const auto s = server->stats();
   EXPECT_GT(s.dropped_messages, 1000u);
   EXPECT_EQ(s.dropped_messages + static_cast<std::uint64_t>(accepted), 2000u);

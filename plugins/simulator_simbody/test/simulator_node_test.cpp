@@ -199,14 +199,13 @@ TEST_F(SimulatorLiveFrames, TheWorldIsPublishedWhileTheBaseDrivesInRealTime) {
   kernel_.clear_published();
   std::vector<double> forward = home();
   forward[0] = 0.6;
-  const auto start = std::chrono::steady_clock::now();
   const auto out = execute({home(), forward}, {0.0, 1.0});
-  const double wall =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   ASSERT_TRUE(out) << out.error().message;
-  EXPECT_GE(wall, 0.95);  // 1 s of motion at real time
 
-  // About 20 frames during the motion and one at its end; the base moves forward through them.
+  // About 20 frames during the motion and one at its end; the base moves
+  // forward through them. Frames are published at most 20 times a wall
+  // second: that many, with the middle one halfway, show the motion held to
+  // real time (unheld, the second of motion takes ~60 ms and gives two).
   const auto frames = kernel_.published("world");
   ASSERT_GE(frames.size(), 8u);
   double base = -1.0;

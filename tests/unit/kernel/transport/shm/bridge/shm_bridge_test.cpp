@@ -177,11 +177,11 @@ TEST(BridgeLimits, AMessageLargerThanItsServicesSlotsIsAClearErrorNotATimeout) {
   ASSERT_TRUE(bus_b.provide(&provider, "tiny", type, type, &BlobServer::on, &server));
   bus_b.set_live(&provider, true);
 
+  // The call's 5 s timeout would end it with PLR_ERR_TIMEOUT: its status
+  // says it was answered.
   Answer reply_too_large;
-  const auto start = std::chrono::steady_clock::now();
   ASSERT_NE(call_blob(bus_main, caller, 16, reply_too_large), nullptr);
-  EXPECT_LT(std::chrono::steady_clock::now() - start, 4s) << "answered, not timed out";
-  EXPECT_EQ(reply_too_large.status, PLR_ERR_INVALID);
+  EXPECT_EQ(reply_too_large.status, PLR_ERR_INVALID) << "answered, not timed out";
   EXPECT_NE(reply_too_large.error.find("service 'blob': a message of "), std::string::npos)
       << reply_too_large.error;
   EXPECT_NE(reply_too_large.error.find("exceeds its 1024-byte slots"), std::string::npos)
