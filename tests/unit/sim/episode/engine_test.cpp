@@ -201,7 +201,9 @@ TEST(Engine, ALostWorldIsRestoredAndTheInterruptedActionRepeated) {
     if (kill) settings.observers.push_back(&killer);
     settings.recovery = &flaky;
     auto e = run_episode(model, flaky, hardcoded(), settings);
-    if (e) EXPECT_EQ(flaky.checkpoints, static_cast<int>(e->actions + 1));
+    if (e) {
+      EXPECT_EQ(flaky.checkpoints, static_cast<int>(e->actions + 1));
+    }
     return e;
   };
   std::vector<std::string> smooth_events, lost_events;
