@@ -6,9 +6,9 @@
 #include <chrono>
 #include <memory>
 
-#include "plr/actions/episode.hpp"
 #include "plr/actions/run_stats.hpp"
 #include "plr/chooser/features.hpp"
+#include "plr/episode/engine.hpp"
 #include "plr/sim/physics.hpp"
 #include "plr/sim/world_io.hpp"
 
@@ -31,14 +31,14 @@ std::vector<const sim::LibraryEntry*> training_entries(const Resources& r, sim::
   return out;
 }
 
-bool excluded_root(const sim::Strategy& s, const actions::RunRules& rules) {
+bool excluded_root(const sim::Strategy& s, const episode::RunRules& rules) {
   return rules.excluded(s.nodes[s.root].action);
 }
 
 // The sources of the methods: where each run's strategies come from.
-actions::StrategySource method_source(const EvaluationSettings& settings, const Resources& r,
+episode::StrategySource method_source(const EvaluationSettings& settings, const Resources& r,
                                       Method method, const sim::LibraryEntry* own) {
-  const actions::StrategySource h = actions::hardcoded_source(settings.h);
+  const episode::StrategySource h = episode::hardcoded_source(settings.h);
   switch (method) {
     case Method::kHardcoded:
       return h;
@@ -49,14 +49,14 @@ actions::StrategySource method_source(const EvaluationSettings& settings, const 
       // training world.
       auto used = std::make_shared<bool>(false);
       return [own, used](const actions::Perceived&, const sim::SceneAnalysis&,
-                         const actions::RunRules&) -> plr::Expected<actions::StrategyChoice> {
+                         const episode::RunRules&) -> plr::Expected<episode::StrategyChoice> {
         if (*used)
-          return actions::StrategyChoice{
+          return episode::StrategyChoice{
               std::nullopt, "library:" + own->name,
               "the precomputed strategy ended (its tree ended or did not plan for what was "
               "seen)"};
         *used = true;
-        return actions::StrategyChoice{own->strategy, "library:" + own->name, {}, true};
+        return episode::StrategyChoice{own->strategy, "library:" + own->name, {}, true};
       };
     }
     case Method::kNearest:
@@ -66,7 +66,7 @@ actions::StrategySource method_source(const EvaluationSettings& settings, const 
       const sim::ObservationParams obs = settings.observation;
       return [&r, h, plr, max_distance, obs](
                  const actions::Perceived& seen, const sim::SceneAnalysis& scene,
-                 const actions::RunRules& rules) -> plr::Expected<actions::StrategyChoice> {
+                 const episode::RunRules& rules) -> plr::Expected<episode::StrategyChoice> {
         const chooser::Features f = chooser::features(seen.world, obs);
         const chooser::Nearest nn = r.index->nearest(r.model->scaling().apply(f));
         const sim::LibraryEntry& entry = r.library.entries[nn.entry];
@@ -75,17 +75,17 @@ actions::StrategySource method_source(const EvaluationSettings& settings, const 
           // else to run: a first action that moved nothing here would only
           // be tried again.
           if (excluded_root(entry.strategy, rules))
-            return actions::StrategyChoice{
+            return episode::StrategyChoice{
                 std::nullopt, "library:" + entry.name,
                 fmt::format("the nearest strategy {}'s first action moved nothing here",
                             entry.name)};
-          return actions::StrategyChoice{entry.strategy, "library:" + entry.name, {}, true};
+          return episode::StrategyChoice{entry.strategy, "library:" + entry.name, {}, true};
         }
         // As the strategy_chooser plug-in decides.
         const chooser::Verdict verdict = r.model->decide(f);
         if ((max_distance <= 0 || nn.distance <= max_distance) && verdict.nearest &&
             !excluded_root(entry.strategy, rules))
-          return actions::StrategyChoice{entry.strategy, "library:" + entry.name, {}};
+          return episode::StrategyChoice{entry.strategy, "library:" + entry.name, {}};
         return h(seen, scene, rules);
       };
     }
@@ -199,55 +199,45 @@ nlohmann::json run_one(actions::Rig& rig, const EvaluationSettings& settings,
   }
   out["world"] = start->name;
   rig.reset(start->truth);
-  actions::PlannerStats planner;
-  actions::ActionStats pick, sweep;
+  episode::EngineSettings engine_settings;
+  engine_settings.limits = {settings.max_actions, 24, settings.max_robot_time_s};
+  episode::Engine engine(rig.model(), rig.backend(),
+                         method_source(settings, resources, run.method, start->entry),
+                         std::move(engine_settings));
+  const auto ran = engine.run();
+  // What the run did, also when it failed: its figures until then.
+  const episode::Episode& e = engine.episode();
   nlohmann::json curve = nlohmann::json::array({{0.0, 0}});
+  for (const auto& p : e.curve.points()) curve.push_back({p.robot_time_s, p.boxes});
   nlohmann::json steps = nlohmann::json::array();
-  double t = 0;
-  std::uint32_t boxes = 0;
   std::uint64_t library_actions = 0;
-  const actions::RunLimits limits{settings.max_actions, 24, settings.max_robot_time_s};
-  auto episode = actions::run_strategies(
-      rig.model(), rig.backend(), method_source(settings, resources, run.method, start->entry),
-      limits, [&](const actions::EpisodeStep& s) {
-        const actions::Outcome& o = s.outcome;
-        planner.add(o.queries);
-        if (o.applicable) actions::add_execution(pick, sweep, s.action, o);
-        if (s.source.rfind("library:", 0) == 0) ++library_actions;
-        // The curve steps where each box left; the action's end has the count.
-        std::vector<double> at = o.unloaded_at_s;
-        std::sort(at.begin(), at.end());
-        const std::uint32_t after = boxes + o.boxes;
-        for (double a : at)
-          if (boxes < after) curve.push_back({std::min(t + a, t + o.robot_time_s), ++boxes});
-        boxes = after;
-        t += o.robot_time_s;
-        curve.push_back({t, boxes});
-        steps.push_back({{"action", sim::to_string(s.action)},
-                         {"source", s.source},
-                         {"observation", sim::to_string(s.observation)},
-                         {"applicable", o.applicable},
-                         {"boxes", o.boxes},
-                         {"robot_time_s", o.robot_time_s}});
-      });
-  if (!episode) {
-    out["error"] = episode.error().message;
+  for (const auto& s : e.steps) {
+    if (s.source.rfind("library:", 0) == 0) ++library_actions;
+    steps.push_back({{"action", sim::to_string(s.action)},
+                     {"source", s.source},
+                     {"observation", sim::to_string(s.observation)},
+                     {"applicable", s.outcome.applicable},
+                     {"boxes", s.outcome.boxes},
+                     {"robot_time_s", s.outcome.robot_time_s}});
+  }
+  if (!ran) {
+    out["error"] = ran.error().message;
   } else {
-    out["boxes_total"] = episode->boxes_total;
-    out["boxes_unloaded"] = episode->boxes_unloaded;
-    out["robot_time_s"] = episode->robot_time_s;
-    out["actions"] = episode->actions;
+    out["boxes_total"] = e.boxes_total;
+    out["boxes_unloaded"] = e.boxes_unloaded;
+    out["robot_time_s"] = e.robot_time_s;
+    out["actions"] = e.actions;
     out["library_actions"] = library_actions;
-    out["strategies_asked"] = episode->strategies_asked;
-    out["strategy_steps"] = episode->strategy_steps;
-    out["robot_trailer_collisions"] = episode->robot_trailer_contacts;
-    out["stop_reason"] = episode->stop_reason;
+    out["strategies_asked"] = e.strategies_asked;
+    out["strategy_steps"] = e.strategy_steps;
+    out["robot_trailer_collisions"] = e.robot_trailer_contacts;
+    out["stop_reason"] = e.stop_reason;
   }
   out["curve"] = curve;
   out["steps"] = steps;
-  out["planner_modes"] = actions::modes_json(planner);
-  out["action_stats"] = {{"pick", actions::action_json(pick)},
-                         {"sweep", actions::action_json(sweep)}};
+  out["planner_modes"] = actions::modes_json(e.planner);
+  out["action_stats"] = {{"pick", actions::action_json(e.pick)},
+                         {"sweep", actions::action_json(e.sweep)}};
   out["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }

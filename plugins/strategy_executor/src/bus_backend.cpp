@@ -78,4 +78,54 @@ plr::Expected<actions::Executed> BusBackend::execute(const actions::Motion& moti
   return actions::decode_execute_outcome(*r.value());
 }
 
+plr::Expected<actions::Perceived> BusBackend::wait_for_simulator() {
+  using namespace std::chrono_literals;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (;;) {
+    auto w = observe();
+    if (w || !lost(w.error())) return w;
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >
+        options_.service_wait_s)
+      return plr::make_error(PLR_ERR_INTERNAL,
+                             fmt::format("simulator unavailable for {:.0f} s: {}",
+                                         options_.service_wait_s, w.error().message));
+    if (!pause_(200ms)) return plr::make_error(PLR_ERR_CANCELLED, "stopping");
+  }
+}
+
+plr::Expected<std::string> BusBackend::snapshot_or_restore(const char* service) {
+  flatbuffers::FlatBufferBuilder fbb;
+  fbb.Finish(msg::CreateSnapshotRequestDirect(fbb, "checkpoint"));
+  auto r = call_retry<msg::SnapshotRequest, msg::SnapshotReply>(service, fbb, 60.0);
+  if (!r) {
+    if (r.error().code == PLR_ERR_CANCELLED || r.error().code == PLR_ERR_UNAVAILABLE)
+      return plr::make_error(r.error().code, std::string(service) + ": " + r.error().message);
+    return r.error().message;
+  }
+  if (!r.value()->ok()) return r.value()->message() ? r.value()->message()->str() : "refused";
+  return std::string();
+}
+
+plr::Status BusBackend::checkpoint() {
+  const auto why = snapshot_or_restore("sim/snapshot");
+  if (!why) return why.error();
+  if (!why->empty()) ctx_.log().warn("sim/snapshot 'checkpoint' failed: {}", *why);
+  return {};
+}
+
+bool BusBackend::lost(const plr::Error& error) const {
+  return error.code == PLR_ERR_UNAVAILABLE || error.code == PLR_ERR_TIMEOUT;
+}
+
+plr::Status BusBackend::restore() {
+  forget_clock();  // the restart set it back
+  if (auto w = wait_for_simulator(); !w) return w.error();
+  // Going on without it would unload a world that is not the trailer's.
+  const auto why = snapshot_or_restore("sim/restore");
+  if (!why) return why.error();
+  if (!why->empty()) return plr::make_error(PLR_ERR_INTERNAL, "sim/restore 'checkpoint': " + *why);
+  forget_clock();  // and so did the restore
+  return {};
+}
+
 }  // namespace plr::executor

@@ -1,16 +1,20 @@
 // The action model's backend over the bus: `sim/observe` and `sim/execute`
 // of the simulator (or a robot driver serving the same services) and the
-// `plan` service of whichever planner is loaded.
+// `plan` service of whichever planner is loaded. A simulator whose host died
+// is waited for and restored from its checkpoint (`sim/snapshot`,
+// `sim/restore`): the episode engine's recovery.
 #pragma once
 
 #include <plr/actions/backend.hpp>
 #include <plr/context.hpp>
+#include <plr/episode/recovery.hpp>
 #include <plr/messages.hpp>
 
 #include <atomic>
 #include <chrono>
 #include <functional>
 #include <optional>
+#include <string>
 
 namespace plr::executor {
 
@@ -21,7 +25,9 @@ struct BusOptions {
   double plan_timeout_s = 5.0;  // the planner's own limit; the call waits 10 s more
 };
 
-class BusBackend final : public actions::Backend {
+// Errors: PLR_ERR_CANCELLED when the node is stopping; PLR_ERR_UNAVAILABLE
+// or PLR_ERR_TIMEOUT when the simulator went away (lost()).
+class BusBackend final : public actions::Backend, public episode::Recovery {
  public:
   // `pause` sleeps for a while and returns false when the node is stopping.
   BusBackend(Context& ctx, BusOptions options, std::function<bool(std::chrono::nanoseconds)> pause);
@@ -31,12 +37,18 @@ class BusBackend final : public actions::Backend {
                                                     const sim::World& world) override;
   plr::Expected<actions::Executed> execute(const actions::Motion& motion) override;
 
+  // Observes once the simulator answers (at start, and after its host
+  // restarted), waiting at most `service_wait_s`.
+  plr::Expected<actions::Perceived> wait_for_simulator();
+
+  // A checkpoint not taken (refused) is logged: it only costs a longer
+  // repeat after a crash.
+  plr::Status checkpoint() override;
+  bool lost(const plr::Error& error) const override;
+  plr::Status restore() override;
+
   // The last world observed, as the simulator sent it (strategy/next takes it).
   const std::optional<Message<msg::WorldState>>& last_world() const { return last_world_; }
-  // A simulator that restarted (or was restored) sets its clock back: forget
-  // the clock seen so far, so the next call does not count as a restart.
-  void forget_clock() { sim_clock_s_ = -1.0; }
-
   // Calls `service`, retrying while its provider is unavailable (not started
   // yet, or being swapped): a swap is atomic in the kernel, and this makes a
   // call survive even a gap, so none is lost.
@@ -46,11 +58,17 @@ class BusBackend final : public actions::Backend {
                                          double timeout_s);
 
  private:
+  // A simulator that restarted (or was restored) sets its clock back: forget
+  // the clock seen so far, so the next call does not count as a restart.
+  void forget_clock() { sim_clock_s_ = -1.0; }
   template <class Req, class Rep>
   plr::Expected<Message<Rep>> call_once(const std::string& service,
                                         const flatbuffers::FlatBufferBuilder& fbb,
                                         double timeout_s);
   plr::Status check_clock(double sim_time_s, const char* service);
+  // Empty when the simulator took or restored the checkpoint, else why not;
+  // an error when the simulator is gone or the node stopping.
+  plr::Expected<std::string> snapshot_or_restore(const char* service);
 
   Context& ctx_;
   BusOptions options_;

@@ -1,14 +1,15 @@
-// The strategy executor: walks strategies (decision trees) from their root,
-// observing the world between actions, and runs each abstract action with
-// the action model (plr/actions/action_model.hpp) over the bus: the planner's
-// `plan`, the simulator's (or robot driver's) `sim/observe` and
-// `sim/execute`. A simulator that dies is waited for and restored from the
-// last checkpoint; the interrupted action is repeated. See docs/executor.md.
+// The strategy executor: runs the episode engine (plr/episode/engine.hpp)
+// over the bus: the planner's `plan`, the simulator's (or robot driver's)
+// `sim/observe` and `sim/execute`, strategies from the config and
+// `strategy/next`. A simulator that dies is waited for and restored from the
+// last checkpoint; the interrupted action is repeated. It watches the run
+// for the progress line, the state topic, the log and the report. See
+// docs/executor.md.
 #include <unistd.h>
 
 #include <plr/actions/action_model.hpp>
-#include <plr/actions/episode.hpp>
 #include <plr/atomic_file.hpp>
+#include <plr/episode/engine.hpp>
 #include <plr/interface.hpp>
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
@@ -29,7 +30,6 @@
 #include <filesystem>
 #include <mutex>
 #include <optional>
-#include <set>
 #include <thread>
 
 #include "bus_backend.hpp"
@@ -64,7 +64,7 @@ bool read_array(const Params& p, const char* key, std::array<double, N>& to, Sta
   return true;
 }
 
-class ExecutorNode : public plr::Node {
+class ExecutorNode : public plr::Node, private episode::Observer {
  public:
   using Node::Node;
 
@@ -179,6 +179,7 @@ class ExecutorNode : public plr::Node {
   }
 
   plr::Status on_cleanup() override {
+    engine_.reset();
     model_.reset();
     robot_.reset();
     return {};
@@ -188,8 +189,7 @@ class ExecutorNode : public plr::Node {
     stop_ = false;
     stats_ = {};
     first_used_ = false;
-    memory_ = {};
-    rules_ = actions::RunRules({max_actions_, max_idle_});
+    engine_.reset();
     backend_ = std::make_unique<BusBackend>(ctx(), bus_, [this](std::chrono::nanoseconds d) {
       std::unique_lock lock(m_);
       return !cv_.wait_for(lock, d, [this] { return stop_.load(); });
@@ -222,62 +222,42 @@ class ExecutorNode : public plr::Node {
     return std::move(*w);
   }
 
-  void pause(std::chrono::nanoseconds d) {
-    std::unique_lock lock(m_);
-    if (cv_.wait_for(lock, d, [this] { return stop_.load(); })) throw Stopped{};
-  }
-
-  // Waits for the simulator to answer (at start, and after its host restarted).
-  actions::Perceived wait_for_simulator() {
-    const auto t0 = Clock::now();
-    for (;;) {
-      try {
-        return observe();
-      } catch (const SimulatorLost& lost) {
-        if (seconds_since(t0) > bus_.service_wait_s)
-          throw std::runtime_error("simulator unavailable for " +
-                                   fmt::format("{:.0f}", bus_.service_wait_s) + " s: " + lost.what);
+  // The run's strategies: the config's first (open loop), then strategy/next's.
+  episode::StrategySource strategy_source() {
+    return [this](const actions::Perceived&, const sim::SceneAnalysis& scene,
+                  const episode::RunRules& rules) -> plr::Expected<episode::StrategyChoice> {
+      if (first_strategy_ && !first_used_) {
+        first_used_ = true;
+        log().info("strategy '{}' from the config ({} nodes), open loop", first_strategy_->name,
+                   first_strategy_->nodes.size());
+        return episode::StrategyChoice{*first_strategy_, "config", {}};
       }
-      pause(200ms);
-    }
+      auto s = ask_strategy(*scene.observation, rules);
+      if (!s) return s.error();
+      return episode::StrategyChoice{std::move(*s), "strategy/next", {}};
+    };
   }
 
-  // Empty when the simulator took or restored the checkpoint, else why not.
-  std::string snapshot_or_restore(const char* service) {
-    flatbuffers::FlatBufferBuilder fbb;
-    fbb.Finish(msg::CreateSnapshotRequestDirect(fbb, "checkpoint"));
-    auto r = backend_->call_retry<msg::SnapshotRequest, msg::SnapshotReply>(service, fbb, 60.0);
-    if (!r) {
-      if (r.error().code == PLR_ERR_CANCELLED) throw Stopped{};
-      if (r.error().code == PLR_ERR_UNAVAILABLE)
-        throw SimulatorLost{std::string(service) + ": " + r.error().message};
-      return r.error().message;
-    }
-    if (!r.value()->ok()) return r.value()->message() ? r.value()->message()->str() : "refused";
-    return {};
-  }
-
-  sim::Strategy ask_strategy(sim::Observation observation) {
+  plr::Expected<sim::Strategy> ask_strategy(sim::Observation observation,
+                                            const episode::RunRules& rules) {
     const auto& world = backend_->last_world();
     const auto view = world->view();
     flatbuffers::FlatBufferBuilder fbb;
     const auto nested = plr::create_nested(fbb, view.data, view.size);
-    const std::vector<std::uint8_t> excluded(rules_.exclusions().begin(),
-                                             rules_.exclusions().end());
+    const std::vector<std::uint8_t> excluded(rules.exclusions().begin(), rules.exclusions().end());
     fbb.Finish(msg::CreateNextStrategyRequest(
         fbb, nested, observation,
         fbb.CreateVector(reinterpret_cast<const msg::Action*>(excluded.data()), excluded.size())));
     auto r = backend_->call_retry<msg::NextStrategyRequest, msg::NextStrategyReply>("strategy/next",
                                                                                     fbb, 30.0);
     if (!r) {
-      if (r.error().code == PLR_ERR_CANCELLED) throw Stopped{};
-      throw std::runtime_error("strategy/next: " + r.error().message);
+      if (r.error().code == PLR_ERR_CANCELLED) return r.error();
+      return make_error(PLR_ERR_INTERNAL, "strategy/next: " + r.error().message);
     }
     if (r.value()->strategy() == nullptr)
-      throw std::runtime_error("strategy/next: reply without a strategy");
-    ++stats_.strategies_asked;
+      return make_error(PLR_ERR_INTERNAL, "strategy/next: reply without a strategy");
     auto s = sim::from_message(*r.value()->strategy(), "strategy/next reply");
-    if (!s) throw std::runtime_error(s.error().message);
+    if (!s) return make_error(PLR_ERR_INTERNAL, s.error().message);
     const auto* reason = r.value()->reason();
     log().info("strategy '{}' from {}{} ({} nodes) for {}", s->name,
                r.value()->source() ? r.value()->source()->str() : "?",
@@ -286,55 +266,29 @@ class ExecutorNode : public plr::Node {
     return std::move(*s);
   }
 
-  void checkpoint() {
-    // A checkpoint not taken only costs a longer repeat after a crash.
-    if (const auto why = snapshot_or_restore("sim/snapshot"); !why.empty())
-      log().warn("sim/snapshot 'checkpoint' failed: {}", why);
-    checkpoint_stats_ = stats_;
-    checkpoint_memory_ = memory_;
-    checkpoint_rules_ = rules_;
-  }
-
-  void recover(const std::string& why) {
-    log().warn("simulator lost ({}); waiting for it to restart", why);
-    report_progress("waiting for the simulator");
-    backend_->forget_clock();  // the restart set it back
-    wait_for_simulator();
-    // Going on without it would unload a world that is not the trailer's.
-    if (const auto why = snapshot_or_restore("sim/restore"); !why.empty())
-      throw std::runtime_error("sim/restore 'checkpoint': " + why);
-    backend_->forget_clock();  // and so did the restore
-    const std::uint64_t recoveries = stats_.recoveries + 1;
-    stats_ = checkpoint_stats_;
-    stats_.recoveries = recoveries;
-    memory_ = checkpoint_memory_;
-    rules_ = checkpoint_rules_;
-    log().info("simulator back; restored 'checkpoint', repeating the interrupted action");
-  }
-
   void run() {
-    const auto t0 = Clock::now();
+    t0_ = Clock::now();
     try {
-      job(t0);
-      finish(true, t0);
+      job();
+      finish(true);
     } catch (const Stopped&) {
       // Stopped before the job was done (Ctrl-C, SIGTERM, --duration, a lost
       // host): the figures so far are the report; the kernel adds why.
       stats_.stop_reason = "stopped";
-      stats_.wall_time_s = seconds_since(t0);
+      stats_.wall_time_s = seconds_since(t0_);
       save_report();
     } catch (const std::exception& e) {
       stats_.stop_reason = e.what();
       log().error("executor: {}", e.what());
-      finish(false, t0);
+      finish(false);
     } catch (const SimulatorLost& lost) {
       stats_.stop_reason = "simulator lost: " + lost.what;
       log().error("executor: {}", stats_.stop_reason);
-      finish(false, t0);
+      finish(false);
     }
   }
 
-  void job(Clock::time_point t0) {
+  void job() {
     // A simulator may hold no world before its first reset: reset first when
     // asked to (waiting for it to come up), observe only otherwise.
     if (!env_.empty() || !world_file_.empty()) {
@@ -346,121 +300,81 @@ class ExecutorNode : public plr::Node {
         throw std::runtime_error("sim/reset: " + r.error().message);
       }
     }
-    actions::Perceived w = wait_for_simulator();
-    stats_.boxes_total = static_cast<std::uint32_t>(w.world.boxes.size()) + w.unloaded;
-    unloaded_at_start_ = w.unloaded;
+    auto w = backend_->wait_for_simulator();
+    if (!w) fail(w.error());
+    stats_.boxes_total = static_cast<std::uint32_t>(w->world.boxes.size()) + w->unloaded;
     log().info("{} boxes in the trailer", stats_.boxes_total);
-    checkpoint();
-
-    sim::Strategy strategy;
-    std::optional<std::uint32_t> node;
-    // The action a lost simulator interrupted, done again once it is back
-    // (a flag, not an optional: GCC 12 warns falsely on optional<enum> here).
-    bool repeating = false;
-    sim::Action repeat{};
-    const actions::Reporter reporter{
-        [this](const std::string& step) { report_progress(step); },
-        [this](const std::string& line) { log().info("{}: {}", action_name_, line); }};
-    for (;;) {
-      try {
-        w = observe();
-      } catch (const SimulatorLost& lost) {
-        recover(lost.what);
-        continue;
-      }
-      stats_.boxes_unloaded = w.unloaded - unloaded_at_start_;
-      if (auto why = rules_.stop(w.world.boxes.size())) {
-        stats_.stop_reason = std::move(*why);
-        classify_left(w);
-        break;
-      }
-      sim::Action action{};
-      const sim::SceneAnalysis scene = model_->scene(w, memory_);
-      const sim::Observation observation = *scene.observation;
-      if (repeating) {
-        action = repeat;
-      } else {
-        // After an action that moved nothing, the strategy's next step is
-        // not followed blindly: its source is asked again, told what failed.
-        const auto child =
-            node && rules_.fresh() ? strategy.next(*node, observation) : std::nullopt;
-        if (child) {
-          node = child;
-          ++stats_.strategy_steps;
-        } else if (first_strategy_ && !first_used_) {
-          strategy = *first_strategy_;
-          node = strategy.root;
-          first_used_ = true;
-          ++stats_.strategies_asked;
-          log().info("strategy '{}' from the config ({} nodes), open loop", strategy.name,
-                     strategy.nodes.size());
-        } else {
-          strategy = ask_strategy(observation);
-          node = strategy.root;
-        }
-        action = strategy.nodes[*node].action;
-      }
-      strategy_ = strategy;
-      node_ = node;
-      action_name_ = fmt::format("#{} {}", rules_.actions() + 1, sim::to_string(action));
-      publish_state("starting");
-      repeat = action;
-      repeating = true;
-      auto outcome = model_->run(action, *backend_, memory_, reporter);
-      if (!outcome) {
-        try {
-          fail(outcome.error());
-        } catch (const SimulatorLost& lost) {
-          recover(lost.what);
-          continue;
-        }
-      }
-      repeating = false;
-      const actions::Outcome& o = *outcome;
-      rules_.record(action, o);
-      stats_.planner.add(o.queries);
-      if (!o.applicable) {
-        ++stats_.not_applicable;
-      } else {
-        actions::add_execution(stats_.pick, stats_.sweep, action, o);
-      }
-      stats_.steps.push_back({sim::to_string(action), sim::to_string(observation),
-                              scene.wall_height, scene.pile_height, scene.pile_depth, o.applicable,
-                              o.boxes, o.robot_time_s});
-      const double action_start = stats_.robot_time_s;
-      stats_.robot_time_s += o.robot_time_s;
-      stats_.plan_wall_s += o.plan_wall_s;
-      stats_.robot_trailer_collisions += o.robot_trailer_contacts;
-      if (o.sim_time_s > 0) stats_.sim_time_s = o.sim_time_s;
-      stats_.failed_grasps += o.failed_grasp ? 1 : 0;
-      // The curve steps where each box left; the action's end has the count
-      // the simulator's state says.
-      std::vector<double> at = o.unloaded_at_s;
-      std::sort(at.begin(), at.end());
-      std::uint32_t count = stats_.boxes_unloaded;
-      stats_.boxes_unloaded += o.boxes;
-      for (double t : at)
-        if (count < stats_.boxes_unloaded)
-          stats_.curve.push_back({std::min(action_start + t, stats_.robot_time_s), ++count});
-      stats_.curve.push_back({stats_.robot_time_s, stats_.boxes_unloaded});
-      stats_.wall_time_s = seconds_since(t0);
-      report_progress(fmt::format("{}: +{} boxes", action_name_, o.boxes), true);
-      publish_status();
-      // After every action, so a run killed at any moment keeps its figures.
-      stats_.stop_reason = "running";
-      save_report();
-      try {
-        checkpoint();
-      } catch (const SimulatorLost& lost) {
-        recover(lost.what);
-      }
-    }
+    episode::EngineSettings settings;
+    settings.limits = {max_actions_, max_idle_};
+    settings.observers = {this};
+    settings.recovery = backend_.get();
+    engine_.emplace(*model_, *backend_, strategy_source(), std::move(settings));
+    const auto ran = engine_->run();
+    sync(engine_->episode());
+    if (!ran) fail(ran.error());
+    stats_.stop_reason = engine_->episode().stop_reason;
   }
 
-  void classify_left(const actions::Perceived& w) {
+  // ---- The run as the engine goes (episode::Observer) ----------------------
+
+  void starting(const episode::ActionStart& action, const episode::Episode& e) override {
+    sync(e);
+    strategy_ = action.strategy;
+    node_ = action.node;
+    action_name_ = fmt::format("#{} {}", action.number, sim::to_string(action.action));
+    publish_state("starting");
+  }
+
+  void progress(const std::string& step) override { report_progress(step); }
+
+  void note(const std::string& line) override { log().info("{}: {}", action_name_, line); }
+
+  void recorded(const episode::EpisodeStep& step, const episode::Episode& e) override {
+    sync(e);
+    stats_.wall_time_s = seconds_since(t0_);
+    report_progress(fmt::format("{}: +{} boxes", action_name_, step.outcome.boxes), true);
+    publish_status();
+    // After every action, so a run killed at any moment keeps its figures.
+    stats_.stop_reason = "running";
+    save_report();
+  }
+
+  void lost(const Error& why) override {
+    log().warn("simulator lost ({}); waiting for it to restart", why.message);
+    report_progress("waiting for the simulator");
+  }
+
+  void restored(const episode::Episode& e) override {
+    sync(e);
+    log().info("simulator back; restored 'checkpoint', repeating the interrupted action");
+  }
+
+  // The report's figures from the engine's (the total is the executor's own:
+  // the boxes in the trailer and those unloaded before the run).
+  void sync(const episode::Episode& e) {
+    stats_.boxes_unloaded = e.boxes_unloaded;
+    stats_.robot_time_s = e.robot_time_s;
+    stats_.plan_wall_s = e.plan_wall_s;
+    stats_.sim_time_s = e.sim_time_s;
+    stats_.robot_trailer_collisions = e.robot_trailer_contacts;
+    stats_.failed_grasps = e.failed_grasps;
+    stats_.not_applicable = e.not_applicable;
+    stats_.recoveries = e.recoveries;
+    stats_.strategies_asked = e.strategies_asked;
+    stats_.strategy_steps = e.strategy_steps;
+    stats_.planner = e.planner;
+    stats_.pick = e.pick;
+    stats_.sweep = e.sweep;
+    stats_.curve.clear();
+    for (const auto& p : e.curve.points()) stats_.curve.push_back({p.robot_time_s, p.boxes});
+    stats_.steps.clear();
+    for (const auto& s : e.steps)
+      stats_.steps.push_back({sim::to_string(s.action), sim::to_string(s.observation),
+                              s.wall_height, s.pile_height, s.pile_depth, s.outcome.applicable,
+                              s.outcome.boxes, s.outcome.robot_time_s});
     stats_.boxes_left.clear();
-    for (const auto& b : actions::boxes_left(w.world, w.q, memory_, *model_))
-      stats_.boxes_left.push_back({b.id, actions::to_string(b.reason), b.detail});
+    for (const auto& b : e.left)
+      stats_.boxes_left.push_back({b.id, episode::to_string(b.reason), b.detail});
   }
 
   // Why each box still in the trailer is there: known where the run stopped
@@ -468,7 +382,11 @@ class ExecutorNode : public plr::Node {
   void log_boxes_left() {
     if (stats_.boxes_left.empty() && stats_.boxes_unloaded < stats_.boxes_total && model_) {
       try {
-        classify_left(observe());
+        const actions::Perceived w = observe();
+        const actions::Memory none;
+        for (const auto& b :
+             episode::boxes_left(w.world, w.q, engine_ ? engine_->memory() : none, *model_))
+          stats_.boxes_left.push_back({b.id, episode::to_string(b.reason), b.detail});
       } catch (...) {  // the simulator is gone: the report says only what is known
       }
     }
@@ -484,8 +402,8 @@ class ExecutorNode : public plr::Node {
       log().info("  box {}: {}{}", b.id, b.reason, b.detail.empty() ? "" : " (" + b.detail + ")");
   }
 
-  void finish(bool ok, Clock::time_point t0) {
-    stats_.wall_time_s = seconds_since(t0);
+  void finish(bool ok) {
+    stats_.wall_time_s = seconds_since(t0_);
     if (show_progress_ && tty_) std::fputs("\n", stderr);
     log().info("done: {} of {} boxes in {:.1f} s robot time ({:.1f} s wall): {}",
                stats_.boxes_unloaded, stats_.boxes_total, stats_.robot_time_s, stats_.wall_time_s,
@@ -647,11 +565,9 @@ class ExecutorNode : public plr::Node {
 
   // Run state (worker thread only).
   std::unique_ptr<BusBackend> backend_;
-  RunStats stats_, checkpoint_stats_;
-  actions::Memory memory_, checkpoint_memory_;
-  // Which actions are left out until progress, and when the run stops.
-  actions::RunRules rules_, checkpoint_rules_;
-  std::uint32_t unloaded_at_start_ = 0;
+  std::optional<episode::Engine> engine_;
+  Clock::time_point t0_;
+  RunStats stats_;
   std::string action_name_;
   std::optional<sim::Strategy> strategy_;  // the one being walked (a copy: trees are small)
   std::optional<std::uint32_t> node_;

@@ -33,7 +33,7 @@
 #include <nlohmann/json.hpp>
 
 #include "plr/actions/in_process.hpp"
-#include "plr/actions/open_loop.hpp"
+#include "plr/episode/open_loop.hpp"
 #include "plr/planning/lattice_planner.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/library.hpp"
@@ -188,7 +188,7 @@ std::optional<nlohmann::json> evaluate(const std::string& name, const sim::World
       actions::UnloaderSimulation simulation(*robot, truth);
       actions::InProcessBackend backend(simulation, planner);
       actions::Memory memory;
-      auto run = actions::run_open_loop(model, backend, memory,
+      auto run = episode::run_open_loop(model, backend, memory,
                                         use_strategy ? std::optional(strategy) : std::nullopt, {},
                                         static_cast<std::uint64_t>(actions));
       if (!run) {

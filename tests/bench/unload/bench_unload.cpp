@@ -30,10 +30,10 @@
 #include <nlohmann/json.hpp>
 
 #include "bench_util.hpp"
-#include "plr/actions/episode.hpp"
 #include "plr/actions/in_process.hpp"
 #include "plr/actions/process_pool.hpp"
 #include "plr/atomic_file.hpp"
+#include "plr/episode/engine.hpp"
 #include "plr/planning/lattice_planner.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/physics.hpp"
@@ -97,23 +97,23 @@ nlohmann::json run(const Job& job) {
   plr::actions::ActionOptions options;
   options.plan_timeout_s = 1800.0;
   const plr::actions::ActionModel model(robot, options);
-  // Each action as it went, so that a run that stopped early can be read.
+  const auto episode = value_or_die(plr::episode::run_episode(
+      model, backend, plr::episode::hardcoded_source(plr::sim::HardcodedParams{})));
+  // Each action, so that a run can be read step by step.
   nlohmann::json steps = nlohmann::json::array();
-  const auto episode = value_or_die(plr::actions::run_hardcoded(
-      model, backend, plr::sim::HardcodedParams{}, {}, [&](const plr::actions::EpisodeStep& s) {
-        steps.push_back({{"action", plr::sim::to_string(s.action)},
-                         {"observation", plr::sim::to_string(s.observation)},
-                         {"wall_height", s.wall_height},
-                         {"pile_height", s.pile_height},
-                         {"pile_depth", s.pile_depth},
-                         {"applicable", s.outcome.applicable},
-                         {"why", s.outcome.why},
-                         {"boxes", s.outcome.boxes},
-                         {"robot_time_s", s.outcome.robot_time_s},
-                         {"failed_grasp", s.outcome.failed_grasp},
-                         {"robot_trailer_contacts", s.outcome.robot_trailer_contacts},
-                         {"notes", s.notes}});
-      }));
+  for (const auto& s : episode.steps)
+    steps.push_back({{"action", plr::sim::to_string(s.action)},
+                     {"observation", plr::sim::to_string(s.observation)},
+                     {"wall_height", s.wall_height},
+                     {"pile_height", s.pile_height},
+                     {"pile_depth", s.pile_depth},
+                     {"applicable", s.outcome.applicable},
+                     {"why", s.outcome.why},
+                     {"boxes", s.outcome.boxes},
+                     {"robot_time_s", s.outcome.robot_time_s},
+                     {"failed_grasp", s.outcome.failed_grasp},
+                     {"robot_trailer_contacts", s.outcome.robot_trailer_contacts},
+                     {"notes", s.notes}});
   if (!episode.final_world.boxes.empty()) {
     auto world = job.file;
     if (auto saved =
@@ -134,7 +134,7 @@ nlohmann::json run(const Job& job) {
           {"robot_trailer_collisions", episode.robot_trailer_contacts},
           {"stop_reason", episode.stop_reason},
           {"left", left},
-          {"left_by_reason", plr::actions::count_by_reason(episode.left)},
+          {"left_by_reason", plr::episode::count_by_reason(episode.left)},
           {"steps", steps},
           {"wall_s", std::chrono::duration<double>(Clock::now() - start).count()}};
 }

@@ -13,8 +13,8 @@
 #include <csignal>
 #include <cstring>
 
-#include "plr/actions/open_loop.hpp"
 #include "plr/actions/state_bytes.hpp"
+#include "plr/episode/open_loop.hpp"
 
 namespace plr::chooser {
 
@@ -101,7 +101,7 @@ plr::Expected<Rollout> Rig::run(const std::vector<std::uint8_t>& state, const Jo
   if (!job.masses.empty())
     if (auto ok = rig_->simulation().set_masses(job.masses); !ok) return ok.error();
   auto run =
-      actions::run_open_loop(rig_->model(), rig_->backend(), *memory, job.strategy, h, max_actions);
+      episode::run_open_loop(rig_->model(), rig_->backend(), *memory, job.strategy, h, max_actions);
   if (!run) return run.error();
   return Rollout{run->actions, run->boxes, run->robot_time_s, snapshot(*memory)};
 }

@@ -1,12 +1,13 @@
 // The run's rules (exclusions, stops), the reasons given for boxes left, and
-// strategy H run in process to the end of a small trailer.
-#include "plr/actions/episode.hpp"
+// strategy H run in process by the engine to the end of a small trailer.
+#include "plr/episode/engine.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <set>
 
 #include "plr/actions/instantiate.hpp"
@@ -15,16 +16,35 @@
 
 #include "scene.hpp"
 
-namespace plr::actions {
+namespace plr::episode {
 namespace {
 
-using testing::box;
-using testing::CpuLoad;
-using testing::Fixture;
-using testing::options;
-using testing::planner;
-using testing::robot;
-using testing::wall;
+using namespace plr::actions;
+using actions::testing::box;
+using actions::testing::CpuLoad;
+using actions::testing::Fixture;
+using actions::testing::options;
+using actions::testing::planner;
+using actions::testing::robot;
+using actions::testing::wall;
+
+// Strategy H from the backend's state to the end of the run; `on_step`, if
+// given, sees each action's outcome.
+plr::Expected<Episode> run_hardcoded(const ActionModel& model, Backend& backend,
+                                     const sim::HardcodedParams& h, const RunLimits& limits,
+                                     std::function<void(const EpisodeStep&)> on_step = {}) {
+  struct Steps final : Observer {
+    std::function<void(const EpisodeStep&)> f;
+    void recorded(const EpisodeStep& s, const Episode&) override {
+      if (f) f(s);
+    }
+  } steps;
+  steps.f = std::move(on_step);
+  EngineSettings settings;
+  settings.limits = limits;
+  settings.observers = {&steps};
+  return run_episode(model, backend, hardcoded_source(h), std::move(settings));
+}
 
 Outcome moved(std::uint32_t boxes) {
   Outcome o;
@@ -597,4 +617,4 @@ TEST(RunHardcoded, TheSameRunOnA1UnderCpuLoadGivesTheSameCurve) {
 }
 
 }  // namespace
-}  // namespace plr::actions
+}  // namespace plr::episode

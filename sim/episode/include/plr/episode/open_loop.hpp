@@ -15,7 +15,7 @@
 #include "plr/sim/hardcoded_strategy.hpp"
 #include "plr/sim/strategy.hpp"
 
-namespace plr::actions {
+namespace plr::episode {
 
 struct OpenLoopRun {
   std::uint64_t actions = 0;
@@ -25,8 +25,9 @@ struct OpenLoopRun {
 };
 
 // `memory` is the state's: what the robot learnt before it, and after.
-plr::Expected<OpenLoopRun> run_open_loop(const ActionModel& model, Backend& backend, Memory& memory,
+plr::Expected<OpenLoopRun> run_open_loop(const actions::ActionModel& model,
+                                         actions::Backend& backend, actions::Memory& memory,
                                          const std::optional<sim::Strategy>& strategy,
                                          const sim::HardcodedParams& h, std::uint64_t max_actions);
 
-}  // namespace plr::actions
+}  // namespace plr::episode
