@@ -102,6 +102,20 @@ TEST(Cli, RunFinishesTheDemoAndExitsZero) {
   EXPECT_NE(out.find("pipeline done: counted to 5"), std::string::npos) << out;
 }
 
+// A list option takes one value per use: the config after it is the config.
+TEST(Cli, ASetBeforeTheConfigLeavesItToItsArgument) {
+  std::string out;
+  EXPECT_EQ(
+      run_command(kPlr +
+                      " run --set pipeline=cli_set_first --set nodes.counter.params.period_ms=1"
+                      " --set nodes.counter.params.limit=2 " +
+                      kDemo + " --report " + ::testing::TempDir() + "cli_set_first",
+                  &out),
+      0)
+      << out;
+  EXPECT_NE(out.find("pipeline done: counted to 2"), std::string::npos) << out;
+}
+
 TEST(Cli, RunRefusesABadOverride) {
   std::string out;
   EXPECT_EQ(
