@@ -52,6 +52,7 @@ int fail(const Error& error);
 Expected<PipelineConfig> load_config(const std::string& file,
                                      const std::vector<std::string>& overrides);
 
+// A Run (run.hpp) driven from a loop that takes SIGINT, SIGTERM and SIGHUP.
 int run_pipeline(const RunOptions& options);
 // Checks the config and its plug-ins and prints the run's /dev/shm need
 // (each segment with `verbose`).
