@@ -1,7 +1,10 @@
 // The subcommands of `plr`; each returns the process exit code.
 #pragma once
 
+#include "pipeline_config.hpp"
+
 #include <plr/plugin_abi.h>
+#include <plr/expected.hpp>
 
 #include <string>
 #include <vector>
@@ -41,7 +44,15 @@ struct SwapOptions {
 // 2 invalid input, 3 timeout, 4 unavailable, 5 cancelled, 6 wrong state,
 // 1 internal; `plr run` adds 1 (the job failed) and 128 + signal.
 int exit_code(plr_status code);
+// Prints "plr: MESSAGE" to stderr (control bytes escaped, one problem a
+// line) and returns the error's exit code.
+int fail(const Error& error);
 
+// The config with `overrides` ("KEY=VALUE") applied.
+Expected<PipelineConfig> load_config(const std::string& file,
+                                     const std::vector<std::string>& overrides);
+
+// A Run (run.hpp) driven from a loop that takes SIGINT, SIGTERM and SIGHUP.
 int run_pipeline(const RunOptions& options);
 // Checks the config and its plug-ins and prints the run's /dev/shm need
 // (each segment with `verbose`).

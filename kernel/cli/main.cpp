@@ -41,6 +41,8 @@ void run_external(int argc, char** argv, const CLI::App& app) {
 int main(int argc, char** argv) {
   using namespace plr::kernel;
   CLI::App app{"PLR: plans, learns and reasons for a truck-unloading robot"};
+  // List options (--set, --topics, ...) below take one value per use, so
+  // `--set A=1 CONFIG` leaves CONFIG to the positional argument.
   app.require_subcommand(1);
   app.footer(
       "Other commands: `plr NAME ...` runs the program plr-NAME beside plr (e.g. plr library).");
@@ -50,7 +52,8 @@ int main(int argc, char** argv) {
   run_cmd->add_option("config", run.config, "Pipeline config (YAML)")->required();
   run_cmd
       ->add_option("--set", run.overrides, "Override a config value: nodes.NODE.params.KEY=VALUE")
-      ->type_name("KEY=VALUE");
+      ->type_name("KEY=VALUE")
+      ->allow_extra_args(false);
   run_cmd->add_option("--duration", run.duration_s, "Stop after this many seconds (0: no limit)");
   run_cmd->add_option("--report", run.report_dir, "Folder for the run's report");
   run_cmd->add_option("--host", run.host, "Run only this host's nodes (used by the supervisor)");
@@ -58,11 +61,13 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("-v,--verbose", run.verbose, "Debug logging");
   run_cmd->add_option("--record", run.record_file, "Record the run's topics to this MCAP file");
   run_cmd->add_option("--record-topics", run.record_topics, "Topics to record ('*' wildcard)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->allow_extra_args(false);
 
   const auto dds_options = [](CLI::App* cmd, DdsToolOptions& o) {
     cmd->add_option("--domain", o.domain, "DDS domain")->capture_default_str();
-    cmd->add_option("--interface", o.interfaces, "Network interfaces for DDS (default: lo)");
+    cmd->add_option("--interface", o.interfaces, "Network interfaces for DDS (default: lo)")
+        ->allow_extra_args(false);
     cmd->add_option("--security", o.security_dir, "DDS Security material of this tool");
   };
 
@@ -77,8 +82,10 @@ int main(int argc, char** argv) {
       ->required()
       ->expected(1, 2);
   record_cmd->add_option("--topics", record.record_topics, "Topics ('*' wildcard; default all)")
-      ->delimiter(',');
-  record_cmd->add_option("--set", record.overrides, "Override a config value");
+      ->delimiter(',')
+      ->allow_extra_args(false);
+  record_cmd->add_option("--set", record.overrides, "Override a config value")
+      ->allow_extra_args(false);
   record_cmd->add_option("--duration", record.duration_s, "Stop after this many seconds");
   record_cmd->add_option("--report", record.report_dir, "Folder for the run's report");
   record_cmd->add_option("--remote", remote_record_options.kernel,
@@ -97,7 +104,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   replay_cmd->add_option("--linger", replay.replay_linger_s, "Seconds to run on after the replay")
       ->capture_default_str();
-  replay_cmd->add_option("--set", replay.overrides, "Override a config value");
+  replay_cmd->add_option("--set", replay.overrides, "Override a config value")
+      ->allow_extra_args(false);
   replay_cmd->add_option("--report", replay.report_dir, "Folder for the run's report");
 
   std::string validate_config;
@@ -106,7 +114,8 @@ int main(int argc, char** argv) {
       app.add_subcommand("validate", "Check a config (and its plug-ins) without running it");
   validate_cmd->add_option("config", validate_config, "Pipeline config (YAML)")->required();
   validate_cmd->add_option("--set", validate_overrides, "Override a config value")
-      ->type_name("KEY=VALUE");
+      ->type_name("KEY=VALUE")
+      ->allow_extra_args(false);
   bool validate_verbose = false;
   validate_cmd->add_flag("-v,--verbose", validate_verbose,
                          "Each shared-memory segment of the run, with its size");

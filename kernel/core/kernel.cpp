@@ -322,6 +322,16 @@ Status Kernel::on_pipeline_done(std::function<void(bool, std::string)> fn) {
                                    });
 }
 
+Status Kernel::on_node_report(std::function<void(std::string, std::string)> fn) {
+  return listen<msg::NodeReport>("pipeline/report", [fn = std::move(fn)](const msg::NodeReport& r) {
+    fn(r.node() ? r.node()->str() : "", r.figures() ? r.figures()->str() : "");
+  });
+}
+
+void Kernel::drain_listeners() {
+  internal_->node_thread().drain();
+}
+
 std::vector<NodeStatus> Kernel::nodes() const {
   std::vector<NodeStatus> out;
   for (const auto& s : slots_) {

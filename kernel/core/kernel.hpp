@@ -64,6 +64,11 @@ class Kernel {
   Status follow_sim_clock();
   // Calls `fn(ok, reason)` when a node announces on `pipeline/done` that the job is over.
   Status on_pipeline_done(std::function<void(bool, std::string)> fn);
+  // Calls `fn(node, figures)` for each report a node publishes on `pipeline/report`.
+  Status on_node_report(std::function<void(std::string, std::string)> fn);
+  // Waits until these callbacks have handled every message this process's
+  // nodes published so far (after stop(): what they sent while stopping).
+  void drain_listeners();
 
   // Waits until the transports have set up what the started nodes
   // registered; an error names what other hosts cannot reach.
@@ -113,7 +118,7 @@ class Kernel {
   std::mutex transports_mutex_;
   std::unique_ptr<class ShmBridge> bridge_;
   std::unique_ptr<class DdsBridge> dds_;  // main host only, when remote.dds is configured
-  // Kernel-side subscriptions (clock, pipeline/done), alive as long as the kernel.
+  // Kernel-side subscriptions (clock, pipeline/done, pipeline/report), alive as long as the kernel.
   std::vector<std::unique_ptr<std::function<void(const plr_msg*)>>> listeners_;
   std::unique_ptr<class TelemetryPublisher> telemetry_;
   bool started_ = false;

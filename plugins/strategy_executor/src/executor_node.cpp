@@ -174,6 +174,9 @@ class ExecutorNode : public plr::Node, private episode::Observer {
     auto done = ctx().advertise<msg::PipelineDone>("pipeline/done");
     if (!done) return done.error();
     done_ = *done;
+    auto report = ctx().advertise<msg::NodeReport>("pipeline/report");
+    if (!report) return report.error();
+    report_pub_ = *report;
     tty_ = isatty(STDERR_FILENO) == 1;
     return {};
   }
@@ -425,7 +428,7 @@ class ExecutorNode : public plr::Node, private episode::Observer {
     (void)done_.publish(fbb);
   }
 
-  // report.json and the curve only (no final scene: the simulator may be
+  // The figures and the curve only (no final scene: the simulator may be
   // gone or stopping); a failure is logged, the run goes on.
   void save_report() {
     try {
@@ -435,19 +438,24 @@ class ExecutorNode : public plr::Node, private episode::Observer {
     }
   }
 
+  // The figures go to `plr run`, which writes them into report.json; the
+  // files beside it are the executor's.
   void write_report(bool final_scene = true) {
+    auto check = [](const Status& written) {
+      if (!written) throw std::runtime_error(written.error().message);
+    };
+    flatbuffers::FlatBufferBuilder report;
+    report.Finish(
+        msg::CreateNodeReportDirect(report, ctx().name().c_str(), to_json(stats_).dump().c_str()));
+    check(report_pub_.publish(report));
     namespace fs = std::filesystem;
     const fs::path dir(report_dir_);
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec) throw std::runtime_error(dir.string() + ": " + ec.message());
-    auto check = [](const Status& written) {
-      if (!written) throw std::runtime_error(written.error().message);
-    };
     auto write = [&](const std::string& name, const std::string& content) {
       check(write_file_atomically((dir / name).string(), content));
     };
-    write("report.json", to_json(stats_).dump(2) + "\n");
     write("unloading.svg", curve_svg(stats_.curve, stats_.boxes_total,
                                      fmt::format("{}: {}/{} boxes unloaded", ctx().name(),
                                                  stats_.boxes_unloaded, stats_.boxes_total)));
@@ -556,6 +564,7 @@ class ExecutorNode : public plr::Node, private episode::Observer {
   Publisher<msg::Statistics> status_;
   Publisher<msg::ExecutorState> state_pub_;
   Publisher<msg::PipelineDone> done_;
+  Publisher<msg::NodeReport> report_pub_;
 
   // Worker.
   std::thread worker_;
@@ -580,4 +589,5 @@ PLR_PLUGIN(plr::executor::ExecutorNode, "strategy_executor", "2.0.0", PLR_KIND_E
            "Walks strategies; runs each abstract action with the action model over the bus")
 PLR_INTERFACE(plr::topic<plr::msg::Statistics>("executor/status"),
               plr::topic<plr::msg::ExecutorState>("executor/state"),
-              plr::topic<plr::msg::PipelineDone>("pipeline/done"))
+              plr::topic<plr::msg::PipelineDone>("pipeline/done"),
+              plr::topic<plr::msg::NodeReport>("pipeline/report"))

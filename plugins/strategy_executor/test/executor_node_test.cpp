@@ -10,7 +10,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
 
 #include "plr/planning/plan_query.hpp"
@@ -327,9 +326,18 @@ class Executor : public ::testing::Test {
       done_ok_ = done[0].as<msg::PipelineDone>()->ok();
       done_reason_ = done[0].as<msg::PipelineDone>()->reason()->str();
     }
-    std::ifstream in(dir_ / "report.json");
-    EXPECT_TRUE(in) << "no report.json";
-    return in ? nlohmann::json::parse(in) : nlohmann::json{};
+    return reported();
+  }
+
+  // The executor's latest figures on pipeline/report: what `plr run` writes
+  // into report.json.
+  nlohmann::json reported() const {
+    const auto reports = kernel_.published("pipeline/report");
+    EXPECT_FALSE(reports.empty()) << "nothing on pipeline/report";
+    if (reports.empty()) return {};
+    const auto* r = reports.back().as<msg::NodeReport>();
+    EXPECT_EQ(r->node()->str(), "executor");
+    return nlohmann::json::parse(r->figures()->str());
   }
 
   FakeKernel kernel_;
@@ -377,8 +385,8 @@ TEST_F(Executor, UnloadsASmallWallWithStrategyH) {
 }
 
 // Ctrl-C, SIGTERM, --duration or a lost host stop the executor before the
-// job is done: its figures were lost (no report.json). Now the report is
-// rewritten after every action and when it stops.
+// job is done: its figures were lost (no report.json). Now they are
+// reported after every action and when it stops.
 TEST_F(Executor, AStoppedRunKeepsItsFiguresInTheReport) {
   FakeSim sim(small_wall());
   FakePlanner planner;
@@ -404,15 +412,14 @@ TEST_F(Executor, AStoppedRunKeepsItsFiguresInTheReport) {
   ASSERT_TRUE(n->configure());
   ASSERT_TRUE(n->activate());
   // Until the first action is done and reported.
-  for (int i = 0; i < 60000 && !fs::exists(dir_ / "report.json"); ++i) {
+  for (int i = 0; i < 60000 && kernel_.published("pipeline/report").empty(); ++i) {
     kernel_.spin();
     kernel_.wait_published("pipeline/done", 1, std::chrono::milliseconds(1));
   }
-  ASSERT_TRUE(fs::exists(dir_ / "report.json"));
+  ASSERT_FALSE(kernel_.published("pipeline/report").empty());
   EXPECT_TRUE(n->deactivate());
   EXPECT_TRUE(kernel_.published("pipeline/done").empty()) << "stopped, not done";
-  std::ifstream in(dir_ / "report.json");
-  const auto report = nlohmann::json::parse(in);
+  const auto report = reported();
   EXPECT_EQ(report["stop_reason"], "stopped");
   EXPECT_EQ(report["boxes_total"], 6);
   EXPECT_GE(report["actions"]["pick"]["executions"].get<int>() +
