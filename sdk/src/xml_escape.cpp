@@ -19,9 +19,6 @@ std::string xml_escape(std::string_view text) {
       case '"':
         out += "&quot;";
         break;
-      case '\'':
-        out += "&apos;";
-        break;
       default:
         out += c;
     }

@@ -6,8 +6,9 @@
 
 namespace plr {
 
-// `text` safe inside an XML element or attribute: & < > " ' as entities.
-// Link plr::sdk_support.
+// `text` safe inside an XML element or a double-quoted attribute: & < > "
+// as entities (PLR writes every attribute in double quotes). Link
+// plr::sdk_support.
 std::string xml_escape(std::string_view text);
 
 }  // namespace plr
