@@ -102,8 +102,15 @@ std::string render_svg(const Chart& c) {
       }
     }
   }
-  if (x_lo > x_hi) x_lo = 0, x_hi = 1;
-  if (y_lo > y_hi) y_lo = 0, y_hi = 1;
+  // No data: the unit square.
+  if (x_lo > x_hi) {
+    x_lo = 0;
+    x_hi = 1;
+  }
+  if (y_lo > y_hi) {
+    y_lo = 0;
+    y_hi = 1;
+  }
   const Range xr = axis_range(c.x, x_lo, x_hi), yr = axis_range(c.y, y_lo, y_hi);
 
   std::size_t legend_chars = 0;
