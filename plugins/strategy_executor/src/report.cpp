@@ -69,7 +69,8 @@ std::string curve_svg(const std::vector<CurvePoint>& curve, std::uint32_t total,
   chart.x.min = 0;
   chart.y.label = "boxes unloaded";
   chart.y.min = 0;
-  chart.y.max = std::max<double>(1.0, total);
+  // Headroom over the dashed line of all boxes, so that it stands clear of the frame.
+  chart.y.max = 1.05 * std::max<double>(1.0, total);
   chart.y.integer = true;
   // A step curve: the count rises as each box leaves the trailer.
   ChartSeries unloaded;
@@ -82,8 +83,8 @@ std::string curve_svg(const std::vector<CurvePoint>& curve, std::uint32_t total,
   all.color = "#bbb";
   all.dashed = true;
   all.width = 1;
-  all.points = {{0, chart.y.max.value()},
-                {std::max(1.0, unloaded.points.back().x), chart.y.max.value()}};
+  all.points = {{0, static_cast<double>(total)},
+                {std::max(1.0, unloaded.points.back().x), static_cast<double>(total)}};
   chart.series = {all, unloaded};
   return render_svg(chart);
 }
