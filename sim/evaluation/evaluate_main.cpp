@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include <chrono>
 #include <cstdio>
@@ -43,34 +44,26 @@ struct Args {
 };
 
 Args parse(int argc, char** argv) {
-  const char* usage =
-      "usage: plr evaluate SETTINGS [--report DIR] [--quick] [--workers N] [--set KEY=VALUE]...";
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    const bool has_value = i + 1 < argc;
-    if (arg == "--quick") {
-      a.quick = true;
-    } else if (arg == "--report" && has_value) {
-      a.report = argv[++i];
-    } else if (arg == "--set" && has_value) {
-      a.overrides.push_back(argv[++i]);
-    } else if (arg == "--workers" && has_value) {
-      const std::string v = argv[++i];
-      if (v.empty() || v.size() > 3 || v.find_first_not_of("0123456789") != std::string::npos ||
-          std::stoi(v) < 1)
-        die(fmt::format("--workers: not a number from 1 to 999: '{}'", v));
-      a.workers = static_cast<unsigned>(std::stoi(v));
-    } else if (arg == "--help" || arg == "-h") {
-      std::printf("%s\n", usage);
-      std::exit(0);
-    } else if (a.settings.empty() && arg.rfind("--", 0) != 0) {
-      a.settings = arg;
-    } else {
-      die(fmt::format("unexpected argument '{}'\n{}", arg, usage));
-    }
+  CLI::App app{
+      "The paper's comparison of H, NN, open-loop, expected-offline and PLR on every "
+      "environment and seed of a settings file, in worker processes, resumable; then "
+      "the report"};
+  app.name("plr evaluate");
+  app.add_option("settings", a.settings, "Evaluation settings (configs/evaluate.yaml)")->required();
+  app.add_option("--report", a.report,
+                 "Report folder; its runs/ keeps each run's result, so a run is not run again")
+      ->capture_default_str();
+  app.add_flag("--quick", a.quick, "The settings' quick_seeds instead of seeds");
+  app.add_option("--workers", a.workers, "Worker processes (default: the settings' workers)")
+      ->check(CLI::Range(1u, 999u));
+  app.add_option("--set", a.overrides, "Override a setting: KEY=VALUE (repeatable)")
+      ->type_name("KEY=VALUE");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    std::exit(app.exit(e));
   }
-  if (a.settings.empty()) die(usage);
   return a;
 }
 

@@ -12,15 +12,14 @@
 #include <cstring>
 
 #include "plr/atomic_file.hpp"
-#include "plr/sim/render.hpp"
+#include "plr/svg_chart.hpp"
+#include "plr/xml_escape.hpp"
 
 extern char** environ;
 
 namespace plr::evaluation {
 
 namespace {
-
-using sim::xml_escape;
 
 const char* color(const std::string& method) {
   if (method == "H") return "#1f77b4";
@@ -29,15 +28,6 @@ const char* color(const std::string& method) {
   if (method == "expected-offline") return "#9467bd";
   if (method == "PLR") return "#d62728";
   return "#555555";
-}
-
-// A round step for about `target` ticks over [0, max].
-double tick_step(double max, int target) {
-  const double raw = max / target;
-  const double p = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (m * p >= raw) return m * p;
-  return 10 * p;
 }
 
 std::string pm(const nlohmann::json& j, const char* mean, const char* sd, int digits) {
@@ -57,78 +47,35 @@ std::string to_90(const nlohmann::json& method) {
 }  // namespace
 
 std::string plot_svg(const nlohmann::json& summary, const std::string& name) {
-  constexpr double kW = 680, kH = 420, kL = 60, kR = 210, kT = 40, kB = 50;
   const auto& env = summary["environments"][name];
   const auto& grid = summary["grid_s"];
-  const double t_max = std::max(1.0, grid.back().get<double>());
-  double n_max = 1;
-  for (const auto& [m, d] : env["methods"].items())
-    for (std::size_t i = 0; i < d["mean"].size(); ++i)
-      n_max = std::max(n_max, d["mean"][i].get<double>() + d["se"][i].get<double>());
-  const double y_step = tick_step(n_max, 6);
-  n_max = std::ceil(n_max / y_step) * y_step;
-  auto px = [&](double t) { return kL + (kW - kL - kR) * t / t_max; };
-  auto py = [&](double n) { return kH - kB - (kH - kT - kB) * n / n_max; };
-  std::string s = fmt::format(
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{0}\" height=\"{1}\" viewBox=\"0 0 {0} "
-      "{1}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"{0}\" height=\"{1}\" "
-      "fill=\"white\"/>\n",
-      kW, kH);
-  s += fmt::format(
-      "<text x=\"{}\" y=\"22\" font-size=\"14\">{} ({}): boxes unloaded, mean ± standard "
-      "error</text>\n",
-      kL, xml_escape(name), env["training"].get<bool>() ? "training" : "held out");
-  const double x_step = tick_step(t_max, 6);
-  for (double t = 0; t <= t_max + 1e-9; t += x_step)
-    s += fmt::format(
-        "<line x1=\"{0:.1f}\" y1=\"{1}\" x2=\"{0:.1f}\" y2=\"{2}\" stroke=\"#ddd\"/><text "
-        "x=\"{0:.1f}\" y=\"{3}\" text-anchor=\"middle\">{4:g}</text>\n",
-        px(t), kT, kH - kB, kH - kB + 16, t);
-  for (double n = 0; n <= n_max + 1e-9; n += y_step)
-    s += fmt::format(
-        "<line x1=\"{0}\" y1=\"{1:.1f}\" x2=\"{2}\" y2=\"{1:.1f}\" stroke=\"#ddd\"/><text "
-        "x=\"{3}\" y=\"{4:.1f}\" text-anchor=\"end\">{5:g}</text>\n",
-        kL, py(n), kW - kR, kL - 6, py(n) + 4, n);
-  s += fmt::format(
-      "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"black\"/>\n", kL,
-      kT, kW - kL - kR, kH - kT - kB);
-  s += fmt::format(
-      "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">robot time [s]</text>\n<text x=\"14\" "
-      "y=\"{}\" transform=\"rotate(-90 14 {})\" text-anchor=\"middle\">boxes unloaded</text>\n",
-      (kL + kW - kR) / 2, kH - 12, (kT + kH - kB) / 2, (kT + kH - kB) / 2);
-  int row = 0;
+  Chart chart;
+  chart.title = fmt::format("{} ({}): boxes unloaded, mean ± standard error", name,
+                            env["training"].get<bool>() ? "training" : "held out");
+  chart.width = 680;
+  chart.height = 420;
+  chart.x.label = "robot time [s]";
+  chart.x.min = 0;
+  chart.x.max = std::max(1.0, grid.back().get<double>());
+  chart.y.label = "boxes unloaded";
+  chart.y.min = 0;
   for (const auto& method : summary["settings"]["methods"]) {
     const std::string m = method.get<std::string>();
     if (!env["methods"].contains(m)) continue;
     const auto& d = env["methods"][m];
     if (d["runs"].get<std::size_t>() == 0) continue;
-    std::string upper, lower, line;
+    ChartSeries s;
+    s.label = fmt::format("{} ({} runs)", m, d["runs"].get<std::size_t>());
+    s.color = color(m);
     for (std::size_t i = 0; i < grid.size(); ++i) {
-      const double t = grid[i].get<double>(), mean = d["mean"][i].get<double>(),
-                   se = d["se"][i].get<double>();
-      upper += fmt::format("{:.1f},{:.1f} ", px(t), py(mean + se));
-      line += fmt::format("{:.1f},{:.1f} ", px(t), py(mean));
+      const double mean = d["mean"][i].get<double>(), se = d["se"][i].get<double>();
+      s.points.push_back({grid[i].get<double>(), mean});
+      s.band_low.push_back(std::max(0.0, mean - se));
+      s.band_high.push_back(mean + se);
     }
-    for (std::size_t i = grid.size(); i-- > 0;) {
-      const double t = grid[i].get<double>(),
-                   low = std::max(0.0, d["mean"][i].get<double>() - d["se"][i].get<double>());
-      lower += fmt::format("{:.1f},{:.1f} ", px(t), py(low));
-    }
-    s +=
-        fmt::format("<polygon points=\"{}{}\" fill=\"{}\" fill-opacity=\"0.2\" stroke=\"none\"/>\n",
-                    upper, lower, color(m));
-    s += fmt::format("<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"2\"/>\n",
-                     line, color(m));
-    const double ly = kT + 10 + 20 * row++;
-    s += fmt::format(
-        "<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"{3}\" "
-        "stroke-width=\"3\"/><text "
-        "x=\"{4}\" y=\"{5}\">{6} ({7} runs)</text>\n",
-        kW - kR + 10, ly, kW - kR + 30, color(m), kW - kR + 36, ly + 4, xml_escape(m),
-        d["runs"].get<std::size_t>());
+    chart.series.push_back(std::move(s));
   }
-  s += "</svg>\n";
-  return s;
+  return render_svg(chart);
 }
 
 std::string report_html(const nlohmann::json& r) {

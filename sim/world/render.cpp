@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 #include <plr/atomic_file.hpp>
+#include <plr/xml_escape.hpp>
 
 #include <algorithm>
 #include <array>
@@ -130,30 +131,6 @@ std::string render_svg(const World& world, View view, const RenderOptions& o) {
 Status write_svg(const std::filesystem::path& file, const World& world, View view,
                  const RenderOptions& options) {
   return write_file_atomically(file.string(), render_svg(world, view, options));
-}
-
-std::string xml_escape(const std::string& text) {
-  std::string out;
-  out.reserve(text.size());
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
 }
 
 }  // namespace plr::sim

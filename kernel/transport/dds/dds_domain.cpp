@@ -1,6 +1,7 @@
 #include "dds_domain.hpp"
 
 #include <fmt/format.h>
+#include <plr/xml_escape.hpp>
 
 #include <unistd.h>
 #include <cctype>
@@ -10,29 +11,6 @@
 namespace plr::kernel {
 
 namespace {
-
-std::string xml_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '&':
-        out += "&amp;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 bool glob_match(const char* p, const char* s) {
   if (*p == '\0') return *s == '\0';

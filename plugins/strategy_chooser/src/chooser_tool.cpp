@@ -6,6 +6,7 @@
 //
 // A training started again on the same out folder resumes where it stood.
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include <cstdio>
 #include <string>
@@ -16,13 +17,6 @@
 
 namespace {
 
-int usage() {
-  std::fprintf(stderr,
-               "usage: plr chooser train SETTINGS [--set key=value]...\n"
-               "       plr chooser show MODEL\n");
-  return 2;
-}
-
 int fail(const std::string& what) {
   std::fprintf(stderr, "plr chooser: %s\n", what.c_str());
   return 1;
@@ -31,18 +25,23 @@ int fail(const std::string& what) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 3) return usage();
-  const std::string command = argv[1];
-  if (command == "train") {
-    std::vector<std::string> overrides;
-    for (int i = 3; i < argc; ++i) {
-      if (std::string(argv[i]) == "--set" && i + 1 < argc) {
-        overrides.emplace_back(argv[++i]);
-      } else {
-        return usage();
-      }
-    }
-    auto settings = plr::chooser::TrainingSettings::load(argv[2], overrides);
+  CLI::App app{"Trains the strategy chooser and shows a trained model"};
+  app.name("plr chooser");
+  app.require_subcommand(1);
+  std::string settings_file, model_file;
+  std::vector<std::string> overrides;
+  auto* train_cmd = app.add_subcommand(
+      "train", "Trains the chooser (DAgger); started again on the same out folder it resumes");
+  train_cmd->add_option("settings", settings_file, "Training settings (configs/train_chooser.yaml)")
+      ->required();
+  train_cmd->add_option("--set", overrides, "Override a setting: KEY=VALUE (repeatable)")
+      ->type_name("KEY=VALUE");
+  auto* show_cmd = app.add_subcommand("show", "A trained model's figures");
+  show_cmd->add_option("model", model_file, "Chooser model (.plrm)")->required();
+  CLI11_PARSE(app, argc, argv);
+
+  if (*train_cmd) {
+    auto settings = plr::chooser::TrainingSettings::load(settings_file, overrides);
     if (!settings) return fail(settings.error().message);
     auto summary = plr::chooser::train_chooser(*settings, [](const std::string& line) {
       std::printf("%s\n", line.c_str());
@@ -57,15 +56,12 @@ int main(int argc, char** argv) {
         (settings->out / "model.plrm").c_str());
     return 0;
   }
-  if (command == "show" && argc == 3) {
-    auto model = plr::chooser::Model::load(argv[2]);
-    if (!model) return fail(model.error().message);
-    std::printf(
-        "%s: features version %u (%zu), C %g, gamma %g, cross-validated accuracy %.3f, "
-        "%zu support vectors, library CRC %08x\n",
-        argv[2], plr::chooser::kFeatureVersion, plr::chooser::kFeatureCount, model->c(),
-        model->gamma(), model->cv_accuracy(), model->support_vectors(), model->library_crc());
-    return 0;
-  }
-  return usage();
+  auto model = plr::chooser::Model::load(model_file);
+  if (!model) return fail(model.error().message);
+  std::printf(
+      "%s: features version %u (%zu), C %g, gamma %g, cross-validated accuracy %.3f, "
+      "%zu support vectors, library CRC %08x\n",
+      model_file.c_str(), plr::chooser::kFeatureVersion, plr::chooser::kFeatureCount, model->c(),
+      model->gamma(), model->cv_accuracy(), model->support_vectors(), model->library_crc());
+  return 0;
 }

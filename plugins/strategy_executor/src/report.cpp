@@ -1,6 +1,6 @@
 #include "report.hpp"
 
-#include <plr/sim/render.hpp>
+#include <plr/svg_chart.hpp>
 
 #include <fmt/format.h>
 
@@ -63,48 +63,30 @@ nlohmann::json to_json(const RunStats& s) {
 
 std::string curve_svg(const std::vector<CurvePoint>& curve, std::uint32_t total,
                       const std::string& title) {
-  constexpr double kW = 640, kH = 400, kL = 60, kR = 20, kT = 40, kB = 50;
-  const double t_max = std::max(1.0, curve.empty() ? 1.0 : curve.back().robot_time_s);
-  const double n_max = std::max<double>(1.0, total);
-  auto px = [&](double t) { return kL + (kW - kL - kR) * t / t_max; };
-  auto py = [&](double n) { return kH - kB - (kH - kT - kB) * n / n_max; };
-  std::string svg = fmt::format(
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" "
-      "font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" "
-      "fill=\"white\"/>\n<text x=\"{}\" y=\"24\" font-size=\"14\">{}</text>\n",
-      kW, kH, kL, sim::xml_escape(title));
-  // Axes with five ticks each.
-  svg += fmt::format(
-      "<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"black\"/>\n"
-      "<line x1=\"{0}\" y1=\"{1}\" x2=\"{0}\" y2=\"{3}\" stroke=\"black\"/>\n",
-      kL, kH - kB, kW - kR, kT);
-  for (int i = 0; i <= 5; ++i) {
-    const double t = t_max * i / 5, n = n_max * i / 5;
-    svg += fmt::format(
-        "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{:.0f}</text>\n"
-        "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"end\">{:.0f}</text>\n",
-        px(t), kH - kB + 16, t, kL - 6, py(n) + 4, n);
-  }
-  svg += fmt::format(
-      "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">robot time [s]</text>\n"
-      "<text x=\"16\" y=\"{:.1f}\" transform=\"rotate(-90 16 {:.1f})\" "
-      "text-anchor=\"middle\">boxes unloaded</text>\n",
-      (kL + kW - kR) / 2, kH - 12, (kT + kH - kB) / 2, (kT + kH - kB) / 2);
-  svg += fmt::format(
-      "<line x1=\"{}\" y1=\"{:.1f}\" x2=\"{}\" y2=\"{:.1f}\" stroke=\"#bbb\" "
-      "stroke-dasharray=\"4 4\"/>\n",
-      kL, py(total), kW - kR, py(total));
+  Chart chart;
+  chart.title = title;
+  chart.x.label = "robot time [s]";
+  chart.x.min = 0;
+  chart.y.label = "boxes unloaded";
+  chart.y.min = 0;
+  // Headroom over the dashed line of all boxes, so that it stands clear of the frame.
+  chart.y.max = 1.05 * std::max<double>(1.0, total);
+  chart.y.integer = true;
   // A step curve: the count rises as each box leaves the trailer.
-  std::string points = fmt::format("{:.1f},{:.1f}", px(0), py(0));
-  std::uint32_t last = 0;
-  for (const auto& p : curve) {
-    points += fmt::format(" {:.1f},{:.1f} {:.1f},{:.1f}", px(p.robot_time_s), py(last),
-                          px(p.robot_time_s), py(p.boxes));
-    last = p.boxes;
-  }
-  svg += "<polyline fill=\"none\" stroke=\"#c0392b\" stroke-width=\"2\" points=\"" + points +
-         "\"/>\n</svg>\n";
-  return svg;
+  ChartSeries unloaded;
+  unloaded.color = "#c0392b";
+  unloaded.steps = true;
+  unloaded.points.push_back({0, 0});
+  for (const auto& p : curve)
+    unloaded.points.push_back({p.robot_time_s, static_cast<double>(p.boxes)});
+  ChartSeries all;
+  all.color = "#bbb";
+  all.dashed = true;
+  all.width = 1;
+  all.points = {{0, static_cast<double>(total)},
+                {std::max(1.0, unloaded.points.back().x), static_cast<double>(total)}};
+  chart.series = {all, unloaded};
+  return render_svg(chart);
 }
 
 std::string progress_line(std::uint32_t done, std::uint32_t total, double robot_time_s,

@@ -9,6 +9,7 @@
 #include <plr/atomic_file.hpp>
 
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include <cstdio>
 #include <filesystem>
@@ -20,15 +21,6 @@
 namespace {
 
 using plr::sim::LibraryEntry;
-
-int usage() {
-  std::fprintf(stderr,
-               "usage: plr library list FILE\n"
-               "       plr library show FILE ENTRY\n"
-               "       plr library export FILE ENTRY OUT.plrs|OUT.yaml\n"
-               "       plr library svg FILE DIR\n");
-  return 2;
-}
 
 const LibraryEntry* find(const plr::sim::Library& lib, const std::string& key) {
   for (const LibraryEntry& e : lib.entries) {
@@ -77,50 +69,69 @@ void show(const LibraryEntry& e) {
   std::fputs(plr::sim::format_yaml(e.strategy).c_str(), stdout);
 }
 
+int fail(const std::string& what) {
+  std::fprintf(stderr, "plr library: %s\n", what.c_str());
+  return 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 3) return usage();
-  const std::string cmd = argv[1];
-  auto lib = plr::sim::load_library(argv[2]);
-  if (!lib) {
-    std::fprintf(stderr, "plr library: %s\n", lib.error().message.c_str());
-    return 1;
-  }
-  if (cmd == "list" && argc == 3) {
+  CLI::App app{
+      "Lists and shows the entries of a strategy library, exports an entry's strategy "
+      "and draws its pictures"};
+  app.name("plr library");
+  app.require_subcommand(1);
+  std::string file, key, out;
+  const auto library_file = [&file](CLI::App* cmd) {
+    cmd->add_option("file", file, "Strategy library (.plrl)")->required();
+  };
+  const auto entry = [&key](CLI::App* cmd) {
+    cmd->add_option("entry", key, "The entry: its name or its index")->required();
+  };
+  auto* list_cmd = app.add_subcommand("list", "A line per entry");
+  library_file(list_cmd);
+  auto* show_cmd = app.add_subcommand("show", "An entry's world, bounds, provenance and strategy");
+  library_file(show_cmd);
+  entry(show_cmd);
+  auto* export_cmd = app.add_subcommand(
+      "export", "Writes an entry's strategy as a strategy file for the executor");
+  library_file(export_cmd);
+  entry(export_cmd);
+  export_cmd->add_option("out", out, "Strategy file: OUT.plrs or OUT.yaml")->required();
+  auto* svg_cmd = app.add_subcommand("svg",
+                                     "Draws every entry: DIR/<name>.svg (its strategy tree) and "
+                                     "DIR/<name>-anytime.svg (its root bounds against time)");
+  library_file(svg_cmd);
+  svg_cmd->add_option("dir", out, "Folder of the pictures")->required();
+  CLI11_PARSE(app, argc, argv);
+
+  auto lib = plr::sim::load_library(file);
+  if (!lib) return fail(lib.error().message);
+  if (*list_cmd) {
     list(*lib);
     return 0;
   }
-  if (cmd == "svg" && argc == 4) {
+  if (*svg_cmd) {
+    const std::filesystem::path dir(out);
     for (const LibraryEntry& e : lib->entries) {
-      const std::filesystem::path dir(argv[3]);
-      for (const auto& [file, text] :
+      for (const auto& [path, text] :
            {std::pair{dir / (e.name + ".svg"), plr::generator::strategy_svg(e.strategy)},
             {dir / (e.name + "-anytime.svg"), plr::generator::anytime_svg(e)}}) {
-        if (auto s = plr::write_file_atomically(file.string(), text); !s) {
-          std::fprintf(stderr, "plr library: %s\n", s.error().message.c_str());
-          return 1;
-        }
+        if (auto s = plr::write_file_atomically(path.string(), text); !s)
+          return fail(s.error().message);
       }
     }
     return 0;
   }
-  if ((cmd == "show" && argc == 4) || (cmd == "export" && argc == 5)) {
-    const LibraryEntry* e = find(*lib, argv[3]);
-    if (!e) {
-      std::fprintf(stderr, "plr library: %s: no entry '%s' (%zu entries)\n", argv[2], argv[3],
-                   lib->entries.size());
-      return 1;
-    }
-    if (cmd == "show") {
-      show(*e);
-      return 0;
-    }
-    if (auto s = plr::sim::save_strategy(e->strategy, argv[4]); !s) {
-      std::fprintf(stderr, "plr library: %s\n", s.error().message.c_str());
-      return 1;
-    }
+  const LibraryEntry* e = find(*lib, key);
+  if (!e) {
+    return fail(fmt::format("{}: no entry '{}' ({} entries)", file, key, lib->entries.size()));
+  }
+  if (*show_cmd) {
+    show(*e);
     return 0;
   }
-  return usage();
+  if (auto s = plr::sim::save_strategy(e->strategy, out); !s) return fail(s.error().message);
+  return 0;
 }

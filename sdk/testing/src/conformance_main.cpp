@@ -1,21 +1,10 @@
 // plr_conformance <plugin.so> [<params json>] [gtest flags]
 #include <plr/testing/conformance.hpp>
 
-#include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
-
-#include <cstdio>
-
 int main(int argc, char** argv) {
-  ::testing::InitGoogleTest(&argc, argv);  // removes the gtest flags it knows
-  if (argc < 2 || argc > 3) {
-    std::fprintf(stderr, "usage: %s <plugin.so> [<params json>] [gtest flags]\n", argv[0]);
-    return 2;
-  }
-  const std::string params = argc == 3 ? argv[2] : "{}";
-  if (!nlohmann::json::parse(params, nullptr, false).is_object()) {
-    std::fprintf(stderr, "%s: params must be a JSON object: %s\n", argv[0], params.c_str());
-    return 2;
-  }
-  return plr::testing::run_conformance(argv[1], params);
+  return plr::testing::conformance_main(
+      argc, argv, "The conformance suite every PLR plug-in passes, on one plug-in",
+      [](const std::string& plugin, const std::string& params) {
+        return plr::testing::run_conformance(plugin, params);
+      });
 }

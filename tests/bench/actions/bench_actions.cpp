@@ -48,6 +48,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench_cli.hpp"
+#include "bench_families.hpp"
 #include "bench_util.hpp"
 #include "plr/actions/action_model.hpp"
 #include "plr/actions/in_process.hpp"
@@ -393,52 +395,31 @@ std::pair<double, double> wall_state_medians(const FamilyFigures& fig) {
   return {median(applicable), median(distinct)};
 }
 
-int usage() {
-  std::fprintf(stderr,
-               "usage: bench_actions [--quick] [--json] [--states K] [--particles N] [--seed S]\n"
-               "                     [--families A1,B1] [--every N] [--fresh-checker]\n");
-  return 2;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   Options o;
   bool quick = false, json = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    const bool has_value = i + 1 < argc;
-    if (arg == "--quick") {
-      quick = true;
-    } else if (arg == "--json") {
-      json = true;
-    } else if (arg == "--fresh-checker") {
-      o.fresh_checker = true;
-    } else if (arg == "--states" && has_value) {
-      o.states = std::max(1, std::atoi(argv[++i]));
-    } else if (arg == "--particles" && has_value) {
-      o.particles = std::max(1, std::atoi(argv[++i]));
-    } else if (arg == "--every" && has_value) {
-      o.every = std::max(1, std::atoi(argv[++i]));
-    } else if (arg == "--seed" && has_value) {
-      o.seed = std::strtoull(argv[++i], nullptr, 10);
-    } else if (arg == "--families" && has_value) {
-      o.families.clear();
-      const std::string list = argv[++i];
-      for (std::size_t at = 0; at <= list.size();) {
-        const std::size_t end = std::min(list.find(',', at), list.size());
-        const auto f = plr::sim::parse_env_family(std::string_view(list).substr(at, end - at));
-        if (!f) {
-          std::fprintf(stderr, "bench_actions: unknown family in '%s'\n", list.c_str());
-          return 2;
-        }
-        o.families.push_back(*f);
-        at = end + 1;
-      }
-    } else {
-      return usage();
-    }
-  }
+  CLI::App app{
+      "The 12 abstract actions in process from the states strategy H visits, on mass "
+      "particles: what each does, its mass sensitivity and speed"};
+  plr::bench::add_quick_flag(app, quick, "1 state, 2 particles, 3 actions");
+  plr::bench::add_json_flag(app, json);
+  app.add_option("--states", o.states, "States per family (2 per seed)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--particles", o.particles, "Mass particles each action runs on")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--seed", o.seed, "First environment seed (and the mass particles' seed)")
+      ->capture_default_str();
+  plr::bench::add_families_option(app, o.families, "Families to run (default A1,A2,B1,B2)");
+  app.add_option("--every", o.every, "H actions between saved states")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_flag("--fresh-checker", o.fresh_checker,
+               "One collision checker per planning query (the backend's old behaviour)");
+  plr::bench::parse_or_exit(app, argc, argv);
   if (quick) {
     o.states = 1;
     o.particles = 2;

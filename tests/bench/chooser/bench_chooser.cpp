@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_cli.hpp"
 #include "bench_util.hpp"
 #include "plr/chooser/model.hpp"
 #include "plr/chooser/nearest.hpp"
@@ -50,34 +51,24 @@ int main(int argc, char** argv) {
   std::string library_file = "lib/library.plrl", model_file = "chooser/model.plrm",
               data_file = "chooser/data.plrd";
   int seeds = 10, repeats = 200;
-  bool json = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) die(a + ": needs a value");
-      return argv[++i];
-    };
-    if (a == "--quick") {
-      seeds = 3;
-      repeats = 50;
-    } else if (a == "--json") {
-      json = true;
-    } else if (a == "--library") {
-      library_file = value();
-    } else if (a == "--model") {
-      model_file = value();
-    } else if (a == "--data") {
-      data_file = value();
-    } else if (a == "--seeds") {
-      seeds = std::max(1, std::atoi(value().c_str()));
-    } else if (a == "--repeats") {
-      repeats = std::max(1, std::atoi(value().c_str()));
-    } else {
-      die("unknown argument " + a +
-          " (usage: bench_chooser [--quick] [--json] [--library FILE] [--model FILE] [--data "
-          "FILE] [--seeds N] [--repeats R])");
-    }
-  }
+  bool quick = false, json = false;
+  CLI::App app{
+      "The strategy chooser's decision time on A1, A2, B1 and B2 worlds, and the "
+      "DAgger iterations of a training's data set"};
+  plr::bench::add_quick_flag(app, quick, "seeds 1-3, 50 decisions per world");
+  plr::bench::add_json_flag(app, json);
+  app.add_option("--library", library_file, "Strategy library (.plrl)")->capture_default_str();
+  app.add_option("--model", model_file, "Trained chooser model (.plrm)")->capture_default_str();
+  app.add_option("--data", data_file, "The training's data set (.plrd)")->capture_default_str();
+  auto* seeds_option = app.add_option("--seeds", seeds, "Seeds 1-N of each family")
+                           ->check(CLI::PositiveNumber)
+                           ->capture_default_str();
+  auto* repeats_option = app.add_option("--repeats", repeats, "Decisions timed per world")
+                             ->check(CLI::PositiveNumber)
+                             ->capture_default_str();
+  plr::bench::parse_or_exit(app, argc, argv);
+  if (quick && seeds_option->count() == 0) seeds = 3;
+  if (quick && repeats_option->count() == 0) repeats = 50;
   const auto library = plr::sim::load_library(library_file);
   if (!library) die(library.error().message);
   const auto model = plr::chooser::Model::load(model_file);

@@ -15,7 +15,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <map>
 #include <memory>
 #include <random>
@@ -24,6 +23,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench_cli.hpp"
 #include "plr/sim/collision.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/octree.hpp"
@@ -63,18 +63,11 @@ struct Row {
 int main(int argc, char** argv) {
   bool quick = false, json = false;
   std::uint64_t seed = 1;
-  for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--quick") == 0) {
-      quick = true;
-    } else if (std::strcmp(argv[i], "--json") == 0) {
-      json = true;
-    } else if (std::strcmp(argv[i], "--seed") == 0 && i + 1 < argc) {
-      seed = std::stoull(argv[++i]);
-    } else {
-      std::fprintf(stderr, "usage: bench_collision [--quick] [--json] [--seed N]\n");
-      return 2;
-    }
-  }
+  CLI::App app{"Collision checker setup per planning query: fresh, shared octree, kept"};
+  plr::bench::add_quick_flag(app, quick, "2 walls and 1 pile, 8 states each");
+  plr::bench::add_json_flag(app, json);
+  app.add_option("--seed", seed, "Random seed (worlds, settling, queries)")->capture_default_str();
+  plr::bench::parse_or_exit(app, argc, argv);
   const RobotModel robot = load_robot().value();
   const int walls = quick ? 2 : 6, piles = quick ? 1 : 3, states = quick ? 8 : 20,
             queries_per_state = 3;

@@ -8,6 +8,7 @@
 // the process's CPU time minus the feeder's and the clients' own threads,
 // with the monitor minus without, as a share of one core.
 //   bench_dashboard [--quick] [--json]
+#include "bench_cli.hpp"
 #include "bench_util.hpp"
 #include "kernel.hpp"
 #include "pipeline_config.hpp"
@@ -252,17 +253,10 @@ Figures measure(bool monitor, double seconds, double hz) {
 
 int main(int argc, char** argv) {
   bool quick = false, json = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--quick")
-      quick = true;
-    else if (a == "--json")
-      json = true;
-    else {
-      std::cerr << "usage: bench_dashboard [--quick] [--json]\n";
-      return 2;
-    }
-  }
+  CLI::App app{"The web monitor's CPU cost to the pipeline's process at 10 Hz"};
+  plr::bench::add_quick_flag(app, quick, "5 s per case instead of 20");
+  plr::bench::add_json_flag(app, json);
+  plr::bench::parse_or_exit(app, argc, argv);
   spdlog::set_level(spdlog::level::warn);
   const double seconds = quick ? 5 : 20;
   const double hz = 10;

@@ -32,6 +32,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "bench_cli.hpp"
 #include "plr/actions/in_process.hpp"
 #include "plr/episode/open_loop.hpp"
 #include "plr/planning/lattice_planner.hpp"
@@ -72,16 +73,6 @@ struct Generated {
   double simulated_robot_s = NAN, simulated_wall_s = NAN;  // unknown over DDS
   std::string note;
 };
-
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  for (std::size_t at = 0; at <= s.size();) {
-    const std::size_t end = std::min(s.find(',', at), s.size());
-    if (end > at) out.push_back(s.substr(at, end - at));
-    at = end + 1;
-  }
-  return out;
-}
 
 std::string worker_program(const char* argv0) {
   std::error_code ec;
@@ -155,15 +146,6 @@ nlohmann::json nullable(double v) {
   return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
 }
 
-int usage() {
-  std::fprintf(stderr,
-               "usage: bench_generate [--quick] [--json] [--worlds A1:1,B1:1] [--workers 1,2,2+2]\n"
-               "                      [--trials N] [--particles N] [--horizon N] [--eval N]\n"
-               "                      [--partial-tree]\n"
-               "       bench_generate --library FILE [--eval N] [--json]\n");
-  return 2;
-}
-
 struct Eval {
   double strategy_boxes = 0, strategy_s = 0, h_boxes = 0, h_s = 0, strategy_steps = 0;
   int runs = 0;
@@ -234,46 +216,54 @@ int main(int argc, char** argv) {
   GenerateOptions o;
   int particles = 5, eval_particles = 3;
   std::string library;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    const bool more = i + 1 < argc;
-    if (arg == "--quick") {
-      quick = true;
-    } else if (arg == "--json") {
-      json = true;
-    } else if (arg == "--worlds" && more) {
-      worlds.clear();
-      for (const auto& w : split(argv[++i])) {
-        const auto colon = w.find(':');
-        const auto f = sim::parse_env_family(w.substr(0, colon));
-        if (!f || colon == std::string::npos) return usage();
-        worlds.push_back({*f, std::strtoull(w.c_str() + colon + 1, nullptr, 10)});
-      }
-    } else if (arg == "--workers" && more) {
-      worker_counts.clear();
-      for (const auto& w : split(argv[++i])) {
-        const auto plus = w.find('+');
-        Workers spec{std::atoi(w.c_str()),
-                     plus == std::string::npos ? 0 : std::atoi(w.c_str() + plus + 1)};
-        if (spec.local < 0 || spec.remote < 0) return usage();
-        worker_counts.push_back(spec);
-      }
-    } else if (arg == "--trials" && more) {
-      o.trials = std::strtoull(argv[++i], nullptr, 10);
-    } else if (arg == "--particles" && more) {
-      particles = std::atoi(argv[++i]);
-    } else if (arg == "--horizon" && more) {
-      o.truck.horizon = std::atoi(argv[++i]);
-    } else if (arg == "--partial-tree") {
-      o.complete_tree = false;
-    } else if (arg == "--library" && more) {
-      library = argv[++i];
-    } else if (arg == "--eval" && more) {
-      eval_particles = std::atoi(argv[++i]);
-    } else {
-      return usage();
-    }
-  }
+  CLI::App app{
+      "Strategy generation measured: time to one strategy with local and remote "
+      "simulation workers, then each strategy open loop against H"};
+  plr::bench::add_quick_flag(app, quick, "A1 seed 1 with 2 local workers, no evaluation");
+  plr::bench::add_json_flag(app, json);
+  app.add_option_function<std::vector<std::string>>(
+         "--worlds",
+         [&](const std::vector<std::string>& list) {
+           worlds.clear();
+           for (const auto& w : list) {
+             const auto colon = w.find(':');
+             const auto f = sim::parse_env_family(w.substr(0, colon));
+             if (!f || colon == std::string::npos)
+               throw CLI::ValidationError("--worlds", "not FAMILY:SEED: '" + w + "'");
+             worlds.push_back({*f, std::strtoull(w.c_str() + colon + 1, nullptr, 10)});
+           }
+         },
+         "Worlds as FAMILY:SEED (default A1:1,B1:1)")
+      ->delimiter(',')
+      ->type_name("LIST");
+  app.add_option_function<std::vector<std::string>>(
+         "--workers",
+         [&](const std::vector<std::string>& list) {
+           worker_counts.clear();
+           for (const auto& w : list) {
+             const auto plus = w.find('+');
+             Workers spec{std::atoi(w.c_str()),
+                          plus == std::string::npos ? 0 : std::atoi(w.c_str() + plus + 1)};
+             if (spec.local < 0 || spec.remote < 0)
+               throw CLI::ValidationError("--workers", "not L or L+R: '" + w + "'");
+             worker_counts.push_back(spec);
+           }
+         },
+         "Worker counts to compare: L local processes, or L+R with R remote workers over DDS "
+         "(default 1,2,2+2)")
+      ->delimiter(',')
+      ->type_name("LIST");
+  app.add_option("--trials", o.trials, "Trial budget of each generation")->capture_default_str();
+  app.add_option("--particles", particles, "Mass particles the generator plans with")
+      ->capture_default_str();
+  app.add_option("--horizon", o.truck.horizon, "Actions to the horizon")->capture_default_str();
+  app.add_option("--eval", eval_particles, "Held-out particles of the open-loop evaluation")
+      ->capture_default_str();
+  app.add_flag_callback(
+      "--partial-tree", [&] { o.complete_tree = false; },
+      "The strategy stops at beliefs no trial expanded");
+  app.add_option("--library", library, "Only evaluate every strategy of this library file");
+  plr::bench::parse_or_exit(app, argc, argv);
   if (quick) {
     worlds = {{sim::EnvFamily::kA1, 1}};
     worker_counts = {{2, 0}};

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <exception>
 #include <string>
 
@@ -13,28 +12,20 @@
 #include "plr/planning/search/arastar.hpp"
 #include "plr/planning/search/grid.hpp"
 
+#include "bench_cli.hpp"
+
 int main(int argc, char** argv) {
   std::string map_path, scen_path;
   bool json = false;
   double weight = 1.0;
-  for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--json") == 0) {
-      json = true;
-    } else if (std::strcmp(argv[i], "--weight") == 0 && i + 1 < argc) {
-      weight = std::atof(argv[++i]);
-    } else if (map_path.empty()) {
-      map_path = argv[i];
-    } else if (scen_path.empty()) {
-      scen_path = argv[i];
-    } else {
-      std::fprintf(stderr, "bench_grid: unexpected argument '%s'\n", argv[i]);
-      return 2;
-    }
-  }
-  if (scen_path.empty() || weight < 1.0) {
-    std::fprintf(stderr, "usage: bench_grid MAP SCEN [--json] [--weight W>=1]\n");
-    return 2;
-  }
+  CLI::App app{"The search core on a Moving AI grid benchmark, against the published optima"};
+  app.add_option("map", map_path, "Moving AI map (.map)")->required()->check(CLI::ExistingFile);
+  app.add_option("scen", scen_path, "Its scenario (.scen)")->required()->check(CLI::ExistingFile);
+  plr::bench::add_json_flag(app, json);
+  app.add_option("--weight", weight, "ARA* heuristic weight (1: optimal)")
+      ->check(CLI::Range(1.0, 1e9))
+      ->capture_default_str();
+  plr::bench::parse_or_exit(app, argc, argv);
   try {
     const auto map = plr::search::load_grid_map(map_path);
     const auto queries = plr::search::load_scenario(scen_path);

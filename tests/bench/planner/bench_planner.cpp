@@ -9,7 +9,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <map>
 #include <memory>
 #include <random>
@@ -18,6 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench_cli.hpp"
 #include "ompl_planner.hpp"
 #include "plr/planning/lattice_planner.hpp"
 #include "plr/sim/collision.hpp"
@@ -235,28 +235,21 @@ int main(int argc, char** argv) {
   int only_mode = 0;
   std::uint64_t seed = 1, budget = 0;
   std::string primitives = shipped_file("robots/unloader_lattice.yaml").value().string();
-  for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--quick") == 0) {
-      quick = true;
-    } else if (std::strcmp(argv[i], "--json") == 0) {
-      json = true;
-    } else if (std::strcmp(argv[i], "--verbose") == 0) {
-      verbose = true;
-    } else if (std::strcmp(argv[i], "--mode") == 0 && i + 1 < argc) {
-      only_mode = std::atoi(argv[++i]);
-    } else if (std::strcmp(argv[i], "--seed") == 0 && i + 1 < argc) {
-      seed = std::stoull(argv[++i]);
-    } else if (std::strcmp(argv[i], "--primitives") == 0 && i + 1 < argc) {
-      primitives = argv[++i];
-    } else if (std::strcmp(argv[i], "--budget") == 0 && i + 1 < argc) {
-      budget = std::stoull(argv[++i]);
-    } else {
-      std::fprintf(stderr,
-                   "usage: bench_planner [--quick] [--json] [--seed N] [--mode 1-6] [--budget N] "
-                   "[--primitives FILE] [--verbose]\n");
-      return 2;
-    }
-  }
+  CLI::App app{
+      "Seeded planning queries per mode from Pick and Sweep actions on A1 walls and B1 "
+      "piles: ARA* lattice planner and RRTConnect side by side"};
+  plr::bench::add_quick_flag(app, quick, "2 walls and 1 pile, 3 picks each");
+  plr::bench::add_json_flag(app, json);
+  app.add_option("--seed", seed, "Random seed (worlds and queries)")->capture_default_str();
+  app.add_option("--mode", only_mode, "Only the queries of this planning mode (0: all)")
+      ->check(CLI::Range(0, 6))
+      ->capture_default_str();
+  app.add_option("--budget", budget, "Every query's max_expansions (0: none; deterministic)")
+      ->capture_default_str();
+  app.add_option("--primitives", primitives, "Lattice file instead of the shipped one")
+      ->check(CLI::ExistingFile);
+  app.add_flag("--verbose", verbose, "A line per query on stderr");
+  plr::bench::parse_or_exit(app, argc, argv);
   const RobotModel robot = load_robot().value();
   auto lattice = LatticeConfig::from_file(primitives);
   if (!lattice) {

@@ -34,6 +34,8 @@
 #include "pomdp/pomcp.hpp"
 #include "pomdp/pomhdp.hpp"
 
+#include "bench_cli.hpp"
+
 using namespace plr::pomdp;
 
 namespace {
@@ -159,8 +161,8 @@ int main(int argc, char** argv) {
   app.add_flag("--pomcp-random-rollouts", random_rollouts,
                "POMCP rollouts with uniformly random actions (default: the MDP's greedy action)");
   app.add_option("--seed", seed, "random seed");
-  app.add_flag("--json", json, "print one JSON object");
-  app.add_flag("--quick", quick, "a run of under a minute");
+  plr::bench::add_json_flag(app, json);
+  plr::bench::add_quick_flag(app, quick, "the shorter budgets and limits above");
   CLI11_PARSE(app, argc, argv);
   if (budget < 0) budget = quick ? 0.1 : 1.0;
   if (pomcp_budget < 0) pomcp_budget = quick ? 0.02 : budget;

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 namespace {
 
@@ -453,45 +454,54 @@ void write_tag_pomdpx(const Tag& t, std::FILE* out) {
   std::fprintf(out, "</Parameter></Func>\n</RewardFunction>\n</pomdpx>\n");
 }
 
-int usage() {
-  std::fprintf(stderr,
-               "usage: gen_pomdp rocksample N K HALF_EFFICIENCY_DISTANCE OUT | gen_pomdp tag OUT\n"
-               "  (OUT ends in .pomdp or .pomdpx; RockSample instances: (4,4), (5,7), (7,8))\n");
-  return 2;
+// Writes `problem` to `file` in the form its extension names.
+template <typename Problem>
+int write(const Problem& problem, void (*pomdp)(const Problem&, std::FILE*),
+          void (*pomdpx)(const Problem&, std::FILE*), const std::string& file) {
+  std::FILE* out = std::fopen(file.c_str(), "w");
+  if (!out) return 1;
+  (ends_with(file, ".pomdpx") ? pomdpx : pomdp)(problem, out);
+  return std::fclose(out) == 0 ? 0 : 1;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 3) return usage();
-  const std::string kind = argv[1], file = argv[argc - 1];
-  const bool xml = ends_with(file, ".pomdpx");
-  if (!xml && !ends_with(file, ".pomdp")) return usage();
-  std::FILE* out = nullptr;
-  if (kind == "rocksample" && argc == 6) {
-    RockSample p;
-    p.n = std::atoi(argv[2]);
-    const int k = std::atoi(argv[3]);
-    p.d0 = std::atof(argv[4]);
-    const auto it = kRocks.find({p.n, k});
-    if (it == kRocks.end() || !(p.d0 > 0.0)) return usage();
-    p.rocks = it->second;
-    out = std::fopen(file.c_str(), "w");
-    if (!out) return 1;
-    if (xml)
-      write_rocksample_pomdpx(p, out);
-    else
-      write_rocksample_pomdp(p, out);
-  } else if (kind == "tag" && argc == 3) {
-    out = std::fopen(file.c_str(), "w");
-    if (!out) return 1;
-    const Tag t;
-    if (xml)
-      write_tag_pomdpx(t, out);
-    else
-      write_tag_pomdp(t, out);
-  } else {
-    return usage();
+  CLI::App app{"Writes the standard POMDP benchmark problems too large to keep in the repository"};
+  app.require_subcommand(1);
+  const auto out_option = [](CLI::App* cmd, std::string& file) {
+    cmd->add_option("out", file, "Output file: .pomdp (Cassandra) or .pomdpx")
+        ->required()
+        ->check([](const std::string& f) {
+          return ends_with(f, ".pomdp") || ends_with(f, ".pomdpx")
+                     ? std::string()
+                     : std::string("must end in .pomdp or .pomdpx");
+        });
+  };
+  RockSample rocksample;
+  int k = 0;
+  std::string rocksample_file, tag_file;
+  auto* rocksample_cmd = app.add_subcommand(
+      "rocksample", "RockSample(N, K), Smith and Simmons 2004; instances (4,4), (5,7), (7,8)");
+  rocksample_cmd->add_option("n", rocksample.n, "Grid side")->required();
+  rocksample_cmd->add_option("k", k, "Rocks")->required();
+  rocksample_cmd
+      ->add_option("half_efficiency_distance", rocksample.d0,
+                   "Distance at which a check is right with probability 3/4")
+      ->required()
+      ->check(CLI::PositiveNumber);
+  out_option(rocksample_cmd, rocksample_file);
+  auto* tag_cmd = app.add_subcommand("tag", "Tag, Pineau et al. 2003");
+  out_option(tag_cmd, tag_file);
+  CLI11_PARSE(app, argc, argv);
+
+  if (*tag_cmd) return write(Tag{}, write_tag_pomdp, write_tag_pomdpx, tag_file);
+  const auto it = kRocks.find({rocksample.n, k});
+  if (it == kRocks.end()) {
+    std::fprintf(stderr, "gen_pomdp: no RockSample(%d,%d): instances (4,4), (5,7), (7,8)\n",
+                 rocksample.n, k);
+    return 2;
   }
-  return std::fclose(out) == 0 ? 0 : 1;
+  rocksample.rocks = it->second;
+  return write(rocksample, write_rocksample_pomdp, write_rocksample_pomdpx, rocksample_file);
 }

@@ -7,6 +7,7 @@
 // figures are doubled here, and the doubling is checked against its rate.
 //   bench_remote [--quick] [--json]
 #include "bare_kernel.hpp"
+#include "bench_cli.hpp"
 
 #include <plr/message.hpp>
 #include <plr/spin_wait.hpp>
@@ -312,21 +313,19 @@ int main(int argc, char** argv) {
   // The bridges' info lines would mix with the table or the JSON on stdout.
   spdlog::set_level(spdlog::level::warn);
   bool quick = false, json = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--serve" && i + 1 < argc) {
-      // The server shares the parent's stdout: its warnings would break the JSON.
-      spdlog::set_level(spdlog::level::err);
-      return plr::kernel::serve(std::atoi(argv[i + 1]));
-    }
-    if (a == "--quick")
-      quick = true;
-    else if (a == "--json")
-      json = true;
-    else {
-      std::cerr << "usage: bench_remote [--quick] [--json]\n";
-      return 2;
-    }
+  std::optional<int> serve_domain;
+  CLI::App app{
+      "Round trip of a service call between two kernels over Cyclone DDS, beside "
+      "ddsperf ping/pong"};
+  plr::bench::add_quick_flag(app, quick, "1 s per size and case instead of 3");
+  plr::bench::add_json_flag(app, json);
+  app.add_option("--serve", serve_domain,
+                 "Be the echo side on this DDS domain (the benchmark starts it itself)");
+  plr::bench::parse_or_exit(app, argc, argv);
+  if (serve_domain) {
+    // The server shares the parent's stdout: its warnings would break the JSON.
+    spdlog::set_level(spdlog::level::err);
+    return plr::kernel::serve(*serve_domain);
   }
   return plr::kernel::bench(quick, json);
 }

@@ -22,11 +22,12 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <functional>
 #include <string>
 #include <vector>
 
+#include "bench_cli.hpp"
+#include "bench_families.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/physics.hpp"
 
@@ -396,37 +397,24 @@ int main(int argc, char** argv) {
   bool quick = false, json = false;
   int repeat = 3, environments = 0, generators = 0;
   std::vector<EnvFamily> families{EnvFamily::kA1, EnvFamily::kA2, EnvFamily::kB1, EnvFamily::kB2};
-  for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--quick") == 0) {
-      quick = true;
-    } else if (std::strcmp(argv[i], "--json") == 0) {
-      json = true;
-    } else if (std::strcmp(argv[i], "--repeat") == 0 && i + 1 < argc) {
-      repeat = std::max(1, std::atoi(argv[++i]));
-    } else if (std::strcmp(argv[i], "--environments") == 0 && i + 1 < argc) {
-      environments = std::max(0, std::atoi(argv[++i]));
-    } else if (std::strcmp(argv[i], "--generators") == 0 && i + 1 < argc) {
-      generators = std::max(1, std::atoi(argv[++i]));
-    } else if (std::strcmp(argv[i], "--families") == 0 && i + 1 < argc) {
-      families.clear();
-      const std::string list = argv[++i];
-      for (std::size_t at = 0; at <= list.size();) {
-        const std::size_t end = std::min(list.find(',', at), list.size());
-        const auto f = plr::sim::parse_env_family(std::string_view(list).substr(at, end - at));
-        if (!f) {
-          std::fprintf(stderr, "bench_sim: unknown family in '%s'\n", list.c_str());
-          return 2;
-        }
-        families.push_back(*f);
-        at = end + 1;
-      }
-    } else {
-      std::fprintf(stderr,
-                   "usage: bench_sim [--quick] [--json] [--repeat R] [--environments N] "
-                   "[--generators N] [--families LIST]\n");
-      return 2;
-    }
-  }
+  CLI::App app{
+      "Real-time factor of the box simulation (pick, sweep, a sequence of picks) and "
+      "the size and time of its state as bytes"};
+  plr::bench::add_quick_flag(app, quick, "1 repetition, 3 picks in the sequence");
+  plr::bench::add_json_flag(app, json);
+  app.add_option("--repeat", repeat, "Repetitions of each scenario (figures are medians)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--environments", environments,
+                 "Also generate N seeds per family and check them (no interpenetration, at rest "
+                 "within 2 s)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--generators", generators,
+                 "Only check the first N seeds of every family as generated; exit 1 if one fails")
+      ->check(CLI::PositiveNumber);
+  plr::bench::add_families_option(app, families, "Families the checks run (default A1,A2,B1,B2)");
+  plr::bench::parse_or_exit(app, argc, argv);
   if (generators > 0) return check_generators(generators, families);
   if (quick) repeat = 1;
   const int sequence_actions = quick ? 3 : 10;

@@ -31,6 +31,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_cli.hpp"
 #include "kernel_path.hpp"
 #include "links.hpp"
 #include "plr/shm/shm.hpp"
@@ -391,19 +392,14 @@ std::string write_dds_config() {
 int main(int argc, char** argv) {
   using namespace plr::bench;
   bool quick = false, json = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--quick") {
-      quick = true;
-    } else if (a == "--json") {
-      json = true;
-    } else if (a == "--rt") {
-      g_realtime = true;
-    } else {
-      std::fprintf(stderr, "usage: %s [--quick] [--json] [--rt]\n", argv[0]);
-      return 2;
-    }
-  }
+  CLI::App app{
+      "Cross-process one-way latency and throughput: shared memory (polling, futex, "
+      "spin-then-futex) against a Unix socket and Cyclone DDS, then the kernel's "
+      "publish path"};
+  add_quick_flag(app, quick, "a tenth of the messages");
+  add_json_flag(app, json);
+  app.add_flag("--rt", g_realtime, "SCHED_FIFO for sender and receiver (needs CAP_SYS_NICE)");
+  parse_or_exit(app, argc, argv);
   if (!pin(kSenderCpu)) {
     std::perror("sched_setaffinity/sched_setscheduler");
     return 1;

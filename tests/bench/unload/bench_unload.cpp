@@ -29,6 +29,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "bench_cli.hpp"
+#include "bench_families.hpp"
 #include "bench_util.hpp"
 #include "plr/actions/in_process.hpp"
 #include "plr/actions/process_pool.hpp"
@@ -264,45 +266,27 @@ void print_table(const nlohmann::json& families) {
 Options parse(int argc, char** argv) {
   Options o;
   bool quick = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    const bool has_value = i + 1 < argc;
-    auto number = [&](const char* what) {
-      char* end = nullptr;
-      const double v = std::strtod(argv[++i], &end);
-      if (end == argv[i] || *end != '\0' || !(v > 0))
-        die(fmt::format("{}: not a positive number: '{}'", what, argv[i]));
-      return v;
-    };
-    if (arg == "--quick") {
-      quick = true;
-    } else if (arg == "--json") {
-      o.json = true;
-    } else if (arg == "--seeds" && has_value) {
-      o.seeds = static_cast<std::uint64_t>(number("--seeds"));
-    } else if (arg == "--first" && has_value) {
-      o.first = static_cast<std::uint64_t>(number("--first"));
-    } else if (arg == "--workers" && has_value) {
-      o.workers = static_cast<unsigned>(number("--workers"));
-    } else if (arg == "--timeout" && has_value) {
-      o.timeout_s = number("--timeout");
-    } else if (arg == "--out" && has_value) {
-      o.out = argv[++i];
-    } else if (arg == "--families" && has_value) {
-      std::string list = argv[++i];
-      for (std::size_t at = 0; at <= list.size();) {
-        const std::size_t comma = std::min(list.find(',', at), list.size());
-        const std::string name = list.substr(at, comma - at);
-        const auto f = plr::sim::parse_env_family(name);
-        if (!f) die(fmt::format("--families: unknown family '{}'", name));
-        o.families.push_back(*f);
-        at = comma + 1;
-      }
-    } else {
-      die("usage: bench_unload [--quick] [--json] [--seeds N] [--first S] [--families A1,C] "
-          "[--workers W] [--out DIR] [--timeout S]");
-    }
-  }
+  CLI::App app{
+      "Strategy H to the end of the run on many seeds of every family, in worker "
+      "processes: unloaded fraction, robot time, why runs stopped and boxes were left"};
+  plr::bench::add_quick_flag(app, quick, "seeds 1-5");
+  plr::bench::add_json_flag(app, o.json);
+  app.add_option("--seeds", o.seeds, "Seeds per family")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--first", o.first, "First seed")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  plr::bench::add_families_option(app, o.families, "Families to run (default all)");
+  app.add_option("--workers", o.workers, "Worker processes (default one per core)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--out", o.out,
+                 "Folder of the runs' results; a run already there is not run again")
+      ->capture_default_str();
+  app.add_option("--timeout", o.timeout_s, "Wall seconds after which a run is killed")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  plr::bench::parse_or_exit(app, argc, argv);
   if (quick) o.seeds = 5;
   if (o.families.empty()) o.families = plr::sim::all_env_families();
   if (o.workers == 0) o.workers = std::max(1L, sysconf(_SC_NPROCESSORS_ONLN));

@@ -4,6 +4,8 @@
 // but frames.
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -40,7 +42,11 @@ std::optional<plr::Expected<plr::actions::Frame>> next_frame() {
 
 }  // namespace
 
-int main() {
+int main(int argc, char** argv) {
+  CLI::App app{
+      "A simulation worker of the strategy generator: reads frames on stdin (a setup, then "
+      "jobs) and answers each job with its result on stdout; started by the generator"};
+  CLI11_PARSE(app, argc, argv);
   // Frames go to a private copy of stdout; whatever a library prints goes to stderr.
   const int out = ::dup(1);
   ::dup2(2, 1);

@@ -34,7 +34,4 @@ std::string render_svg(const World& world, View view, const RenderOptions& optio
 Status write_svg(const std::filesystem::path& file, const World& world, View view,
                  const RenderOptions& options = {});
 
-// Text made safe inside an SVG/XML element or attribute (&, <, >, ").
-std::string xml_escape(const std::string& text);
-
 }  // namespace plr::sim

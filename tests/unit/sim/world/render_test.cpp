@@ -62,9 +62,5 @@ TEST(Render, AFileThatCannotBeWrittenIsNamed) {
             p.string() + ": cannot create a temporary file: No such file or directory");
 }
 
-TEST(Render, TextIsEscaped) {
-  EXPECT_EQ(xml_escape("A1 <seed 1> & \"B\""), "A1 &lt;seed 1&gt; &amp; &quot;B&quot;");
-}
-
 }  // namespace
 }  // namespace plr::sim

@@ -8,6 +8,7 @@
 // By hand: plr_conformance <plugin.so> [<params json>] [gtest flags].
 #pragma once
 
+#include <functional>
 #include <string>
 
 namespace plr::testing {
@@ -29,5 +30,12 @@ void register_conformance_tests(const ConformanceOptions& options);
 // Registers the tests and runs every registered test; returns RUN_ALL_TESTS().
 // ::testing::InitGoogleTest must have run.
 int run_conformance(const std::string& plugin_path, const std::string& params_json = "{}");
+
+// The command line of a conformance runner: PLUGIN.so [PARAMS_JSON] and
+// GoogleTest's --gtest_* flags, with --help. Initialises GoogleTest and
+// returns run(plugin, params), or 0 after --help, or 2 after a one-line error.
+int conformance_main(
+    int argc, char** argv, const std::string& description,
+    const std::function<int(const std::string& plugin_path, const std::string& params_json)>& run);
 
 }  // namespace plr::testing
