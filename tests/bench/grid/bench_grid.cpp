@@ -10,8 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "plr/planning/search/arastar.hpp"
-#include "plr/planning/search/grid.hpp"
+#include "plr/search/arastar.hpp"
+#include "plr/search/grid.hpp"
 
 int main(int argc, char** argv) {
   std::string map_path, scen_path;
