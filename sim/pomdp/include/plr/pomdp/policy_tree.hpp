@@ -1,7 +1,7 @@
 // A policy tree: an action at each node, a child per observation. The same
-// shape as the project's strategies (sim/include/plr/sim/strategy.hpp: an
-// action index per node, children keyed by observation index), so a truck
-// strategy is a relabelling of one of these.
+// shape as the project's strategies (plr/sim/strategy.hpp: an action index
+// per node, children keyed by observation index), so a truck strategy is a
+// relabelling of one of these.
 #pragma once
 
 #include <cstdint>
