@@ -5,7 +5,7 @@ cmake_minimum_required(VERSION 3.25)
 #   sdk/              -> nothing of ours
 #   sim/<lib>/        -> sdk/ and the sim/ libraries below it (the layers below)
 #   plugins/<name>/   -> sdk/, sim/ (never another plug-in, never the kernel)
-# Fails naming each offending file (and line) or target.
+# Fails naming each offending file with the include, or target.
 # cmake -DROOT=<source tree> -DLINK_GRAPH=<link_graph.txt> -P dependency_rules.cmake
 
 # The layers of sim/, lowest first: a library, then the sim/ libraries it
