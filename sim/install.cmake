@@ -8,14 +8,15 @@
 include(GNUInstallDirs)
 set(PLR_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/plr)
 
-set(planning_targets plr_sim_headers plr_sim_world plr_sim_robot plr_search plr_planning)
+set(planning_targets plr_sim_common plr_sim_world plr_sim_robot plr_search plr_planning)
 foreach(t IN LISTS planning_targets)
   string(REGEX REPLACE "^plr_" "" name ${t})
   set_target_properties(${t} PROPERTIES EXPORT_NAME ${name})
 endforeach()
 install(TARGETS ${planning_targets} EXPORT plrPlanningTargets COMPONENT sdk)
-install(DIRECTORY include/plr/sim include/plr/planning DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/plr
-        COMPONENT sdk)
+foreach(lib IN ITEMS common world robot search planning)
+  install(DIRECTORY ${lib}/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} COMPONENT sdk)
+endforeach()
 foreach(file IN LISTS PLR_SHIPPED_DATA)
   get_filename_component(dir ${file} DIRECTORY)
   install(FILES ${file} DESTINATION ${CMAKE_INSTALL_DATADIR}/plr/${dir} COMPONENT sdk)

@@ -3,8 +3,8 @@
 #include <algorithm>
 
 #include "lattice/robot_lattice.hpp"
-#include "plr/planning/search/arastar.hpp"
 #include "plr/planning/shortcut.hpp"
+#include "plr/search/arastar.hpp"
 
 namespace plr::planning {
 namespace {

@@ -5,7 +5,7 @@
 #include <chrono>
 
 #include "lattice/robot_lattice.hpp"
-#include "plr/planning/search/arastar.hpp"
+#include "plr/search/arastar.hpp"
 
 namespace plr::planning {
 namespace {

@@ -2,7 +2,7 @@
 // an input cannot make a target spend its time on one legal, huge model.
 #pragma once
 
-#include "pomdp/read_limits.hpp"
+#include "plr/pomdp/read_limits.hpp"
 
 inline plr::pomdp::ReadLimits fuzz_limits() {
   plr::pomdp::ReadLimits limits;

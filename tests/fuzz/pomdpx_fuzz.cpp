@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <string_view>
 
-#include "pomdp/pomdpx_reader.hpp"
+#include "plr/pomdp/pomdpx_reader.hpp"
 #include "pomdp_limits.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -24,7 +24,7 @@
 #include <vector>
 
 #include "plr/planning/lattice_config.hpp"
-#include "plr/planning/search/graph.hpp"
+#include "plr/search/graph.hpp"
 
 namespace plr::planning {
 

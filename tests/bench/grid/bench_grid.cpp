@@ -9,8 +9,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "plr/planning/search/arastar.hpp"
-#include "plr/planning/search/grid.hpp"
+#include "plr/search/arastar.hpp"
+#include "plr/search/grid.hpp"
 
 #include "bench_cli.hpp"
 

@@ -28,11 +28,11 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include "pomdp/evaluate.hpp"
-#include "pomdp/heuristics.hpp"
-#include "pomdp/model_io.hpp"
-#include "pomdp/pomcp.hpp"
-#include "pomdp/pomhdp.hpp"
+#include "plr/pomdp/evaluate.hpp"
+#include "plr/pomdp/heuristics.hpp"
+#include "plr/pomdp/model_io.hpp"
+#include "plr/pomdp/pomcp.hpp"
+#include "plr/pomdp/pomhdp.hpp"
 
 #include "bench_cli.hpp"
 

@@ -3,6 +3,8 @@
 # (cmake_language(DEFER) at the end of the top directory).
 #   target <name> <folder relative to the source tree>
 #   link <name> <linked target>
+#   include <name> <folder of the tree on its own include path>
+#   export <name> <folder of the tree it puts on its users' include path>
 function(plr_collect_targets dir out)
   get_property(targets DIRECTORY ${dir} PROPERTY BUILDSYSTEM_TARGETS)
   get_property(subdirs DIRECTORY ${dir} PROPERTY SUBDIRECTORIES)
@@ -11,6 +13,26 @@ function(plr_collect_targets dir out)
     list(APPEND targets ${more})
   endforeach()
   set(${out} ${targets} PARENT_SCOPE)
+endfunction()
+
+# The folders of the source tree among include directories (relative to it;
+# $<BUILD_INTERFACE:x> read as x, other generator expressions and the build
+# tree skipped).
+function(plr_tree_folders dirs out)
+  set(folders "")
+  foreach(dir IN LISTS dirs)
+    string(REGEX REPLACE "^\\$<BUILD_INTERFACE:(.*)>$" "\\1" dir "${dir}")
+    if(dir MATCHES "\\$<" OR NOT IS_ABSOLUTE "${dir}")
+      continue()
+    endif()
+    cmake_path(IS_PREFIX PROJECT_SOURCE_DIR "${dir}" NORMALIZE inside)
+    cmake_path(IS_PREFIX PROJECT_BINARY_DIR "${dir}" NORMALIZE generated)
+    if(inside AND NOT generated)
+      cmake_path(RELATIVE_PATH dir BASE_DIRECTORY ${PROJECT_SOURCE_DIR} OUTPUT_VARIABLE rel)
+      list(APPEND folders ${rel})
+    endif()
+  endforeach()
+  set(${out} ${folders} PARENT_SCOPE)
 endfunction()
 
 function(plr_write_link_graph file)
@@ -35,6 +57,18 @@ function(plr_write_link_graph file)
     if(interface)
       list(APPEND links ${interface})
     endif()
+    if(NOT type STREQUAL "INTERFACE_LIBRARY")
+      get_target_property(dirs ${t} INCLUDE_DIRECTORIES)
+      plr_tree_folders("${dirs}" folders)
+      foreach(folder IN LISTS folders)
+        string(APPEND text "include ${t} ${folder}\n")
+      endforeach()
+    endif()
+    get_target_property(dirs ${t} INTERFACE_INCLUDE_DIRECTORIES)
+    plr_tree_folders("${dirs}" folders)
+    foreach(folder IN LISTS folders)
+      string(APPEND text "export ${t} ${folder}\n")
+    endforeach()
     list(REMOVE_DUPLICATES links)
     foreach(item IN LISTS links)
       # $<BUILD_INTERFACE:x>, $<LINK_ONLY:x> and directory-scoped names.

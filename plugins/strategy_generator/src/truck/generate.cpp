@@ -5,8 +5,8 @@
 #include <chrono>
 #include <ctime>
 
+#include "plr/pomdp/pomhdp.hpp"
 #include "plr/sim/physics.hpp"
-#include "pomdp/pomhdp.hpp"
 #include "truck/truck_heuristics.hpp"
 
 namespace plr::generator {

@@ -18,9 +18,9 @@
 #include <string>
 #include <vector>
 
+#include "plr/pomdp/policy_tree.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/library.hpp"
-#include "pomdp/policy_tree.hpp"
 #include "truck/journal.hpp"
 #include "truck/simulator.hpp"
 #include "truck/truck_model.hpp"

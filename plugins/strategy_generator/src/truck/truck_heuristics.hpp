@@ -17,7 +17,7 @@
 
 #include <string>
 
-#include "pomdp/heuristics.hpp"
+#include "plr/pomdp/heuristics.hpp"
 #include "truck/truck_model.hpp"
 
 namespace plr::generator {

@@ -19,7 +19,7 @@
 #include <utility>
 #include <vector>
 
-#include "pomdp/model.hpp"
+#include "plr/pomdp/model.hpp"
 #include "truck/journal.hpp"
 #include "truck/simulator.hpp"
 
