@@ -9,6 +9,8 @@
 #include <cstring>
 #include <vector>
 
+#include <plr/frame.hpp>
+
 #include "plr/actions/job_runner.hpp"
 
 namespace {
@@ -61,7 +63,7 @@ int main() {
       return 2;
     }
     const auto result = (*runner)->run((*frame)->request);
-    if (!plr::actions::write_all(out, plr::actions::frame_result((*frame)->id, result))) return 0;
+    if (!plr::write_all(out, plr::actions::frame_result((*frame)->id, result))) return 0;
   }
   return 0;
 }
