@@ -14,10 +14,8 @@
 #include "plr/evaluation/report_files.hpp"
 #include "plr/evaluation/run.hpp"
 #include "plr/evaluation/summary.hpp"
-#include "plr/jobs/engine.hpp"
 #include "plr/jobs/fork_runner.hpp"
 #include "plr/jobs/progress.hpp"
-#include "plr/jobs/signals.hpp"
 
 namespace {
 
@@ -100,35 +98,23 @@ int main(int argc, char** argv) {
             {kRunKind, ev::run_key(*settings, spec), jobs::to_bytes(std::to_string(specs.size()))});
         specs.push_back(spec);
       }
-  std::size_t stored = 0;
-  for (const jobs::Job& job : all) stored += store->load(job.key).has_value();
-  if (stored > 0)
-    std::fprintf(stderr, "plr evaluate: %zu of %zu runs already in %s\n", stored, all.size(),
-                 store->dir().c_str());
-
-  plr::actions::ActionOptions options;
-  options.observation = settings->observation;
-  // Plans are bounded by expansions, so results do not depend on the
-  // machine's load; the time limit is only a safety net.
-  options.plan_timeout_s = 1800.0;
   std::unique_ptr<plr::actions::Rig> rig;
   jobs::Kinds kinds;
   kinds.add(kRunKind, [&](const jobs::Bytes& input) -> plr::Expected<jobs::Bytes> {
     const ev::RunSpec& spec = specs.at(std::stoul(jobs::to_text(input)));
     return jobs::to_bytes(ev::run_one(*rig, *settings, *resources, spec).dump(1));
   });
-  if (stored < all.size()) {
+  jobs::ForkRunner runner(kinds, {settings->workers, settings->timeout_s, 1, true, store->logs()});
+  auto outcome = jobs::run_with_progress("plr evaluate", all, runner, *store, [&] {
+    plr::actions::ActionOptions options;
+    options.observation = settings->observation;
+    // Plans are bounded by expansions, so results do not depend on the
+    // machine's load; the time limit is only a safety net.
+    options.plan_timeout_s = 1800.0;
     auto created = plr::actions::Rig::create(options);
     if (!created) die(created.error().message);
     rig = std::move(*created);
-  }
-  jobs::ForkRunner runner(kinds, {settings->workers, settings->timeout_s, 1, true, store->logs()});
-  jobs::ProgressBar progress("plr evaluate", all.size() - stored);
-  const jobs::StopOnSignals stop;
-  auto outcome =
-      jobs::run(all, runner, &*store,
-                {[&] { return stop(); }, [&](const jobs::Result& r) { progress.step(r.key); }});
-  progress.finish();
+  });
   if (!outcome) die(outcome.error().message);
   if (outcome->stopped)
     die(fmt::format("stopped; {} runs are in {}, run it again to go on",

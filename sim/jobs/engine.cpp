@@ -28,6 +28,7 @@ plr::Expected<Outcome> run(const std::vector<Job>& jobs, Runner& runner, const S
       todo.push_back(i);
     }
   }
+  if (options.on_start) options.on_start(out.stored, todo.size());
   std::optional<plr::Error> failure;
   runner.run(
       jobs, todo,

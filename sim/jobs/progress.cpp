@@ -6,6 +6,9 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <optional>
+
+#include "plr/jobs/signals.hpp"
 
 namespace plr::jobs {
 
@@ -34,6 +37,24 @@ void ProgressBar::step(const std::string& what) {
 
 void ProgressBar::finish() {
   if (tty_ && done_ > 0) std::fprintf(stderr, "\n");
+}
+
+plr::Expected<Outcome> run_with_progress(const std::string& name, const std::vector<Job>& jobs,
+                                         Runner& runner, const Store& store,
+                                         const std::function<void()>& prepare) {
+  std::optional<ProgressBar> bar;
+  const StopOnSignals stop;
+  auto outcome = run(jobs, runner, &store,
+                     {[&](std::size_t stored, std::size_t to_run) {
+                        if (stored > 0)
+                          std::fprintf(stderr, "%s: %zu of %zu runs already in %s\n", name.c_str(),
+                                       stored, jobs.size(), store.dir().c_str());
+                        if (to_run > 0 && prepare) prepare();
+                        bar.emplace(name, to_run);
+                      },
+                      [&] { return stop(); }, [&](const Result& r) { bar->step(r.key); }});
+  if (bar) bar->finish();
+  return outcome;
 }
 
 }  // namespace plr::jobs

@@ -33,10 +33,8 @@
 #include "plr/actions/episode.hpp"
 #include "plr/actions/in_process.hpp"
 #include "plr/atomic_file.hpp"
-#include "plr/jobs/engine.hpp"
 #include "plr/jobs/fork_runner.hpp"
 #include "plr/jobs/progress.hpp"
-#include "plr/jobs/signals.hpp"
 #include "plr/planning/lattice_planner.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/physics.hpp"
@@ -176,21 +174,10 @@ std::vector<nlohmann::json> run_all(const std::vector<Job>& runs, const Options&
     return jobs::to_bytes(run(runs.at(std::stoul(jobs::to_text(input)))).dump(1));
   });
   std::vector<jobs::Job> all;
-  std::size_t stored = 0;
-  for (std::size_t i = 0; i < runs.size(); ++i) {
+  for (std::size_t i = 0; i < runs.size(); ++i)
     all.push_back({kRunKind, runs[i].file.stem().string(), jobs::to_bytes(std::to_string(i))});
-    stored += store->load(all.back().key).has_value();
-  }
-  if (stored > 0)
-    std::fprintf(stderr, "bench_unload: %zu of %zu runs already in %s\n", stored, all.size(),
-                 o.out.c_str());
   jobs::ForkRunner runner(kinds, {o.workers, o.timeout_s, 1, true, store->logs()});
-  jobs::ProgressBar progress("bench_unload", all.size() - stored);
-  const jobs::StopOnSignals stop;
-  auto outcome =
-      jobs::run(all, runner, &*store,
-                {[&] { return stop(); }, [&](const jobs::Result& r) { progress.step(r.key); }});
-  progress.finish();
+  auto outcome = jobs::run_with_progress("bench_unload", all, runner, *store);
   if (!outcome) die(outcome.error().message);
   if (outcome->stopped) die("stopped; run it again with the same --out to go on");
   std::vector<nlohmann::json> results;

@@ -55,9 +55,18 @@ TEST_F(EngineTest, AFinishedRunRunAgainRunsNothing) {
     EXPECT_TRUE(first->results[i].ok);
     EXPECT_EQ(first->results[i].output, Bytes{static_cast<std::uint8_t>(2 * i)});
   }
-  auto second = run(jobs, runner, &*store);
+  std::size_t stored = 0, to_run = 9;
+  auto second = run(jobs, runner, &*store,
+                    {[&](std::size_t s, std::size_t r) {
+                       stored = s;
+                       to_run = r;
+                     },
+                     {},
+                     {}});
   ASSERT_TRUE(second);
   EXPECT_EQ(calls_, 4);
+  EXPECT_EQ(stored, 4u);
+  EXPECT_EQ(to_run, 0u);
   EXPECT_EQ(second->stored, 4u);
   EXPECT_EQ(second->ran, 0u);
   for (std::size_t i = 0; i < jobs.size(); ++i) {
@@ -109,7 +118,7 @@ TEST_F(EngineTest, StoppedBySignalKeepsWhatFinished) {
   InProcessRunner runner(kinds_);
   {
     StopOnSignals stop;
-    auto out = run(jobs, runner, &*store, {[&] { return stop(); }, {}});
+    auto out = run(jobs, runner, &*store, {{}, [&] { return stop(); }, {}});
     ASSERT_TRUE(out);
     EXPECT_TRUE(out->stopped);
     EXPECT_EQ(out->ran, 2u);

@@ -121,7 +121,7 @@ TEST_F(ForkRunnerTest, StopEndsTheRunningChildrenAndKeepsTheFinished) {
   const std::vector<Job> jobs = {{"test.pid", "done", {}}, {"test.hang", "hangs", {}}};
   std::size_t finished = 0;
   auto out = run(jobs, runner, &*store,
-                 {[&] { return finished == 1; }, [&](const Result&) { ++finished; }});
+                 {{}, [&] { return finished == 1; }, [&](const Result&) { ++finished; }});
   ASSERT_TRUE(out) << out.error().message;
   EXPECT_TRUE(out->stopped);
   EXPECT_TRUE(out->results[0].ok);

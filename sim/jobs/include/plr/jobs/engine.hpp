@@ -17,6 +17,9 @@
 namespace plr::jobs {
 
 struct RunOptions {
+  // Once the store is read, before any job runs: how many results it
+  // held and how many jobs are to run.
+  std::function<void(std::size_t stored, std::size_t to_run)> on_start;
   // Asked between events; true ends the run early (signals.hpp).
   std::function<bool()> stop;
   // Each result as it comes and is stored (not those read from the store).
