@@ -1,13 +1,9 @@
 #include "plr/actions/job_runner.hpp"
 
-#include <plr/msg/generator_generated.h>
-
 #include <algorithm>
 #include <chrono>
 
 #include <nlohmann/json.hpp>
-
-#include "plr/actions/state_bytes.hpp"
 
 namespace plr::actions {
 
@@ -40,10 +36,7 @@ plr::Expected<SimOutcome> JobRunner::describe(const Memory& memory) {
   for (const sim::Box& b : seen->world.boxes) {
     o.highest_stack_m = std::max(o.highest_stack_m, sim::bounds(b).z1);
   }
-  flatbuffers::FlatBufferBuilder fbb;
-  fbb.Finish(build(fbb, SimState{rig_->simulation().save(), memory}));
-  o.state = std::make_shared<const std::vector<std::uint8_t>>(
-      fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize());
+  o.state = std::make_shared<const std::vector<std::uint8_t>>(rig_->snapshot(memory));
   return o;
 }
 
@@ -54,16 +47,13 @@ plr::Expected<SimOutcome> JobRunner::start(const sim::World& truth) {
 
 plr::Expected<SimOutcome> JobRunner::run(const SimRequest& request) {
   const auto t0 = std::chrono::steady_clock::now();
-  const auto* message = flatbuffers::GetRoot<plr::msg::TruckState>(request.state->data());
-  auto state = from_message(*message, "state");
-  if (!state) return state.error();
-  rig_->simulation().restore(*state->saved);
-  Memory memory = std::move(state->memory);
-  auto outcome = rig_->model().run(request.action, rig_->backend(), memory);
+  auto memory = rig_->restore(*request.state);
+  if (!memory) return memory.error();
+  auto outcome = rig_->model().run(request.action, rig_->backend(), *memory);
   if (!outcome)
     return plr::make_error(outcome.error().code,
                            sim::to_string(request.action) + ": " + outcome.error().message);
-  auto o = describe(memory);
+  auto o = describe(*memory);
   if (!o) return o.error();
   o->applicable = outcome->applicable;
   o->boxes = outcome->boxes;

@@ -1,5 +1,6 @@
 #include "plr/actions/rig.hpp"
 
+#include "plr/actions/state_bytes.hpp"
 #include "plr/sim/shipped_files.hpp"
 
 namespace plr::actions {
@@ -24,6 +25,22 @@ plr::Expected<std::unique_ptr<Rig>> Rig::create(ActionOptions options) {
 
 void Rig::reset(const sim::World& truth) {
   simulation_ = UnloaderSimulation(robot_, truth);
+}
+
+std::vector<std::uint8_t> Rig::snapshot(const Memory& memory) const {
+  flatbuffers::FlatBufferBuilder fbb;
+  fbb.Finish(build(fbb, SimState{simulation_.save(), memory}));
+  return {fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()};
+}
+
+plr::Expected<Memory> Rig::restore(const std::vector<std::uint8_t>& bytes) {
+  flatbuffers::Verifier verifier(bytes.data(), bytes.size());
+  if (!verifier.VerifyBuffer<plr::msg::TruckState>(nullptr))
+    return plr::make_error(PLR_ERR_INVALID, "state: not a TruckState");
+  auto state = from_message(*flatbuffers::GetRoot<plr::msg::TruckState>(bytes.data()), "state");
+  if (!state) return state.error();
+  simulation_.restore(*state->saved);
+  return std::move(state->memory);
 }
 
 }  // namespace plr::actions

@@ -1,9 +1,5 @@
 #include "plr/actions/simulation_job.hpp"
 
-#include <unistd.h>
-
-#include <cerrno>
-
 #include <plr/msg/generator_generated.h>
 
 #include <fmt/format.h>
@@ -170,17 +166,6 @@ std::uint64_t work_key(std::uint64_t state_hash, sim::Action action) {
   z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
   z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
   return z ^ (z >> 31);
-}
-
-bool write_all(int fd, const std::vector<std::uint8_t>& bytes) {
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
-    done += static_cast<std::size_t>(n);
-  }
-  return true;
 }
 
 }  // namespace plr::actions

@@ -236,7 +236,7 @@ std::vector<std::uint8_t> Model::serialize() const {
       fbb, msg::CreateChooserModel(fbb, kModelVersion, kFeatureVersion, kFeatureCount, mean, scale,
                                    m.library_crc, m.c, m.gamma, m.cv_accuracy, m.samples, labels,
                                    support, vectors, coefficients, m.rho));
-  return sim::frame(fbb.GetBufferPointer(), fbb.GetSize());
+  return plr::frame(fbb.GetBufferPointer(), fbb.GetSize());
 }
 
 plr::Expected<Model> Model::deserialize(const std::uint8_t* data, std::size_t size,

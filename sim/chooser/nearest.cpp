@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "plr/sim/crc32.hpp"
+#include <plr/frame.hpp>
 
 namespace plr::chooser {
 
@@ -51,7 +51,7 @@ Nearest LibraryIndex::nearest(const Features& scaled) const {
 
 std::uint32_t fingerprint(const sim::Library& library) {
   const std::vector<std::uint8_t> image = sim::serialize(library);
-  return sim::crc32(image.data(), image.size());
+  return plr::crc32(image.data(), image.size());
 }
 
 }  // namespace plr::chooser

@@ -144,8 +144,8 @@ plr::Expected<Resources> load_resources(const EvaluationSettings& settings) {
   return r;
 }
 
-std::string result_file_name(const EvaluationSettings& settings, const RunSpec& run) {
-  return fmt::format("{}_{}_seed{}.json", settings.environments[run.environment].name,
+std::string run_key(const EvaluationSettings& settings, const RunSpec& run) {
+  return fmt::format("{}_{}_seed{}", settings.environments[run.environment].name,
                      to_string(run.method), run.seed);
 }
 

@@ -1,6 +1,7 @@
 #include "plr/sim/framed_file.hpp"
 
 #include <plr/atomic_file.hpp>
+#include <plr/frame.hpp>
 
 #include <fmt/format.h>
 
@@ -8,19 +9,10 @@
 #include <fstream>
 #include <string_view>
 
-#include "plr/sim/crc32.hpp"
-
 namespace plr::sim {
 
 namespace {
 
-std::uint32_t read_u32(const std::uint8_t* p) {
-  return static_cast<std::uint32_t>(p[0]) | static_cast<std::uint32_t>(p[1]) << 8 |
-         static_cast<std::uint32_t>(p[2]) << 16 | static_cast<std::uint32_t>(p[3]) << 24;
-}
-void write_u32(std::vector<std::uint8_t>& out, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
-}
 plr::Error error(const std::string& where, const std::string& what) {
   return plr::make_error(PLR_ERR_INVALID, where + ": " + what);
 }
@@ -34,31 +26,14 @@ FramedBody::FramedBody(const std::uint8_t* body, std::size_t n) : data(body), si
   data = reinterpret_cast<const std::uint8_t*>(aligned.data());
 }
 
-std::vector<std::uint8_t> frame(const std::uint8_t* body, std::size_t size) {
-  std::vector<std::uint8_t> out;
-  out.reserve(size + 8);
-  write_u32(out, static_cast<std::uint32_t>(size));
-  out.insert(out.end(), body, body + size);
-  write_u32(out, crc32(body, size));
-  return out;
-}
-
 plr::Expected<FramedBody> unframe(const std::uint8_t* data, std::size_t size, std::size_t max_body,
                                   const std::string& what, const std::string& origin) {
   if (size < 8)
     return error(origin, fmt::format("truncated: {} bytes, {} has at least 8", size, what));
-  const std::size_t body = read_u32(data);
-  if (body > max_body)
-    return error(origin,
-                 fmt::format("bytes 0..4: size {} is over the limit of {}", body, max_body));
-  if (size < body + 8)
-    return error(origin, fmt::format("truncated: {} of {} bytes", size, body + 8));
-  if (size > body + 8)
-    return error(origin, fmt::format("byte {}: {} bytes after the end of {}", body + 8,
-                                     size - body - 8, what));
-  const std::uint8_t* fb = data + 4;
-  if (crc32(fb, body) != read_u32(fb + body))
-    return error(origin, fmt::format("bytes 4..{}: checksum mismatch (corrupt)", body + 4));
+  auto payload = plr::unframe(data, size, max_body, origin);
+  if (!payload) return payload.error();
+  const std::uint8_t* fb = payload->data;
+  const std::size_t body = payload->size;
   // Every framed body is a FlatBuffers buffer: the identifier test that
   // follows reads its bytes 4..8.
   if (body < 8)

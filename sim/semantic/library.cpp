@@ -114,7 +114,7 @@ std::vector<std::uint8_t> serialize(const Library& library) {
   }
   msg::FinishStrategyLibraryBuffer(
       fbb, msg::CreateStrategyLibrary(fbb, kLibraryVersion, fbb.CreateVector(entries)));
-  return frame(fbb.GetBufferPointer(), fbb.GetSize());
+  return plr::frame(fbb.GetBufferPointer(), fbb.GetSize());
 }
 
 plr::Expected<Library> deserialize_library(const std::uint8_t* data, std::size_t size,

@@ -11,7 +11,7 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;
   std::vector<std::uint8_t> file(data + 1, data + size);
-  if (data[0] & 1) file = plr::sim::frame(data + 1, size - 1);
+  if (data[0] & 1) file = plr::frame(data + 1, size - 1);
   auto model = plr::chooser::Model::deserialize(file.data(), file.size(), "fuzz.plrm");
   if (!model) return 0;
   (void)model->decide(plr::chooser::Features{});

@@ -12,7 +12,7 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;
   std::vector<std::uint8_t> file(data + 1, data + size);
-  if (data[0] & 1) file = plr::sim::frame(data + 1, size - 1);
+  if (data[0] & 1) file = plr::frame(data + 1, size - 1);
   auto library = plr::sim::deserialize_library(file.data(), file.size(), "fuzz.plrl");
   if (!library) return 0;
   // What was read writes back and reads again.

@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -22,6 +23,7 @@
 #include "plr/chooser/model.hpp"
 #include "plr/chooser/nearest.hpp"
 #include "plr/evaluation/summary.hpp"
+#include "plr/jobs/store.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/hardcoded_strategy.hpp"
 #include "plr/sim/library.hpp"
@@ -46,6 +48,23 @@ int run(const std::string& command, std::string* output = nullptr) {
   const int status = ::pclose(pipe);
   if (output) *output = text;
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// A run's JSON as the result store under the report holds it.
+nlohmann::json run_result(const fs::path& report, const std::string& key) {
+  auto store = plr::jobs::Store::open(report / "runs");
+  if (!store) return {};
+  const auto r = store->load(key);
+  if (!r || !r->ok) return {};
+  return nlohmann::json::parse(plr::jobs::to_text(r->output));
+}
+
+// Each result file of the store and when it was written.
+std::map<std::string, fs::file_time_type> result_files(const fs::path& report) {
+  std::map<std::string, fs::file_time_type> out;
+  for (const auto& f : fs::directory_iterator(report / "runs" / "results"))
+    out[f.path().filename().string()] = f.last_write_time();
+  return out;
 }
 
 bool well_formed_xml(const std::string& text) {
@@ -153,11 +172,9 @@ TEST_F(EvaluationTest, ReportHoldsPlotsAndTablesOfItsRuns) {
   evaluate();
   const fs::path report = dir_ / "report";
   // S: 5 methods x 2 seeds; T (held out): H, NN, PLR x 2 seeds.
-  std::size_t files = 0;
-  for (const auto& f : fs::directory_iterator(report / "runs"))
-    files += f.path().extension() == ".json";
-  EXPECT_EQ(files, 16u);
-  EXPECT_FALSE(fs::exists(report / "runs" / "T_open-loop_seed1.json"));
+  const auto files = result_files(report);
+  EXPECT_EQ(files.size(), 16u);
+  EXPECT_EQ(files.count("T_open-loop_seed1.result"), 0u);
   const auto j = nlohmann::json::parse(read(report / "report.json"));
   for (const char* env : {"S", "T"}) {
     const std::string svg = read(report / (std::string(env) + ".svg"));
@@ -216,8 +233,7 @@ TEST_F(EvaluationTest, ReportHoldsPlotsAndTablesOfItsRuns) {
   for (const char* env : {"S", "T"}) {
     double library = 0, actions = 0;
     for (int seed : {1, 2}) {
-      const auto run = nlohmann::json::parse(read(
-          report / "runs" / (std::string(env) + "_PLR_seed" + std::to_string(seed) + ".json")));
+      const auto run = run_result(report, std::string(env) + "_PLR_seed" + std::to_string(seed));
       for (const auto& step : run["steps"]) {
         actions += 1;
         library += step["source"].get<std::string>().rfind("library:", 0) == 0;
@@ -234,15 +250,25 @@ TEST_F(EvaluationTest, ReportHoldsPlotsAndTablesOfItsRuns) {
     EXPECT_EQ(cells[3], (*c)["why"]["text"].get<std::string>());
   }
 
-  // Run again: nothing runs. Without one result, only that run, and it ends
-  // as before (robot time is deterministic).
-  EXPECT_NE(evaluate().find(""), std::string::npos);
-  const fs::path one = report / "runs" / "S_PLR_seed2.json";
-  const auto before = nlohmann::json::parse(read(one));
-  fs::remove(one);
+  // Run again: nothing runs, no result file is written again, the report
+  // is the same. Without one result, only that run, and it ends as before
+  // (robot time is deterministic).
+  const std::string report_json = read(report / "report.json");
+  const std::string finished = evaluate();
+  EXPECT_NE(finished.find("16 of 16 runs already"), std::string::npos) << finished;
+  EXPECT_EQ(result_files(report), files);
+  EXPECT_EQ(read(report / "report.json"), report_json);
+  const auto before = run_result(report, "S_PLR_seed2");
+  ASSERT_TRUE(before.is_object());
+  fs::remove(report / "runs" / "results" / "S_PLR_seed2.result");
   const std::string again = evaluate();
   EXPECT_NE(again.find("15 of 16 runs already"), std::string::npos) << again;
-  const auto after = nlohmann::json::parse(read(one));
+  const auto after_files = result_files(report);
+  for (const auto& [name, written] : files) {
+    if (name == "S_PLR_seed2.result") continue;
+    EXPECT_EQ(after_files.at(name), written) << name;
+  }
+  const auto after = run_result(report, "S_PLR_seed2");
   EXPECT_EQ(after["boxes_unloaded"], before["boxes_unloaded"]);
   EXPECT_DOUBLE_EQ(after["robot_time_s"].get<double>(), before["robot_time_s"].get<double>());
 }

@@ -8,8 +8,9 @@
 //   bench_unload [--quick] [--json] [--seeds N] [--first S] [--families A1,C]
 //                [--workers W] [--out DIR] [--timeout S]
 // Defaults: seeds 1-20 of every family, one worker per core, results in
-// ./bench_unload. --quick: seeds 1-5. Each run's result is written to DIR as
-// it finishes (atomically), with each action it took, the settled start
+// ./bench_unload. --quick: seeds 1-5. Each run is a job (plr/jobs); its
+// result goes to the result store DIR as it finishes, with each action it
+// took; beside it in DIR the settled start
 // (F_seedS.start.yaml) and the world it left (F_seedS.final.yaml) when
 // boxes remain; a stopped benchmark started again with the same DIR runs
 // only what is missing. A run past --timeout (wall seconds, default
@@ -21,7 +22,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <string>
 #include <vector>
@@ -33,9 +33,10 @@
 #include "bench_families.hpp"
 #include "bench_util.hpp"
 #include "plr/actions/in_process.hpp"
-#include "plr/actions/process_pool.hpp"
 #include "plr/atomic_file.hpp"
 #include "plr/episode/engine.hpp"
+#include "plr/jobs/fork_runner.hpp"
+#include "plr/jobs/progress.hpp"
 #include "plr/planning/lattice_planner.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/physics.hpp"
@@ -45,6 +46,7 @@
 namespace {
 
 namespace fs = std::filesystem;
+namespace jobs = plr::jobs;
 using plr::sim::EnvFamily;
 using Clock = std::chrono::steady_clock;
 
@@ -59,11 +61,15 @@ struct Options {
   bool json = false;
 };
 
+// A run; its settled start and the world it leaves are saved beside
+// `file`'s name (F_seedS.start.yaml, F_seedS.final.yaml).
 struct Job {
   EnvFamily family;
   std::uint64_t seed;
   fs::path file;
 };
+
+constexpr const char* kRunKind = "unload.run";
 
 [[noreturn]] void die(const std::string& what) {
   std::fprintf(stderr, "bench_unload: %s\n", what.c_str());
@@ -141,12 +147,18 @@ nlohmann::json run(const Job& job) {
           {"wall_s", std::chrono::duration<double>(Clock::now() - start).count()}};
 }
 
-nlohmann::json timed_out(const Job& job, double after_s) {
+// What a run that ended without a result counts as.
+nlohmann::json failed(const Job& job, const jobs::Result& r) {
+  if (r.error.rfind("killed", 0) == 0)
+    return {{"family", std::string(to_string(job.family))},
+            {"seed", job.seed},
+            {"timed_out", true},
+            {"stop_reason", r.error},
+            {"wall_s", r.wall_s}};
   return {{"family", std::string(to_string(job.family))},
           {"seed", job.seed},
-          {"timed_out", true},
-          {"stop_reason", fmt::format("killed after {:.0f} s wall", after_s)},
-          {"wall_s", after_s}};
+          {"failed", true},
+          {"stop_reason", r.error}};
 }
 
 void save(const fs::path& file, const nlohmann::json& j) {
@@ -154,24 +166,34 @@ void save(const fs::path& file, const nlohmann::json& j) {
     die(ok.error().message);
 }
 
-// Runs the jobs in worker processes (plr/actions/process_pool.hpp).
-void run_all(const std::vector<Job>& jobs, const Options& o) {
-  std::vector<plr::actions::PoolRun> runs;
-  for (const Job& job : jobs)
-    runs.push_back({fmt::format("{} seed {}", to_string(job.family), job.seed), job.file});
-  plr::bench::Progress progress("bench_unload", jobs.size());
-  const std::string error = plr::actions::run_in_processes(
-      runs, {o.workers, o.timeout_s, true}, [&](std::size_t i) { return run(jobs[i]); },
-      [&](std::size_t i, const std::string& why, double wall_s) {
-        if (why.rfind("killed", 0) == 0) return timed_out(jobs[i], wall_s);
-        return nlohmann::json{{"family", std::string(to_string(jobs[i].family))},
-                              {"seed", jobs[i].seed},
-                              {"failed", true},
-                              {"stop_reason", why}};
-      },
-      [&](std::size_t i) { progress.step(runs[i].name); });
-  if (!error.empty()) die(error);
-  progress.finish();
+// Runs every run as a job in a child process of its own (plr/jobs); those
+// whose result is in the store DIR are not run again.
+std::vector<nlohmann::json> run_all(const std::vector<Job>& runs, const Options& o) {
+  auto store = jobs::Store::open(o.out);
+  if (!store) die(store.error().message);
+  jobs::Kinds kinds;
+  kinds.add(kRunKind, [&](const jobs::Bytes& input) -> plr::Expected<jobs::Bytes> {
+    return jobs::to_bytes(run(runs.at(std::stoul(jobs::to_text(input)))).dump(1));
+  });
+  std::vector<jobs::Job> all;
+  for (std::size_t i = 0; i < runs.size(); ++i)
+    all.push_back({kRunKind, runs[i].file.stem().string(), jobs::to_bytes(std::to_string(i))});
+  jobs::ForkRunner runner(kinds, {o.workers, o.timeout_s, 1, true, store->logs()});
+  auto outcome = jobs::run_with_progress("bench_unload", all, runner, *store);
+  if (!outcome) die(outcome.error().message);
+  if (outcome->stopped) die("stopped; run it again with the same --out to go on");
+  std::vector<nlohmann::json> results;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const jobs::Result& r = outcome->results[i];
+    if (!r.ok) {
+      results.push_back(failed(runs[i], r));
+      continue;
+    }
+    auto j = nlohmann::json::parse(jobs::to_text(r.output), nullptr, false);
+    if (j.is_discarded()) die(store->result_file(r.key).string() + ": not a run's result");
+    results.push_back(std::move(j));
+  }
+  return results;
 }
 
 nlohmann::json summarize(const std::vector<nlohmann::json>& runs, EnvFamily family) {
@@ -300,25 +322,11 @@ int main(int argc, char** argv) {
   std::error_code ec;
   fs::create_directories(o.out, ec);
   if (ec) die(o.out + ": " + ec.message());
-  std::vector<Job> all, missing;
+  std::vector<Job> all;
   for (const EnvFamily f : o.families)
-    for (std::uint64_t s = o.first; s < o.first + o.seeds; ++s) {
-      Job job{f, s, fs::path(o.out) / fmt::format("{}_seed{}.json", to_string(f), s)};
-      all.push_back(job);
-      if (!fs::exists(job.file)) missing.push_back(job);
-    }
-  if (missing.size() < all.size())
-    std::fprintf(stderr, "bench_unload: %zu of %zu runs already in %s\n",
-                 all.size() - missing.size(), all.size(), o.out.c_str());
-  run_all(missing, o);
-
-  std::vector<nlohmann::json> runs;
-  for (const Job& job : all) {
-    std::ifstream in(job.file);
-    const auto j = nlohmann::json::parse(in, nullptr, false);
-    if (j.is_discarded()) die(job.file.string() + ": not a result file");
-    runs.push_back(j);
-  }
+    for (std::uint64_t s = o.first; s < o.first + o.seeds; ++s)
+      all.push_back({f, s, fs::path(o.out) / fmt::format("{}_seed{}", to_string(f), s)});
+  const std::vector<nlohmann::json> runs = run_all(all, o);
   nlohmann::json families = nlohmann::json::object();
   for (const EnvFamily f : o.families) families[std::string(to_string(f))] = summarize(runs, f);
   const nlohmann::json report = {{"families", families}, {"runs", runs}};

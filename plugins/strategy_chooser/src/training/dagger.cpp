@@ -96,7 +96,9 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
     if (auto ok = save_data_set(d, data_file); !ok) return ok.error();
   }
   const LibraryIndex index(*library, d.scaling, settings.observation);
-  auto rig = Rig::create(settings.observation);
+  actions::ActionOptions rig_options;
+  rig_options.observation = settings.observation;
+  auto rig = actions::Rig::create(std::move(rig_options));
   if (!rig) return rig.error();
 
   std::optional<Model> model;
@@ -126,10 +128,12 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
     if (d.state.empty()) {
       auto truth = source.load();
       if (!truth) return truth.error();
-      d.state = (*rig)->start(*truth);
+      (*rig)->reset(*truth);
+      d.state = (*rig)->snapshot({});
       world_start = t0;
     }
-    auto seen = (*rig)->observe(d.state);
+    if (auto restored = (*rig)->restore(d.state); !restored) return restored.error();
+    auto seen = (*rig)->backend().observe();
     if (!seen) return seen.error();
 
     bool world_done = seen->world.boxes.empty() || d.step >= settings.states_per_world;
@@ -138,7 +142,7 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
       const Nearest nn = index.nearest(d.scaling.apply(f));
       // Pairs of rollouts (NN, H): particle 0 is the state as it is, the
       // others draw the masses W does not show.
-      std::vector<Rig::Job> jobs;
+      std::vector<RolloutJob> jobs;
       const auto family = source.family() ? source.family() : settings.mass_prior;
       for (std::uint32_t p = 0; p < settings.particles; ++p) {
         std::vector<std::pair<std::uint32_t, double>> masses;
@@ -152,8 +156,8 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
         jobs.push_back({library->entries[nn.entry].strategy, masses});
         jobs.push_back({std::nullopt, std::move(masses)});
       }
-      const auto runs = (*rig)->run_parallel(d.state, jobs, settings.h, settings.rollout_actions,
-                                             settings.workers);
+      const auto runs =
+          rollouts(**rig, d.state, jobs, settings.h, settings.rollout_actions, settings.workers);
       bool failed = false;
       for (const auto& r : runs) {
         if (!r) {

@@ -81,7 +81,7 @@ plr::Status save_data_set(const DataSet& d, const std::filesystem::path& file) {
   msg::FinishChooserDataBuffer(
       fbb, msg::CreateChooserData(fbb, kDataSetVersion, kFeatureVersion, d.settings_hash, mean,
                                   scale, v, t, it, d.validating, d.world, d.step, state, d.wall_s));
-  return sim::save_framed(sim::frame(fbb.GetBufferPointer(), fbb.GetSize()), file);
+  return sim::save_framed(plr::frame(fbb.GetBufferPointer(), fbb.GetSize()), file);
 }
 
 plr::Expected<DataSet> load_data_set(const std::filesystem::path& file) {

@@ -10,7 +10,7 @@
 #include <fstream>
 #include <vector>
 
-#include "plr/sim/crc32.hpp"
+#include <plr/frame.hpp>
 
 namespace plr::generator {
 
@@ -48,7 +48,7 @@ plr::Expected<std::unique_ptr<Journal>> Journal::open(const std::filesystem::pat
       const std::uint8_t* p = bytes.data() + good;
       const std::size_t size = read_le(p, 4);
       if (size > actions::kMaxFrameBytes || good + kHeader + size > bytes.size()) break;
-      if (sim::crc32(p + 8, size + 8) != read_le(p + 4, 4)) break;
+      if (plr::crc32(p + 8, size + 8) != read_le(p + 4, 4)) break;
       auto frame = actions::decode_frame(p + kHeader, size, file.string());
       if (!frame || frame->kind != actions::Frame::Kind::kResult || !frame->result) break;
       j->loaded_.emplace(read_le(p + 8, 8), std::move(*frame->result));
@@ -80,7 +80,7 @@ plr::Status Journal::append(std::uint64_t key, const SimOutcome& outcome) {
   put_le(record, 0, 4);
   put_le(record, key, 8);
   record.insert(record.end(), frame.begin() + 4, frame.end());
-  const std::uint32_t crc = sim::crc32(record.data() + 8, size + 8);
+  const std::uint32_t crc = plr::crc32(record.data() + 8, size + 8);
   for (int i = 0; i < 4; ++i) record[4 + i] = static_cast<std::uint8_t>(crc >> (8 * i));
   if (std::fwrite(record.data(), 1, record.size(), file_) != record.size())
     return io_error(path_, "write");

@@ -11,6 +11,8 @@
 #include <cstring>
 #include <vector>
 
+#include <plr/frame.hpp>
+
 #include "plr/actions/job_runner.hpp"
 
 namespace {
@@ -67,7 +69,7 @@ int main(int argc, char** argv) {
       return 2;
     }
     const auto result = (*runner)->run((*frame)->request);
-    if (!plr::actions::write_all(out, plr::actions::frame_result((*frame)->id, result))) return 0;
+    if (!plr::write_all(out, plr::actions::frame_result((*frame)->id, result))) return 0;
   }
   return 0;
 }

@@ -7,6 +7,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <plr/frame.hpp>
+
 #include <fmt/format.h>
 
 #include <cerrno>
@@ -97,7 +99,7 @@ plr::Status WorkerPool::spawn(Worker& w) {
   w.from = from[0];
   w.in.clear();
   w.job = -1;
-  if (!actions::write_all(w.to, actions::frame_setup(options_.observation_json))) {
+  if (!plr::write_all(w.to, actions::frame_setup(options_.observation_json))) {
     bury(w);
     return plr::make_error(PLR_ERR_INTERNAL,
                            fmt::format("worker '{}' exited at start", options_.command));
@@ -185,8 +187,7 @@ std::vector<plr::Expected<SimOutcome>> WorkerPool::run(const std::vector<SimRequ
       w.job = j;
       w.job_id = next_id_++;
       busy_.fetch_add(1, std::memory_order_relaxed);
-      if (!actions::write_all(w.to,
-                              actions::frame_job(w.job_id, batch[static_cast<std::size_t>(j)])))
+      if (!plr::write_all(w.to, actions::frame_job(w.job_id, batch[static_cast<std::size_t>(j)])))
         lost(w, "its pipe closed");
     }
     const auto now = Clock::now();

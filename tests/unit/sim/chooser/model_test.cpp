@@ -123,7 +123,7 @@ TEST(Model, AModelOfOtherFeaturesIsRefused) {
   obj->feature_version = kFeatureVersion + 1;
   plr::msg::FinishChooserModelBuffer(fbb, plr::msg::ChooserModel::Pack(fbb, obj));
   delete obj;
-  const auto framed = plr::sim::frame(fbb.GetBufferPointer(), fbb.GetSize());
+  const auto framed = plr::frame(fbb.GetBufferPointer(), fbb.GetSize());
   const auto r = Model::deserialize(framed.data(), framed.size(), "old.plrm");
   ASSERT_FALSE(r);
   EXPECT_EQ(r.error().message,
@@ -141,7 +141,7 @@ TEST(Model, SupportCountsWhoseSumOverflowsAnIntAreRefused) {
   obj->class_support = {INT32_MAX, INT32_MAX};
   plr::msg::FinishChooserModelBuffer(fbb, plr::msg::ChooserModel::Pack(fbb, obj));
   delete obj;
-  const auto framed = plr::sim::frame(fbb.GetBufferPointer(), fbb.GetSize());
+  const auto framed = plr::frame(fbb.GetBufferPointer(), fbb.GetSize());
   const auto r = Model::deserialize(framed.data(), framed.size(), "big.plrm");
   ASSERT_FALSE(r);
   EXPECT_EQ(r.error().message,
@@ -153,7 +153,7 @@ TEST(Model, ALibraryIsNotAModel) {
   const auto bytes = trained().serialize();
   auto other = bytes;
   other[8] = 'X';  // the identifier, behind the size and the root offset
-  const auto framed = plr::sim::frame(other.data() + 4, other.size() - 8);
+  const auto framed = plr::frame(other.data() + 4, other.size() - 8);
   const auto r = Model::deserialize(framed.data(), framed.size(), "lib.plrl");
   ASSERT_FALSE(r);
   EXPECT_EQ(r.error().message, "lib.plrl: byte 8: not a chooser model (identifier is not PLRM)");

@@ -136,7 +136,7 @@ TEST(Library, TheFramedBodyIsReadAlignedWhereverTheFileLies) {
 // buffer: the identifier test must not read past it (found by fuzzing).
 TEST(Library, AnEmptyBodyIsRefusedBeforeItsIdentifierIsRead) {
   const std::vector<std::uint8_t> none;
-  const auto framed = frame(none.data(), 0);
+  const auto framed = plr::frame(none.data(), 0);
   const auto back = deserialize_library(framed.data(), framed.size(), "l.plrl");
   ASSERT_FALSE(back);
   EXPECT_EQ(back.error().message, "l.plrl: bytes 4..4: 0 bytes, too short for a library");

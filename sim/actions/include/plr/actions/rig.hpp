@@ -7,7 +7,9 @@
 
 #include <plr/expected.hpp>
 
+#include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "plr/actions/action_model.hpp"
 #include "plr/actions/in_process.hpp"
@@ -24,6 +26,13 @@ class Rig {
 
   // A new simulation of `truth` (with masses), the robot at home.
   void reset(const sim::World& truth);
+  // The simulation's state with what the robot learnt, as the bytes of a
+  // TruckState (state_bytes.hpp): to run on from it here or in another
+  // process, bit for bit.
+  std::vector<std::uint8_t> snapshot(const Memory& memory) const;
+  // Puts the simulation in the state `bytes` hold (untrusted: verified) and
+  // returns what the robot had learnt there.
+  plr::Expected<Memory> restore(const std::vector<std::uint8_t>& bytes);
 
   const sim::RobotModel& robot() const { return robot_; }
   const ActionModel& model() const { return model_; }

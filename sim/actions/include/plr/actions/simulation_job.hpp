@@ -56,9 +56,6 @@ void build_job(flatbuffers::FlatBufferBuilder& fbb, std::uint64_t id, const SimR
                const std::string& observation_json = {});
 void build_result(flatbuffers::FlatBufferBuilder& fbb, std::uint64_t id,
                   const plr::Expected<SimOutcome>& result);
-// Writes a whole frame to a pipe (retrying interrupted writes); false when
-// the reader is gone.
-bool write_all(int fd, const std::vector<std::uint8_t>& bytes);
 
 struct Frame {
   enum class Kind { kSetup, kJob, kResult } kind = Kind::kSetup;

@@ -37,8 +37,8 @@ struct RunSpec {
   std::uint64_t seed = 1;
 };
 
-// "A1_PLR_seed3.json"
-std::string result_file_name(const EvaluationSettings& settings, const RunSpec& run);
+// "A1_PLR_seed3": the run's key in the result store.
+std::string run_key(const EvaluationSettings& settings, const RunSpec& run);
 // Whether the method runs on the environment (open-loop and
 // expected-offline on training environments only).
 bool applies(const EvaluationSettings& settings, const RunSpec& run);

@@ -1,10 +1,10 @@
-// The frame the offline files share (the strategy library, the chooser's
-// model and data set): a 4-byte little-endian size N, N bytes of a
-// FlatBuffers buffer, a 4-byte CRC-32 of those N bytes. The size prefix
-// tells a file cut short from a whole one, the CRC an altered one.
+// The offline files (the strategy library, the chooser's model and data
+// set): a FlatBuffers buffer in the SDK's frame (plr/frame.hpp: size,
+// payload, CRC-32), written with plr::frame() and read back here.
 #pragma once
 
 #include <plr/expected.hpp>
+#include <plr/frame.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -13,8 +13,6 @@
 #include <vector>
 
 namespace plr::sim {
-
-std::vector<std::uint8_t> frame(const std::uint8_t* body, std::size_t size);
 
 // FlatBuffers reads 8-byte scalars in place, and the body follows a 4-byte
 // size: a body off an 8-byte boundary is copied into `aligned`, and `data`
@@ -41,7 +39,7 @@ plr::Expected<FramedBody> unframe(const std::uint8_t* data, std::size_t size, st
 plr::Expected<std::vector<std::uint8_t>> read_bounded_file(const std::filesystem::path& file,
                                                            std::size_t max_bytes);
 
-// frame() written atomically (plr::write_file_atomically).
+// plr::frame()'s bytes written atomically (plr::write_file_atomically).
 plr::Status save_framed(const std::vector<std::uint8_t>& framed, const std::filesystem::path& file);
 
 }  // namespace plr::sim
