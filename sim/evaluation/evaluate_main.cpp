@@ -2,10 +2,13 @@
 // and PLR on every environment and seed of a settings file, in worker
 // processes, resumable; then the report (plots, Tables I and II, findings).
 //
-//   plr evaluate SETTINGS [--report DIR] [--quick] [--workers N] [--set KEY=VALUE]...
+//   plr evaluate SETTINGS [--report DIR] [--quick] [--workers N] [--runner local|slurm]
+//                [--set KEY=VALUE]...
 //
 // Each run is a job (plr/jobs); its result goes to the store DIR/runs/ as it
-// finishes; started again with the same DIR, only the missing runs run. docs/evaluation.md.
+// finishes; started again with the same DIR, only the missing runs run. The
+// runs run in child processes, or as Slurm job arrays whose tasks are this
+// program again with --slurm-task (docs/cluster.md). docs/evaluation.md.
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
@@ -17,6 +20,7 @@
 #include "plr/evaluation/summary.hpp"
 #include "plr/jobs/fork_runner.hpp"
 #include "plr/jobs/progress.hpp"
+#include "plr/jobs/slurm_runner.hpp"
 
 namespace {
 
@@ -36,7 +40,9 @@ struct Args {
   std::string report = "report_eval";
   bool quick = false;
   unsigned workers = 0;
+  std::string runner;
   std::vector<std::string> overrides;
+  std::string slurm_task;
 };
 
 Args parse(int argc, char** argv) {
@@ -53,6 +59,12 @@ Args parse(int argc, char** argv) {
   app.add_flag("--quick", a.quick, "The settings' quick_seeds instead of seeds");
   app.add_option("--workers", a.workers, "Worker processes (default: the settings' workers)")
       ->check(CLI::Range(1u, 999u));
+  app.add_option("--runner", a.runner,
+                 "Where the runs run: local (child processes) or slurm (job arrays, "
+                 "docs/cluster.md); default: the settings' runner")
+      ->check(CLI::IsMember({"local", "slurm"}));
+  app.add_option("--slurm-task", a.slurm_task, "Run one Slurm array task of this batch file")
+      ->group("");  // what a task runs, not for people
   app.add_option("--set", a.overrides, "Override a setting: KEY=VALUE (repeatable)")
       ->type_name("KEY=VALUE");
   try {
@@ -70,6 +82,7 @@ int main(int argc, char** argv) {
   auto settings = ev::EvaluationSettings::load(args.settings, args.overrides);
   if (!settings) die(settings.error().message);
   if (args.workers > 0) settings->workers = args.workers;
+  if (!args.runner.empty()) settings->runner.kind = *jobs::parse_runner(args.runner);
   auto resources = ev::load_resources(*settings);
   if (!resources) die(resources.error().message);
 
@@ -97,8 +110,7 @@ int main(int argc, char** argv) {
     const ev::RunSpec& spec = specs.at(std::stoul(jobs::to_text(input)));
     return jobs::to_bytes(ev::run_one(*rig, *settings, *resources, spec).dump(1));
   });
-  jobs::ForkRunner runner(kinds, {settings->workers, settings->timeout_s, 1, true, store->logs()});
-  auto outcome = jobs::run_with_progress("plr evaluate", all, runner, *store, [&] {
+  auto prepare = [&] {
     plr::actions::ActionOptions options;
     options.observation = settings->observation;
     // Plans are bounded by expansions, so results do not depend on the
@@ -107,7 +119,27 @@ int main(int argc, char** argv) {
     auto created = plr::actions::Rig::create(options);
     if (!created) die(created.error().message);
     rig = std::move(*created);
-  });
+  };
+  if (!args.slurm_task.empty()) return jobs::run_array_task(kinds, args.slurm_task, prepare);
+
+  std::unique_ptr<jobs::Runner> runner;
+  const jobs::SlurmRunner* slurm = nullptr;
+  if (settings->runner.kind == jobs::RunnerSettings::Kind::kSlurm) {
+    // A task is this command again, from any folder the nodes share.
+    std::vector<std::string> task{jobs::this_program(), fs::absolute(args.settings).string(),
+                                  "--report", fs::absolute(dir).string()};
+    if (args.quick) task.push_back("--quick");
+    for (const auto& o : args.overrides) task.insert(task.end(), {"--set", o});
+    task.push_back("--slurm-task");
+    auto s = std::make_unique<jobs::SlurmRunner>(*store, task, settings->runner.slurm);
+    slurm = s.get();
+    runner = std::move(s);
+  } else {
+    runner = std::make_unique<jobs::ForkRunner>(
+        kinds, jobs::ForkOptions{settings->workers, settings->timeout_s, 1, true, store->logs()});
+  }
+  auto outcome = jobs::run_with_progress("plr evaluate", all, *runner, *store,
+                                         slurm ? std::function<void()>{} : prepare);
   if (!outcome) die(outcome.error().message);
   if (outcome->stopped)
     die(fmt::format("stopped; {} runs are in {}, run it again to go on",
@@ -132,7 +164,8 @@ int main(int argc, char** argv) {
                       store->result_file(r.key).string()));
     results.push_back(std::move(j));
   }
-  const nlohmann::json summary = ev::summarize(*settings, results, args.quick);
+  nlohmann::json summary = ev::summarize(*settings, results, args.quick);
+  if (slurm) summary["runner"] = jobs::to_json(slurm->stats());
   if (auto ok = ev::write_report(summary, dir); !ok) die(ok.error().message);
   for (const auto& f : summary["findings"])
     std::printf("%s\n", f["text"].get<std::string>().c_str());

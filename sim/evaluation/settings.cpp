@@ -52,9 +52,10 @@ plr::Expected<EvaluationSettings> EvaluationSettings::load(
   }
   EvaluationSettings s;
   const yaml::Map top = doc->root().map(
-      "evaluation settings", {"format", "library", "model", "environments", "methods", "first_seed",
-                              "seeds", "quick_seeds", "max_robot_time_s", "max_actions", "workers",
-                              "timeout_s", "max_distance", "observation", "h_min", "d_min"});
+      "evaluation settings",
+      {"format", "library", "model", "environments", "methods", "first_seed", "seeds",
+       "quick_seeds", "max_robot_time_s", "max_actions", "workers", "timeout_s", "max_distance",
+       "observation", "h_min", "d_min", jobs::kRunnerKey, jobs::kSlurmKey});
   (void)top.required("format").one_of({"plr-evaluation"});
   if (auto l = top.required("library").string()) s.library = *l;
   if (auto m = top.required("model").string()) s.model = *m;
@@ -93,6 +94,7 @@ plr::Expected<EvaluationSettings> EvaluationSettings::load(
   if (auto v = top.find("timeout_s").number(1, 1e7)) s.timeout_s = *v;
   if (auto v = top.find("max_distance").number(0, 1e9)) s.max_distance = *v;
   sim::read_strategy_settings(top, s.h, s.observation);
+  jobs::read_runner_settings(top, s.runner);
   if (!doc->ok()) return doc->error();
   if (auto ok = s.h.check(); !ok) return ok.error();
   return s;

@@ -28,6 +28,7 @@
 #include "plr/sim/hardcoded_strategy.hpp"
 #include "plr/sim/library.hpp"
 #include "plr/sim/world_io.hpp"
+#include "small_evaluation.hpp"
 
 namespace fs = std::filesystem;
 
@@ -103,54 +104,9 @@ class EvaluationTest : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("plr_evaluation_test_" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    // A library of one strategy for the small world: H's first action, then
-    // a low sweep whatever is seen (a leaf per observation).
-    auto world = plr::sim::load_world(SMALL_WORLD);
-    ASSERT_TRUE(world) << world.error().message;
-    plr::sim::LibraryEntry e;
-    e.name = "S-1";
-    e.family = "A1";
-    e.world_seed = 1;
-    e.world = plr::sim::without_masses(*world);
-    e.observation_json = "{}";
-    e.strategy.name = "S-1";
-    const auto first = plr::sim::hardcoded_action(plr::sim::analyse(e.world), {});
-    e.strategy.nodes.push_back({first, {}});
-    for (std::uint32_t o = 0; o < plr::sim::kNumObservations; ++o) {
-      e.strategy.nodes[0].children.push_back({static_cast<plr::sim::Observation>(o), o + 1});
-      e.strategy.nodes.push_back({plr::sim::make_sweep(plr::sim::Height::kLow), {}});
-    }
-    e.provenance.seed = 1;
-    e.provenance.particles = 2;
-    e.provenance.horizon = 2;
-    plr::sim::Library library;
-    library.entries.push_back(e);
-    ASSERT_TRUE(plr::sim::save_library(library, dir_ / "library.plrl"));
-    // M: trained on the full world (NN's) and on it without its top layer (H's).
-    plr::sim::World lower = e.world;
-    std::erase_if(lower.boxes,
-                  [](const plr::sim::Box& b) { return b.pose.translation().z() > 0.8; });
-    plr::sim::World front = e.world;
-    front.boxes.resize(front.boxes.size() / 2);
-    const std::vector<plr::chooser::Features> samples = {
-        plr::chooser::features(e.world), plr::chooser::features(lower),
-        plr::chooser::features(front), plr::chooser::features(e.world)};
-    auto model =
-        plr::chooser::Model::train(samples, {1, -1, -1, 1}, plr::chooser::Scaling::fit(samples),
-                                   plr::chooser::fingerprint(library), {2, {1}, {-3}});
-    ASSERT_TRUE(model) << model.error().message;
-    ASSERT_TRUE(model->save(dir_ / "model.plrm"));
-    std::ofstream(dir_ / "evaluate.yaml")
-        << "format: plr-evaluation\n"
-        << "library: " << (dir_ / "library.plrl").string() << "\n"
-        << "model: " << (dir_ / "model.plrm").string() << "\n"
-        << "environments:\n"
-        << "  - {name: S, family: A1, training: true}\n"
-        << "  - {name: T, family: A1, world: " << SMALL_WORLD << "}\n"
-        << "methods: [H, NN, open-loop, expected-offline, PLR]\n"
-        << "seeds: 2\n"
-        << "max_robot_time_s: 60\n"
-        << "workers: 2\n";
+    const std::string error = plr::evaluation_test::write_small_evaluation(
+        dir_, "[H, NN, open-loop, expected-offline, PLR]");
+    ASSERT_TRUE(error.empty()) << error;
   }
   void TearDown() override {
     if (!HasFailure()) fs::remove_all(dir_);

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "plr/jobs/runner_settings.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/hardcoded_strategy.hpp"
 #include "plr/sim/observation.hpp"
@@ -51,6 +52,7 @@ struct EvaluationSettings {
   double max_distance = 0;  // PLR: NN beyond it goes to H; 0: no limit
   sim::ObservationParams observation;
   sim::HardcodedParams h;
+  jobs::RunnerSettings runner;  // where the runs run: local processes or Slurm
 
   // The file, then each "key=value" override (as --set gives them); errors
   // name the file, line and key.

@@ -1,0 +1,222 @@
+// plr evaluate on a real single-node Slurm cluster (tests/common/
+// slurm_cluster.hpp): its runs as job arrays give the local runner's
+// results; a task cancelled mid-run is submitted again and nothing is lost
+// or counted twice; SIGTERM cancels the arrays, keeps what finished, and the
+// same command resumes. Skips, saying why, where the daemons cannot start.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "plr/jobs/store.hpp"
+#include "slurm_cluster.hpp"
+#include "small_evaluation.hpp"
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using plr::slurm_test::SlurmCluster;
+
+namespace {
+
+// 2 environments x 2 methods x 2 seeds.
+constexpr std::size_t kRuns = 8;
+
+// A run's JSON without what the wall clock measured (its wall time, the
+// planner's milliseconds): what must be equal wherever the run ran.
+nlohmann::json deterministic(nlohmann::json j) {
+  if (j.is_object()) {
+    nlohmann::json out = nlohmann::json::object();
+    for (auto& [k, v] : j.items())
+      if (k != "wall_s" && !(k.size() > 3 && k.compare(k.size() - 3, 3, "_ms") == 0))
+        out[k] = deterministic(v);
+    return out;
+  }
+  if (j.is_array())
+    for (auto& v : j) v = deterministic(v);
+  return j;
+}
+
+// Every result of a report's store: key -> the run's JSON.
+std::map<std::string, nlohmann::json> results(const fs::path& report) {
+  std::map<std::string, nlohmann::json> out;
+  auto store = plr::jobs::Store::open(report / "runs");
+  if (!store) return out;
+  for (const auto& f : fs::directory_iterator(report / "runs" / "results")) {
+    const std::string key = f.path().stem().string();
+    if (const auto r = store->load(key); r && r->ok)
+      out[key] = nlohmann::json::parse(plr::jobs::to_text(r->output));
+  }
+  return out;
+}
+
+std::map<std::string, fs::file_time_type> result_times(const fs::path& report) {
+  std::map<std::string, fs::file_time_type> out;
+  for (const auto& f : fs::directory_iterator(report / "runs" / "results"))
+    out[f.path().filename().string()] = f.last_write_time();
+  return out;
+}
+
+nlohmann::json report_json(const fs::path& report) {
+  std::ifstream in(report / "report.json");
+  return nlohmann::json::parse(in, nullptr, false);
+}
+
+class SlurmTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const std::string why = cluster_.start();
+    if (!why.empty()) GTEST_SKIP() << "no Slurm cluster here: " << why;
+    dir_ = fs::temp_directory_path() / ("plr_slurm_test_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    const std::string error = plr::evaluation_test::write_small_evaluation(dir_, "[H, PLR]");
+    ASSERT_TRUE(error.empty()) << error;
+    job_name_ = "plr-test-" + std::to_string(::getpid());
+  }
+  void TearDown() override {
+    cluster_.stop();
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+
+  // plr evaluate into `report` with `extra` arguments, started in the
+  // background; its output goes to report.log beside the report.
+  pid_t start(const std::string& report, std::vector<std::string> extra) {
+    std::vector<std::string> argv = {PLR_EVALUATE, (dir_ / "evaluate.yaml").string(), "--report",
+                                     (dir_ / report).string()};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    std::vector<char*> args;
+    for (auto& a : argv) args.push_back(a.data());
+    args.push_back(nullptr);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    const std::string log = (dir_ / (report + ".log")).string();
+    posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&actions, 1, 2);
+    pid_t pid = -1;
+    EXPECT_EQ(posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ), 0);
+    posix_spawn_file_actions_destroy(&actions);
+    return pid;
+  }
+  int wait(pid_t pid) {
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+  std::vector<std::string> slurm_args() const {
+    return {"--runner",         "slurm", "--set",
+            "slurm.poll_s=0.2", "--set", "slurm.job_name=" + job_name_};
+  }
+  std::string log(const std::string& report) const {
+    std::ifstream in(dir_ / (report + ".log"));
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  // This test's array tasks in the queue, as "jobid_task STATE" lines.
+  std::string queue() const {
+    std::string out;
+    SlurmCluster::run("squeue -h -r -n " + job_name_ + " -o '%i %T'", &out);
+    return out;
+  }
+
+  SlurmCluster cluster_;
+  fs::path dir_;
+  std::string job_name_;
+};
+
+TEST_F(SlurmTest, RunsGiveTheLocalRunnersResults) {
+  ASSERT_EQ(wait(start("local", {})), 0) << log("local");
+  ASSERT_EQ(wait(start("slurm", slurm_args())), 0) << log("slurm");
+  const auto local = results(dir_ / "local"), slurm = results(dir_ / "slurm");
+  ASSERT_EQ(local.size(), kRuns);
+  ASSERT_EQ(slurm.size(), kRuns);
+  for (const auto& [key, run] : local) {
+    ASSERT_TRUE(slurm.count(key)) << key;
+    EXPECT_EQ(deterministic(run), deterministic(slurm.at(key))) << key;
+    EXPECT_GT(run.value("robot_time_s", 0.0), 0.0) << key;
+  }
+  // The report's figures too; the Slurm one says what the scheduler did.
+  auto a = report_json(dir_ / "local"), b = report_json(dir_ / "slurm");
+  ASSERT_TRUE(b.contains("runner"));
+  EXPECT_EQ(b["runner"]["kind"], "slurm");
+  EXPECT_EQ(b["runner"]["tasks"], kRuns);
+  EXPECT_EQ(b["runner"]["resubmitted"], 0);
+  EXPECT_GE(b["runner"]["submit_to_first_running_s"].get<double>(), 0.0);
+  b.erase("runner");
+  EXPECT_EQ(deterministic(a), deterministic(b));
+  EXPECT_TRUE(queue().empty()) << queue();
+}
+
+TEST_F(SlurmTest, ACancelledTaskIsSubmittedAgain) {
+  auto args = slurm_args();
+  args.insert(args.end(), {"--set", "slurm.max_parallel=1"});
+  const pid_t pid = start("slurm", args);
+  // Cancel the first task seen running, once.
+  std::string cancelled;
+  for (int i = 0; i < 600 && cancelled.empty(); ++i) {
+    std::this_thread::sleep_for(100ms);
+    std::istringstream lines(queue());
+    for (std::string task, state; lines >> task >> state;)
+      if (state == "RUNNING") {
+        cancelled = task;
+        break;
+      }
+  }
+  ASSERT_FALSE(cancelled.empty()) << "no task ran; " << log("slurm");
+  ASSERT_EQ(SlurmCluster::run("scancel " + cancelled), 0);
+  ASSERT_EQ(wait(pid), 0) << log("slurm");
+
+  const auto runs = results(dir_ / "slurm");
+  EXPECT_EQ(runs.size(), kRuns);
+  const auto j = report_json(dir_ / "slurm");
+  EXPECT_GE(j["runner"]["resubmitted"].get<int>(), 1) << j["runner"];
+  EXPECT_GE(j["runner"]["ended_without_result"].value("CANCELLED", 0), 1) << j["runner"];
+  // Nothing counted twice: each environment's methods ran their 2 seeds once.
+  for (const char* env : {"S", "T"})
+    for (const auto& [m, d] : j["environments"][env]["methods"].items()) {
+      EXPECT_EQ(d["runs"].get<int>(), 2) << env << " " << m;
+      EXPECT_EQ(d["failed"].get<int>(), 0) << env << " " << m;
+    }
+  EXPECT_TRUE(queue().empty()) << queue();
+}
+
+TEST_F(SlurmTest, SigtermCancelsTheArraysAndTheSameCommandResumes) {
+  auto args = slurm_args();
+  args.insert(args.end(), {"--set", "slurm.max_parallel=1"});
+  const pid_t pid = start("slurm", args);
+  // Stop it once a result is in and tasks are still to come.
+  for (int i = 0; i < 1200 && result_times(dir_ / "slurm").empty(); ++i)
+    std::this_thread::sleep_for(100ms);
+  ASSERT_FALSE(result_times(dir_ / "slurm").empty()) << log("slurm");
+  ::kill(pid, SIGTERM);
+  EXPECT_EQ(wait(pid), 130) << log("slurm");
+  // No task of its arrays is left queued or running.
+  for (int i = 0; i < 50 && !queue().empty(); ++i) std::this_thread::sleep_for(100ms);
+  std::string left;
+  SlurmCluster::run("squeue -h -r -n " + job_name_ + " -t PENDING,RUNNING -o '%i %T'", &left);
+  EXPECT_TRUE(left.empty()) << left;
+
+  const auto before = result_times(dir_ / "slurm");
+  ASSERT_LT(before.size(), kRuns);
+  ASSERT_EQ(wait(start("slurm", slurm_args())), 0) << log("slurm");
+  const auto after = result_times(dir_ / "slurm");
+  EXPECT_EQ(after.size(), kRuns);
+  // What finished before the stop was not run again.
+  for (const auto& [file, time] : before) EXPECT_EQ(after.at(file), time) << file;
+  EXPECT_EQ(report_json(dir_ / "slurm")["runner"]["tasks"].get<std::size_t>(),
+            kRuns - before.size());
+}
+
+}  // namespace
