@@ -23,6 +23,8 @@
 #include <thread>
 #include <vector>
 
+#include "remote_fixture.hpp"
+
 extern char** environ;
 
 namespace plr::slurm_test {
@@ -99,14 +101,7 @@ class SlurmCluster {
 
   // Runs a shell command (sbatch, squeue, ...) against this cluster.
   static int run(const std::string& command, std::string* out = nullptr) {
-    FILE* p = ::popen((command + " 2>&1").c_str(), "r");
-    if (!p) return -1;
-    char buf[4096];
-    std::size_t n = 0;
-    std::string sink;
-    while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) (out ? out : &sink)->append(buf, n);
-    const int status = ::pclose(p);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    return plr::remote_test::sh(command, out);
   }
 
   // The array tasks still queued or running, one "jobid_task STATE" per line.
