@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <thread>
 
 #include "plr/jobs/in_process_runner.hpp"
@@ -180,7 +181,10 @@ class InstantRemoteCall final : public RemoteCall {
       return plr::make_error(PLR_ERR_UNAVAILABLE, "kernel 'w' providing 'sim/simulate' is gone");
     auto message = jobs::decode_message(request_.data(), request_.size(), "request");
     if (!message) return message.error();
+    // Both remote slots' threads call here: one simulation, one at a time.
+    static std::mutex m;
     static const InProcess here;
+    std::lock_guard lock(m);
     return jobs::encode_reply(message->id, here.kinds.run(message->job));
   }
 
