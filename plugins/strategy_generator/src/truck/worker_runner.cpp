@@ -138,8 +138,8 @@ void WorkerRunner::serve_remote(Batch& batch) {
     }
     const auto rest = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                          std::chrono::duration<double>(options_.remote_retry_s));
-    while (Clock::now() < rest && !batch.stopping)
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    std::unique_lock lock(batch.m);
+    batch.cv.wait_until(lock, rest, [&] { return batch.stopping || batch.left == 0; });
   }
 }
 
