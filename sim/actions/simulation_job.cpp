@@ -4,23 +4,49 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+#include "plr/sim/observation.hpp"
+
 namespace plr::actions {
 
 namespace {
 
 namespace msg = plr::msg;
 
-std::vector<std::uint8_t> with_size(const flatbuffers::FlatBufferBuilder& fbb) {
-  const auto n = static_cast<std::uint32_t>(fbb.GetSize());
-  std::vector<std::uint8_t> out;
-  out.reserve(n + 4);
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<std::uint8_t>(n >> (8 * i)));
-  out.insert(out.end(), fbb.GetBufferPointer(), fbb.GetBufferPointer() + n);
-  return out;
-}
-
 plr::Error bad(const std::string& origin, const std::string& what) {
   return plr::make_error(PLR_ERR_INVALID, origin + ": " + what);
+}
+
+plr::jobs::Bytes finished(flatbuffers::FlatBufferBuilder& fbb) {
+  return plr::jobs::Bytes(fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize());
+}
+
+plr::Expected<StateBytes> state_of(const flatbuffers::Vector<std::uint8_t>* v,
+                                   const std::string& origin, const char* what) {
+  if (!v) return bad(origin, fmt::format("{}: state missing", what));
+  if (!is_truck_state(v->data(), v->size()))
+    return bad(origin, fmt::format("{}: state: not a TruckState", what));
+  return std::make_shared<const std::vector<std::uint8_t>>(v->begin(), v->end());
+}
+
+// Looks at the simulation's state after `memory`'s actions.
+plr::Expected<SimOutcome> describe(Rig& rig, const Memory& memory) {
+  auto seen = rig.backend().observe();
+  if (!seen) return seen.error();
+  SimOutcome o;
+  const sim::SceneAnalysis scene = rig.model().scene(*seen, memory);
+  o.observation = scene.observation ? static_cast<int>(*scene.observation) : kEmptyObservation;
+  o.boxes_left = static_cast<std::uint32_t>(seen->world.boxes.size());
+  for (const sim::Box& b : seen->world.boxes) {
+    o.highest_stack_m = std::max(o.highest_stack_m, sim::bounds(b).z1);
+  }
+  o.state = std::make_shared<const std::vector<std::uint8_t>>(rig.snapshot(memory));
+  return o;
 }
 
 }  // namespace
@@ -30,126 +56,117 @@ bool is_truck_state(const std::uint8_t* data, std::size_t size) {
   return v.VerifyBuffer<msg::TruckState>(nullptr);
 }
 
-std::vector<std::uint8_t> frame_setup(const std::string& observation_json) {
-  flatbuffers::FlatBufferBuilder fbb;
-  const auto setup = msg::CreateWorkerSetup(fbb, fbb.CreateString(observation_json));
-  msg::FinishWorkerFrameBuffer(
-      fbb, msg::CreateWorkerFrame(fbb, msg::WorkerMessage::WorkerSetup, setup.Union()));
-  return with_size(fbb);
+plr::jobs::Bytes encode_sim_job(const SimJob& job) {
+  flatbuffers::FlatBufferBuilder fbb(job.request.state->size() + 1024);
+  const auto state = fbb.CreateVector(*job.request.state);
+  const auto json = fbb.CreateString(job.observation_json);
+  fbb.Finish(msg::CreateSimJob(fbb, state, job.request.action, json));
+  return finished(fbb);
 }
 
-void build_job(flatbuffers::FlatBufferBuilder& fbb, std::uint64_t id, const SimRequest& request,
-               const std::string& observation_json) {
-  const auto state = fbb.CreateVector(*request.state);
-  const auto json = observation_json.empty() ? 0 : fbb.CreateString(observation_json);
-  const auto job = msg::CreateSimJob(fbb, id, state, request.action, json);
-  msg::FinishWorkerFrameBuffer(
-      fbb, msg::CreateWorkerFrame(fbb, msg::WorkerMessage::SimJob, job.Union()));
-}
-
-std::vector<std::uint8_t> frame_job(std::uint64_t id, const SimRequest& request) {
-  flatbuffers::FlatBufferBuilder fbb(request.state->size() + 256);
-  build_job(fbb, id, request);
-  return with_size(fbb);
-}
-
-std::vector<std::uint8_t> frame_result(std::uint64_t id, const plr::Expected<SimOutcome>& result) {
-  flatbuffers::FlatBufferBuilder fbb(result && result->state ? result->state->size() + 256 : 256);
-  build_result(fbb, id, result);
-  return with_size(fbb);
-}
-
-void build_result(flatbuffers::FlatBufferBuilder& fbb, std::uint64_t id,
-                  const plr::Expected<SimOutcome>& result) {
-  flatbuffers::Offset<msg::SimResult> r;
-  if (!result) {
-    r = msg::CreateSimResult(fbb, id, fbb.CreateString(result.error().message));
-  } else {
-    const SimOutcome& o = *result;
-    const auto state = o.state ? fbb.CreateVector(*o.state) : 0;
-    r = msg::CreateSimResult(fbb, id, 0, state, o.applicable, o.boxes, o.robot_time_s,
-                             static_cast<std::int16_t>(o.observation), o.boxes_left,
-                             o.highest_stack_m, o.wall_s);
-  }
-  msg::FinishWorkerFrameBuffer(
-      fbb, msg::CreateWorkerFrame(fbb, msg::WorkerMessage::SimResult, r.Union()));
-}
-
-plr::Expected<Frame> decode_frame(const std::uint8_t* data, std::size_t size,
-                                  const std::string& origin) {
-  if (size > kMaxFrameBytes) return bad(origin, fmt::format("frame of {} bytes", size));
-  flatbuffers::Verifier verifier(data, size);
-  // The identifier sits at bytes 4..8: a shorter frame has none to compare.
-  if (size < 8 || !msg::WorkerFrameBufferHasIdentifier(data) ||
-      !msg::VerifyWorkerFrameBuffer(verifier))
-    return bad(origin, "frame fails verification");
-  const msg::WorkerFrame* f = msg::GetWorkerFrame(data);
-  Frame out;
-  auto json_of = [&](const flatbuffers::String* json, std::string& to) -> plr::Status {
-    if (json == nullptr) return {};
+plr::Expected<SimJob> decode_sim_job(const plr::jobs::Bytes& bytes, const std::string& origin) {
+  flatbuffers::Verifier verifier(bytes.data(), bytes.size());
+  if (!verifier.VerifyBuffer<msg::SimJob>(nullptr)) return bad(origin, "not a SimJob");
+  const auto* j = flatbuffers::GetRoot<msg::SimJob>(bytes.data());
+  auto state = state_of(j->state(), origin, "job");
+  if (!state) return state.error();
+  if (static_cast<int>(j->action()) >= sim::kNumActions)
+    return bad(origin, fmt::format("job: action {} out of range", static_cast<int>(j->action())));
+  SimJob out;
+  out.request = {*state, j->action()};
+  if (const auto* json = j->observation_json()) {
     if (json->size() > kMaxObservationJson) return bad(origin, "observation_json too long");
-    to = json->str();
-    return {};
-  };
-  auto state_of = [&](const flatbuffers::Vector<std::uint8_t>* v) -> plr::Expected<StateBytes> {
-    if (!v) return StateBytes{};
-    if (!is_truck_state(v->data(), v->size())) return bad(origin, "state: not a TruckState");
-    return std::make_shared<const std::vector<std::uint8_t>>(v->begin(), v->end());
-  };
-  // A union's type may be set with its table absent: verification passes that.
-  if (f->message() == nullptr) return bad(origin, "frame without a message");
-  switch (f->message_type()) {
-    case msg::WorkerMessage::WorkerSetup: {
-      const auto* s = f->message_as_WorkerSetup();
-      out.kind = Frame::Kind::kSetup;
-      out.observation_json = "{}";
-      if (auto ok = json_of(s->observation_json(), out.observation_json); !ok) return ok.error();
-      return out;
-    }
-    case msg::WorkerMessage::SimJob: {
-      const auto* j = f->message_as_SimJob();
-      out.kind = Frame::Kind::kJob;
-      out.id = j->id();
-      auto state = state_of(j->state());
-      if (!state) return state.error();
-      if (!*state) return bad(origin, "job: state missing");
-      if (static_cast<int>(j->action()) >= sim::kNumActions)
-        return bad(origin,
-                   fmt::format("job: action {} out of range", static_cast<int>(j->action())));
-      out.request = {*state, j->action()};
-      if (auto ok = json_of(j->observation_json(), out.observation_json); !ok) return ok.error();
-      return out;
-    }
-    case msg::WorkerMessage::SimResult: {
-      const auto* r = f->message_as_SimResult();
-      out.kind = Frame::Kind::kResult;
-      out.id = r->id();
-      if (r->error()) {
-        out.result = plr::make_error(PLR_ERR_INTERNAL, r->error()->str());
-        return out;
-      }
-      auto state = state_of(r->state());
-      if (!state) return state.error();
-      SimOutcome o;
-      o.applicable = r->applicable();
-      o.boxes = r->boxes();
-      o.robot_time_s = r->robot_time_s();
-      o.observation = r->observation();
-      o.boxes_left = r->boxes_left();
-      o.highest_stack_m = r->highest_stack_m();
-      o.wall_s = r->wall_s();
-      o.state = *state;
-      if (o.observation < kEmptyObservation || o.observation >= sim::kNumObservations)
-        return bad(origin, fmt::format("result: observation {} out of range", o.observation));
-      if (!std::isfinite(o.robot_time_s) || o.robot_time_s < 0)
-        return bad(origin, "result: robot_time_s must be finite and >= 0");
-      if (!o.state) return bad(origin, "result: state missing");
-      out.result = std::move(o);
-      return out;
-    }
-    default:
-      return bad(origin, "frame holds no message");
+    out.observation_json = json->str();
   }
+  return out;
+}
+
+plr::jobs::Bytes encode_sim_outcome(const SimOutcome& o) {
+  flatbuffers::FlatBufferBuilder fbb(o.state ? o.state->size() + 256 : 256);
+  const auto state = o.state ? fbb.CreateVector(*o.state) : 0;
+  fbb.Finish(msg::CreateSimResult(fbb, state, o.applicable, o.boxes, o.robot_time_s,
+                                  static_cast<std::int16_t>(o.observation), o.boxes_left,
+                                  o.highest_stack_m, o.wall_s));
+  return finished(fbb);
+}
+
+plr::Expected<SimOutcome> decode_sim_outcome(const plr::jobs::Bytes& bytes,
+                                             const std::string& origin) {
+  flatbuffers::Verifier verifier(bytes.data(), bytes.size());
+  if (!verifier.VerifyBuffer<msg::SimResult>(nullptr)) return bad(origin, "not a SimResult");
+  const auto* r = flatbuffers::GetRoot<msg::SimResult>(bytes.data());
+  auto state = state_of(r->state(), origin, "result");
+  if (!state) return state.error();
+  SimOutcome o;
+  o.applicable = r->applicable();
+  o.boxes = r->boxes();
+  o.robot_time_s = r->robot_time_s();
+  o.observation = r->observation();
+  o.boxes_left = r->boxes_left();
+  o.highest_stack_m = r->highest_stack_m();
+  o.wall_s = r->wall_s();
+  o.state = *state;
+  if (o.observation < kEmptyObservation || o.observation >= sim::kNumObservations)
+    return bad(origin, fmt::format("result: observation {} out of range", o.observation));
+  if (!std::isfinite(o.robot_time_s) || o.robot_time_s < 0)
+    return bad(origin, "result: robot_time_s must be finite and >= 0");
+  return o;
+}
+
+plr::Expected<std::unique_ptr<Rig>> make_rig(const std::string& observation_json) {
+  const auto parsed = nlohmann::json::parse(observation_json, nullptr, false);
+  if (parsed.is_discarded() || !parsed.is_object())
+    return plr::make_error(PLR_ERR_INVALID, "observation_json: not a JSON object");
+  auto params = sim::ObservationParams::from_json(parsed);
+  if (!params)
+    return plr::make_error(PLR_ERR_INVALID, "observation_json: " + params.error().message);
+  ActionOptions options;
+  options.observation = *params;
+  return Rig::create(std::move(options));
+}
+
+plr::Expected<SimOutcome> start_state(Rig& rig, const sim::World& truth) {
+  rig.reset(truth);
+  return describe(rig, {});
+}
+
+plr::Expected<SimOutcome> simulate(Rig& rig, const SimRequest& request) {
+  const auto t0 = std::chrono::steady_clock::now();
+  auto memory = rig.restore(*request.state);
+  if (!memory) return memory.error();
+  auto outcome = rig.model().run(request.action, rig.backend(), *memory);
+  if (!outcome)
+    return plr::make_error(outcome.error().code,
+                           sim::to_string(request.action) + ": " + outcome.error().message);
+  auto o = describe(rig, *memory);
+  if (!o) return o.error();
+  o->applicable = outcome->applicable;
+  o->boxes = outcome->boxes;
+  o->robot_time_s = outcome->robot_time_s;
+  o->wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return o;
+}
+
+void add_sim_action(plr::jobs::Kinds& kinds) {
+  struct Loaded {
+    std::unique_ptr<Rig> rig;
+    std::string observation_json;
+  };
+  auto loaded = std::make_shared<Loaded>();
+  kinds.add(kSimActionKind,
+            [loaded](const plr::jobs::Bytes& input) -> plr::Expected<plr::jobs::Bytes> {
+              auto job = decode_sim_job(input, kSimActionKind);
+              if (!job) return job.error();
+              if (!loaded->rig || job->observation_json != loaded->observation_json) {
+                auto rig = make_rig(job->observation_json);
+                if (!rig) return rig.error();
+                loaded->rig = std::move(*rig);
+                loaded->observation_json = job->observation_json;
+              }
+              auto outcome = simulate(*loaded->rig, job->request);
+              if (!outcome) return outcome.error();
+              return encode_sim_outcome(*outcome);
+            });
 }
 
 std::uint64_t state_hash(const std::vector<std::uint8_t>& state) {

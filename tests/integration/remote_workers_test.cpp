@@ -61,6 +61,14 @@ const std::string& local_fingerprint(const std::string& dir) {
   return made;
 }
 
+// Results in a result store's folder.
+std::size_t stored(const fs::path& results) {
+  std::error_code ec;
+  std::size_t n = 0;
+  for (fs::directory_iterator it(results, ec), end; !ec && it != end; it.increment(ec)) ++n;
+  return n;
+}
+
 std::string fresh_dir(const std::string& name) {
   const std::string dir = ::testing::TempDir() + fmt::format("{}_{}/", name, ::getpid());
   fs::remove_all(dir);
@@ -79,16 +87,11 @@ TEST(RemoteWorkers, WorkersInHostProcessesOneKilledEqualsALocalGeneration) {
                                   "  w2: {plugin: simulation_worker, host: w2}\n"
                                   "hosts: {w1: {}, w2: {}}\n"
                                   // The block world's states are small: slots far below
-                                  // WorkerFrame's 4 MiB bound keep /dev/shm's need small.
+                                  // JobFrame's 4 MiB bound keep /dev/shm's need small.
                                   "topics: {sim/simulate: {slot_size: 262144}}\n"));
   Proc gen("", {kPlr, "run", config, "--report", dir + "run"}, dir + "run.log");
-  const fs::path journal = dir + "run/checkpoint/block.journal";
-  ASSERT_TRUE(eventually(240s,
-                         [&] {
-                           std::error_code ec;
-                           return (fs::exists(journal, ec) && fs::file_size(journal, ec) > 5000) ||
-                                  ::kill(gen.pid, 0) != 0;
-                         }) &&
+  const fs::path results = dir + "run/checkpoint/block/results";
+  ASSERT_TRUE(eventually(240s, [&] { return stored(results) >= 3 || ::kill(gen.pid, 0) != 0; }) &&
               ::kill(gen.pid, 0) == 0)
       << slurp(gen.log);
   // Host w1 (a child of plr run) is killed; the kernel starts it again.
@@ -143,11 +146,8 @@ TEST(RemoteWorkers, AGenerationOverDdsWorkersOneKilledEqualsALocalOne) {
                                               domain, net.here)));
   Proc gen("", {kPlr, "run", remote, "--report", dir + "remote"}, dir + "remote.log");
   // The one-thread kernel is killed once the first results are in.
-  const fs::path journal = dir + "remote/checkpoint/block.journal";
-  ASSERT_TRUE(eventually(240s, [&] {
-    std::error_code ec;
-    return fs::exists(journal, ec) && fs::file_size(journal, ec) > 5000;
-  })) << slurp(gen.log);
+  const fs::path results = dir + "remote/checkpoint/block/results";
+  ASSERT_TRUE(eventually(240s, [&] { return stored(results) >= 3; })) << slurp(gen.log);
   ASSERT_EQ(::kill(w1->pid, SIGKILL), 0);
   w1.reset();
   ASSERT_EQ(gen.wait(300s), 0) << slurp(gen.log);

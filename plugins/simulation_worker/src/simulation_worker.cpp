@@ -1,15 +1,17 @@
-// A simulation worker reached as a service: serves `sim/simulate`
-// (WorkerFrame with a SimJob → WorkerFrame with its SimResult), the same
-// frames a local worker process reads on its pipe. Run on another machine
-// with the service exported over DDS, it is one of the strategy
-// generator's remote workers (docs/generator.md).
+// A simulation worker reached as a service: serves `sim/simulate`, a
+// JobFrame holding a JobRequest of kind sim.action → a JobFrame holding its
+// JobReply: the job engine's messages (plr/jobs/messages.hpp), the same a
+// local worker process reads and writes on its pipe, run by the same
+// handler (plr/actions/simulation_job.hpp). Run on another machine with the
+// service exported over DDS, it is one of the strategy generator's remote
+// workers (docs/generator.md).
 //
 // Jobs run in arrival order on `threads` threads of the node's own, each
 // with its own simulation and planner (the simulation is single-threaded:
 // one thread per core the machine gives). The job names its observation
 // parameters, so a thread keeps nothing between jobs but its loaded robot
 // and planner.
-#include <plr/msg/generator_generated.h>
+#include <plr/msg/jobs_generated.h>
 #include <plr/interface.hpp>
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
@@ -20,12 +22,13 @@
 #include <mutex>
 #include <thread>
 
-#include "plr/actions/job_runner.hpp"
+#include "plr/actions/simulation_job.hpp"
+#include "plr/jobs/messages.hpp"
 
 namespace {
 
 using namespace plr;
-using Frame = msg::WorkerFrame;
+using Frame = msg::JobFrame;
 
 class SimulationWorker : public Node {
  public:
@@ -83,15 +86,10 @@ class SimulationWorker : public Node {
     Responder<Frame> reply;
   };
 
-  // The simulation and planner of one thread, made for one set of
-  // observation parameters.
-  struct Runner {
-    std::unique_ptr<actions::JobRunner> runner;
-    std::string json;
-  };
-
   void serve() {
-    Runner runner;
+    // This thread's handler of sim.action, with its own simulation and planner.
+    jobs::Kinds kinds;
+    actions::add_sim_action(kinds);
     for (;;) {
       std::unique_lock lock(m_);
       cv_.wait(lock, [&] { return stop_ || !jobs_.empty(); });
@@ -99,35 +97,27 @@ class SimulationWorker : public Node {
       Job job = std::move(jobs_.front());
       jobs_.pop_front();
       lock.unlock();
-      run(job, runner);
+      run(job, kinds);
     }
   }
 
-  void run(Job& job, Runner& r) {
+  void run(Job& job, const jobs::Kinds& kinds) {
     const auto v = job.frame.view();
-    auto frame = actions::decode_frame(v.data, v.size, service_);
-    if (!frame) {
-      (void)job.reply.fail(PLR_ERR_INVALID, frame.error().message);
+    auto message = jobs::decode_message(v.data, v.size, service_);
+    if (!message) {
+      (void)job.reply.fail(PLR_ERR_INVALID, message.error().message);
       return;
     }
-    if (frame->kind != actions::Frame::Kind::kJob) {
-      (void)job.reply.fail(PLR_ERR_INVALID, service_ + ": the request is not a job");
+    if (message->type != jobs::Message::Type::kRequest ||
+        message->job.kind != actions::kSimActionKind) {
+      (void)job.reply.fail(PLR_ERR_INVALID, service_ + ": the request is not a sim.action job");
       return;
     }
-    const std::string json = frame->observation_json.empty() ? "{}" : frame->observation_json;
-    if (!r.runner || json != r.json) {
-      auto runner = actions::JobRunner::create(json);
-      if (!runner) {
-        (void)job.reply.fail(PLR_ERR_INVALID, service_ + ": job: " + runner.error().message);
-        return;
-      }
-      r.runner = std::move(*runner);
-      r.json = json;
-    }
-    const auto result = r.runner->run(frame->request);
-    if (!result) log().warn("{}: job {}: {}", service_, frame->id, result.error().message);
-    flatbuffers::FlatBufferBuilder fbb(result && result->state ? result->state->size() + 256 : 256);
-    actions::build_result(fbb, frame->id, result);
+    const jobs::Result result = kinds.run(message->job);
+    if (!result.ok) log().warn("{}: job {}: {}", service_, result.key, result.error);
+    const jobs::Bytes reply = jobs::encode_reply(message->id, result);
+    flatbuffers::FlatBufferBuilder fbb(reply.size() + 64);
+    fbb.PushFlatBuffer(reply.data(), reply.size());
     (void)job.reply.reply(fbb);
   }
 
@@ -145,4 +135,4 @@ class SimulationWorker : public Node {
 PLR_PLUGIN(SimulationWorker, "simulation_worker", "1.0.0", PLR_KIND_SIMULATOR,
            "Simulates the strategy generator's jobs (an abstract action on a trailer state) as "
            "the service sim/simulate")
-PLR_INTERFACE(plr::service<plr::msg::WorkerFrame, plr::msg::WorkerFrame>("sim/simulate"))
+PLR_INTERFACE(plr::service<plr::msg::JobFrame, plr::msg::JobFrame>("sim/simulate"))

@@ -3,7 +3,7 @@
 // workers, and with 2 local + 2 remote ones (a worker kernel in another
 // network namespace, over DDS: `plr run` of the generator node, as a user
 // runs it); simulated actions per second; the root's bounds at the end; the
-// tree's size. Each generation starts from nothing (no journal). With more
+// tree's size. Each generation starts from nothing (no stored results). With more
 // than one worker count, the strategies must come out the same; the bench
 // says whether they did. Then each strategy runs open loop from its own
 // world on mass particles not used for planning, against strategy H over
@@ -35,6 +35,7 @@
 #include "bench_cli.hpp"
 #include "plr/actions/in_process.hpp"
 #include "plr/episode/open_loop.hpp"
+#include "plr/jobs/in_process_runner.hpp"
 #include "plr/planning/lattice_planner.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/library.hpp"
@@ -42,7 +43,7 @@
 #include "plr/sim/shipped_files.hpp"
 #include "remote_fixture.hpp"
 #include "truck/generate.hpp"
-#include "truck/worker_pool.hpp"
+#include "truck/worker_runner.hpp"
 
 namespace {
 
@@ -289,9 +290,9 @@ int main(int argc, char** argv) {
     if (json) std::printf("%s\n", nlohmann::json{{"evaluation", evals}}.dump(2).c_str());
     return 0;
   }
-  auto runner = generator::JobRunner::create(sim::ObservationParams{});
-  if (!runner) {
-    std::fprintf(stderr, "bench_generate: %s\n", runner.error().message.c_str());
+  auto rig = actions::make_rig("{}");
+  if (!rig) {
+    std::fprintf(stderr, "bench_generate: %s\n", rig.error().message.c_str());
     return 1;
   }
   const std::string program = worker_program(argv[0]);
@@ -314,23 +315,26 @@ int main(int argc, char** argv) {
         r = generate_over_dds(std::filesystem::path(program).parent_path().string(), w, o,
                               particles, workers);
       } else {
-        std::unique_ptr<generator::Simulator> simulator;
+        jobs::Kinds kinds;
+        std::unique_ptr<jobs::Runner> runner;
         if (workers.local <= 0) {
-          simulator = std::make_unique<generator::LocalSimulator>(**runner);
+          actions::add_sim_action(kinds);
+          runner = std::make_unique<jobs::InProcessRunner>(kinds);
         } else {
-          generator::WorkerPoolOptions pool_options;
-          pool_options.command = program;
-          pool_options.workers = workers.local;
-          auto pool = generator::WorkerPool::create(pool_options);
+          generator::WorkerOptions worker_options;
+          worker_options.local.command = {program};
+          worker_options.local.workers = static_cast<unsigned>(workers.local);
+          auto pool = generator::WorkerRunner::create(std::move(worker_options));
           if (!pool) {
             std::fprintf(stderr, "bench_generate: %s\n", pool.error().message.c_str());
             return 1;
           }
-          simulator = std::move(*pool);
+          runner = std::move(*pool);
         }
+        generator::Simulator simulator(*runner, std::max(workers.local, 1), "{}");
         const auto t0 = Clock::now();
         auto made = generator::generate(
-            problem, o, **runner, *simulator, nullptr, [&](const generator::GenerateProgress& p) {
+            problem, o, **rig, simulator, nullptr, [&](const generator::GenerateProgress& p) {
               std::fprintf(stderr,
                            "\r\033[K%s, %s workers: trial %llu/%llu, %zu "
                            "nodes, %llu sims, root [%.1f, %.1f], %.0f s",

@@ -4,11 +4,12 @@
 // each strategy's tree and anytime curve as SVG beside it. Progress on
 // stderr: trials, tree nodes, root bounds, workers busy, ETA.
 //
-// Checkpoint and resume: every simulation result goes to a journal per
-// world (checkpoint_dir) before the search uses it, and finished strategies
-// are in the library. Started again after a kill, the node skips the
-// library's strategies and replays the journal: the search repeats itself
-// without simulating anything twice and ends with the same strategy.
+// Checkpoint and resume: every simulation is a job of the job engine whose
+// result goes to a result store per world (checkpoint_dir/<world>) before
+// the search uses it, and finished strategies are in the library. Started
+// again after a kill, the node skips the library's strategies and the
+// search repeats itself, reading the stored results instead of simulating
+// anything twice, and ends with the same strategy.
 #include <plr/atomic_file.hpp>
 #include <plr/interface.hpp>
 #include <plr/messages.hpp>
@@ -25,13 +26,14 @@
 #include <mutex>
 #include <thread>
 
-#include <plr/msg/generator_generated.h>
+#include <plr/msg/jobs_generated.h>
 
+#include "plr/jobs/in_process_runner.hpp"
 #include "plr/sim/library.hpp"
 #include "plr/sim/world_io.hpp"
 #include "truck/generate.hpp"
 #include "truck/svg.hpp"
-#include "truck/worker_pool.hpp"
+#include "truck/worker_runner.hpp"
 
 namespace {
 
@@ -54,20 +56,20 @@ std::string duration(double s) {
 }
 
 // A job with a remote worker: a call of its kernel's sim/simulate.
-class ServiceJob final : public generator::RemoteJob {
+class ServiceCall final : public generator::RemoteCall {
  public:
-  explicit ServiceJob(Future<msg::WorkerFrame> call) : call_(std::move(call)) {}
-  ~ServiceJob() override { call_.cancel(); }
+  explicit ServiceCall(Future<msg::JobFrame> call) : call_(std::move(call)) {}
+  ~ServiceCall() override { call_.cancel(); }
   bool done() const override { return call_.ready(); }
-  Expected<std::vector<std::uint8_t>> take() override {
+  Expected<jobs::Bytes> take() override {
     auto reply = call_.get();
     if (!reply) return reply.error();
     const auto v = reply->view();
-    return std::vector<std::uint8_t>(v.data, v.data + v.size);
+    return jobs::Bytes(v.data, v.data + v.size);
   }
 
  private:
-  Future<msg::WorkerFrame> call_;
+  Future<msg::JobFrame> call_;
 };
 
 // The worker program beside this process's executable (build/bin).
@@ -131,9 +133,8 @@ class GeneratorNode : public Node {
     if (o.trials < 1 || o.trials > 10'000'000)
       return make_error(PLR_ERR_INVALID, "param 'trials': must be in 1..10000000");
     const nlohmann::json observation = params().json().value("observation", nlohmann::json());
-    auto obs = sim::ObservationParams::from_json(observation);
-    if (!obs) return make_error(PLR_ERR_INVALID, "param 'observation': " + obs.error().message);
-    observation_ = *obs;
+    if (auto obs = sim::ObservationParams::from_json(observation); !obs)
+      return make_error(PLR_ERR_INVALID, "param 'observation': " + obs.error().message);
     observation_json_ = observation.is_null() ? "{}" : observation.dump();
     worlds_.clear();
     const nlohmann::json worlds = params().json().value("worlds", nlohmann::json::array());
@@ -207,33 +208,43 @@ class GeneratorNode : public Node {
       }
       library = std::move(*loaded);
     }
-    auto runner = generator::JobRunner::create(observation_);
-    if (!runner) {
-      why = runner.error().message;
+    // The particles' starting states are made here; the simulations run as
+    // jobs: in this process with no workers, else on the workers.
+    const generator::WorkerRunner* worker_runner = nullptr;
+    auto rig = actions::make_rig(observation_json_);
+    if (!rig) {
+      why = rig.error().message;
       return false;
     }
-    std::unique_ptr<generator::Simulator> simulator;
+    jobs::Kinds kinds;
+    std::unique_ptr<jobs::Runner> runner;
+    int workers = 1;
     if (workers_ == 0 && remote_workers_ == 0) {
-      simulator = std::make_unique<generator::LocalSimulator>(**runner);
+      actions::add_sim_action(kinds);
+      runner = std::make_unique<jobs::InProcessRunner>(kinds);
     } else {
-      generator::WorkerPoolOptions pool_options;
-      pool_options.command = worker_program_;
-      pool_options.workers = workers_;
-      pool_options.observation_json = observation_json_;
-      pool_options.remote_workers = remote_workers_;
+      generator::WorkerOptions worker_options;
+      worker_options.local.command = {worker_program_};
+      worker_options.local.workers = static_cast<unsigned>(workers_);
+      worker_options.remote_workers = static_cast<unsigned>(remote_workers_);
       const auto timeout = std::chrono::duration_cast<std::chrono::nanoseconds>(
           std::chrono::duration<double>(remote_timeout_s_));
-      pool_options.remote_send = [this, timeout](const flatbuffers::FlatBufferBuilder& job) {
-        return std::make_unique<ServiceJob>(
-            ctx().call<msg::WorkerFrame, msg::WorkerFrame>(remote_service_, job, timeout));
+      worker_options.remote_send = [this, timeout](const jobs::Bytes& request) {
+        flatbuffers::FlatBufferBuilder fbb(request.size() + 64);
+        fbb.PushFlatBuffer(request.data(), request.size());
+        return std::make_unique<ServiceCall>(
+            ctx().call<msg::JobFrame, msg::JobFrame>(remote_service_, fbb, timeout));
       };
-      auto pool = generator::WorkerPool::create(pool_options);
-      if (!pool) {
-        why = pool.error().message;
+      auto made = generator::WorkerRunner::create(std::move(worker_options));
+      if (!made) {
+        why = made.error().message;
         return false;
       }
-      simulator = std::move(*pool);
+      workers = (*made)->workers();
+      worker_runner = made->get();
+      runner = std::move(*made);
     }
+    generator::Simulator simulator(*runner, workers, observation_json_);
     std::size_t made = 0;
     for (std::size_t i = 0; i < worlds_.size(); ++i) {
       if (stop_) {
@@ -254,16 +265,11 @@ class GeneratorNode : public Node {
         log().info("{}: in the library already", problem.name);
         continue;
       }
-      auto journal =
-          generator::Journal::open(fs::path(checkpoint_dir_) / (problem.name + ".journal"));
-      if (!journal) {
-        why = journal.error().message;
+      auto store = jobs::Store::open(fs::path(checkpoint_dir_) / problem.name);
+      if (!store) {
+        why = store.error().message;
         return false;
       }
-      if ((*journal)->loaded_count() > 0)
-        log().info("{}: resuming with {} simulations from the journal{}", problem.name,
-                   (*journal)->loaded_count(),
-                   (*journal)->dropped_bytes() ? " (a torn record dropped)" : "");
       const auto t0 = Clock::now();
       // The line is drawn again every second, also while a batch of
       // simulations runs (workers busy, ETA), from the last trial's figures.
@@ -274,10 +280,10 @@ class GeneratorNode : public Node {
       std::thread ticker([&] {
         std::unique_lock lock(m);
         while (!cv.wait_for(lock, std::chrono::seconds(1), [&] { return finished; })) {
-          show(problem.name, i, last, *simulator, t0);
+          show(problem.name, i, last, simulator, t0);
         }
       });
-      auto result = generator::generate(problem, options_, **runner, *simulator, journal->get(),
+      auto result = generator::generate(problem, options_, **rig, simulator, &*store,
                                         [&](const generator::GenerateProgress& p) {
                                           std::lock_guard lock(m);
                                           last = p;
@@ -312,10 +318,9 @@ class GeneratorNode : public Node {
           e.provenance.simulations, result->simulated, e.provenance.wall_s);
       ++made;
     }
-    if (const auto* pool = dynamic_cast<const generator::WorkerPool*>(simulator.get());
-        pool && remote_workers_ > 0)
+    if (worker_runner && remote_workers_ > 0)
       log().info("remote workers: {} jobs answered, {} calls failed (re-issued)",
-                 pool->remote_done(), pool->remote_failures());
+                 worker_runner->remote_done(), worker_runner->remote_failures());
     why = fmt::format("library {}: {} strategies ({} made now)", library_, library.entries.size(),
                       made);
     return true;
@@ -355,7 +360,6 @@ class GeneratorNode : public Node {
   std::uint64_t seed_ = 1;
   bool show_progress_ = true, tty_ = false;
   GenerateOptions options_;
-  sim::ObservationParams observation_;
   std::vector<WorldSpec> worlds_;
   Publisher<msg::PipelineDone> done_;
   std::thread thread_;
@@ -368,6 +372,6 @@ class GeneratorNode : public Node {
 PLR_PLUGIN(
     GeneratorNode, "strategy_generator", "1.0.0", PLR_KIND_GENERATOR,
     "Generates the strategy library L: POMHDP over simulated mass particles, in worker processes")
-// Its local workers are processes fed over pipes (truck/worker_pool.hpp), not
+// Its local workers are processes fed over pipes (truck/worker_runner.hpp), not
 // bus peers; its remote ones are called as sim/simulate (remote_service).
 PLR_INTERFACE(plr::topic<plr::msg::PipelineDone>("pipeline/done"))

@@ -88,13 +88,17 @@ TEST(GeneratorNode, KilledWithSigkillAndRunAgainGivesTheSameLibrary) {
   const std::string whole = plr::sim::testing::library_fingerprint(dir / "whole/library.plrl");
   ASSERT_EQ(whole.rfind("block\n", 0), 0u) << whole;
 
-  // Killed once its journal holds some results, before the strategy is done.
+  // Killed once its result store holds some results, before the strategy is done.
   const pid_t pid = start(dir / "generate.yaml", dir / "killed");
-  const fs::path journal = dir / "killed/checkpoint/block.journal";
+  const fs::path results = dir / "killed/checkpoint/block/results";
+  const auto stored = [&] {
+    std::error_code ec;
+    std::size_t n = 0;
+    for (fs::directory_iterator it(results, ec), end; !ec && it != end; it.increment(ec)) ++n;
+    return n;
+  };
   const auto t0 = std::chrono::steady_clock::now();
-  std::error_code ec;
-  while (!(fs::exists(journal, ec) && fs::file_size(journal, ec) > 20000) &&
-         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120)) {
+  while (stored() < 10 && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120)) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   ASSERT_EQ(::kill(pid, SIGKILL), 0);

@@ -1,6 +1,6 @@
 // The truck POMDP and the generator on tiny worlds: a first action that
 // depends on the masses, workers that die, a generation resumed from its
-// journal.
+// stored results.
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
@@ -10,13 +10,16 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <thread>
 
+#include "plr/jobs/in_process_runner.hpp"
+#include "plr/jobs/messages.hpp"
 #include "plr/sim/testing/library_fingerprint.hpp"
 #include "plr/sim/testing/worlds.hpp"
 #include "truck/generate.hpp"
 #include "truck/svg.hpp"
-#include "truck/worker_pool.hpp"
+#include "truck/worker_runner.hpp"
 
 namespace plr::generator {
 namespace {
@@ -54,13 +57,16 @@ sim::World block() {
   return w;
 }
 
+// sim::testing::small_scene_observation() as JSON.
+constexpr char kObservation[] =
+    R"({"h_pile":0.55,"pile_mid":0.25,"pile_high":0.4,"wall_mid":1.2,"wall_high":1.9})";
+
 Problem block_problem(const std::string& name, const std::vector<double>& masses) {
   Problem p;
   p.name = name;
   p.family = "test";
   p.world = block();
-  p.observation_json =
-      R"({"h_pile":0.55,"pile_mid":0.25,"pile_high":0.4,"wall_mid":1.2,"wall_high":1.9})";
+  p.observation_json = kObservation;
   for (const double m : masses) {
     sim::World w = p.world;
     for (sim::Box& b : w.boxes) b.mass = m + 0.1 * b.id;
@@ -69,10 +75,18 @@ Problem block_problem(const std::string& name, const std::vector<double>& masses
   return p;
 }
 
-JobRunner& runner() {
-  static auto r = JobRunner::create(sim::testing::small_scene_observation()).value();
+actions::Rig& rig() {
+  static auto r = actions::make_rig(kObservation).value();
   return *r;
 }
+
+// Simulations in this process, one after the other.
+struct InProcess {
+  InProcess() { actions::add_sim_action(kinds); }
+  jobs::Kinds kinds;
+  jobs::InProcessRunner runner{kinds};
+  Simulator simulator{runner, 1, kObservation};
+};
 
 using sim::testing::entry_fingerprint;
 
@@ -90,11 +104,11 @@ TEST(Generator, FindsTheBestFirstActionWhichDependsOnTheMasses) {
     double best_value = -1e300;
     sim::Action best{};
     std::vector<SimOutcome> roots;
-    for (const auto& w : p.particles) roots.push_back(runner().start(w).value());
+    for (const auto& w : p.particles) roots.push_back(actions::start_state(rig(), w).value());
     for (int a = 0; a < sim::kNumActions; ++a) {
       double v = 0;
       for (const SimOutcome& r : roots) {
-        const auto out = runner().run({r.state, static_cast<sim::Action>(a)});
+        const auto out = actions::simulate(rig(), {r.state, static_cast<sim::Action>(a)});
         ASSERT_TRUE(out) << out.error().message;
         v -= out->robot_time_s + (out->observation == kEmptyObservation
                                       ? 0.0
@@ -103,8 +117,8 @@ TEST(Generator, FindsTheBestFirstActionWhichDependsOnTheMasses) {
       v /= static_cast<double>(roots.size());
       if (v > best_value + 1e-9) best_value = v, best = static_cast<sim::Action>(a);
     }
-    LocalSimulator local(runner());
-    const auto result = generate(p, o, runner(), local, nullptr);
+    InProcess local;
+    const auto result = generate(p, o, rig(), local.simulator, nullptr);
     ASSERT_TRUE(result) << result.error().message;
     const sim::Strategy& s = result->entry.strategy;
     EXPECT_EQ(sim::to_string(s.nodes[s.root].action), sim::to_string(best)) << name;
@@ -122,26 +136,27 @@ TEST(Generator, AWorkerKilledMidRunChangesNothing) {
   o.truck.horizon = 2;
   o.trials = 4;
   const Problem p = block_problem("block", {4.0, 30.0});
-  LocalSimulator local(runner());
-  const auto alone = generate(p, o, runner(), local, nullptr);
+  InProcess local;
+  const auto alone = generate(p, o, rig(), local.simulator, nullptr);
   ASSERT_TRUE(alone) << alone.error().message;
 
-  WorkerPoolOptions options;
-  options.command = PLR_SIM_WORKER;
-  options.observation_json = p.observation_json;
-  auto pool = WorkerPool::create(options);
+  WorkerOptions options;
+  options.local.command = {PLR_SIM_WORKER};
+  options.local.workers = 2;
+  auto pool = WorkerRunner::create(options);
   ASSERT_TRUE(pool) << pool.error().message;
+  Simulator simulator(**pool, (*pool)->workers(), p.observation_json);
   // SIGKILL the first worker while it simulates, once the search has begun
   // (this small problem may be solved within the root's batch).
   const pid_t victim = (*pool)->pids()[0];
   std::atomic<bool> armed{false}, killed{false}, done{false};
   std::thread killer([&] {
     while (!done && !killed) {
-      if (armed && (*pool)->busy() == 2) killed = ::kill(victim, SIGKILL) == 0;
+      if (armed && simulator.busy() == 2) killed = ::kill(victim, SIGKILL) == 0;
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
   });
-  const auto pooled = generate(p, o, runner(), **pool, nullptr, [&](const GenerateProgress&) {
+  const auto pooled = generate(p, o, rig(), simulator, nullptr, [&](const GenerateProgress&) {
     armed = true;
     return true;
   });
@@ -157,23 +172,24 @@ TEST(Generator, AWorkerKilledMidRunChangesNothing) {
 // them fail as a call to a kernel that went away does; the others run the
 // job here. (The real transport, DDS between network namespaces, is
 // tests/integration/remote_workers_test.cpp.)
-class InstantRemoteJob final : public RemoteJob {
+class InstantRemoteCall final : public RemoteCall {
  public:
-  InstantRemoteJob(std::vector<std::uint8_t> job, bool fail) : job_(std::move(job)), fail_(fail) {}
+  InstantRemoteCall(jobs::Bytes request, bool fail) : request_(std::move(request)), fail_(fail) {}
   bool done() const override { return true; }
-  plr::Expected<std::vector<std::uint8_t>> take() override {
+  plr::Expected<jobs::Bytes> take() override {
     if (fail_)
       return plr::make_error(PLR_ERR_UNAVAILABLE, "kernel 'w' providing 'sim/simulate' is gone");
-    auto frame = actions::decode_frame(job_.data(), job_.size(), "job");
-    if (!frame) return frame.error();
-    flatbuffers::FlatBufferBuilder fbb;
-    actions::build_result(fbb, frame->id, runner().run(frame->request));
-    return std::vector<std::uint8_t>(fbb.GetBufferPointer(),
-                                     fbb.GetBufferPointer() + fbb.GetSize());
+    auto message = jobs::decode_message(request_.data(), request_.size(), "request");
+    if (!message) return message.error();
+    // Both remote slots' threads call here: one simulation, one at a time.
+    static std::mutex m;
+    static const InProcess here;
+    std::lock_guard lock(m);
+    return jobs::encode_reply(message->id, here.kinds.run(message->job));
   }
 
  private:
-  std::vector<std::uint8_t> job_;
+  jobs::Bytes request_;
   bool fail_;
 };
 
@@ -182,27 +198,25 @@ TEST(Generator, RemoteCallsThatFailAreIssuedAgainAndChangeNothing) {
   o.truck.horizon = 2;
   o.trials = 3;
   const Problem p = block_problem("block", {4.0, 30.0});
-  LocalSimulator local(runner());
-  const auto alone = generate(p, o, runner(), local, nullptr);
+  InProcess local;
+  const auto alone = generate(p, o, rig(), local.simulator, nullptr);
   ASSERT_TRUE(alone) << alone.error().message;
 
-  for (const int local_workers : {0, 1}) {
-    int calls = 0;
-    WorkerPoolOptions options;
-    options.command = PLR_SIM_WORKER;
-    options.workers = local_workers;
-    options.observation_json = p.observation_json;
+  for (const unsigned local_workers : {0u, 1u}) {
+    std::atomic<int> calls{0};
+    WorkerOptions options;
+    options.local.command = {PLR_SIM_WORKER};
+    options.local.workers = local_workers;
     options.remote_workers = 2;
     options.remote_retry_s = 0.01;
-    options.remote_send = [&](const flatbuffers::FlatBufferBuilder& job) {
-      return std::make_unique<InstantRemoteJob>(
-          std::vector<std::uint8_t>(job.GetBufferPointer(), job.GetBufferPointer() + job.GetSize()),
-          ++calls <= 5);
+    options.remote_send = [&](const jobs::Bytes& request) {
+      return std::make_unique<InstantRemoteCall>(request, ++calls <= 5);
     };
-    auto pool = WorkerPool::create(options);
+    auto pool = WorkerRunner::create(options);
     ASSERT_TRUE(pool) << pool.error().message;
-    EXPECT_EQ((*pool)->workers(), local_workers + 2);
-    const auto pooled = generate(p, o, runner(), **pool, nullptr);
+    EXPECT_EQ((*pool)->workers(), static_cast<int>(local_workers) + 2);
+    Simulator simulator(**pool, (*pool)->workers(), p.observation_json);
+    const auto pooled = generate(p, o, rig(), simulator, nullptr);
     ASSERT_TRUE(pooled) << pooled.error().message;
     EXPECT_EQ(entry_fingerprint(pooled->entry), entry_fingerprint(alone->entry)) << local_workers;
     // More failures than max_attempts, yet no job was given up: a kernel
@@ -212,34 +226,30 @@ TEST(Generator, RemoteCallsThatFailAreIssuedAgainAndChangeNothing) {
   }
 }
 
-TEST(Generator, ResumedFromItsJournalEndsWithTheSameStrategy) {
+TEST(Generator, ResumedFromItsStoredResultsEndsWithTheSameStrategy) {
   TempDir dir;
   GenerateOptions o;
   o.truck.horizon = 2;
   o.trials = 4;
   const Problem p = block_problem("block", {4.0, 30.0});
-  LocalSimulator local(runner());
-  const auto whole = generate(p, o, runner(), local, nullptr);
+  InProcess local;
+  const auto whole = generate(p, o, rig(), local.simulator, nullptr);
   ASSERT_TRUE(whole) << whole.error().message;
 
-  {
-    auto journal = Journal::open(dir / "j");
-    ASSERT_TRUE(journal);
-    const auto cut = generate(p, o, runner(), local, journal->get(),
-                              [](const GenerateProgress& g) { return g.trials < 2; });
-    ASSERT_FALSE(cut);
-    EXPECT_EQ(cut.error().code, PLR_ERR_CANCELLED);
-  }
-  // A kill in the middle of a write leaves a torn record behind.
-  const auto size = fs::file_size(dir / "j");
-  ASSERT_GT(size, 100u);
-  fs::resize_file(dir / "j", size - 50);
+  auto store = jobs::Store::open(dir / "store");
+  ASSERT_TRUE(store);
+  const auto cut = generate(p, o, rig(), local.simulator, &*store,
+                            [](const GenerateProgress& g) { return g.trials < 2; });
+  ASSERT_FALSE(cut);
+  EXPECT_EQ(cut.error().code, PLR_ERR_CANCELLED);
+  // A kill in the middle of a write leaves a result cut short behind: it
+  // counts as missing and is simulated again.
+  std::vector<fs::path> results;
+  for (const auto& f : fs::directory_iterator(dir / "store/results")) results.push_back(f.path());
+  ASSERT_GT(results.size(), 1u);
+  fs::resize_file(results.front(), fs::file_size(results.front()) / 2);
 
-  auto journal = Journal::open(dir / "j");
-  ASSERT_TRUE(journal);
-  EXPECT_GT((*journal)->loaded_count(), 0u);
-  EXPECT_GT((*journal)->dropped_bytes(), 0u);
-  const auto resumed = generate(p, o, runner(), local, journal->get());
+  const auto resumed = generate(p, o, rig(), local.simulator, &*store);
   ASSERT_TRUE(resumed) << resumed.error().message;
   EXPECT_LT(resumed->simulated, whole->simulated);
   EXPECT_EQ(entry_fingerprint(resumed->entry), entry_fingerprint(whole->entry));

@@ -64,8 +64,9 @@ sim::Strategy to_strategy(const pomdp::PolicyTree& tree, const std::string& name
 }
 
 plr::Expected<GenerateResult> generate(
-    const Problem& problem, const GenerateOptions& options, JobRunner& runner, Simulator& simulator,
-    Journal* journal, const std::function<bool(const GenerateProgress&)>& on_progress) {
+    const Problem& problem, const GenerateOptions& options, actions::Rig& rig, Simulator& simulator,
+    const plr::jobs::Store* store,
+    const std::function<bool(const GenerateProgress&)>& on_progress) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   if (problem.particles.empty())
@@ -75,11 +76,11 @@ plr::Expected<GenerateResult> generate(
                            fmt::format("horizon: {} is not in 1..50", options.truck.horizon));
   std::vector<SimOutcome> roots;
   for (const sim::World& w : problem.particles) {
-    auto r = runner.start(w);
+    auto r = actions::start_state(rig, w);
     if (!r) return plr::make_error(r.error().code, problem.name + ": " + r.error().message);
     roots.push_back(std::move(*r));
   }
-  TruckModel model(simulator, roots, options.truck, journal);
+  TruckModel model(simulator, roots, options.truck, store);
   using K = TruckHeuristic::Kind;
   const TruckHeuristic anchor(model, K::kAnchor), lower(model, K::kLower),
       any(model, K::kAnyBoxLeft), boxes(model, K::kBoxesLeft), stack(model, K::kHighestStack);

@@ -6,7 +6,7 @@
 // The result depends on the problem and the options only: the budget is in
 // trials, every simulation is a function of its (state, action), and the
 // solver is deterministic. So neither the number nor the speed of the
-// workers, nor a resume from the journal, changes it; only the times in the
+// workers, nor a resume from the stored results, changes it; only the times in the
 // curve and provenance differ.
 #pragma once
 
@@ -18,10 +18,10 @@
 #include <string>
 #include <vector>
 
+#include "plr/jobs/store.hpp"
 #include "plr/pomdp/policy_tree.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/library.hpp"
-#include "truck/journal.hpp"
 #include "truck/simulator.hpp"
 #include "truck/truck_model.hpp"
 
@@ -70,17 +70,19 @@ struct GenerateProgress {
 struct GenerateResult {
   sim::LibraryEntry entry;
   pomdp::PolicyTree tree;
-  std::uint64_t simulated = 0;  // by this run (the rest came from the journal)
+  std::uint64_t simulated = 0;  // by this run (the rest came from the store)
   double simulated_robot_s = 0.0;
   double simulated_wall_s = 0.0;  // inside the workers
 };
 
-// `runner` makes the particles' starting states; `simulator` runs the
-// actions. `on_progress` is called after every trial; returning false stops
-// the generation (PLR_ERR_CANCELLED). An error says which simulation failed.
+// `rig` makes the particles' starting states; `simulator` runs the
+// actions, its results kept in `store` (checkpoint_dir/<name>) if given. `on_progress` is called
+// after every trial; returning false stops the generation (PLR_ERR_CANCELLED). An error says which
+// simulation failed.
 plr::Expected<GenerateResult> generate(
-    const Problem& problem, const GenerateOptions& options, JobRunner& runner, Simulator& simulator,
-    Journal* journal, const std::function<bool(const GenerateProgress&)>& on_progress = {});
+    const Problem& problem, const GenerateOptions& options, actions::Rig& rig, Simulator& simulator,
+    const plr::jobs::Store* store,
+    const std::function<bool(const GenerateProgress&)>& on_progress = {});
 
 // The policy tree with the truck's labels (observations of an empty
 // trailer end a branch).

@@ -1,46 +1,56 @@
-// Where the generator's batches of simulation jobs run: the Simulator
-// interface the truck model hands its batches to, and the simulator that
-// runs them one after the other in this process.
+// Where the generator's batches of simulations run: jobs of kind
+// sim.action (plr/actions/simulation_job.hpp) on a runner of the job
+// engine (in this process, local worker processes, remote workers:
+// truck/worker_runner.hpp), their results kept in a store when one is given
+// so that a generation killed and started again simulates nothing twice.
 #pragma once
 
 #include <plr/expected.hpp>
 
+#include <atomic>
+#include <string>
 #include <vector>
 
-#include "plr/actions/job_runner.hpp"
 #include "plr/actions/simulation_job.hpp"
+#include "plr/jobs/runner.hpp"
+#include "plr/jobs/store.hpp"
 
 namespace plr::generator {
 
-using actions::JobRunner;
 using actions::kEmptyObservation;
 using actions::SimOutcome;
 using actions::SimRequest;
 using actions::StateBytes;
+
+struct Simulated {
+  plr::Expected<SimOutcome> outcome = SimOutcome{};
+  bool stored = false;  // read from the store, not simulated now
+};
 
 // Runs batches of requests. The outcome of request i is the i-th result,
 // and it depends only on the request: not on which worker ran it, when, or
 // how many there are.
 class Simulator {
  public:
-  virtual ~Simulator() = default;
-  virtual std::vector<plr::Expected<SimOutcome>> run(const std::vector<SimRequest>& batch) = 0;
-  virtual int workers() const = 0;
-  // Workers simulating now (for a progress display; any thread).
-  virtual int busy() const = 0;
-};
+  // `runner` must outlive the simulator; `workers`: how many jobs it runs at once.
+  Simulator(plr::jobs::Runner& runner, int workers, std::string observation_json)
+      : runner_(runner), workers_(workers), observation_json_(std::move(observation_json)) {}
 
-// Runs each batch one request after the other in this process.
-class LocalSimulator final : public Simulator {
- public:
-  explicit LocalSimulator(JobRunner& runner) : runner_(runner) {}
-  std::vector<plr::Expected<SimOutcome>> run(const std::vector<SimRequest>& batch) override;
-  int workers() const override { return 1; }
-  int busy() const override { return busy_; }
+  // The store, if any, is read before and written as each result comes.
+  std::vector<Simulated> run(const std::vector<SimRequest>& batch,
+                             const plr::jobs::Store* store = nullptr);
+  int workers() const { return workers_; }
+  // Workers simulating now (for a progress display; any thread).
+  int busy() const;
+
+  // The key of a request's result in a store: work_key() in hex.
+  static std::string key(const SimRequest& request);
 
  private:
-  JobRunner& runner_;
-  int busy_ = 0;
+  plr::jobs::Runner& runner_;
+  int workers_;
+  std::string observation_json_;
+  std::atomic<int> running_{0};
 };
 
 }  // namespace plr::generator

@@ -7,9 +7,8 @@
 namespace plr::generator {
 
 TruckModel::TruckModel(Simulator& simulator, const std::vector<SimOutcome>& roots,
-                       TruckOptions options, Journal* journal)
-    : simulator_(simulator), options_(options), journal_(journal), roots_(roots.size()) {
-  if (journal_) results_ = journal_->take_loaded();
+                       TruckOptions options, const plr::jobs::Store* store)
+    : simulator_(simulator), options_(options), store_(store), roots_(roots.size()) {
   // Roots first, one state each even when two particles look alike: the
   // particles are the belief.
   for (const SimOutcome& r : roots) {
@@ -67,19 +66,15 @@ void TruckModel::fill(const std::vector<SimRequest>& requests) const {
     todo.push_back(r);
   }
   if (todo.empty()) return;
-  auto out = simulator_.run(todo);
+  auto out = simulator_.run(todo, store_);
   for (std::size_t i = 0; i < out.size(); ++i) {
-    if (!out[i]) throw SimulationError(out[i].error().message);
-    ++simulated_;
-    simulated_robot_s_ += out[i]->robot_time_s;
-    simulated_wall_s_ += out[i]->wall_s;
-    if (journal_) {
-      if (auto s = journal_->append(keys[i], *out[i]); !s) throw SimulationError(s.error().message);
+    if (!out[i].outcome) throw SimulationError(out[i].outcome.error().message);
+    if (!out[i].stored) {
+      ++simulated_;
+      simulated_robot_s_ += out[i].outcome->robot_time_s;
+      simulated_wall_s_ += out[i].outcome->wall_s;
     }
-    results_.emplace(keys[i], std::move(*out[i]));
-  }
-  if (journal_) {
-    if (auto s = journal_->sync(); !s) throw SimulationError(s.error().message);
+    results_.emplace(keys[i], std::move(*out[i].outcome));
   }
 }
 

@@ -7,8 +7,8 @@
 // the step into it also pays a terminal estimate for the boxes left.
 //
 // Simulating one action on one particle is the costly step: each (state,
-// action) is simulated once (results cached by work_key(), and written to
-// the journal if there is one), and a node's expansion hands all its
+// action) is simulated once (results cached by work_key(), and kept in
+// the result store if there is one), and a node's expansion hands all its
 // particles × 12 actions to the Simulator as one batch (prefetch()).
 #pragma once
 
@@ -19,8 +19,8 @@
 #include <utility>
 #include <vector>
 
+#include "plr/jobs/store.hpp"
 #include "plr/pomdp/model.hpp"
-#include "truck/journal.hpp"
 #include "truck/simulator.hpp"
 
 namespace plr::generator {
@@ -65,10 +65,10 @@ class TruckModel final : public pomdp::GenerativeModel {
     int observation = kEmptyObservation;
   };
 
-  // `roots`: each particle's starting state (JobRunner::start), equally
-  // likely. The simulator (and journal) must outlive the model.
+  // `roots`: each particle's starting state (actions::start_state), equally
+  // likely. The simulator (and store) must outlive the model.
   TruckModel(Simulator& simulator, const std::vector<SimOutcome>& roots, TruckOptions options,
-             Journal* journal = nullptr);
+             const plr::jobs::Store* store = nullptr);
 
   int num_actions() const override { return sim::kNumActions; }
   int num_observations() const override { return sim::kNumObservations + 1; }
@@ -100,7 +100,7 @@ class TruckModel final : public pomdp::GenerativeModel {
 
   Simulator& simulator_;
   TruckOptions options_;
-  Journal* journal_;
+  const plr::jobs::Store* store_;
   std::size_t roots_ = 0;
   mutable std::vector<State> states_;
   mutable std::map<std::pair<std::uint64_t, int>, pomdp::StateId> index_;  // (hash, depth)

@@ -1,22 +1,24 @@
 // One unit of offline work: an abstract action simulated on one state of
 // the trailer (a particle of the strategy generator), and what came of it;
-// and the frames that carry both to a worker and back
-// (sdk/schemas/generator.fbs) — over a pipe to a process on this machine, or
-// as the `sim/simulate` service of a kernel on another.
+// as a job of the job engine (plr/jobs/, docs/jobs.md) of kind `sim.action`,
+// whose input carries everything a worker on any machine needs: the state,
+// the action and the observation parameters (sdk/schemas/generator.fbs:
+// SimJob in, SimResult out).
 // States are the bytes of a finished TruckState buffer
 // (plr/actions/state_bytes.hpp), kept as they are and never rebuilt.
 #pragma once
 
 #include <plr/expected.hpp>
 
-#include <flatbuffers/flatbuffers.h>
-
 #include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "plr/actions/rig.hpp"
+#include "plr/jobs/kinds.hpp"
 #include "plr/sim/strategy.hpp"
+#include "plr/sim/world.hpp"
 
 namespace plr::actions {
 
@@ -41,42 +43,41 @@ struct SimOutcome {
   StateBytes state;  // after the action (also when it was not applicable)
 };
 
-// A stream of frames: a 4-byte little-endian size, then that many bytes of
-// a WorkerFrame. Larger frames are refused.
-inline constexpr std::size_t kMaxFrameBytes = std::size_t{1} << 28;
+inline constexpr char kSimActionKind[] = "sim.action";
 inline constexpr std::size_t kMaxObservationJson = 64 * 1024;
 
-std::vector<std::uint8_t> frame_setup(const std::string& observation_json);
-std::vector<std::uint8_t> frame_job(std::uint64_t id, const SimRequest& request);
-std::vector<std::uint8_t> frame_result(std::uint64_t id, const plr::Expected<SimOutcome>& result);
-// The same frames finished in `fbb`, without the size: the message of a
-// service call. A job for a service carries its observation parameters
-// (a service keeps no setup between calls).
-void build_job(flatbuffers::FlatBufferBuilder& fbb, std::uint64_t id, const SimRequest& request,
-               const std::string& observation_json = {});
-void build_result(flatbuffers::FlatBufferBuilder& fbb, std::uint64_t id,
-                  const plr::Expected<SimOutcome>& result);
-
-struct Frame {
-  enum class Kind { kSetup, kJob, kResult } kind = Kind::kSetup;
-  std::uint64_t id = 0;
-  // kSetup; kJob: empty unless the job names its own (a service's jobs do)
-  std::string observation_json;
-  SimRequest request;                               // kJob
-  plr::Expected<SimOutcome> result = SimOutcome{};  // kResult
+struct SimJob {
+  SimRequest request;
+  std::string observation_json = "{}";  // the fields of sim::ObservationParams
 };
 
-// The bytes of one frame without its size prefix; untrusted: verified, and
-// the embedded states checked to be TruckState buffers. The error is one
-// line, "<origin>: <cause>".
-plr::Expected<Frame> decode_frame(const std::uint8_t* data, std::size_t size,
-                                  const std::string& origin);
+// The job's input and output bytes; decoding takes untrusted bytes (verified,
+// the states checked to be TruckState buffers, values in range). The error
+// is one line, "<origin>: <cause>".
+plr::jobs::Bytes encode_sim_job(const SimJob& job);
+plr::Expected<SimJob> decode_sim_job(const plr::jobs::Bytes& bytes, const std::string& origin);
+plr::jobs::Bytes encode_sim_outcome(const SimOutcome& outcome);
+plr::Expected<SimOutcome> decode_sim_outcome(const plr::jobs::Bytes& bytes,
+                                             const std::string& origin);
+
+// The rig a job runs on: the shipped robot and lattice, scenes classified
+// with the observation parameters `observation_json` holds.
+plr::Expected<std::unique_ptr<Rig>> make_rig(const std::string& observation_json);
+// Runs the request's action from its state on `rig`.
+plr::Expected<SimOutcome> simulate(Rig& rig, const SimRequest& request);
+// The starting state of a particle: `truth` (with the particle's masses)
+// at rest, the robot at home, nothing learnt; and how it looks.
+plr::Expected<SimOutcome> start_state(Rig& rig, const sim::World& truth);
+
+// Registers the sim.action kind: its handler keeps one rig, made again when
+// a job names other observation parameters.
+void add_sim_action(plr::jobs::Kinds& kinds);
 
 // Whether `bytes` hold a verifiable TruckState buffer.
 bool is_truck_state(const std::uint8_t* data, std::size_t size);
 
 // A 64-bit name of (state, action): FNV-1a over the state's bytes, mixed
-// with the action. The generator's cache and journal are keyed by it.
+// with the action. The generator's cache and result store are keyed by it.
 std::uint64_t state_hash(const std::vector<std::uint8_t>& state);
 std::uint64_t work_key(std::uint64_t state_hash, sim::Action action);
 
