@@ -64,7 +64,8 @@ std::map<std::string, nlohmann::json> results(const fs::path& report) {
 
 std::map<std::string, fs::file_time_type> result_times(const fs::path& report) {
   std::map<std::string, fs::file_time_type> out;
-  for (const auto& f : fs::directory_iterator(report / "runs" / "results"))
+  std::error_code ec;  // no folder yet: the command has not opened its store
+  for (const auto& f : fs::directory_iterator(report / "runs" / "results", ec))
     out[f.path().filename().string()] = f.last_write_time();
   return out;
 }
