@@ -18,7 +18,7 @@
 #include "plr/evaluation/report_files.hpp"
 #include "plr/evaluation/run.hpp"
 #include "plr/evaluation/summary.hpp"
-#include "plr/jobs/fork_runner.hpp"
+#include "plr/jobs/process_runner.hpp"
 #include "plr/jobs/progress.hpp"
 #include "plr/jobs/slurm_runner.hpp"
 
@@ -135,8 +135,10 @@ int main(int argc, char** argv) {
     slurm = s.get();
     runner = std::move(s);
   } else {
-    runner = std::make_unique<jobs::ForkRunner>(
-        kinds, jobs::ForkOptions{settings->workers, settings->timeout_s, 1, true, store->logs()});
+    auto local = jobs::ProcessRunner::create(
+        {{}, &kinds, settings->workers, settings->timeout_s, 1, true, store->logs()});
+    if (!local) die(local.error().message);
+    runner = std::move(*local);
   }
   auto outcome = jobs::run_with_progress("plr evaluate", all, *runner, *store,
                                          slurm ? std::function<void()>{} : prepare);

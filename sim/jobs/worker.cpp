@@ -1,5 +1,7 @@
 #include "plr/jobs/worker.hpp"
 
+#include <fcntl.h>
+
 #include <unistd.h>
 
 #include <plr/frame.hpp>
@@ -10,7 +12,7 @@
 
 namespace plr::jobs {
 
-int serve_jobs(const Kinds& kinds) {
+int serve_jobs(const Kinds& kinds, const std::filesystem::path& log_dir) {
   // Frames go to a private copy of stdout; whatever a library prints goes to stderr.
   const int out = ::dup(STDOUT_FILENO);
   ::dup2(STDERR_FILENO, STDOUT_FILENO);
@@ -28,6 +30,15 @@ int serve_jobs(const Kinds& kinds) {
           stderr, "%s\n",
           message ? "stdin: a reply where a request belongs" : message.error().message.c_str());
       return 2;
+    }
+    if (!log_dir.empty()) {
+      const auto log = log_dir / (message->job.key + ".log");
+      const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+      if (fd >= 0) {
+        ::dup2(fd, STDERR_FILENO);
+        ::dup2(fd, STDOUT_FILENO);
+        ::close(fd);
+      }
     }
     const Bytes reply = encode_reply(message->id, kinds.run(message->job));
     std::fflush(nullptr);

@@ -22,7 +22,7 @@
 #include "bench_cli.hpp"
 #include "bench_util.hpp"
 #include "plr/jobs/engine.hpp"
-#include "plr/jobs/fork_runner.hpp"
+#include "plr/jobs/process_runner.hpp"
 #include "plr/jobs/slurm_runner.hpp"
 #include "slurm_cluster.hpp"
 
@@ -101,9 +101,13 @@ int main(int argc, char** argv) {
   plr::bench::Progress progress("bench_jobs", 2 * rounds);
 
   std::vector<double> local_wall, local_per_job;
-  jobs::ForkRunner local(kinds, {workers, 600, 1, true, {}});
+  auto local = jobs::ProcessRunner::create({{}, &kinds, workers, 600, 1, true, {}});
+  if (!local) {
+    std::fprintf(stderr, "bench_jobs: %s\n", local.error().message.c_str());
+    return 1;
+  }
   for (unsigned i = 0; i < rounds; ++i) {
-    const Round r = measure(local, dir / "local", n, task_ms, workers);
+    const Round r = measure(**local, dir / "local", n, task_ms, workers);
     if (!r.ok) {
       std::fprintf(stderr, "bench_jobs: a local job failed\n");
       return 1;

@@ -35,7 +35,7 @@
 #include "plr/actions/in_process.hpp"
 #include "plr/atomic_file.hpp"
 #include "plr/episode/engine.hpp"
-#include "plr/jobs/fork_runner.hpp"
+#include "plr/jobs/process_runner.hpp"
 #include "plr/jobs/progress.hpp"
 #include "plr/planning/lattice_planner.hpp"
 #include "plr/sim/generators.hpp"
@@ -178,8 +178,9 @@ std::vector<nlohmann::json> run_all(const std::vector<Job>& runs, const Options&
   std::vector<jobs::Job> all;
   for (std::size_t i = 0; i < runs.size(); ++i)
     all.push_back({kRunKind, runs[i].file.stem().string(), jobs::to_bytes(std::to_string(i))});
-  jobs::ForkRunner runner(kinds, {o.workers, o.timeout_s, 1, true, store->logs()});
-  auto outcome = jobs::run_with_progress("bench_unload", all, runner, *store);
+  auto runner = value_or_die(
+      jobs::ProcessRunner::create({{}, &kinds, o.workers, o.timeout_s, 1, true, store->logs()}));
+  auto outcome = jobs::run_with_progress("bench_unload", all, *runner, *store);
   if (!outcome) die(outcome.error().message);
   if (outcome->stopped) die("stopped; run it again with the same --out to go on");
   std::vector<nlohmann::json> results;

@@ -8,7 +8,7 @@
 
 #include "plr/episode/open_loop.hpp"
 #include "plr/jobs/engine.hpp"
-#include "plr/jobs/fork_runner.hpp"
+#include "plr/jobs/process_runner.hpp"
 
 namespace plr::chooser {
 
@@ -65,10 +65,14 @@ std::vector<plr::Expected<Rollout>> rollouts(actions::Rig& rig,
   std::vector<jobs::Job> batch;
   for (std::size_t i = 0; i < todo.size(); ++i)
     batch.push_back({kRolloutKind, fmt::format("rollout{}", i), jobs::to_bytes(std::to_string(i))});
-  jobs::ForkRunner runner(
-      kinds, {static_cast<unsigned>(std::max(workers, 1)), kRolloutTimeoutS, 1, false, {}});
   std::vector<plr::Expected<Rollout>> results;
-  auto outcome = jobs::run(batch, runner, nullptr);
+  auto runner = jobs::ProcessRunner::create(
+      {{}, &kinds, static_cast<unsigned>(std::max(workers, 1)), kRolloutTimeoutS, 1, true, {}});
+  if (!runner) {
+    results.assign(todo.size(), runner.error());
+    return results;
+  }
+  auto outcome = jobs::run(batch, **runner, nullptr);
   if (!outcome) {
     results.assign(todo.size(), outcome.error());
     return results;

@@ -1,5 +1,5 @@
 // plr_sim_worker: a simulation worker of the strategy generator, started
-// by the job engine's SpawnRunner. Serves jobs of kind sim.action
+// by the job engine's ProcessRunner. Serves jobs of kind sim.action
 // (plr/actions/simulation_job.hpp) over stdin and stdout (plr/jobs/worker.hpp).
 #include <CLI/CLI.hpp>
 

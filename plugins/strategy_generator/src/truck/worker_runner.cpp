@@ -60,10 +60,10 @@ plr::Expected<std::unique_ptr<WorkerRunner>> WorkerRunner::create(WorkerOptions 
   if (options.remote_workers > 0 && !options.remote_send)
     return plr::make_error(PLR_ERR_INVALID, "remote workers: no way to send them jobs");
   std::unique_ptr<WorkerRunner> runner(new WorkerRunner(std::move(options)));
-  jobs::SpawnOptions one = runner->options_.local;
+  jobs::ProcessOptions one = runner->options_.local;
   one.workers = 1;
   for (unsigned i = 0; i < runner->options_.local.workers; ++i) {
-    auto local = jobs::SpawnRunner::create(one);
+    auto local = jobs::ProcessRunner::create(one);
     if (!local) return local.error();
     runner->local_.push_back(std::move(*local));
   }
@@ -85,7 +85,7 @@ std::uint64_t WorkerRunner::restarts() const {
   return n;
 }
 
-void WorkerRunner::serve_local(jobs::SpawnRunner& local, Batch& batch) {
+void WorkerRunner::serve_local(jobs::ProcessRunner& local, Batch& batch) {
   while (const auto i = batch.take()) {
     local.run(
         batch.jobs, std::vector<std::size_t>{*i},

@@ -1,5 +1,5 @@
 // The generator's runner of the job engine: local worker processes (the
-// plr_sim_worker program, each a SpawnRunner of one worker: restart of a
+// plr_sim_worker program, each a ProcessRunner of one worker: restart of a
 // dead worker, timeout, retry) and remote workers (a call of a kernel's
 // `sim/simulate` service carrying the job engine's messages, served by the
 // simulation_worker plug-in), all fed from one queue: a job goes to
@@ -19,8 +19,8 @@
 #include <string>
 #include <vector>
 
+#include "plr/jobs/process_runner.hpp"
 #include "plr/jobs/runner.hpp"
-#include "plr/jobs/spawn_runner.hpp"
 
 namespace plr::generator {
 
@@ -37,7 +37,7 @@ class RemoteCall {
 using RemoteSend = std::function<std::unique_ptr<RemoteCall>(const plr::jobs::Bytes& request)>;
 
 struct WorkerOptions {
-  plr::jobs::SpawnOptions local;  // local.workers processes of local.command (0: none)
+  plr::jobs::ProcessOptions local;  // local.workers processes of local.command (0: none)
   // Jobs kept in flight with remote workers, and how they are sent.
   unsigned remote_workers = 0;
   RemoteSend remote_send;
@@ -66,11 +66,11 @@ class WorkerRunner final : public plr::jobs::Runner {
  private:
   struct Batch;
   explicit WorkerRunner(WorkerOptions options) : options_(std::move(options)) {}
-  void serve_local(plr::jobs::SpawnRunner& local, Batch& batch);
+  void serve_local(plr::jobs::ProcessRunner& local, Batch& batch);
   void serve_remote(Batch& batch);
 
   WorkerOptions options_;
-  std::vector<std::unique_ptr<plr::jobs::SpawnRunner>> local_;
+  std::vector<std::unique_ptr<plr::jobs::ProcessRunner>> local_;
   std::atomic<std::uint64_t> remote_done_{0}, remote_failures_{0}, next_id_{1};
 };
 

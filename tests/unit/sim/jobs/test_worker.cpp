@@ -1,4 +1,4 @@
-// A worker program for spawn_runner_test: serves test kinds over stdin and
+// A worker program for process_runner_test: serves test kinds over stdin and
 // stdout (plr/jobs/worker.hpp).
 #include <signal.h>
 #include <unistd.h>

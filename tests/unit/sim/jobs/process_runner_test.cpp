@@ -6,28 +6,29 @@
 #include <set>
 
 #include "plr/jobs/engine.hpp"
-#include "plr/jobs/spawn_runner.hpp"
+#include "plr/jobs/process_runner.hpp"
 
 namespace fs = std::filesystem;
 using namespace plr::jobs;
 
 namespace {
 
-class SpawnRunnerTest : public ::testing::Test {
+class ProcessRunnerTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("plr_jobs_spawn_test_" + std::to_string(::getpid()));
+    dir_ = fs::temp_directory_path() / ("plr_jobs_process_test_" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  std::unique_ptr<SpawnRunner> runner(unsigned workers, double timeout_s, unsigned attempts) {
-    auto r = SpawnRunner::create({{TEST_WORKER}, workers, timeout_s, attempts});
+  std::unique_ptr<ProcessRunner> runner(unsigned workers, double timeout_s, unsigned attempts) {
+    auto r =
+        ProcessRunner::create({{TEST_WORKER}, nullptr, workers, timeout_s, attempts, false, {}});
     EXPECT_TRUE(r) << r.error().message;
     return r ? std::move(*r) : nullptr;
   }
-  std::vector<Result> run_all(const std::vector<Job>& jobs, SpawnRunner& r) {
+  std::vector<Result> run_all(const std::vector<Job>& jobs, ProcessRunner& r) {
     auto out = run(jobs, r, nullptr);
     EXPECT_TRUE(out) << out.error().message;
     return out ? out->results : std::vector<Result>{};
@@ -36,7 +37,7 @@ class SpawnRunnerTest : public ::testing::Test {
   fs::path dir_;
 };
 
-TEST_F(SpawnRunnerTest, WorkersServeManyJobsEach) {
+TEST_F(ProcessRunnerTest, WorkersServeManyJobsEach) {
   auto r = runner(2, 60, 1);
   ASSERT_TRUE(r);
   std::vector<Job> jobs;
@@ -58,7 +59,7 @@ TEST_F(SpawnRunnerTest, WorkersServeManyJobsEach) {
   EXPECT_EQ(r->restarts(), 0u);
 }
 
-TEST_F(SpawnRunnerTest, AWorkerKilledOnAJobIsStartedAgainAndTheJobRetried) {
+TEST_F(ProcessRunnerTest, AWorkerKilledOnAJobIsStartedAgainAndTheJobRetried) {
   auto r = runner(1, 60, 2);
   ASSERT_TRUE(r);
   const pid_t first = r->pids()[0];
@@ -71,7 +72,7 @@ TEST_F(SpawnRunnerTest, AWorkerKilledOnAJobIsStartedAgainAndTheJobRetried) {
   EXPECT_NE(r->pids()[0], first);
 }
 
-TEST_F(SpawnRunnerTest, AJobPastItsTimeoutFailsAfterItsAttempts) {
+TEST_F(ProcessRunnerTest, AJobPastItsTimeoutFailsAfterItsAttempts) {
   auto r = runner(1, 0.2, 2);
   ASSERT_TRUE(r);
   const auto results = run_all({{"test.hang", "h", {}}, {"test.pid", "after", {}}}, *r);
@@ -83,8 +84,9 @@ TEST_F(SpawnRunnerTest, AJobPastItsTimeoutFailsAfterItsAttempts) {
   EXPECT_EQ(r->restarts(), 2u);
 }
 
-TEST_F(SpawnRunnerTest, AMissingProgramIsNamed) {
-  auto r = SpawnRunner::create({{(dir_ / "no_such_worker").string()}, 1, 60, 1});
+TEST_F(ProcessRunnerTest, AMissingProgramIsNamed) {
+  auto r =
+      ProcessRunner::create({{(dir_ / "no_such_worker").string()}, nullptr, 1, 60, 1, false, {}});
   ASSERT_FALSE(r);
   EXPECT_NE(r.error().message.find("no_such_worker"), std::string::npos);
 }

@@ -8,14 +8,14 @@
 #include <sstream>
 
 #include "plr/jobs/engine.hpp"
-#include "plr/jobs/fork_runner.hpp"
+#include "plr/jobs/process_runner.hpp"
 
 namespace fs = std::filesystem;
 using namespace plr::jobs;
 
 namespace {
 
-class ForkRunnerTest : public ::testing::Test {
+class ForkedWorkersTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() / ("plr_jobs_fork_test_" + std::to_string(::getpid()));
@@ -48,7 +48,14 @@ class ForkRunnerTest : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  std::vector<Result> run_all(const std::vector<Job>& jobs, ForkRunner& runner) {
+  // A fresh child of this process per job, as the evaluation runs them.
+  std::unique_ptr<ProcessRunner> forked(unsigned workers, double timeout_s, unsigned attempts,
+                                        const fs::path& log_dir = {}) {
+    auto r = ProcessRunner::create({{}, &kinds_, workers, timeout_s, attempts, true, log_dir});
+    EXPECT_TRUE(r) << r.error().message;
+    return r ? std::move(*r) : nullptr;
+  }
+  std::vector<Result> run_all(const std::vector<Job>& jobs, ProcessRunner& runner) {
     auto out = run(jobs, runner, nullptr);
     EXPECT_TRUE(out) << out.error().message;
     return out ? out->results : std::vector<Result>{};
@@ -58,10 +65,10 @@ class ForkRunnerTest : public ::testing::Test {
   Kinds kinds_;
 };
 
-TEST_F(ForkRunnerTest, EachJobRunsInAChildOfItsOwn) {
-  ForkRunner runner(kinds_, {2, 60, 1, true, {}});
+TEST_F(ForkedWorkersTest, EachJobRunsInAChildOfItsOwn) {
+  auto runner = forked(2, 60, 1);
   const auto results =
-      run_all({{"test.pid", "a", {}}, {"test.pid", "b", {}}, {"test.pid", "c", {}}}, runner);
+      run_all({{"test.pid", "a", {}}, {"test.pid", "b", {}}, {"test.pid", "c", {}}}, *runner);
   ASSERT_EQ(results.size(), 3u);
   std::set<std::string> pids;
   for (const Result& r : results) {
@@ -73,26 +80,26 @@ TEST_F(ForkRunnerTest, EachJobRunsInAChildOfItsOwn) {
   EXPECT_EQ(pids.count(std::to_string(::getpid())), 0u);
 }
 
-TEST_F(ForkRunnerTest, AJobPastItsTimeoutIsKilled) {
-  ForkRunner runner(kinds_, {1, 0.2, 1, true, {}});
-  const auto results = run_all({{"test.hang", "slow", {}}, {"test.pid", "quick", {}}}, runner);
+TEST_F(ForkedWorkersTest, AJobPastItsTimeoutIsKilled) {
+  auto runner = forked(1, 0.2, 1);
+  const auto results = run_all({{"test.hang", "slow", {}}, {"test.pid", "quick", {}}}, *runner);
   ASSERT_EQ(results.size(), 2u);
   EXPECT_FALSE(results[0].ok);
   EXPECT_EQ(results[0].error.rfind("killed after", 0), 0u) << results[0].error;
   EXPECT_TRUE(results[1].ok);
 }
 
-TEST_F(ForkRunnerTest, ADeadChildIsTriedAgainUpToMaxAttempts) {
-  ForkRunner twice(kinds_, {1, 60, 2, true, {}});
-  const auto once = run_all({{"test.crash_once", "flaky", {}}}, twice);
+TEST_F(ForkedWorkersTest, ADeadChildIsTriedAgainUpToMaxAttempts) {
+  auto twice = forked(1, 60, 2);
+  const auto once = run_all({{"test.crash_once", "flaky", {}}}, *twice);
   ASSERT_EQ(once.size(), 1u);
   ASSERT_TRUE(once[0].ok) << once[0].error;
   EXPECT_EQ(to_text(once[0].output), "second time");
   EXPECT_EQ(once[0].attempts, 2u);
-  EXPECT_EQ(twice.retries(), 1u);
+  EXPECT_EQ(twice->retries(), 1u);
 
-  ForkRunner thrice(kinds_, {1, 60, 3, true, dir_});
-  const auto always = run_all({{"test.crash", "doomed", {}}}, thrice);
+  auto thrice = forked(1, 60, 3, dir_);
+  const auto always = run_all({{"test.crash", "doomed", {}}}, *thrice);
   ASSERT_EQ(always.size(), 1u);
   EXPECT_FALSE(always[0].ok);
   EXPECT_EQ(always[0].attempts, 3u);
@@ -104,23 +111,23 @@ TEST_F(ForkRunnerTest, ADeadChildIsTriedAgainUpToMaxAttempts) {
   EXPECT_EQ(text.str(), "about to die\n");
 }
 
-TEST_F(ForkRunnerTest, AHandlersErrorIsAResultNotARetry) {
-  ForkRunner runner(kinds_, {1, 60, 3, true, {}});
-  const auto results = run_all({{"test.fail", "f", {}}}, runner);
+TEST_F(ForkedWorkersTest, AHandlersErrorIsAResultNotARetry) {
+  auto runner = forked(1, 60, 3);
+  const auto results = run_all({{"test.fail", "f", {}}}, *runner);
   ASSERT_EQ(results.size(), 1u);
   EXPECT_FALSE(results[0].ok);
   EXPECT_EQ(results[0].error, "refused");
   EXPECT_EQ(results[0].attempts, 1u);
-  EXPECT_EQ(runner.retries(), 0u);
+  EXPECT_EQ(runner->retries(), 0u);
 }
 
-TEST_F(ForkRunnerTest, StopEndsTheRunningChildrenAndKeepsTheFinished) {
+TEST_F(ForkedWorkersTest, StopEndsTheRunningChildrenAndKeepsTheFinished) {
   auto store = Store::open(dir_ / "store");
   ASSERT_TRUE(store);
-  ForkRunner runner(kinds_, {2, 600, 1, true, {}});
+  auto runner = forked(2, 600, 1);
   const std::vector<Job> jobs = {{"test.pid", "done", {}}, {"test.hang", "hangs", {}}};
   std::size_t finished = 0;
-  auto out = run(jobs, runner, &*store,
+  auto out = run(jobs, *runner, &*store,
                  {{}, [&] { return finished == 1; }, [&](const Result&) { ++finished; }});
   ASSERT_TRUE(out) << out.error().message;
   EXPECT_TRUE(out->stopped);
