@@ -44,6 +44,8 @@ Bytes encode_reply(std::uint64_t id, const Result& result) {
 plr::Expected<Message> decode_message(const std::uint8_t* data, std::size_t size,
                                       const std::string& origin) {
   if (size > kMaxBytes + 4096) return bad(origin, fmt::format("message of {} bytes", size));
+  // The identifier sits at bytes 4..8: a shorter buffer has none to compare.
+  if (size < 8) return bad(origin, fmt::format("message of {} bytes is too short", size));
   // FlatBuffers reads scalars in place: a buffer off an 8-byte boundary is
   // read from an aligned copy.
   std::vector<std::uint64_t> aligned;
@@ -53,8 +55,7 @@ plr::Expected<Message> decode_message(const std::uint8_t* data, std::size_t size
     data = reinterpret_cast<const std::uint8_t*>(aligned.data());
   }
   flatbuffers::Verifier verifier(data, size);
-  // The identifier sits at bytes 4..8: a shorter buffer has none to compare.
-  if (size < 8 || !msg::JobFrameBufferHasIdentifier(data) || !msg::VerifyJobFrameBuffer(verifier))
+  if (!msg::JobFrameBufferHasIdentifier(data) || !msg::VerifyJobFrameBuffer(verifier))
     return bad(origin, "not a job message (fails verification)");
   const msg::JobFrame* f = msg::GetJobFrame(data);
   // A union's type may be set with its table absent: verification passes that.
