@@ -13,6 +13,9 @@
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
+#include <fstream>
+
+#include <plr/atomic_file.hpp>
 
 #include "plr/actions/rig.hpp"
 #include "plr/evaluation/report_files.hpp"
@@ -35,9 +38,35 @@ constexpr const char* kRunKind = "evaluation.run";
   std::exit(code);
 }
 
+// The runs in a store were made under the conditions recorded beside them;
+// a store made under others (another cap, library, ...) is refused rather
+// than mixed in.
+void check_conditions(const fs::path& file, const nlohmann::json& conditions) {
+  std::ifstream in(file);
+  if (!in) {
+    if (auto ok = plr::write_file_atomically(file.string(), conditions.dump(1) + "\n"); !ok)
+      die(ok.error().message);
+    return;
+  }
+  const auto stored = nlohmann::json::parse(in, nullptr, false);
+  if (stored == conditions) return;
+  std::string what = "unreadable";
+  if (stored.is_object())
+    for (const auto& [key, value] : conditions.items())
+      if (!stored.contains(key) || stored[key] != value) {
+        what = fmt::format("{} {} there, {} now", key, stored.value(key, nlohmann::json()).dump(),
+                           value.dump());
+        break;
+      }
+  die(
+      fmt::format("{}: the runs there were made under other conditions ({}); report to another "
+                  "folder, or delete it to run them again",
+                  file.string(), what));
+}
+
 struct Args {
   std::string settings;
-  std::string report = "report_eval";
+  std::string report;
   bool quick = false;
   unsigned workers = 0;
   std::string runner;
@@ -54,9 +83,11 @@ Args parse(int argc, char** argv) {
   app.name("plr evaluate");
   app.add_option("settings", a.settings, "Evaluation settings (configs/evaluate.yaml)")->required();
   app.add_option("--report", a.report,
-                 "Report folder; its runs/ keeps each run's result, so a run is not run again")
-      ->capture_default_str();
-  app.add_flag("--quick", a.quick, "The settings' quick_seeds instead of seeds");
+                 "Report folder (default report_eval, with --quick report_eval_quick); its runs/ "
+                 "keeps each run's result, so a run is not run again");
+  app.add_flag("--quick", a.quick,
+               "The settings' quick_seeds and quick_max_robot_time_s instead of seeds and "
+               "max_robot_time_s");
   app.add_option("--workers", a.workers, "Worker processes (default: the settings' workers)")
       ->check(CLI::Range(1u, 999u));
   app.add_option("--runner", a.runner,
@@ -72,6 +103,7 @@ Args parse(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     std::exit(app.exit(e));
   }
+  if (a.report.empty()) a.report = a.quick ? "report_eval_quick" : "report_eval";
   return a;
 }
 
@@ -83,12 +115,14 @@ int main(int argc, char** argv) {
   if (!settings) die(settings.error().message);
   if (args.workers > 0) settings->workers = args.workers;
   if (!args.runner.empty()) settings->runner.kind = *jobs::parse_runner(args.runner);
+  if (args.quick) settings->max_robot_time_s = settings->quick_max_robot_time_s;
   auto resources = ev::load_resources(*settings);
   if (!resources) die(resources.error().message);
 
   const fs::path dir = args.report;
   auto store = jobs::Store::open(dir / "runs");
   if (!store) die(store.error().message);
+  check_conditions(store->dir() / "conditions.json", ev::run_conditions(*settings, *resources));
 
   const std::uint64_t seeds = args.quick ? settings->quick_seeds : settings->seeds;
   std::vector<ev::RunSpec> specs;

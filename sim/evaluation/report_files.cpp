@@ -152,6 +152,24 @@ std::string report_html(const nlohmann::json& r) {
           pm(d["boxes_at_horizon"], "mean", "se", 1), d["boxes_total"]["mean"].get<double>(),
           to_90(d), xml_escape(stops));
     }
+  h += "</table>\n<h2>Whole trailers</h2>\n<p>Robot seconds to half, 90 % and all of a trailer's "
+       "boxes (a run that did not get there counts as the horizon; runs there in brackets), and "
+       "boxes out at 300, 600 and 1200 robot-seconds (mean ± se).</p>\n<table id=\"trailers\">\n"
+       "<tr><th>environment</th><th>method</th><th>to 50 %</th><th>to 90 %</th><th>to empty</th>"
+       "<th>at 300 s</th><th>at 600 s</th><th>at 1200 s</th></tr>\n";
+  for (const auto& [name, env] : r["environments"].items())
+    for (const auto& [m, d] : env["methods"].items()) {
+      auto to = [&](const char* share) {
+        const auto& t = d["time_to_share_s"][share];
+        return fmt::format("{} ({})", pm(t, "mean", "se", 0), t["reached"].get<std::size_t>());
+      };
+      h += fmt::format(
+          "<tr data-row=\"{0}/{1}\"><td>{0}</td><td>{1}</td><td>{2}</td><td>{3}</td><td>{4}</td>"
+          "<td>{5}</td><td>{6}</td><td>{7}</td></tr>\n",
+          xml_escape(name), xml_escape(m), to("50"), to("90"), to("100"),
+          pm(d["boxes_at"]["300"], "mean", "se", 1), pm(d["boxes_at"]["600"], "mean", "se", 1),
+          pm(d["boxes_at"]["1200"], "mean", "se", 1));
+    }
   h += "</table>\n<h2>Runs</h2>\n<table id=\"runs\">\n<tr><th>environment</th><th>method</th>"
        "<th>seed</th><th>world</th><th>boxes</th><th>robot time [s]</th><th>actions</th>"
        "<th>wall [s]</th><th>end</th></tr>\n";

@@ -4,7 +4,11 @@
 
 #include <algorithm>
 #include <chrono>
+#include <fstream>
+#include <iterator>
 #include <memory>
+
+#include <plr/frame.hpp>
 
 #include "plr/actions/run_stats.hpp"
 #include "plr/chooser/features.hpp"
@@ -91,6 +95,15 @@ episode::StrategySource method_source(const EvaluationSettings& settings, const 
     }
   }
   return h;
+}
+
+// How a whole-trailer run ended: emptied, cut at the robot-time cap or the
+// action limit, or stopped before them with no action left that moves a box.
+const char* ending(const EvaluationSettings& settings, const episode::Episode& e) {
+  if (e.final_world.boxes.empty()) return "empty";
+  if (settings.max_robot_time_s > 0 && e.robot_time_s >= settings.max_robot_time_s) return "cap";
+  if (settings.max_actions > 0 && e.actions >= settings.max_actions) return "action limit";
+  return "stuck";
 }
 
 }  // namespace
@@ -186,6 +199,25 @@ plr::Expected<StartWorld> start_world(const EvaluationSettings& settings,
   return w;
 }
 
+nlohmann::json run_conditions(const EvaluationSettings& settings, const Resources& resources) {
+  const sim::ObservationParams& o = settings.observation;
+  nlohmann::json out = {
+      {"max_robot_time_s", settings.max_robot_time_s},
+      {"max_actions", settings.max_actions},
+      {"max_distance", settings.max_distance},
+      {"observation",
+       {o.h_pile, o.wall_depth, o.min_pile_depth, o.pile_mid, o.pile_high, o.wall_mid, o.wall_high,
+        o.side_band}},
+      {"h", {settings.h.h_min, settings.h.d_min}},
+      {"library", fmt::format("{:08x}", chooser::fingerprint(resources.library))}};
+  if (resources.model) {
+    std::ifstream in(settings.model, std::ios::binary);
+    const std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in), {}};
+    out["model"] = fmt::format("{:08x}", plr::crc32(bytes.data(), bytes.size()));
+  }
+  return out;
+}
+
 nlohmann::json run_one(actions::Rig& rig, const EvaluationSettings& settings,
                        const Resources& resources, const RunSpec& run) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -232,6 +264,7 @@ nlohmann::json run_one(actions::Rig& rig, const EvaluationSettings& settings,
     out["strategy_steps"] = e.strategy_steps;
     out["robot_trailer_collisions"] = e.robot_trailer_contacts;
     out["stop_reason"] = e.stop_reason;
+    out["ended"] = ending(settings, e);
   }
   out["curve"] = curve;
   out["steps"] = steps;

@@ -52,10 +52,10 @@ plr::Expected<EvaluationSettings> EvaluationSettings::load(
   }
   EvaluationSettings s;
   const yaml::Map top = doc->root().map(
-      "evaluation settings",
-      {"format", "library", "model", "environments", "methods", "first_seed", "seeds",
-       "quick_seeds", "max_robot_time_s", "max_actions", "workers", "timeout_s", "max_distance",
-       "observation", "h_min", "d_min", jobs::kRunnerKey, jobs::kSlurmKey});
+      "evaluation settings", {"format", "library", "model", "environments", "methods", "first_seed",
+                              "seeds", "quick_seeds", "max_robot_time_s", "quick_max_robot_time_s",
+                              "max_actions", "workers", "timeout_s", "max_distance", "observation",
+                              "h_min", "d_min", jobs::kRunnerKey, jobs::kSlurmKey});
   (void)top.required("format").one_of({"plr-evaluation"});
   if (auto l = top.required("library").string()) s.library = *l;
   if (auto m = top.required("model").string()) s.model = *m;
@@ -89,6 +89,7 @@ plr::Expected<EvaluationSettings> EvaluationSettings::load(
   if (auto n = top.find("seeds").integer(1, kMaxSeeds)) s.seeds = *n;
   if (auto n = top.find("quick_seeds").integer(1, kMaxSeeds)) s.quick_seeds = *n;
   if (auto v = top.find("max_robot_time_s").number(1, 1e6)) s.max_robot_time_s = *v;
+  if (auto v = top.find("quick_max_robot_time_s").number(1, 1e6)) s.quick_max_robot_time_s = *v;
   if (auto n = top.find("max_actions").integer(0, 1000000)) s.max_actions = *n;
   if (auto n = top.find("workers").integer(1, 256)) s.workers = static_cast<unsigned>(*n);
   if (auto v = top.find("timeout_s").number(1, 1e7)) s.timeout_s = *v;

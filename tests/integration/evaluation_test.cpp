@@ -227,6 +227,24 @@ TEST_F(EvaluationTest, ReportHoldsPlotsAndTablesOfItsRuns) {
   const auto after = run_result(report, "S_PLR_seed2");
   EXPECT_EQ(after["boxes_unloaded"], before["boxes_unloaded"]);
   EXPECT_DOUBLE_EQ(after["robot_time_s"].get<double>(), before["robot_time_s"].get<double>());
+
+  // Each run says how it ended: a 30-box trailer is not emptied in 60 s.
+  for (const auto& [name, written] : files) {
+    const auto r = run_result(report, name.substr(0, name.size() - std::string(".result").size()));
+    const bool cut = r["robot_time_s"].get<double>() >= 60;
+    EXPECT_EQ(r["ended"], cut ? "cap" : "stuck") << name << ": " << r["stop_reason"];
+  }
+  // The same report folder with another cap is refused: its runs are not
+  // those runs.
+  std::string out;
+  EXPECT_EQ(run(std::string(PLR_EVALUATE) + " " + (dir_ / "evaluate.yaml").string() + " --report " +
+                    report.string() + " --set max_robot_time_s=30",
+                &out),
+            2);
+  EXPECT_NE(out.find("made under other conditions (max_robot_time_s 60.0 there, 30.0 now)"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(result_files(report).size(), files.size());
 }
 
 TEST_F(EvaluationTest, MissingModelIsOneLineNamingTheCommand) {
@@ -302,7 +320,7 @@ TEST(EvaluationSummary, PlrAgainstHSaysHowItsActionsSplit) {
         {"source": "hardcoded", "boxes": 2, "robot_time_s": 10}])"));
   const auto j = plr::evaluation::summarize(s, {h, plr}, false);
   const auto c = std::find_if(j["claims"].begin(), j["claims"].end(),
-                              [](const auto& x) { return x["claim"] == "PLR > H on E"; });
+                              [](const auto& x) { return x["claim"] == "PLR > H on E at 600 s"; });
   ASSERT_NE(c, j["claims"].end()) << j["claims"].dump();
   const auto& why = (*c)["why"];
   EXPECT_DOUBLE_EQ(why["library_action_share"].get<double>(), 0.5);

@@ -47,10 +47,18 @@ TEST(ReportHtml, HoldsTheClaimsTablesAndEveryRun) {
   const std::string h = report_html(summary());
   EXPECT_TRUE(
       contains(h, "<p>3 seeds from seed 1 (quick mode), each run cut at 120 robot-seconds"));
-  for (const char* id : {"claims", "table1", "table2", "methods", "runs"})
+  for (const char* id : {"claims", "table1", "table2", "methods", "trailers", "runs"})
     EXPECT_TRUE(contains(h, std::string("<table id=\"") + id + "\">")) << id;
   EXPECT_TRUE(contains(
-      h, "<tr data-row=\"PLR &gt;= H on A1\"><td>PLR &gt;= H on A1</td><td>yes</td><td>2.5</td>"));
+      h, "<tr data-row=\"PLR &gt;= H on A1\"><td>PLR &gt;= H on A1</td><td>no</td><td>-1.6</td>"));
+  EXPECT_TRUE(contains(h,
+                       "<tr data-row=\"PLR &gt; H on A1 at 600 s\"><td>PLR &gt; H on A1 at 600 "
+                       "s</td><td>yes</td><td>2.5</td>"));
+  // H on A1 over whole trailers: emptied at 60 and 40 s, the third counted
+  // at the 120 s horizon.
+  EXPECT_TRUE(contains(h,
+                       "<tr data-row=\"A1/H\"><td>A1</td><td>H</td><td>53 ± 7 (3)</td><td>73 ± "
+                       "24 (2)</td><td>73 ± 24 (2)</td><td>8.7 ± 1.3</td>"));
   // Table I, M2 over PLR's three runs: 10 ± 10 queries, failures 10 ± 14.1 %.
   EXPECT_TRUE(contains(h, "<tr data-row=\"M2\"><td>M2</td><td>"));
   EXPECT_TRUE(contains(h, "<td>10.0 ± 10.0</td><td>2.9 ± 1.5</td><td>10.0 ± 14.1</td></tr>"));

@@ -70,6 +70,25 @@ TEST(Summary, TheTimeTo90PercentIsTheMedianOverTheRunsThatGotThere) {
   EXPECT_EQ(method("A1", "PLR")["robot_s_to_90_percent"]["median"], 75.0);
 }
 
+TEST(Summary, WholeTrailerFiguresCountARunThatNeverGotThereAtTheHorizon) {
+  // H empties two of three runs, at 60 s and 40 s; the third is counted at
+  // the 120 s horizon: mean 220/3.
+  const auto& h = method("A1", "H");
+  const auto& empty = h["time_to_empty_s"];
+  EXPECT_EQ(empty["reached"], 2);
+  EXPECT_NEAR(empty["mean"].get<double>(), 220.0 / 3, 1e-12);
+  EXPECT_EQ(empty["n"], 3);
+  EXPECT_EQ(h["time_to_share_s"]["100"], empty);
+  // Half of the boxes: at 60, 30 (4 of 10 is not half: 60) and 40 s.
+  EXPECT_NEAR(h["time_to_share_s"]["50"]["mean"].get<double>(), (60.0 + 60 + 40) / 3, 1e-12);
+  EXPECT_EQ(h["time_to_share_s"]["50"]["reached"], 3);
+  // Boxes at the checkpoints past the horizon are those at its end.
+  for (const char* t : {"300", "600", "1200"}) {
+    EXPECT_NEAR(h["boxes_at"][t]["mean"].get<double>(), 26.0 / 3, 1e-12) << t;
+    EXPECT_NEAR(h["boxes_at"][t]["se"].get<double>(), 4.0 / 3, 1e-12) << t;
+  }
+}
+
 TEST(Summary, StopReasonsCountFailedRunsByTheirError) {
   const auto& stops = method("A1", "H")["stop_reasons"];
   EXPECT_EQ(stops["trailer empty"], 3);
@@ -93,9 +112,18 @@ TEST(Summary, PlrAgainstHIsTheDifferenceOverItsStandardError) {
             "A1: PLR unloads 12.0 ± 0.0 boxes by 120 s, H 8.7 ± 1.3: ahead by +3.3 boxes (+2.5 "
             "standard errors)");
   const auto& claims = summary()["claims"];
-  ASSERT_GE(claims.size(), 1u);
+  ASSERT_GE(claims.size(), 2u);
+  // From 40 s to 50 s PLR has none of its boxes out and H 0, 4 and 10: H
+  // is 14/3 ahead with a standard error of sqrt(76)/3, more than one.
   EXPECT_EQ(claims[0]["claim"], "PLR >= H on A1");
-  EXPECT_EQ(claims[0]["holds"], true);
+  EXPECT_EQ(claims[0]["holds"], false);
+  EXPECT_NEAR(claims[0]["z"].get<double>(), -14 / std::sqrt(76.0), 1e-12);
+  EXPECT_EQ(claims[0]["at_s"], 40.0);
+  // By 600 s (past the horizon: the runs' last counts) PLR is 2.5 standard
+  // errors ahead.
+  EXPECT_EQ(claims[1]["claim"], "PLR > H on A1 at 600 s");
+  EXPECT_EQ(claims[1]["holds"], true);
+  EXPECT_NEAR(claims[1]["z"].get<double>(), 2.5, 1e-12);
   // Half of PLR's actions ran a library strategy (2 boxes in 10 s), the
   // other half H (1 in 10 s); H's runs moved 3 boxes in 10 s.
   const auto& why = claims[0]["why"];

@@ -53,6 +53,11 @@ struct StartWorld {
 plr::Expected<StartWorld> start_world(const EvaluationSettings& settings,
                                       const Resources& resources, const RunSpec& run);
 
+// What decides a run's result besides its key (the cap, the limits, the
+// thresholds, the library and model): runs made under other conditions are
+// not the same runs, however they are named.
+nlohmann::json run_conditions(const EvaluationSettings& settings, const Resources& resources);
+
 // Runs it on `rig` (its simulation is replaced). Errors of the run itself
 // (a backend's) come back in the result's "error".
 nlohmann::json run_one(actions::Rig& rig, const EvaluationSettings& settings,

@@ -45,7 +45,9 @@ struct EvaluationSettings {
   std::uint64_t first_seed = 1;
   std::uint64_t seeds = 10;
   std::uint64_t quick_seeds = 3;
-  double max_robot_time_s = 600;  // the horizon each run is cut at
+  double max_robot_time_s = 3600;  // the robot-time cap each run is cut at
+  // --quick: a look at the start of every run, not whole trailers.
+  double quick_max_robot_time_s = 300;
   std::uint64_t max_actions = 0;  // 0: no limit
   unsigned workers = 2;
   double timeout_s = 3600;  // wall seconds per run, a safety net
