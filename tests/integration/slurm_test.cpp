@@ -2,7 +2,9 @@
 // slurm_cluster.hpp): its runs as job arrays give the local runner's
 // results; a task cancelled mid-run is submitted again and nothing is lost
 // or counted twice; SIGTERM cancels the arrays, keeps what finished, and the
-// same command resumes. Skips, saying why, where the daemons cannot start.
+// same command resumes. The strategy generator's strategies as array tasks
+// make the library a local generation makes. Skips, saying why, where the
+// daemons cannot start.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -23,6 +25,8 @@
 #include <nlohmann/json.hpp>
 
 #include "plr/jobs/store.hpp"
+#include "plr/sim/library.hpp"
+#include "plr/sim/testing/library_fingerprint.hpp"
 #include "slurm_cluster.hpp"
 #include "small_evaluation.hpp"
 
@@ -99,6 +103,10 @@ class SlurmTest : public ::testing::Test {
                                      (dir_ / report).string()};
     argv.insert(argv.end(), {"--set", "seeds=1"});
     argv.insert(argv.end(), extra.begin(), extra.end());
+    return spawn(std::move(argv), report);
+  }
+  // `argv` in the background, its output in <name>.log.
+  pid_t spawn(std::vector<std::string> argv, const std::string& report) {
     std::vector<char*> args;
     for (auto& a : argv) args.push_back(a.data());
     args.push_back(nullptr);
@@ -220,6 +228,48 @@ TEST_F(SlurmTest, SigtermCancelsTheArraysAndTheSameCommandResumes) {
   for (const auto& [file, time] : before) EXPECT_EQ(after.at(file), time) << file;
   EXPECT_EQ(report_json(dir_ / "slurm")["runner"]["tasks"].get<std::size_t>(),
             kRuns - before.size());
+}
+
+// The strategy generator with `runner: slurm`: each world's strategy is an
+// array task of the worker program; the library equals a local
+// generation's, and a second run makes nothing again.
+TEST_F(SlurmTest, AGenerationsStrategiesAsArrayTasksEqualALocalOnes) {
+  // The block world under two names: two strategies, two tasks.
+  for (const char* name : {"block_a.yaml", "block_b.yaml"}) fs::copy_file(BLOCK_WORLD, dir_ / name);
+  auto config = [&](const std::string& name, const std::string& runner) {
+    const fs::path file = dir_ / (name + ".yaml");
+    std::ofstream(file) << "pipeline: " << name << "_" << ::getpid() << "\n"
+                        << "nodes:\n  generator:\n    plugin: strategy_generator\n    params:\n"
+                        << "      library: ${report_dir}/library.plrl\n"
+                        << "      checkpoint_dir: ${report_dir}/checkpoint\n"
+                        << "      worlds: [{family: A1, world_file: "
+                        << (dir_ / "block_a.yaml").string()
+                        << "}, {family: A1, world_file: " << (dir_ / "block_b.yaml").string()
+                        << "}]\n"
+                        << "      particles: 3\n      horizon: 3\n      trials: 6\n"
+                        << "      workers: 0\n      progress: false\n"
+                        << "      observation: {h_pile: 0.55, pile_mid: 0.25, pile_high: 0.4, "
+                           "wall_mid: 1.2, wall_high: 1.9}\n"
+                        << runner;
+    return std::vector<std::string>{PLR_BINARY, "run", file.string(), "--report",
+                                    (dir_ / name).string()};
+  };
+  ASSERT_EQ(wait(spawn(config("generate_local", ""), "generate_local")), 0)
+      << log("generate_local");
+  const std::string slurm =
+      "      runner: slurm\n      slurm: {poll_s: 0.2, job_name: " + job_name_ + "}\n";
+  ASSERT_EQ(wait(spawn(config("generate_slurm", slurm), "generate_slurm")), 0)
+      << log("generate_slurm");
+  const auto local = plr::sim::load_library(dir_ / "generate_local" / "library.plrl");
+  const auto on_slurm = plr::sim::load_library(dir_ / "generate_slurm" / "library.plrl");
+  ASSERT_TRUE(local && on_slurm) << log("generate_slurm");
+  ASSERT_EQ(on_slurm->entries.size(), 2u);
+  EXPECT_EQ(on_slurm->entries[0].name, "block_a");
+  EXPECT_EQ(on_slurm->entries[1].name, "block_b");
+  EXPECT_EQ(plr::sim::testing::library_fingerprint(dir_ / "generate_slurm" / "library.plrl"),
+            plr::sim::testing::library_fingerprint(dir_ / "generate_local" / "library.plrl"));
+  EXPECT_NE(log("generate_slurm").find("\"tasks\":2"), std::string::npos) << log("generate_slurm");
+  EXPECT_TRUE(queue().empty()) << queue();
 }
 
 }  // namespace

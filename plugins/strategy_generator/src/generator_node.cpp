@@ -15,6 +15,7 @@
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
+#include <plr/yaml_reader.hpp>
 
 #include <unistd.h>
 
@@ -28,10 +29,14 @@
 
 #include <plr/msg/jobs_generated.h>
 
+#include "plr/jobs/engine.hpp"
 #include "plr/jobs/in_process_runner.hpp"
+#include "plr/jobs/runner_settings.hpp"
+#include "plr/jobs/slurm_runner.hpp"
 #include "plr/sim/library.hpp"
 #include "plr/sim/world_io.hpp"
 #include "truck/generate.hpp"
+#include "truck/strategy_job.hpp"
 #include "truck/svg.hpp"
 #include "truck/worker_runner.hpp"
 
@@ -40,14 +45,8 @@ namespace {
 namespace fs = std::filesystem;
 using namespace plr;
 using generator::GenerateOptions;
+using generator::WorldSpec;
 using Clock = std::chrono::steady_clock;
-
-// A family's world by seed, or a world file with a family's mass prior.
-struct WorldSpec {
-  sim::EnvFamily family = sim::EnvFamily::kA1;
-  std::uint64_t seed = 1;
-  std::string file;
-};
 
 std::string duration(double s) {
   if (!std::isfinite(s) || s < 0) return "-";
@@ -79,18 +78,31 @@ std::string default_worker() {
   return ec ? "plr_sim_worker" : (self.parent_path() / "plr_sim_worker").string();
 }
 
+// `runner` and `slurm` of the node's params, read as the evaluation's and
+// the chooser's settings files read them (JSON is YAML's flow style).
+Expected<jobs::RunnerSettings> read_runner(const nlohmann::json& params) {
+  nlohmann::json part = nlohmann::json::object();
+  for (const char* key : {jobs::kRunnerKey, jobs::kSlurmKey})
+    if (params.contains(key)) part[key] = params[key];
+  auto doc = yaml::Document::parse(part.dump(), "generator params");
+  if (!doc) return doc.error();
+  jobs::RunnerSettings out;
+  jobs::read_runner_settings(doc->root().map("params", {jobs::kRunnerKey, jobs::kSlurmKey}), out);
+  return doc->result(std::move(out));
+}
+
 class GeneratorNode : public Node {
  public:
   using Node::Node;
 
  protected:
   Status on_configure() override {
-    params().allow_only({"library",          "checkpoint_dir", "worlds",          "particles",
-                         "horizon",          "epsilon1",       "epsilon2",        "trials",
-                         "target_gap",       "seed",           "seconds_per_box", "action_s",
-                         "workers",          "worker_program", "remote_workers",  "remote_service",
-                         "remote_timeout_s", "observation",    "progress",        "max_wall_s",
-                         "complete_tree"});
+    params().allow_only(
+        {"library",         "checkpoint_dir",   "worlds",      "particles",      "horizon",
+         "epsilon1",        "epsilon2",         "trials",      "target_gap",     "seed",
+         "seconds_per_box", "action_s",         "workers",     "worker_program", "remote_workers",
+         "remote_service",  "remote_timeout_s", "observation", "progress",       "max_wall_s",
+         "complete_tree",   "runner",           "slurm"});
     library_ = params().require<std::string>("library");
     checkpoint_dir_ = params().get<std::string>("checkpoint_dir", library_ + ".checkpoint");
     particles_ = params().get<int>("particles", 5);
@@ -132,6 +144,10 @@ class GeneratorNode : public Node {
       return make_error(PLR_ERR_INVALID, "params 'seconds_per_box', 'action_s': must be > 0");
     if (o.trials < 1 || o.trials > 10'000'000)
       return make_error(PLR_ERR_INVALID, "param 'trials': must be in 1..10000000");
+    if (auto runner = read_runner(params().json()); !runner)
+      return runner.error();
+    else
+      runner_ = std::move(*runner);
     const nlohmann::json observation = params().json().value("observation", nlohmann::json());
     if (auto obs = sim::ObservationParams::from_json(observation); !obs)
       return make_error(PLR_ERR_INVALID, "param 'observation': " + obs.error().message);
@@ -208,6 +224,8 @@ class GeneratorNode : public Node {
       }
       library = std::move(*loaded);
     }
+    if (runner_.kind == jobs::RunnerSettings::Kind::kSlurm)
+      return generate_on_slurm(library, lib, why);
     // The particles' starting states are made here; the simulations run as
     // jobs: in this process with no workers, else on the workers.
     const generator::WorkerRunner* worker_runner = nullptr;
@@ -251,17 +269,13 @@ class GeneratorNode : public Node {
         why = "stopped";
         return false;
       }
-      const WorldSpec& spec = worlds_[i];
-      generator::Problem problem =
-          spec.file.empty()
-              ? generator::make_problem(spec.family, spec.seed, particles_, seed_)
-              : generator::make_problem(sim::load_world(spec.file).value(), spec.family,
-                                        fs::path(spec.file).stem().string(), particles_, seed_);
-      problem.observation_json = observation_json_;
-      const bool have =
-          std::any_of(library.entries.begin(), library.entries.end(),
-                      [&](const sim::LibraryEntry& e) { return e.name == problem.name; });
-      if (have) {
+      auto made_problem = generator::make_problem(job_for(worlds_[i]));
+      if (!made_problem) {
+        why = made_problem.error().message;
+        return false;
+      }
+      const generator::Problem& problem = *made_problem;
+      if (has(library, problem.name)) {
         log().info("{}: in the library already", problem.name);
         continue;
       }
@@ -299,17 +313,8 @@ class GeneratorNode : public Node {
         why = result.error().message;
         return false;
       }
-      library.entries.push_back(std::move(result->entry));
-      if (auto s = sim::save_library(library, lib); !s) {
-        why = s.error().message;
-        return false;
-      }
+      if (!add(library, lib, std::move(result->entry), why)) return false;
       const sim::LibraryEntry& e = library.entries.back();
-      const fs::path dir = lib.parent_path();
-      (void)write_file_atomically((dir / (e.name + ".svg")).string(),
-                                  generator::strategy_svg(e.strategy));
-      (void)write_file_atomically((dir / (e.name + "-anytime.svg")).string(),
-                                  generator::anytime_svg(e));
       if (show_progress_ && tty_) std::fputs("\n", stderr);
       log().info(
           "{}: {} nodes, root bounds [{:.1f}, {:.1f}], {} trials, {} simulations ({} run now), "
@@ -323,6 +328,99 @@ class GeneratorNode : public Node {
                  worker_runner->remote_done(), worker_runner->remote_failures());
     why = fmt::format("library {}: {} strategies ({} made now)", library_, library.entries.size(),
                       made);
+    return true;
+  }
+
+  generator::StrategyJob job_for(const WorldSpec& world) const {
+    return {world, particles_, seed_, options_, observation_json_, checkpoint_dir_};
+  }
+
+  static bool has(const sim::Library& library, const std::string& name) {
+    return std::any_of(library.entries.begin(), library.entries.end(),
+                       [&](const sim::LibraryEntry& e) { return e.name == name; });
+  }
+
+  // The library written with `entry` added, and the strategy's tree and
+  // anytime curve beside it.
+  static bool add(sim::Library& library, const fs::path& lib, sim::LibraryEntry entry,
+                  std::string& why) {
+    library.entries.push_back(std::move(entry));
+    if (auto s = sim::save_library(library, lib); !s) {
+      why = s.error().message;
+      return false;
+    }
+    const sim::LibraryEntry& e = library.entries.back();
+    const fs::path dir = lib.parent_path();
+    (void)write_file_atomically((dir / (e.name + ".svg")).string(),
+                                generator::strategy_svg(e.strategy));
+    (void)write_file_atomically((dir / (e.name + "-anytime.svg")).string(),
+                                generator::anytime_svg(e));
+    return true;
+  }
+
+  // Each missing strategy as an array task of a Slurm job (kind
+  // generator.strategy, run by the worker program); their results in the
+  // store checkpoint_dir/strategies, the library written in the worlds'
+  // order once all have come. Run again, stored strategies are not made
+  // again, and a task run again resumes its world's simulations.
+  bool generate_on_slurm(sim::Library& library, const fs::path& lib, std::string& why) {
+    std::vector<jobs::Job> todo;
+    for (const WorldSpec& world : worlds_) {
+      const generator::StrategyJob job = job_for(world);
+      auto problem = generator::make_problem(job);
+      if (!problem) {
+        why = problem.error().message;
+        return false;
+      }
+      if (has(library, problem->name))
+        log().info("{}: in the library already", problem->name);
+      else
+        todo.push_back({generator::kStrategyKind, problem->name, generator::encode(job)});
+    }
+    auto store = jobs::Store::open(fs::path(checkpoint_dir_) / "strategies");
+    if (!store) {
+      why = store.error().message;
+      return false;
+    }
+    jobs::SlurmRunner runner(*store, {fs::absolute(worker_program_).string(), "--slurm-task"},
+                             runner_.slurm);
+    jobs::RunOptions options;
+    options.stop = [this] { return stop_.load(); };
+    std::size_t done = 0;
+    options.on_start = [&](std::size_t stored, std::size_t to_run) {
+      done = stored;
+      log().info("{} strategies as Slurm array tasks: {} stored, {} to run", todo.size(), stored,
+                 to_run);
+    };
+    options.on_done = [&](const jobs::Result& r) {
+      log().info("{} ({} of {}): {}", r.key, ++done, todo.size(),
+                 r.ok ? "made" : "failed: " + r.error);
+    };
+    auto outcome = jobs::run(todo, runner, &*store, options);
+    if (!outcome) {
+      why = outcome.error().message;
+      return false;
+    }
+    log().info("slurm: {}", jobs::to_json(runner.stats()).dump());
+    if (outcome->stopped) {
+      why = "stopped";
+      return false;
+    }
+    for (const jobs::Result& r : outcome->results) {
+      if (!r.ok) {
+        why = fmt::format("{}: {} (log: {})", r.key, r.error, store->log_file(r.key).string());
+        return false;
+      }
+      auto one = sim::deserialize_library(r.output.data(), r.output.size(),
+                                          store->result_file(r.key).string());
+      if (!one || one->entries.size() != 1) {
+        why = one ? store->result_file(r.key).string() + ": not one strategy" : one.error().message;
+        return false;
+      }
+      if (!add(library, lib, std::move(one->entries.front()), why)) return false;
+    }
+    why = fmt::format("library {}: {} strategies ({} made on Slurm now)", library_,
+                      library.entries.size(), outcome->ran);
     return true;
   }
 
@@ -360,6 +458,7 @@ class GeneratorNode : public Node {
   std::uint64_t seed_ = 1;
   bool show_progress_ = true, tty_ = false;
   GenerateOptions options_;
+  jobs::RunnerSettings runner_;
   std::vector<WorldSpec> worlds_;
   Publisher<msg::PipelineDone> done_;
   std::thread thread_;
