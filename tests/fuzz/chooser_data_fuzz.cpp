@@ -1,5 +1,5 @@
 // Fuzz target: the chooser's training data set reader
-// (plugins/strategy_chooser/src/training/data_set.cpp), what a training run
+// (sim/chooser/training/data_set.cpp), what a training run
 // reads back when it resumes. The first byte chooses whether the input is a
 // whole file or a body the target frames itself, past the frame's CRC.
 #include <plr/sim/framed_file.hpp>
@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "training/data_set.hpp"
+#include "plr/chooser/training/data_set.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;

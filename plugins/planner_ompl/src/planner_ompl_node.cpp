@@ -3,7 +3,7 @@
 #include <plr/messages.hpp>
 #include <plr/plugin.hpp>
 
-#include "ompl_planner.hpp"
+#include "plr/planning/ompl_planner.hpp"
 #include "plr/planning/planner_node.hpp"
 
 namespace {

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "plr/chooser/model.hpp"
-#include "training/dagger.hpp"
+#include "plr/chooser/training/dagger.hpp"
 
 namespace {
 

@@ -12,10 +12,10 @@
 #include <fstream>
 #include <thread>
 
+#include "plr/chooser/training/data_set.hpp"
+#include "plr/chooser/training/settings.hpp"
 #include "plr/sim/library.hpp"
 #include "plr/sim/world_io.hpp"
-#include "training/data_set.hpp"
-#include "training/settings.hpp"
 
 namespace fs = std::filesystem;
 using namespace plr::chooser;

@@ -24,9 +24,9 @@
 #include "bench_util.hpp"
 #include "plr/chooser/model.hpp"
 #include "plr/chooser/nearest.hpp"
+#include "plr/chooser/training/data_set.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/library.hpp"
-#include "training/data_set.hpp"
 
 namespace {
 

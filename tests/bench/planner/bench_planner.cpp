@@ -18,8 +18,8 @@
 #include <nlohmann/json.hpp>
 
 #include "bench_cli.hpp"
-#include "ompl_planner.hpp"
 #include "plr/planning/lattice_planner.hpp"
+#include "plr/planning/ompl_planner.hpp"
 #include "plr/sim/collision.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/octree.hpp"

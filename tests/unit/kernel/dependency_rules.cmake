@@ -23,7 +23,7 @@ set(sim_layers
   "jobs        common"
   "actions     physics planning semantic jobs"
   "episode     actions"
-  "chooser     actions"
+  "chooser     episode"
   "evaluation  chooser episode"
   "pomdp"
   "ros2")
@@ -177,12 +177,6 @@ endforeach()
 # --- Include paths -------------------------------------------------------------
 # A plug-in's folders are on no include path but its own targets': neither
 # named by another target nor exported by a plug-in target another one links.
-# Links from outside a plug-in to its internals that predate this rule, each
-# to go (the user moves into the plug-in, or the code it uses into sim/):
-set(known_internal_users
-  "fuzz_chooser_data plr_chooser_training"
-  "bench_chooser plr_chooser_training"
-  "bench_planner plr_ompl_core")
 function(check_include_folder t folder how)
   area_of("${folder}" owner)
   area_of("${folder_of_${t}}" user)
@@ -203,9 +197,6 @@ foreach(entry IN LISTS graph)
   if(entry MATCHES "^link ([^ ]+) ([^ ]+)$")
     set(t ${CMAKE_MATCH_1})
     set(dep ${CMAKE_MATCH_2})
-    if("${t} ${dep}" IN_LIST known_internal_users)
-      continue()
-    endif()
     foreach(folder IN LISTS exports_of_${dep})
       check_include_folder(${t} ${folder} "links ${dep}, which puts")
     endforeach()

@@ -1,4 +1,4 @@
-#include "training/dagger.hpp"
+#include "plr/chooser/training/dagger.hpp"
 
 #include <plr/atomic_file.hpp>
 #include <plr/message.hpp>
@@ -12,11 +12,12 @@
 
 #include "plr/chooser/model.hpp"
 #include "plr/chooser/nearest.hpp"
+#include "plr/chooser/training/data_set.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/library.hpp"
-#include "training/curve_svg.hpp"
-#include "training/data_set.hpp"
-#include "training/rollout.hpp"
+
+#include "curve_svg.hpp"
+#include "rollout.hpp"
 
 namespace plr::chooser {
 

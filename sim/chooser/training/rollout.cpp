@@ -1,4 +1,4 @@
-#include "training/rollout.hpp"
+#include "rollout.hpp"
 
 #include <plr/msg/chooser_data_generated.h>
 

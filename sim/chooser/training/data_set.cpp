@@ -1,4 +1,4 @@
-#include "training/data_set.hpp"
+#include "plr/chooser/training/data_set.hpp"
 
 #include <plr/msg/chooser_data_generated.h>
 

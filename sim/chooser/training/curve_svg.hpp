@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "training/data_set.hpp"
+#include "plr/chooser/training/data_set.hpp"
 
 namespace plr::chooser {
 

@@ -1,4 +1,4 @@
-#include "training/curve_svg.hpp"
+#include "curve_svg.hpp"
 
 #include <plr/svg_chart.hpp>
 

@@ -19,7 +19,7 @@
 #include <functional>
 #include <string>
 
-#include "training/settings.hpp"
+#include "plr/chooser/training/settings.hpp"
 
 namespace plr::chooser {
 

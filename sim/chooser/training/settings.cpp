@@ -1,4 +1,4 @@
-#include "training/settings.hpp"
+#include "plr/chooser/training/settings.hpp"
 
 #include <plr/message.hpp>
 #include <plr/yaml_reader.hpp>

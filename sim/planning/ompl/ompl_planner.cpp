@@ -1,4 +1,4 @@
-#include "ompl_planner.hpp"
+#include "plr/planning/ompl_planner.hpp"
 
 #include "plr/planning/shortcut.hpp"
 
