@@ -42,7 +42,8 @@ std::string base64(std::string_view in) {
 const Channel* FoxgloveChannels::add(const std::string& topic, std::uint64_t type_id) {
   const auto* schema = find_schema(type_id);
   if (schema == nullptr) return nullptr;
-  return insert({0, topic, type_id, "flatbuffer", schema->name, "flatbuffer", base64(schema->bfbs)});
+  return insert(
+      {0, topic, type_id, "flatbuffer", schema->name, "flatbuffer", base64(schema->bfbs)});
 }
 
 const Channel* FoxgloveChannels::add_json(const std::string& topic, const std::string& schema_name,

@@ -76,14 +76,14 @@ json point3(const char* description) {
 }
 
 json pose(const char* description) {
-  return object("foxglove.Pose", description,
-                {{"position", vector3("Point denoting position in 3D space")},
-                 {"orientation", object("foxglove.Quaternion",
-                                        "Quaternion denoting orientation in 3D space",
-                                        {{"x", typed("number", "x value")},
-                                         {"y", typed("number", "y value")},
-                                         {"z", typed("number", "z value")},
-                                         {"w", typed("number", "w value")}})}});
+  return object(
+      "foxglove.Pose", description,
+      {{"position", vector3("Point denoting position in 3D space")},
+       {"orientation", object("foxglove.Quaternion", "Quaternion denoting orientation in 3D space",
+                              {{"x", typed("number", "x value")},
+                               {"y", typed("number", "y value")},
+                               {"z", typed("number", "z value")},
+                               {"w", typed("number", "w value")}})}});
 }
 
 json color(const char* description) {
@@ -99,19 +99,19 @@ json indices() {
 }
 
 json build_schema() {
-  const json arrow = object(
-      "foxglove.ArrowPrimitive", "A primitive representing an arrow",
-      {{"pose", pose("Position of the tail and orientation; identity points along +x")},
-       {"shaft_length", typed("number", "Length of the arrow shaft")},
-       {"shaft_diameter", typed("number", "Diameter of the arrow shaft")},
-       {"head_length", typed("number", "Length of the arrow head")},
-       {"head_diameter", typed("number", "Diameter of the arrow head")},
-       {"color", color("Color of the arrow")}});
-  const json cube = object("foxglove.CubePrimitive",
-                           "A primitive representing a cube or rectangular prism",
-                           {{"pose", pose("Position of the centre and orientation of the cube")},
-                            {"size", vector3("Size of the cube along each axis")},
-                            {"color", color("Color of the cube")}});
+  const json arrow =
+      object("foxglove.ArrowPrimitive", "A primitive representing an arrow",
+             {{"pose", pose("Position of the tail and orientation; identity points along +x")},
+              {"shaft_length", typed("number", "Length of the arrow shaft")},
+              {"shaft_diameter", typed("number", "Diameter of the arrow shaft")},
+              {"head_length", typed("number", "Length of the arrow head")},
+              {"head_diameter", typed("number", "Diameter of the arrow head")},
+              {"color", color("Color of the arrow")}});
+  const json cube =
+      object("foxglove.CubePrimitive", "A primitive representing a cube or rectangular prism",
+             {{"pose", pose("Position of the centre and orientation of the cube")},
+              {"size", vector3("Size of the cube along each axis")},
+              {"color", color("Color of the cube")}});
   const json sphere =
       object("foxglove.SpherePrimitive", "A primitive representing a sphere or ellipsoid",
              {{"pose", pose("Position of the centre and orientation of the sphere")},
@@ -135,8 +135,8 @@ json build_schema() {
        {"thickness", typed("number", "Line thickness")},
        {"scale_invariant",
         typed("boolean", "Thickness in screen pixels (true) or in world units (false)")},
-       {"points", array(point3("A point representing a position in 3D space"),
-                        "Points along the line")},
+       {"points",
+        array(point3("A point representing a position in 3D space"), "Points along the line")},
        {"color", color("Solid color of the whole line; `color` or `colors` is required")},
        {"colors", array(color("A color in RGBA format"), "Per-point colors, as many as points")},
        {"indices", indices()}});
@@ -149,15 +149,15 @@ json build_schema() {
        {"color", color("Solid color of the whole shape; `color` or `colors` is required")},
        {"colors", array(color("A color in RGBA format"), "Per-vertex colors, as many as points")},
        {"indices", indices()}});
-  const json text = object(
-      "foxglove.TextPrimitive", "A primitive representing a text label",
-      {{"pose", pose("Position of the centre of the text box and orientation of the text")},
-       {"billboard", typed("boolean", "Always face the camera (true) or follow the pose")},
-       {"font_size", typed("number", "Font size (height of one line of text)")},
-       {"scale_invariant",
-        typed("boolean", "Font size in screen pixels (true) or in world units (false)")},
-       {"color", color("Color of the text")},
-       {"text", typed("string", "Text")}});
+  const json text =
+      object("foxglove.TextPrimitive", "A primitive representing a text label",
+             {{"pose", pose("Position of the centre of the text box and orientation of the text")},
+              {"billboard", typed("boolean", "Always face the camera (true) or follow the pose")},
+              {"font_size", typed("number", "Font size (height of one line of text)")},
+              {"scale_invariant",
+               typed("boolean", "Font size in screen pixels (true) or in world units (false)")},
+              {"color", color("Color of the text")},
+              {"text", typed("string", "Text")}});
   json model_data = typed("string", "Embedded model; `url` or `data` should be provided");
   model_data["contentEncoding"] = "base64";
   const json model = object(
@@ -176,13 +176,13 @@ json build_schema() {
       {{"timestamp", time_schema("time", false, "Timestamp of the entity")},
        {"frame_id", typed("string", "Frame of reference")},
        {"id", typed("string", "Identifier; it replaces any earlier entity of the topic with it")},
-       {"lifetime", time_schema("duration", true,
-                                "How long after `timestamp` it is removed; zero: never")},
+       {"lifetime",
+        time_schema("duration", true, "How long after `timestamp` it is removed; zero: never")},
        {"frame_locked", typed("boolean", "Follow `frame_id` (true) or stay in the fixed frame")},
-       {"metadata", array(object("foxglove.KeyValuePair", "A key with its associated value",
-                                 {{"key", typed("string", "Key")},
-                                  {"value", typed("string", "Value")}}),
-                          "Additional metadata; keys are unique")},
+       {"metadata",
+        array(object("foxglove.KeyValuePair", "A key with its associated value",
+                     {{"key", typed("string", "Key")}, {"value", typed("string", "Value")}}),
+              "Additional metadata; keys are unique")},
        {"arrows", array(arrow, "Arrow primitives")},
        {"cubes", array(cube, "Cube primitives")},
        {"spheres", array(sphere, "Sphere primitives")},
@@ -220,7 +220,8 @@ json vec(const Eigen::Vector3d& v) {
 }
 
 json pose_of(const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
-  return {{"position", vec(p)}, {"orientation", {{"x", q.x()}, {"y", q.y()}, {"z", q.z()}, {"w", q.w()}}}};
+  return {{"position", vec(p)},
+          {"orientation", {{"x", q.x()}, {"y", q.y()}, {"z", q.z()}, {"w", q.w()}}}};
 }
 
 json rgba(double r, double g, double b, double a) {
@@ -257,10 +258,9 @@ json trailer_entity(const Eigen::Vector3d& trailer, std::int64_t stamp_ns) {
   cubes.push_back(cube({d / 2, 0, -kWall / 2}, none, {d, w + 2 * kWall, kWall}, floor_color));
   cubes.push_back(cube({d / 2, 0, h + kWall / 2}, none, {d, w + 2 * kWall, kWall}, wall_color));
   for (const double side : {-1.0, 1.0})
-    cubes.push_back(
-        cube({d / 2, side * (w + kWall) / 2, h / 2}, none, {d, kWall, h}, wall_color));
-  cubes.push_back(cube({d + kWall / 2, 0, h / 2}, none, {kWall, w + 2 * kWall, h + 2 * kWall},
-                       wall_color));
+    cubes.push_back(cube({d / 2, side * (w + kWall) / 2, h / 2}, none, {d, kWall, h}, wall_color));
+  cubes.push_back(
+      cube({d + kWall / 2, 0, h / 2}, none, {kWall, w + 2 * kWall, h + 2 * kWall}, wall_color));
   return e;
 }
 
@@ -370,8 +370,9 @@ std::optional<FoxgloveScene::Message> FoxgloveScene::take() {
     if (!shown.count(id))
       deletions.push_back({{"timestamp", time_of(stamp_ns_)}, {"type", 0}, {"id", id}});
   shown_boxes_ = std::move(shown);
-  return Message{stamp_ns_,
-                 json{{"deletions", std::move(deletions)}, {"entities", std::move(entities)}}.dump()};
+  return Message{
+      stamp_ns_,
+      json{{"deletions", std::move(deletions)}, {"entities", std::move(entities)}}.dump()};
 }
 
 }  // namespace plr::monitor_web

@@ -213,13 +213,13 @@ class MonitorWebNode final : public Node, public WebHandler {
     using Clock = std::chrono::steady_clock;
     const auto page_period = std::chrono::duration_cast<Clock::duration>(
         std::chrono::duration<double>(1.0 / update_hz_));
-    const auto scene_period = std::chrono::duration_cast<Clock::duration>(
-        std::chrono::duration<double>(1.0 / scene_hz_));
+    const auto scene_period =
+        std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / scene_hz_));
     auto next_page = Clock::now() + page_period;
     auto next_scene = Clock::now() + scene_period;
     std::unique_lock lock(stop_m_);
-    while (!stop_cv_.wait_until(lock, std::min(next_page, next_scene),
-                                [this] { return stopping_; })) {
+    while (
+        !stop_cv_.wait_until(lock, std::min(next_page, next_scene), [this] { return stopping_; })) {
       const auto now = Clock::now();
       // A late tick is not made up for: the next one is a full period on.
       const auto due = [now](Clock::time_point& next, Clock::duration period) {

@@ -29,7 +29,8 @@ std::string world(const std::vector<TestBox>& boxes, const std::vector<std::uint
                   const std::vector<double>& joints) {
   flatbuffers::FlatBufferBuilder fbb;
   std::vector<msg::BoxState> states;
-  for (const auto& b : boxes) states.emplace_back(b.id, b.size, msg::Pose(b.position, b.orientation), 0.0);
+  for (const auto& b : boxes)
+    states.emplace_back(b.id, b.size, msg::Pose(b.position, b.orientation), 0.0);
   const msg::Vec3 trailer(2.4, 2.6, 6.0);
   const auto robot = msg::CreateJointStateDirect(fbb, &joints);
   fbb.Finish(msg::CreateWorldStateDirect(fbb, 1, &trailer, nullptr, 0.0, &states, robot, &held));
@@ -64,9 +65,8 @@ TEST(FoxgloveScene, TheSchemaIsFoxglovesSceneUpdate) {
   std::set<std::string> fields;
   for (const auto& [name, sub] : entity.at("properties").items()) fields.insert(name);
   EXPECT_EQ(fields, (std::set<std::string>{"timestamp", "frame_id", "id", "lifetime",
-                                           "frame_locked", "metadata", "arrows", "cubes",
-                                           "spheres", "cylinders", "lines", "triangles", "texts",
-                                           "models"}));
+                                           "frame_locked", "metadata", "arrows", "cubes", "spheres",
+                                           "cylinders", "lines", "triangles", "texts", "models"}));
   const auto& cube = entity.at("properties").at("cubes").at("items");
   EXPECT_EQ(cube.at("title"), "foxglove.CubePrimitive");
   EXPECT_EQ(cube.at("properties").at("pose").at("properties").at("orientation").at("title"),
@@ -93,7 +93,7 @@ TEST(FoxgloveScene, HoldsTheTrailerEachBoxAndTheRobotsLinks) {
   const auto entities = by_id(j);
   ASSERT_TRUE(entities.count("trailer"));
   const auto& floor = entities.at("trailer").at("cubes").at(0);
-  EXPECT_DOUBLE_EQ(floor.at("size").at("x"), 6.0);   // depth
+  EXPECT_DOUBLE_EQ(floor.at("size").at("x"), 6.0);  // depth
   EXPECT_DOUBLE_EQ(floor.at("pose").at("position").at("x"), 3.0);
   EXPECT_EQ(entities.at("trailer").at("cubes").size(), 5u);  // floor, ceiling, 2 sides, front
   for (const auto& b : kBoxes) {
@@ -106,11 +106,10 @@ TEST(FoxgloveScene, HoldsTheTrailerEachBoxAndTheRobotsLinks) {
     const auto& c = e.at("cubes")[0];
     EXPECT_EQ(c.at("pose").at("position"),
               (json{{"x", b.position.x()}, {"y", b.position.y()}, {"z", b.position.z()}}));
-    EXPECT_EQ(c.at("pose").at("orientation"),
-              (json{{"x", b.orientation.x()},
-                    {"y", b.orientation.y()},
-                    {"z", b.orientation.z()},
-                    {"w", b.orientation.w()}}));
+    EXPECT_EQ(c.at("pose").at("orientation"), (json{{"x", b.orientation.x()},
+                                                    {"y", b.orientation.y()},
+                                                    {"z", b.orientation.z()},
+                                                    {"w", b.orientation.w()}}));
     EXPECT_EQ(c.at("size"), (json{{"x", b.size.x()}, {"y", b.size.y()}, {"z", b.size.z()}}));
     EXPECT_EQ(e.at("metadata")[0].at("value"), b.id == 3 ? "true" : "false");
   }

@@ -23,16 +23,16 @@ inline std::string schema_violation(const nlohmann::json& schema, const nlohmann
     if (key == "title" || key == "description" || key == "$comment") continue;
     if (key == "type") {
       const std::string t = rule.get<std::string>();
-      const bool ok =
-          t == "object"    ? value.is_object()
-          : t == "array"   ? value.is_array()
-          : t == "string"  ? value.is_string()
-          : t == "boolean" ? value.is_boolean()
-          : t == "number"  ? value.is_number()
-          : t == "integer" ? value.is_number_integer() ||
-                                 (value.is_number_float() &&
-                                  std::floor(value.get<double>()) == value.get<double>())
-                           : false;
+      const bool ok = t == "object"    ? value.is_object()
+                      : t == "array"   ? value.is_array()
+                      : t == "string"  ? value.is_string()
+                      : t == "boolean" ? value.is_boolean()
+                      : t == "number"  ? value.is_number()
+                      : t == "integer"
+                          ? value.is_number_integer() ||
+                                (value.is_number_float() &&
+                                 std::floor(value.get<double>()) == value.get<double>())
+                          : false;
       if (!ok) return path + ": expected " + t + ", got " + value.type_name() + " " + value.dump();
     } else if (key == "properties") {
       if (!value.is_object()) continue;  // "type" says what it must be
