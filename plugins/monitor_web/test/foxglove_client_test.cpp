@@ -174,7 +174,7 @@ WorldBoxes decode_world(const std::string& payload) {
   return out;
 }
 
-TEST(FoxgloveScene, EveryMessageMatchesItsSchemaAndTheWorld) {
+TEST(FoxgloveSceneChannel, EveryMessageMatchesItsSchemaAndTheWorld) {
   // Paced at 5x the robot's speed, so the run lasts while the client reads.
   PipelineProcess run(PLR_BIN, {UNLOAD_SMALL_CONFIG, "--report", "{dir}/report", "--set",
                                 "pipeline=monitor_scene_" + std::to_string(::getpid()), "--set",
