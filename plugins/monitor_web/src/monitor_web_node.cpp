@@ -19,6 +19,7 @@
 #include <map>
 #include <mutex>
 #include <thread>
+#include <type_traits>
 
 extern const plr::EmbeddedFile plr_monitor_web_pages[];
 extern const std::size_t plr_monitor_web_pages_count;
@@ -169,7 +170,10 @@ class MonitorWebNode final : public Node, public WebHandler {
   template <class T>
   bool show(const plr_msg_view& v) {
     if (v.type_id != MessageTraits<T>::type_id()) return false;
-    if (verify<T>(v.data, v.size)) state_->update(*flatbuffers::GetRoot<T>(v.data));
+    if (!verify<T>(v.data, v.size)) return true;
+    const auto& m = *flatbuffers::GetRoot<T>(v.data);
+    state_->update(m);
+    if constexpr (std::is_same_v<T, msg::WorldState>) scene_->update(m, v.stamp_ns);
     return true;
   }
 
@@ -178,9 +182,6 @@ class MonitorWebNode final : public Node, public WebHandler {
     const auto v = api->msg_view(msg);
     const bool dashboard = show<msg::WorldState>(v) || show<msg::ExecutorState>(v) ||
                            show<msg::Progress>(v) || show<msg::KernelTelemetry>(v);
-    if (v.type_id == MessageTraits<msg::WorldState>::type_id() &&
-        verify<msg::WorldState>(v.data, v.size))
-      scene_->update(*flatbuffers::GetRoot<msg::WorldState>(v.data), v.stamp_ns);
     if (dashboard && v.type_id == MessageTraits<msg::KernelTelemetry>::type_id() &&
         verify<msg::KernelTelemetry>(v.data, v.size))
       advertise_new_topics(*flatbuffers::GetRoot<msg::KernelTelemetry>(v.data));
@@ -246,14 +247,12 @@ class MonitorWebNode final : public Node, public WebHandler {
   }
 
   void push_page() {
-    {
-      const auto s = server_->stats();
-      state_->set_server({{"clients", s.clients},
-                          {"sent", s.sent_messages},
-                          {"dropped", s.dropped_messages},
-                          {"dropped_bytes", s.dropped_bytes},
-                          {"refused", s.refused_requests}});
-    }
+    const auto s = server_->stats();
+    state_->set_server({{"clients", s.clients},
+                        {"sent", s.sent_messages},
+                        {"dropped", s.dropped_messages},
+                        {"dropped_bytes", s.dropped_bytes},
+                        {"refused", s.refused_requests}});
     const auto version = state_->version();
     if (version == sent_version_) return;
     sent_version_ = version;
