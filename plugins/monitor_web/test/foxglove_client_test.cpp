@@ -20,6 +20,7 @@
 
 #include <map>
 #include <set>
+#include <stdexcept>
 
 namespace plr::monitor_web::testing {
 namespace {
