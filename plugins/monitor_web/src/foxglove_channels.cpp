@@ -42,12 +42,23 @@ std::string base64(std::string_view in) {
 const Channel* FoxgloveChannels::add(const std::string& topic, std::uint64_t type_id) {
   const auto* schema = find_schema(type_id);
   if (schema == nullptr) return nullptr;
+  return insert(
+      {0, topic, type_id, "flatbuffer", schema->name, "flatbuffer", base64(schema->bfbs)});
+}
+
+const Channel* FoxgloveChannels::add_json(const std::string& topic, const std::string& schema_name,
+                                          const std::string& json_schema) {
+  return insert({0, topic, 0, "json", schema_name, "jsonschema", json_schema});
+}
+
+const Channel* FoxgloveChannels::insert(Channel c) {
   std::lock_guard lock(m_);
-  if (channels_.count(topic)) return nullptr;
-  auto& c = channels_[topic];
-  c = {next_id_++, topic, schema};
-  topic_of_[c.id] = topic;
-  return &c;
+  if (channels_.count(c.topic)) return nullptr;
+  c.id = next_id_++;
+  topic_of_[c.id] = c.topic;
+  auto& kept = channels_[c.topic];
+  kept = std::move(c);
+  return &kept;
 }
 
 const Channel* FoxgloveChannels::find(const std::string& topic) const {
@@ -61,10 +72,10 @@ std::string FoxgloveChannels::advertise(const std::vector<Channel>& channels) {
   for (const auto& c : channels)
     list.push_back({{"id", c.id},
                     {"topic", c.topic},
-                    {"encoding", "flatbuffer"},
-                    {"schemaName", c.schema->name},
-                    {"schema", base64(c.schema->bfbs)},
-                    {"schemaEncoding", "flatbuffer"}});
+                    {"encoding", c.encoding},
+                    {"schemaName", c.schema_name},
+                    {"schema", c.schema},
+                    {"schemaEncoding", c.schema_encoding}});
   return nlohmann::json{{"op", "advertise"}, {"channels", std::move(list)}}.dump();
 }
 

@@ -1,7 +1,8 @@
 // The Foxglove WebSocket protocol (foxglove.websocket.v1), server side:
 // PLR's topics as channels (message and schema encoding "flatbuffer", the
-// schema a base64 .bfbs), clients' subscriptions, and the binary message
-// frames. Read-only: no client publishing, services or parameters.
+// schema a base64 .bfbs), channels the monitor makes itself (encoding "json",
+// a JSON Schema), clients' subscriptions, and the binary message frames.
+// Read-only: no client publishing, services or parameters.
 // https://github.com/foxglove/ws-protocol/blob/main/docs/spec.md
 #pragma once
 
@@ -20,7 +21,11 @@ namespace plr::monitor_web {
 struct Channel {
   std::uint32_t id = 0;
   std::string topic;
-  const MessageSchema* schema = nullptr;
+  std::uint64_t type_id = 0;  // the bus topic's type; 0 when the monitor makes the messages
+  std::string encoding;       // "flatbuffer" or "json"
+  std::string schema_name;
+  std::string schema_encoding;  // "flatbuffer" or "jsonschema"
+  std::string schema;           // as advertised: base64 .bfbs, or the JSON Schema's text
 };
 
 class FoxgloveChannels {
@@ -29,6 +34,9 @@ class FoxgloveChannels {
 
   // A new channel for `topic` (nullptr when it exists or its type has no SDK schema).
   const Channel* add(const std::string& topic, std::uint64_t type_id);
+  // A channel of JSON messages the monitor makes (nullptr when `topic` exists).
+  const Channel* add_json(const std::string& topic, const std::string& schema_name,
+                          const std::string& json_schema);
   const Channel* find(const std::string& topic) const;
 
   // The server's first messages to a client: serverInfo, then every channel.
@@ -53,6 +61,8 @@ class FoxgloveChannels {
 
  private:
   mutable std::mutex m_;
+  const Channel* insert(Channel c);
+
   std::map<std::string, Channel> channels_;  // by topic
   std::map<std::uint32_t, std::string> topic_of_;
   std::uint32_t next_id_ = 1;

@@ -1,8 +1,10 @@
 // monitor_web: a live web dashboard of the pipeline and a Foxglove WebSocket
 // server on one port, fed only from the kernel's bus (the world, the
-// executor's state, progress and the kernels' telemetry). Read-only.
+// executor's state, progress and the kernels' telemetry). Read-only. Besides
+// the bus topics, Foxglove clients get the world as a foxglove.SceneUpdate.
 #include "dashboard_state.hpp"
 #include "foxglove_channels.hpp"
+#include "foxglove_scene.hpp"
 #include "web_server.hpp"
 
 #include <plr/embedded_file.hpp>
@@ -17,6 +19,7 @@
 #include <map>
 #include <mutex>
 #include <thread>
+#include <type_traits>
 
 extern const plr::EmbeddedFile plr_monitor_web_pages[];
 extern const std::size_t plr_monitor_web_pages_count;
@@ -32,6 +35,9 @@ std::string content_type(std::string_view name) {
   return "application/octet-stream";
 }
 
+// The Foxglove channel of the scene ('/' keeps it apart from bus topics).
+constexpr const char* kSceneTopic = "/scene";
+
 class MonitorWebNode final : public Node, public WebHandler {
  public:
   using Node::Node;
@@ -40,7 +46,7 @@ class MonitorWebNode final : public Node, public WebHandler {
  protected:
   Status on_configure() override {
     params().allow_only(
-        {"bind", "port", "token", "send_limit_mb", "update_hz", "draw_robot", "urdf"});
+        {"bind", "port", "token", "send_limit_mb", "update_hz", "scene_hz", "draw_robot", "urdf"});
     options_.bind = params().get<std::string>("bind", "127.0.0.1");
     const auto port = params().get<std::int64_t>("port", 8765);
     if (port < 0 || port > 65535) return make_error(PLR_ERR_INVALID, "param 'port': 0..65535");
@@ -53,6 +59,9 @@ class MonitorWebNode final : public Node, public WebHandler {
     update_hz_ = params().get<double>("update_hz", 10.0);
     if (!(update_hz_ > 0 && update_hz_ <= 100))
       return make_error(PLR_ERR_INVALID, "param 'update_hz': must be in (0, 100]");
+    scene_hz_ = params().get<double>("scene_hz", 10.0);
+    if (!(scene_hz_ > 0 && scene_hz_ <= 30))
+      return make_error(PLR_ERR_INVALID, "param 'scene_hz': must be in (0, 30]");
     if (auto s = validate(options_); !s) return s;
     std::optional<sim::RobotModel> robot;
     if (params().get<bool>("draw_robot", true)) {
@@ -60,6 +69,7 @@ class MonitorWebNode final : public Node, public WebHandler {
       if (!model) return make_error(PLR_ERR_INVALID, "param 'urdf': " + model.error().message);
       robot = std::move(*model);
     }
+    scene_ = std::make_unique<FoxgloveScene>(robot);
     state_ = std::make_unique<DashboardState>(std::move(robot));
     return {};
   }
@@ -75,6 +85,7 @@ class MonitorWebNode final : public Node, public WebHandler {
       if (auto s = read_topic(topic, type); !s) return s;
       channels_.add(topic, type);
     }
+    channels_.add_json(kSceneTopic, FoxgloveScene::kSchemaName, FoxgloveScene::json_schema());
     auto server = WebServer::start(options_, *this);
     if (!server) return server.error();
     server_ = std::move(*server);
@@ -91,6 +102,7 @@ class MonitorWebNode final : public Node, public WebHandler {
 
   Status on_cleanup() override {
     state_.reset();
+    scene_.reset();
     return {};
   }
 
@@ -118,10 +130,12 @@ class MonitorWebNode final : public Node, public WebHandler {
     auto r = channels_.handle(client, text);
     for (auto& reply : r.replies)
       server_->send(client, std::make_shared<const std::string>(std::move(reply)), false);
-    for (const auto& topic : r.topics_wanted)
-      if (const auto* c = channels_.find(topic))
-        if (auto s = read_topic(topic, c->schema->type_id); !s)
+    for (const auto& topic : r.topics_wanted) {
+      if (topic == kSceneTopic) scene_->resend();
+      if (const auto* c = channels_.find(topic); c && c->type_id != 0)
+        if (auto s = read_topic(topic, c->type_id); !s)
           log().warn("foxglove: {}", s.error().message);
+    }
   }
 
   void closed(std::uint64_t client) override { channels_.forget(client); }
@@ -156,7 +170,10 @@ class MonitorWebNode final : public Node, public WebHandler {
   template <class T>
   bool show(const plr_msg_view& v) {
     if (v.type_id != MessageTraits<T>::type_id()) return false;
-    if (verify<T>(v.data, v.size)) state_->update(*flatbuffers::GetRoot<T>(v.data));
+    if (!verify<T>(v.data, v.size)) return true;
+    const auto& m = *flatbuffers::GetRoot<T>(v.data);
+    state_->update(m);
+    if constexpr (std::is_same_v<T, msg::WorldState>) scene_->update(m, v.stamp_ns);
     return true;
   }
 
@@ -191,24 +208,56 @@ class MonitorWebNode final : public Node, public WebHandler {
                          false);
   }
 
-  // Sends the dashboard's state to its pages at update_hz, when it changed.
+  // Sends the dashboard's state to its pages at update_hz, when it changed,
+  // and the scene to its Foxglove subscribers at scene_hz, when the world did.
   void push_loop() {
-    const auto period = std::chrono::duration<double>(1.0 / update_hz_);
-    std::uint64_t sent_version = 0;
+    using Clock = std::chrono::steady_clock;
+    const auto page_period = std::chrono::duration_cast<Clock::duration>(
+        std::chrono::duration<double>(1.0 / update_hz_));
+    const auto scene_period =
+        std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / scene_hz_));
+    auto next_page = Clock::now() + page_period;
+    auto next_scene = Clock::now() + scene_period;
     std::unique_lock lock(stop_m_);
-    while (!stop_cv_.wait_for(lock, period, [this] { return stopping_; })) {
-      const auto s = server_->stats();
-      state_->set_server({{"clients", s.clients},
-                          {"sent", s.sent_messages},
-                          {"dropped", s.dropped_messages},
-                          {"dropped_bytes", s.dropped_bytes},
-                          {"refused", s.refused_requests}});
-      const auto version = state_->version();
-      if (version == sent_version) continue;
-      sent_version = version;
-      server_->broadcast(Protocol::kDashboard, std::make_shared<const std::string>(state_->json()),
-                         false);
+    while (
+        !stop_cv_.wait_until(lock, std::min(next_page, next_scene), [this] { return stopping_; })) {
+      const auto now = Clock::now();
+      // A late tick is not made up for: the next one is a full period on.
+      const auto due = [now](Clock::time_point& next, Clock::duration period) {
+        if (now < next) return false;
+        next += period;
+        if (next <= now) next = now + period;
+        return true;
+      };
+      if (due(next_scene, scene_period)) push_scene();
+      if (due(next_page, page_period)) push_page();
     }
+  }
+
+  void push_scene() {
+    const auto subscribers = channels_.subscribers(kSceneTopic);
+    if (subscribers.empty()) return;
+    const auto scene = scene_->take();
+    if (!scene) return;
+    for (const auto& [client, sub] : subscribers)
+      server_->send(client,
+                    std::make_shared<const std::string>(FoxgloveChannels::message_frame(
+                        sub, static_cast<std::uint64_t>(scene->stamp_ns), scene->json)),
+                    true);
+  }
+
+  void push_page() {
+    const auto s = server_->stats();
+    state_->set_server({{"clients", s.clients},
+                        {"sent", s.sent_messages},
+                        {"dropped", s.dropped_messages},
+                        {"dropped_bytes", s.dropped_bytes},
+                        {"refused", s.refused_requests}});
+    const auto version = state_->version();
+    if (version == sent_version_) return;
+    sent_version_ = version;
+    server_->broadcast(Protocol::kDashboard, std::make_shared<const std::string>(state_->json()),
+                       false);
   }
 
   void stop() {
@@ -232,7 +281,10 @@ class MonitorWebNode final : public Node, public WebHandler {
 
   WebServerOptions options_;
   double update_hz_ = 10.0;
+  double scene_hz_ = 10.0;
+  std::uint64_t sent_version_ = 0;  // of the dashboard's state
   std::unique_ptr<DashboardState> state_;
+  std::unique_ptr<FoxgloveScene> scene_;
   FoxgloveChannels channels_;
   std::mutex readers_m_;
   std::map<std::string, std::unique_ptr<Reader>> readers_;

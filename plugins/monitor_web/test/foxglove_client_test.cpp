@@ -1,9 +1,17 @@
 // A Foxglove WebSocket client (foxglove.websocket.v1) against the monitor in
-// a running demo pipeline: it is advertised PLR's topics as channels with
-// their binary schemas, subscribes to two, and decodes the message frames
-// with the reflection schema it was sent (not with PLR's generated code).
+// a running pipeline. In the demo pipeline it is advertised PLR's topics as
+// channels with their binary schemas, subscribes to two, and decodes the
+// message frames with the reflection schema it was sent (not with PLR's
+// generated code). In the small unloading run it reads the scene channel,
+// checks every message against the JSON Schema it was advertised with, and
+// compares the boxes with the world the simulator published.
+#include "json_schema_check.hpp"
 #include "pipeline_process.hpp"
 #include "web_client.hpp"
+
+#include <plr/message.hpp>
+#include <plr/messages.hpp>
+#include <plr/sim/unaligned.hpp>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -11,6 +19,8 @@
 #include <flatbuffers/reflection.h>
 
 #include <map>
+#include <set>
+#include <stdexcept>
 
 namespace plr::monitor_web::testing {
 namespace {
@@ -138,6 +148,134 @@ TEST_F(Foxglove, ItIsReadOnlyAndSaysWhatItRefuses) {
   ASSERT_EQ(statuses.size(), 2u);
   EXPECT_EQ(statuses[0], "unsupported operation 'advertise' (this server is read-only)");
   EXPECT_EQ(statuses[1], "subscribe: no channel 4242");
+}
+
+// The boxes of one world, as the scene should show them.
+struct WorldBoxes {
+  std::map<std::string, nlohmann::json> cubes;  // entity id -> {pose, size}
+};
+
+WorldBoxes decode_world(const std::string& payload) {
+  WorldBoxes out;
+  const auto* data = reinterpret_cast<const std::uint8_t*>(payload.data());
+  if (!plr::verify<msg::WorldState>(data, payload.size()))
+    throw std::runtime_error("world: not a WorldState");
+  const auto& w = *flatbuffers::GetRoot<msg::WorldState>(data);
+  if (!w.boxes()) return out;
+  for (flatbuffers::uoffset_t i = 0; i < w.boxes()->size(); ++i) {
+    const msg::BoxState b = sim::element(*w.boxes(), i);
+    const auto& p = b.pose().position();
+    const auto& q = b.pose().orientation();
+    out.cubes["box/" + std::to_string(b.id())] = {
+        {"pose",
+         {{"position", {{"x", p.x()}, {"y", p.y()}, {"z", p.z()}}},
+          {"orientation", {{"x", q.x()}, {"y", q.y()}, {"z", q.z()}, {"w", q.w()}}}}},
+        {"size", {{"x", b.size().x()}, {"y", b.size().y()}, {"z", b.size().z()}}}};
+  }
+  return out;
+}
+
+TEST(FoxgloveSceneChannel, EveryMessageMatchesItsSchemaAndTheWorld) {
+  // Paced at 5x the robot's speed, so the run lasts while the client reads.
+  PipelineProcess run(PLR_BIN, {UNLOAD_SMALL_CONFIG, "--report", "{dir}/report", "--set",
+                                "pipeline=monitor_scene_" + std::to_string(::getpid()), "--set",
+                                "nodes.simulator.params.real_time_factor=5", "--set",
+                                "nodes.monitor={plugin: monitor_web, params: {port: 0}}"});
+  const auto port = run.monitor_port();
+  ASSERT_NE(port, 0) << run.log();
+  WsClient client("127.0.0.1", port, "/", "foxglove.websocket.v1");
+
+  std::map<std::string, nlohmann::json> channels;
+  for (int i = 0; i < 20 && !(channels.count("/scene") && channels.count("world")); ++i) {
+    auto m = client.read();
+    ASSERT_TRUE(m) << "no advertise for /scene and world\n" << run.log();
+    if (m->binary) continue;
+    const auto j = nlohmann::json::parse(m->data);
+    if (j.at("op") != "advertise") continue;
+    for (const auto& c : j.at("channels")) channels[c.at("topic").get<std::string>()] = c;
+  }
+  const auto& scene = channels.at("/scene");
+  EXPECT_EQ(scene.at("encoding"), "json");
+  EXPECT_EQ(scene.at("schemaEncoding"), "jsonschema");
+  EXPECT_EQ(scene.at("schemaName"), "foxglove.SceneUpdate");
+  const auto schema = nlohmann::json::parse(scene.at("schema").get<std::string>());
+  client.send_text(nlohmann::json{{"op", "subscribe"},
+                                  {"subscriptions",
+                                   {{{"id", 1}, {"channelId", scene.at("id")}},
+                                    {{"id", 2}, {"channelId", channels.at("world").at("id")}}}}}
+                       .dump());
+
+  std::map<std::uint64_t, WorldBoxes> worlds;  // by bus stamp
+  std::set<std::string> shown;                 // box entities of the previous scene
+  std::size_t scenes = 0, matched = 0, deleted = 0, robot_entities = 0;
+  for (int i = 0; i < 5000 && (matched < 10 || deleted < 3); ++i) {
+    auto m = client.read();
+    ASSERT_TRUE(m) << "scenes " << scenes << ", matched " << matched << ", deleted " << deleted
+                   << "\n"
+                   << run.log();
+    if (!m->binary) continue;
+    ASSERT_GE(m->data.size(), 13u);
+    const auto sub = read_le(m->data, 1, 4);
+    const auto stamp = read_le(m->data, 5, 8);
+    const std::string payload = m->data.substr(13);
+    if (sub == 2) {
+      worlds[stamp] = decode_world(payload);
+      continue;
+    }
+    ASSERT_EQ(sub, 1u);
+    ++scenes;
+    const auto j = nlohmann::json::parse(payload);
+    ASSERT_EQ(schema_violation(schema, j, true), "") << "scene " << scenes;
+
+    std::map<std::string, nlohmann::json> boxes;
+    std::size_t robot = 0;
+    for (const auto& e : j.at("entities")) {
+      const std::string id = e.at("id");
+      EXPECT_EQ(e.at("frame_id"), "trailer");
+      EXPECT_EQ(e.at("timestamp").at("sec").get<std::uint64_t>() * 1'000'000'000 +
+                    e.at("timestamp").at("nsec").get<std::uint64_t>(),
+                stamp);
+      if (id.rfind("box/", 0) == 0) {
+        ASSERT_EQ(e.at("cubes").size(), 1u) << id;
+        boxes[id] = e.at("cubes")[0];
+      }
+      robot += id.rfind("robot/", 0) == 0;
+    }
+    EXPECT_GT(robot, 0u);
+    if (robot_entities == 0) robot_entities = robot;
+    EXPECT_EQ(robot, robot_entities) << "the robot's entities stay the same";
+    // Boxes that left since the previous scene are deleted by id, no other.
+    std::set<std::string> gone;
+    for (const auto& id : shown)
+      if (!boxes.count(id)) gone.insert(id);
+    std::set<std::string> deletions;
+    for (const auto& d : j.at("deletions")) {
+      EXPECT_EQ(d.at("type"), 0);
+      deletions.insert(d.at("id").get<std::string>());
+    }
+    if (scenes > 1) {
+      EXPECT_EQ(deletions, gone) << "scene " << scenes;
+    }
+    deleted += gone.size();
+    shown.clear();
+    for (const auto& [id, c] : boxes) shown.insert(id);
+
+    // The world it was made of came first on the world channel (unless the
+    // scene was sent on subscribing, before that world's frame).
+    const auto w = worlds.find(stamp);
+    if (w == worlds.end()) continue;
+    ++matched;
+    ASSERT_EQ(boxes.size(), w->second.cubes.size()) << "scene " << scenes;
+    for (const auto& [id, want] : w->second.cubes) {
+      ASSERT_TRUE(boxes.count(id)) << id;
+      EXPECT_EQ(boxes.at(id).at("pose"), want.at("pose")) << id;
+      EXPECT_EQ(boxes.at(id).at("size"), want.at("size")) << id;
+    }
+  }
+  EXPECT_GE(matched, 10u);
+  EXPECT_GE(deleted, 3u);
+  // Only a new world makes a scene (the first one: the subscription).
+  EXPECT_LE(scenes, worlds.size() + 1);
 }
 
 }  // namespace

@@ -4,7 +4,8 @@
 // octree, as the simulator publishes it during every motion, the executor's
 // state with a 60-point curve, progress and clock, each at 10 Hz),
 // once without and once with the monitor pushing the dashboard at 10 Hz to a
-// connected page and streaming two topics to a Foxglove client. The cost is
+// connected page and streaming two topics and the 3D scene (/scene, a
+// foxglove.SceneUpdate at 10 Hz) to a Foxglove client. The cost is
 // the process's CPU time minus the feeder's and the clients' own threads,
 // with the monitor minus without, as a share of one core.
 //   bench_dashboard [--quick] [--json]
@@ -158,17 +159,27 @@ class Reader {
                 r.set(beast::http::field::sec_websocket_protocol, "foxglove.websocket.v1");
               }));
         ws.handshake("127.0.0.1", foxglove ? "/" : "/ws");
-        std::uint32_t subscribed = 0;
+        std::uint32_t subscribed = 0, scene = 0;
         while (!stop_) {
           beast::flat_buffer b;
           ws.read(b);
           bytes_ += b.size();
           ++messages_;
+          if (foxglove && ws.got_binary() && b.size() >= 5) {
+            // Opcode 1, then the subscription id (little-endian).
+            std::uint32_t sub = 0;
+            std::memcpy(&sub, static_cast<const char*>(b.data().data()) + 1, 4);
+            if (scene != 0 && sub == scene) {
+              ++scene_messages_;
+              scene_bytes_ += b.size();
+            }
+          }
           if (!foxglove || ws.got_binary()) continue;
           const auto j = nlohmann::json::parse(beast::buffers_to_string(b.data()), nullptr, false);
           if (!j.is_object() || j.value("op", "") != "advertise") continue;
           for (const auto& c : j["channels"])
-            if (c["topic"] == "world" || c["topic"] == "executor/state") {
+            if (c["topic"] == "world" || c["topic"] == "executor/state" || c["topic"] == "/scene") {
+              if (c["topic"] == "/scene") scene = subscribed + 1;
               const nlohmann::json sub = {
                   {"op", "subscribe"},
                   {"subscriptions", {{{"id", ++subscribed}, {"channelId", c["id"]}}}}};
@@ -189,16 +200,19 @@ class Reader {
   clockid_t clock() { return cpu_clock(thread_); }
   std::uint64_t messages() const { return messages_; }
   std::uint64_t bytes() const { return bytes_; }
+  std::uint64_t scene_messages() const { return scene_messages_; }
+  std::uint64_t scene_bytes() const { return scene_bytes_; }
 
  private:
   std::atomic<bool> stop_{false};
-  std::atomic<std::uint64_t> messages_{0}, bytes_{0};
+  std::atomic<std::uint64_t> messages_{0}, bytes_{0}, scene_messages_{0}, scene_bytes_{0};
   std::thread thread_;
 };
 
 struct Figures {
   double wall_s = 0, process_cpu_s = 0, others_cpu_s = 0;
   std::uint64_t page_messages = 0, page_bytes = 0, foxglove_messages = 0;
+  std::uint64_t scene_messages = 0, scene_bytes = 0;
   double cost() const { return (process_cpu_s - others_cpu_s) / wall_s; }
 };
 
@@ -245,6 +259,8 @@ Figures measure(bool monitor, double seconds, double hz) {
     f.page_messages = page->messages();
     f.page_bytes = page->bytes();
     f.foxglove_messages = foxglove->messages();
+    f.scene_messages = foxglove->scene_messages();
+    f.scene_bytes = foxglove->scene_bytes();
   }
   return f;
 }
@@ -275,7 +291,9 @@ int main(int argc, char** argv) {
                                 {"monitor_cost_of_a_core", cost},
                                 {"page_messages", with.page_messages},
                                 {"page_bytes", with.page_bytes},
-                                {"foxglove_messages", with.foxglove_messages}}
+                                {"foxglove_messages", with.foxglove_messages},
+                                {"scene_messages", with.scene_messages},
+                                {"scene_bytes", with.scene_bytes}}
                      .dump()
               << "\n";
   } else {
@@ -285,10 +303,14 @@ int main(int argc, char** argv) {
     std::printf("%-34s %10.2f\n", "pipeline process, no monitor", 100 * without.cost());
     std::printf("%-34s %10.2f\n", "with monitor + page + Foxglove", 100 * with.cost());
     std::printf("%-34s %10.2f\n", "monitor's cost", 100 * cost);
-    std::printf("page: %llu updates (%.1f kB each); Foxglove: %llu messages\n",
-                static_cast<unsigned long long>(with.page_messages),
-                with.page_messages ? with.page_bytes / 1e3 / with.page_messages : 0.0,
-                static_cast<unsigned long long>(with.foxglove_messages));
+    std::printf(
+        "page: %llu updates (%.1f kB each); Foxglove: %llu messages, of which %llu "
+        "scenes (%.1f kB each)\n",
+        static_cast<unsigned long long>(with.page_messages),
+        with.page_messages ? with.page_bytes / 1e3 / with.page_messages : 0.0,
+        static_cast<unsigned long long>(with.foxglove_messages),
+        static_cast<unsigned long long>(with.scene_messages),
+        with.scene_messages ? with.scene_bytes / 1e3 / with.scene_messages : 0.0);
   }
   return 0;
 }
