@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -80,9 +81,14 @@ void SlurmRunner::run(const std::vector<Job>& jobs, const std::vector<std::size_
   const fs::path batches = store_.dir() / "batches";
   std::error_code ec;
   fs::create_directories(batches, ec);
+  // Batches are numbered on from the highest left by an earlier run.
   std::size_t batch_number = 0;
-  for (const auto& entry : fs::directory_iterator(batches, ec))
-    batch_number += entry.is_regular_file();
+  for (const auto& entry : fs::directory_iterator(batches, ec)) {
+    const std::string stem = entry.path().stem().string();
+    if (!stem.empty() && stem.find_first_not_of("0123456789") == std::string::npos)
+      batch_number = std::max<std::size_t>(batch_number, std::stoull(stem) + 1);
+  }
+  std::vector<fs::path> written_files;
 
   std::map<std::size_t, Task> task_of;           // job -> its latest array task
   std::map<std::size_t, unsigned> attempts;      // job -> submissions
@@ -120,6 +126,7 @@ void SlurmRunner::run(const std::vector<Job>& jobs, const std::vector<std::size_
           std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
       if (written)
         written = plr::write_file_atomically(script.string(), "#!/bin/sh\n" + command + "\n");
+      written_files.insert(written_files.end(), {batch, script});
       std::string out;
       std::string sbatch = fmt::format(
           "sbatch --parsable --job-name={} --array=0-{}{} --output={}",
@@ -221,6 +228,11 @@ void SlurmRunner::run(const std::vector<Job>& jobs, const std::vector<std::size_
       submit(again);
     }
   }
+  // Every job has its result or has failed: the batches are not read
+  // again (a stopped run keeps them for the tasks the scheduler may still
+  // be ending).
+  if (pending.empty())
+    for (const fs::path& f : written_files) fs::remove(f, ec);
   stats_.wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
 }
 

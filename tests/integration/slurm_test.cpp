@@ -2,8 +2,9 @@
 // slurm_cluster.hpp): its runs as job arrays give the local runner's
 // results; a task cancelled mid-run is submitted again and nothing is lost
 // or counted twice; SIGTERM cancels the arrays, keeps what finished, and the
-// same command resumes. The strategy generator's strategies as array tasks
-// make the library a local generation makes. Skips, saying why, where the
+// same command resumes. The strategy generator's strategies and a chooser
+// training's rollouts as array tasks make the library and the model a local
+// run makes. Skips, saying why, where the
 // daemons cannot start.
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -26,7 +27,9 @@
 
 #include "plr/jobs/store.hpp"
 #include "plr/sim/library.hpp"
+#include "plr/sim/strategy.hpp"
 #include "plr/sim/testing/library_fingerprint.hpp"
+#include "plr/sim/world_io.hpp"
 #include "slurm_cluster.hpp"
 #include "small_evaluation.hpp"
 
@@ -269,6 +272,56 @@ TEST_F(SlurmTest, AGenerationsStrategiesAsArrayTasksEqualALocalOnes) {
   EXPECT_EQ(plr::sim::testing::library_fingerprint(dir_ / "generate_slurm" / "library.plrl"),
             plr::sim::testing::library_fingerprint(dir_ / "generate_local" / "library.plrl"));
   EXPECT_NE(log("generate_slurm").find("\"tasks\":2"), std::string::npos) << log("generate_slurm");
+  EXPECT_TRUE(queue().empty()) << queue();
+}
+
+// plr chooser train with --runner slurm: each state's rollouts are one
+// array; the model is the one a local training makes, byte for byte, and
+// no rollout result is left behind.
+TEST_F(SlurmTest, AChooserTrainingsRolloutsAsArraysMakeTheLocalModel) {
+  // One strategy per world: a sweep for the row on the floor, a pick for
+  // the wall (as the chooser's own training test).
+  const fs::path data = CHOOSER_TEST_DATA;
+  plr::sim::Library library;
+  for (const auto& [name, action] :
+       {std::pair{"floor_row", plr::sim::make_sweep(plr::sim::Height::kLow)},
+        {"two_columns", plr::sim::make_pick(plr::sim::Height::kMid, plr::sim::Side::kLeft)}}) {
+    plr::sim::LibraryEntry e;
+    e.name = name;
+    e.world = plr::sim::load_world(data / (std::string(name) + ".yaml")).value();
+    e.strategy = plr::sim::single_action(action, name);
+    library.entries.push_back(std::move(e));
+  }
+  ASSERT_TRUE(plr::sim::save_library(library, dir_ / "library.plrl"));
+  std::ofstream(dir_ / "train.yaml")
+      << "format: plr-chooser-training\nlibrary: " << (dir_ / "library.plrl").string()
+      << "\nout: " << (dir_ / "out").string() << "\ntrain: [" << (data / "floor_row.yaml").string()
+      << ", " << (data / "two_columns.yaml").string() << "]\nvalidation: ["
+      << (data / "two_columns.yaml").string()
+      << "]\nstates_per_world: 2\nrollout_actions: 1\ntie_boxes: 1\nworkers: 2\nfolds: 2\n"
+      << "particles: 2\nmass_prior: B1\nslurm: {poll_s: 0.2, job_name: " << job_name_ << "}\n";
+  auto train = [&](const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> argv = {PLR_CHOOSER_TOOL, "train", (dir_ / "train.yaml").string(),
+                                     "--set", "out=" + (dir_ / out).string()};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    return wait(spawn(std::move(argv), out));
+  };
+  ASSERT_EQ(train("train_local", {}), 0) << log("train_local");
+  ASSERT_EQ(train("train_slurm", {"--runner", "slurm"}), 0) << log("train_slurm");
+  auto bytes = [](const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  const std::string model = bytes(dir_ / "train_local" / "model.plrm");
+  ASSERT_FALSE(model.empty());
+  EXPECT_EQ(bytes(dir_ / "train_slurm" / "model.plrm"), model);
+  // The rollouts went through the store as array tasks (their logs are
+  // there); their results and batches are gone once their states were
+  // labelled.
+  const fs::path rollouts = dir_ / "train_slurm" / "rollouts";
+  EXPECT_FALSE(fs::is_empty(rollouts / "logs"));
+  EXPECT_TRUE(fs::is_empty(rollouts / "results"));
+  EXPECT_TRUE(fs::is_empty(rollouts / "batches"));
   EXPECT_TRUE(queue().empty()) << queue();
 }
 

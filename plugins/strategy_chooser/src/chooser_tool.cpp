@@ -1,7 +1,8 @@
 // plr-chooser (`plr chooser ...`): trains the strategy chooser and shows a
 // trained model.
 //
-//   plr chooser train SETTINGS [--set key=value]...   (configs/train_chooser.yaml)
+//   plr chooser train SETTINGS [--runner local|slurm] [--set key=value]...
+//                                                     (configs/train_chooser.yaml)
 //   plr chooser show MODEL                            (a .plrm file)
 //
 // A training started again on the same out folder resumes where it stood.
@@ -9,11 +10,13 @@
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
+#include <filesystem>
 #include <string>
 #include <vector>
 
 #include "plr/chooser/model.hpp"
 #include "plr/chooser/training/dagger.hpp"
+#include "plr/jobs/slurm_runner.hpp"
 
 namespace {
 
@@ -28,7 +31,7 @@ int main(int argc, char** argv) {
   CLI::App app{"Trains the strategy chooser and shows a trained model"};
   app.name("plr chooser");
   app.require_subcommand(1);
-  std::string settings_file, model_file;
+  std::string settings_file, model_file, runner, slurm_task;
   std::vector<std::string> overrides;
   auto* train_cmd = app.add_subcommand(
       "train", "Trains the chooser (DAgger); started again on the same out folder it resumes");
@@ -36,6 +39,13 @@ int main(int argc, char** argv) {
       ->required();
   train_cmd->add_option("--set", overrides, "Override a setting: KEY=VALUE (repeatable)")
       ->type_name("KEY=VALUE");
+  train_cmd
+      ->add_option("--runner", runner,
+                   "Where the rollouts run: local (child processes) or slurm (a job array per "
+                   "state, docs/cluster.md); default: the settings' runner")
+      ->check(CLI::IsMember({"local", "slurm"}));
+  train_cmd->add_option("--slurm-task", slurm_task, "Run one Slurm array task of this batch file")
+      ->group("");  // what a task runs, not for people
   auto* show_cmd = app.add_subcommand("show", "A trained model's figures");
   show_cmd->add_option("model", model_file, "Chooser model (.plrm)")->required();
   CLI11_PARSE(app, argc, argv);
@@ -43,10 +53,20 @@ int main(int argc, char** argv) {
   if (*train_cmd) {
     auto settings = plr::chooser::TrainingSettings::load(settings_file, overrides);
     if (!settings) return fail(settings.error().message);
-    auto summary = plr::chooser::train_chooser(*settings, [](const std::string& line) {
-      std::printf("%s\n", line.c_str());
-      std::fflush(stdout);
-    });
+    if (!slurm_task.empty()) return plr::chooser::run_rollout_task(*settings, slurm_task);
+    if (!runner.empty()) settings->runner.kind = *plr::jobs::parse_runner(runner);
+    // A task is this command again, from any folder the nodes share.
+    std::vector<std::string> task{plr::jobs::this_program(), "train",
+                                  std::filesystem::absolute(settings_file).string()};
+    for (const auto& o : overrides) task.insert(task.end(), {"--set", o});
+    task.push_back("--slurm-task");
+    auto summary = plr::chooser::train_chooser(
+        *settings,
+        [](const std::string& line) {
+          std::printf("%s\n", line.c_str());
+          std::fflush(stdout);
+        },
+        task);
     if (!summary) return fail(summary.error().message);
     std::printf(
         "trained: %zu iterations, %zu training and %zu validation states; validation "

@@ -1,6 +1,7 @@
 #include "plr/chooser/training/dagger.hpp"
 
 #include <plr/atomic_file.hpp>
+#include <plr/frame.hpp>
 #include <plr/message.hpp>
 
 #include <fmt/format.h>
@@ -13,6 +14,8 @@
 #include "plr/chooser/model.hpp"
 #include "plr/chooser/nearest.hpp"
 #include "plr/chooser/training/data_set.hpp"
+#include "plr/jobs/process_runner.hpp"
+#include "plr/jobs/slurm_runner.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/library.hpp"
 
@@ -55,10 +58,31 @@ plr::Error error(const std::string& what) {
   return plr::make_error(PLR_ERR_INVALID, what);
 }
 
+// A few actions take seconds to minutes; a rollout past this is stuck.
+constexpr double kRolloutTimeoutS = 3600;
+
+// A state's rollouts' keys: the world, the step and the state itself, so a
+// stored result is never taken for another state's.
+std::string state_key(const std::string& world, std::uint32_t step,
+                      const std::vector<std::uint8_t>& state) {
+  std::string name = world;
+  for (char& c : name)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
+  return fmt::format("{}-s{}-{:08x}", name, step, plr::crc32(state.data(), state.size()));
+}
+
+// The rig the settings describe.
+plr::Expected<std::unique_ptr<actions::Rig>> make_rig(const TrainingSettings& settings) {
+  actions::ActionOptions options;
+  options.observation = settings.observation;
+  return actions::Rig::create(std::move(options));
+}
+
 }  // namespace
 
 plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
-                                             const std::function<void(const std::string&)>& log) {
+                                             const std::function<void(const std::string&)>& log,
+                                             const std::vector<std::string>& slurm_task) {
   auto library = sim::load_library(settings.library);
   if (!library) return library.error();
   if (library->entries.empty()) return error(settings.library.string() + ": the library is empty");
@@ -97,10 +121,33 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
     if (auto ok = save_data_set(d, data_file); !ok) return ok.error();
   }
   const LibraryIndex index(*library, d.scaling, settings.observation);
-  actions::ActionOptions rig_options;
-  rig_options.observation = settings.observation;
-  auto rig = actions::Rig::create(std::move(rig_options));
+  auto rig = make_rig(settings);
   if (!rig) return rig.error();
+  // The rollouts: children forked for each job (they inherit the rig and
+  // the library), or Slurm array tasks that load them, their results in a
+  // store beside the data set until the state's label is saved.
+  const RolloutContext context{**rig, *library, settings.h, settings.rollout_actions};
+  jobs::Kinds kinds;
+  add_rollout_kind(kinds, context);
+  std::optional<jobs::Store> store;
+  std::unique_ptr<jobs::Runner> runner;
+  if (settings.runner.kind == jobs::RunnerSettings::Kind::kSlurm) {
+    if (slurm_task.empty()) return error("rollouts on Slurm need the command of a task");
+    auto opened = jobs::Store::open(settings.out / "rollouts");
+    if (!opened) return opened.error();
+    store.emplace(std::move(*opened));
+    runner = std::make_unique<jobs::SlurmRunner>(*store, slurm_task, settings.runner.slurm);
+  } else {
+    auto local = jobs::ProcessRunner::create({{},
+                                              &kinds,
+                                              static_cast<unsigned>(std::max(settings.workers, 1)),
+                                              kRolloutTimeoutS,
+                                              1,
+                                              true,
+                                              {}});
+    if (!local) return local.error();
+    runner = std::move(*local);
+  }
 
   std::optional<Model> model;
   const auto retrain = [&]() -> plr::Status {
@@ -138,12 +185,20 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
     if (!seen) return seen.error();
 
     bool world_done = seen->world.boxes.empty() || d.step >= settings.states_per_world;
+    // The stored rollouts of the state labelled now: once the data set is
+    // saved they are not needed again (a resumed training goes on from the
+    // next state).
+    std::vector<std::string> labelled;
+    const auto forget = [&] {
+      if (store)
+        for (const std::string& key : labelled) fs::remove(store->result_file(key));
+    };
     if (!world_done) {
       const Features f = features(seen->world, settings.observation);
       const Nearest nn = index.nearest(d.scaling.apply(f));
       // Pairs of rollouts (NN, H): particle 0 is the state as it is, the
       // others draw the masses W does not show.
-      std::vector<RolloutJob> jobs;
+      std::vector<RolloutJob> todo;
       const auto family = source.family() ? source.family() : settings.mass_prior;
       for (std::uint32_t p = 0; p < settings.particles; ++p) {
         std::vector<std::pair<std::uint32_t, double>> masses;
@@ -154,11 +209,15 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
               sim::particle_seed(state_seed(source.name, d.step), static_cast<int>(p)));
           for (const sim::Box& b : particle.boxes) masses.emplace_back(b.id, b.mass);
         }
-        jobs.push_back({library->entries[nn.entry].strategy, masses});
-        jobs.push_back({std::nullopt, std::move(masses)});
+        todo.push_back({static_cast<std::uint32_t>(nn.entry), masses});
+        todo.push_back({std::nullopt, std::move(masses)});
       }
-      const auto runs =
-          rollouts(**rig, d.state, jobs, settings.h, settings.rollout_actions, settings.workers);
+      const auto batch = rollout_jobs(state_key(source.name, d.step, d.state), d.state, todo);
+      auto outcome = jobs::run(batch, *runner, store ? &*store : nullptr);
+      if (!outcome) return outcome.error();
+      if (outcome->stopped) return plr::make_error(PLR_ERR_CANCELLED, "stopped");
+      const auto runs = rollout_results(*outcome);
+      for (const jobs::Job& j : batch) labelled.push_back(j.key);
       bool failed = false;
       for (const auto& r : runs) {
         if (!r) {
@@ -174,6 +233,7 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
         d.step = 0;
         d.state.clear();
         if (auto ok = save_data_set(d, data_file); !ok) return ok.error();
+        forget();
         continue;
       }
       Rollout by_nn, by_h;  // pooled over the particles
@@ -255,6 +315,7 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
     }
     d.wall_s += std::chrono::duration<double>(Clock::now() - t0).count();
     if (auto ok = save_data_set(d, data_file); !ok) return ok.error();
+    forget();
   }
   if (!model) return error("no training state was labelled: nothing to train on");
   if (auto ok = model->save(model_file); !ok) return ok.error();
@@ -265,6 +326,29 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
   summary.validation_accuracy = model->accuracy(features_of(d.validation), labels_of(d.validation));
   summary.majority_accuracy = majority_share(d.validation);
   return summary;
+}
+
+int run_rollout_task(const TrainingSettings& settings, const fs::path& batch_file) {
+  std::optional<sim::Library> library;
+  std::unique_ptr<actions::Rig> rig;
+  std::optional<RolloutContext> context;
+  jobs::Kinds kinds;
+  // Registered before anything is loaded (a task whose result is stored
+  // exits at once); it runs on what prepare loads.
+  kinds.add(kRolloutKind,
+            [&](const jobs::Bytes& input) { return run_rollout_job(*context, input); });
+  const auto prepare = [&] {
+    auto l = sim::load_library(settings.library);
+    auto made = l ? make_rig(settings) : plr::Expected<std::unique_ptr<actions::Rig>>(l.error());
+    if (!made) {
+      std::fprintf(stderr, "plr chooser: %s\n", made.error().message.c_str());
+      std::exit(2);
+    }
+    library = std::move(*l);
+    rig = std::move(*made);
+    context.emplace(RolloutContext{*rig, *library, settings.h, settings.rollout_actions});
+  };
+  return jobs::run_array_task(kinds, batch_file, prepare);
 }
 
 }  // namespace plr::chooser

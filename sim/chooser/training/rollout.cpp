@@ -7,22 +7,20 @@
 #include <string>
 
 #include "plr/episode/open_loop.hpp"
-#include "plr/jobs/engine.hpp"
-#include "plr/jobs/process_runner.hpp"
 
 namespace plr::chooser {
 
 namespace {
 
-constexpr const char* kRolloutKind = "chooser.rollout";
-// A few actions take seconds to minutes; a rollout past this is stuck.
-constexpr double kRolloutTimeoutS = 3600;
+jobs::Bytes finished(flatbuffers::FlatBufferBuilder& fbb) {
+  return jobs::Bytes(fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize());
+}
 
 jobs::Bytes encode(const Rollout& r) {
   flatbuffers::FlatBufferBuilder fbb(r.end.size() + 128);
   fbb.Finish(plr::msg::CreateChooserRollout(fbb, r.actions, r.boxes, r.robot_time_s,
                                             fbb.CreateVector(r.end)));
-  return jobs::Bytes(fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize());
+  return finished(fbb);
 }
 
 plr::Expected<Rollout> decode(const jobs::Bytes& bytes) {
@@ -35,49 +33,88 @@ plr::Expected<Rollout> decode(const jobs::Bytes& bytes) {
   return out;
 }
 
+jobs::Bytes encode(const std::vector<std::uint8_t>& state, const RolloutJob& job) {
+  std::vector<std::uint32_t> ids;
+  std::vector<double> kg;
+  for (const auto& [id, mass] : job.masses) {
+    ids.push_back(id);
+    kg.push_back(mass);
+  }
+  flatbuffers::FlatBufferBuilder fbb(state.size() + 16 * ids.size() + 128);
+  fbb.Finish(plr::msg::CreateChooserRolloutJob(
+      fbb, fbb.CreateVector(state), job.entry ? static_cast<std::int32_t>(*job.entry) : -1,
+      fbb.CreateVector(ids), fbb.CreateVector(kg)));
+  return finished(fbb);
+}
+
+// A job's input as it comes from a batch file or a parent process: checked
+// against the library it will index.
+plr::Expected<std::pair<std::vector<std::uint8_t>, RolloutJob>> decode_job(
+    const jobs::Bytes& bytes, const sim::Library& library) {
+  const auto bad = [](const std::string& what) {
+    return plr::make_error(PLR_ERR_INVALID, "chooser.rollout job: " + what);
+  };
+  flatbuffers::Verifier verifier(bytes.data(), bytes.size());
+  if (!verifier.VerifyBuffer<plr::msg::ChooserRolloutJob>(nullptr))
+    return bad("fails verification");
+  const auto* j = flatbuffers::GetRoot<plr::msg::ChooserRolloutJob>(bytes.data());
+  if (j->state() == nullptr) return bad("no state");
+  RolloutJob job;
+  if (j->entry() >= 0) {
+    if (static_cast<std::size_t>(j->entry()) >= library.entries.size())
+      return bad(fmt::format("entry {} of a library of {}", j->entry(), library.entries.size()));
+    job.entry = static_cast<std::uint32_t>(j->entry());
+  }
+  const std::size_t n = j->mass_ids() ? j->mass_ids()->size() : 0;
+  if (n != (j->masses() ? j->masses()->size() : 0)) return bad("mass ids and masses differ");
+  for (std::size_t i = 0; i < n; ++i)
+    job.masses.emplace_back(j->mass_ids()->Get(i), j->masses()->Get(i));
+  return std::pair{std::vector<std::uint8_t>(j->state()->begin(), j->state()->end()),
+                   std::move(job)};
+}
+
 }  // namespace
 
-plr::Expected<Rollout> rollout(actions::Rig& rig, const std::vector<std::uint8_t>& state,
-                               const RolloutJob& job, const sim::HardcodedParams& h,
-                               std::uint64_t max_actions) {
+plr::Expected<Rollout> rollout(const RolloutContext& context,
+                               const std::vector<std::uint8_t>& state, const RolloutJob& job) {
+  actions::Rig& rig = context.rig;
   auto memory = rig.restore(state);
   if (!memory) return memory.error();
   if (!job.masses.empty())
     if (auto ok = rig.simulation().set_masses(job.masses); !ok) return ok.error();
-  auto run =
-      episode::run_open_loop(rig.model(), rig.backend(), *memory, job.strategy, h, max_actions);
+  std::optional<sim::Strategy> strategy;
+  if (job.entry) strategy = context.library.entries.at(*job.entry).strategy;
+  auto run = episode::run_open_loop(rig.model(), rig.backend(), *memory, strategy, context.h,
+                                    context.max_actions);
   if (!run) return run.error();
   return Rollout{run->actions, run->boxes, run->robot_time_s, rig.snapshot(*memory)};
 }
 
-std::vector<plr::Expected<Rollout>> rollouts(actions::Rig& rig,
-                                             const std::vector<std::uint8_t>& state,
-                                             const std::vector<RolloutJob>& todo,
-                                             const sim::HardcodedParams& h,
-                                             std::uint64_t max_actions, int workers) {
-  // The children inherit the state and the jobs: the input is the job's index.
-  jobs::Kinds kinds;
-  kinds.add(kRolloutKind, [&](const jobs::Bytes& input) -> plr::Expected<jobs::Bytes> {
-    auto r = rollout(rig, state, todo.at(std::stoul(jobs::to_text(input))), h, max_actions);
-    if (!r) return r.error();
-    return encode(*r);
-  });
-  std::vector<jobs::Job> batch;
+plr::Expected<jobs::Bytes> run_rollout_job(const RolloutContext& context,
+                                           const jobs::Bytes& input) {
+  auto job = decode_job(input, context.library);
+  if (!job) return job.error();
+  auto r = rollout(context, job->first, job->second);
+  if (!r) return r.error();
+  return encode(*r);
+}
+
+void add_rollout_kind(jobs::Kinds& kinds, const RolloutContext& context) {
+  kinds.add(kRolloutKind,
+            [&context](const jobs::Bytes& input) { return run_rollout_job(context, input); });
+}
+
+std::vector<jobs::Job> rollout_jobs(const std::string& key, const std::vector<std::uint8_t>& state,
+                                    const std::vector<RolloutJob>& todo) {
+  std::vector<jobs::Job> out;
   for (std::size_t i = 0; i < todo.size(); ++i)
-    batch.push_back({kRolloutKind, fmt::format("rollout{}", i), jobs::to_bytes(std::to_string(i))});
+    out.push_back({kRolloutKind, fmt::format("{}-{}", key, i), encode(state, todo[i])});
+  return out;
+}
+
+std::vector<plr::Expected<Rollout>> rollout_results(const jobs::Outcome& outcome) {
   std::vector<plr::Expected<Rollout>> results;
-  auto runner = jobs::ProcessRunner::create(
-      {{}, &kinds, static_cast<unsigned>(std::max(workers, 1)), kRolloutTimeoutS, 1, true, {}});
-  if (!runner) {
-    results.assign(todo.size(), runner.error());
-    return results;
-  }
-  auto outcome = jobs::run(batch, **runner, nullptr);
-  if (!outcome) {
-    results.assign(todo.size(), outcome.error());
-    return results;
-  }
-  for (const jobs::Result& r : outcome->results) {
+  for (const jobs::Result& r : outcome.results) {
     if (r.ok)
       results.push_back(decode(r.output));
     else

@@ -1,22 +1,29 @@
 // Rollouts from one state of the trailer: the nearest library strategy and
 // strategy H, each for a few actions from the same snapshot, side by side
-// as jobs of kind chooser.rollout (plr/jobs), each in a child process
-// forked from the rig's: it inherits the loaded robot and planner, restores
-// the state bit for bit and runs its own simulation.
+// as jobs of kind chooser.rollout (plr/jobs). A job carries its state, the
+// library entry it follows and its particle's masses, so it runs wherever
+// the job engine sends it: in a child forked from the trainer (which
+// inherits the loaded robot, planner and library) or in a Slurm array task
+// of `plr chooser train --slurm-task`, which loads them itself.
 #pragma once
 
 #include <plr/expected.hpp>
 
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include "plr/actions/rig.hpp"
+#include "plr/jobs/engine.hpp"
+#include "plr/jobs/kinds.hpp"
 #include "plr/sim/hardcoded_strategy.hpp"
-#include "plr/sim/strategy.hpp"
+#include "plr/sim/library.hpp"
 
 namespace plr::chooser {
+
+inline constexpr const char* kRolloutKind = "chooser.rollout";
 
 struct Rollout {
   std::uint64_t actions = 0;
@@ -28,24 +35,37 @@ struct Rollout {
   double rate() const { return robot_time_s > 0 ? boxes / robot_time_s : 0.0; }
 };
 
-// `strategy` (nullopt: H alone) from a state, its boxes given `masses`
+// The library entry it follows (none: H alone), its boxes given `masses`
 // (id, kg) first (a particle; empty: the state's own).
 struct RolloutJob {
-  std::optional<sim::Strategy> strategy;
+  std::optional<std::uint32_t> entry;
   std::vector<std::pair<std::uint32_t, double>> masses;
 };
 
-// One rollout on `rig`, from `state`, at most `max_actions` actions.
-plr::Expected<Rollout> rollout(actions::Rig& rig, const std::vector<std::uint8_t>& state,
-                               const RolloutJob& job, const sim::HardcodedParams& h,
-                               std::uint64_t max_actions);
+// What rollouts run on; it outlives the kinds it is added to.
+struct RolloutContext {
+  actions::Rig& rig;
+  const sim::Library& library;
+  sim::HardcodedParams h;
+  std::uint64_t max_actions = 4;  // actions per rollout at most
+};
 
-// Each job in a child process, at most `workers` at once; results in the
-// jobs' order. A child that dies is an error naming its signal.
-std::vector<plr::Expected<Rollout>> rollouts(actions::Rig& rig,
-                                             const std::vector<std::uint8_t>& state,
-                                             const std::vector<RolloutJob>& todo,
-                                             const sim::HardcodedParams& h,
-                                             std::uint64_t max_actions, int workers);
+// One rollout from `state`.
+plr::Expected<Rollout> rollout(const RolloutContext& context,
+                               const std::vector<std::uint8_t>& state, const RolloutJob& job);
+
+// A job of kind chooser.rollout on `context`: its input checked, its
+// rollout run, the result's bytes.
+plr::Expected<jobs::Bytes> run_rollout_job(const RolloutContext& context, const jobs::Bytes& input);
+// Kind chooser.rollout, run on `context`.
+void add_rollout_kind(jobs::Kinds& kinds, const RolloutContext& context);
+
+// One state's rollouts as jobs, keyed `key`-<i>.
+std::vector<jobs::Job> rollout_jobs(const std::string& key, const std::vector<std::uint8_t>& state,
+                                    const std::vector<RolloutJob>& todo);
+
+// The rollouts a run of those jobs made, in their order; a job that failed
+// (a child that died, an action the model refused) is its error.
+std::vector<plr::Expected<Rollout>> rollout_results(const jobs::Outcome& outcome);
 
 }  // namespace plr::chooser

@@ -95,11 +95,14 @@ plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::pa
     doc->set(o.substr(0, eq), o.substr(eq + 1), "--set " + o.substr(0, eq));
   }
   TrainingSettings s;
-  const yaml::Map top = doc->root().map(
-      "chooser training settings",
-      {"format", "library", "out", "train", "validation", "states_per_world", "rollout_actions",
-       "tie_margin", "tie_boxes", "particles", "mass_prior", "workers", "observation", "h_min",
-       "d_min", "folds", "log2_c", "log2_gamma"});
+  const yaml::Map top = doc->root().map("chooser training settings",
+                                        {"format",          "library",      "out",
+                                         "train",           "validation",   "states_per_world",
+                                         "rollout_actions", "tie_margin",   "tie_boxes",
+                                         "particles",       "mass_prior",   "workers",
+                                         "observation",     "h_min",        "d_min",
+                                         "folds",           "log2_c",       "log2_gamma",
+                                         jobs::kRunnerKey,  jobs::kSlurmKey});
   (void)top.required("format").one_of({"plr-chooser-training"});
   if (auto l = top.required("library").string()) s.library = *l;
   if (auto o = top.required("out").string()) s.out = *o;
@@ -126,6 +129,7 @@ plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::pa
       if (auto i = v.integer(-30, 30)) grid->push_back(static_cast<int>(*i));
   }
   sim::read_strategy_settings(top, s.h, s.observation);
+  jobs::read_runner_settings(top, s.runner);
   if (!doc->ok()) return doc->error();
   if (auto ok = s.h.check(); !ok) return ok.error();
   if (s.particles > 1 && !s.mass_prior)

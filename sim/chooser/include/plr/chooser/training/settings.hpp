@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "plr/chooser/model.hpp"
+#include "plr/jobs/runner_settings.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/hardcoded_strategy.hpp"
 #include "plr/sim/observation.hpp"
@@ -50,11 +51,15 @@ struct TrainingSettings {
   // The prior of a world file's particles; a family:seed world uses its own.
   std::optional<sim::EnvFamily> mass_prior;
   int workers = 2;
+  // Where the rollouts run: child processes (at most `workers` at once) or
+  // Slurm job arrays, one per state (docs/cluster.md).
+  jobs::RunnerSettings runner;
   sim::ObservationParams observation;
   sim::HardcodedParams h;
   TrainOptions svm;
 
-  // Of what shapes the data and the model (not of `workers` or `out`): a
+  // Of what shapes the data and the model (not of `workers`, `runner` or
+  // `out`): a
   // data set made with other settings is not resumed.
   std::uint64_t hash(std::uint32_t library_fingerprint) const;
 
