@@ -15,6 +15,7 @@
 #include "plr/chooser/nearest.hpp"
 #include "plr/chooser/training/data_set.hpp"
 #include "plr/jobs/process_runner.hpp"
+#include "plr/jobs/signals.hpp"
 #include "plr/jobs/slurm_runner.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/library.hpp"
@@ -213,9 +214,16 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
         todo.push_back({std::nullopt, std::move(masses)});
       }
       const auto batch = rollout_jobs(state_key(source.name, d.step, d.state), d.state, todo);
-      auto outcome = jobs::run(batch, *runner, store ? &*store : nullptr);
+      // Ctrl-C or SIGTERM while rollouts run stops them (a Slurm array is
+      // cancelled); the data set holds every state labelled so far.
+      const jobs::StopOnSignals stop;
+      jobs::RunOptions run_options;
+      run_options.stop = [&] { return stop(); };
+      auto outcome = jobs::run(batch, *runner, store ? &*store : nullptr, run_options);
       if (!outcome) return outcome.error();
-      if (outcome->stopped) return plr::make_error(PLR_ERR_CANCELLED, "stopped");
+      if (outcome->stopped)
+        return plr::make_error(PLR_ERR_CANCELLED,
+                               "stopped; run it again on the same out folder to go on");
       const auto runs = rollout_results(*outcome);
       for (const jobs::Job& j : batch) labelled.push_back(j.key);
       bool failed = false;
