@@ -4,8 +4,8 @@
 // or counted twice; SIGTERM cancels the arrays, keeps what finished, and the
 // same command resumes. The strategy generator's strategies and a chooser
 // training's rollouts as array tasks make the library and the model a local
-// run makes. Skips, saying why, where the
-// daemons cannot start.
+// run makes, and so do simulation workers started as a Slurm job. Skips,
+// saying why, where the daemons cannot start.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -18,6 +18,7 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -235,7 +236,7 @@ TEST_F(SlurmTest, SigtermCancelsTheArraysAndTheSameCommandResumes) {
 
 // The strategy generator with `runner: slurm`: each world's strategy is an
 // array task of the worker program; the library equals a local
-// generation's, and a second run makes nothing again.
+// generation's.
 TEST_F(SlurmTest, AGenerationsStrategiesAsArrayTasksEqualALocalOnes) {
   // The block world under two names: two strategies, two tasks.
   for (const char* name : {"block_a.yaml", "block_b.yaml"}) fs::copy_file(BLOCK_WORLD, dir_ / name);
@@ -322,6 +323,65 @@ TEST_F(SlurmTest, AChooserTrainingsRolloutsAsArraysMakeTheLocalModel) {
   EXPECT_FALSE(fs::is_empty(rollouts / "logs"));
   EXPECT_TRUE(fs::is_empty(rollouts / "results"));
   EXPECT_TRUE(fs::is_empty(rollouts / "batches"));
+  EXPECT_TRUE(queue().empty()) << queue();
+}
+
+// The generator's live simulations on workers started as a Slurm job: the
+// worker kernel (plr run of a simulation_worker pipeline) runs as a batch
+// job, the generator finds its sim/simulate by DDS discovery, and the
+// library is the one a generation with in-process simulations makes.
+TEST_F(SlurmTest, SimulationWorkersStartedAsASlurmJobServeTheGenerator) {
+  const int domain = 100 + ::getpid() % 50;
+  const fs::path worker = dir_ / "sim_worker.yaml";
+  std::ofstream(worker) << "pipeline: sim_worker_" << ::getpid()
+                        << "\nnodes:\n  worker:\n    plugin: simulation_worker\n"
+                        << "    params: {threads: 2}\nremote:\n  dds: {domain: " << domain
+                        << ", interfaces: [lo], export: [\"sim/simulate\"]}\n";
+  const fs::path worker_log = dir_ / "sim_worker.log";
+  std::string out;
+  ASSERT_EQ(SlurmCluster::run("sbatch --parsable --job-name=" + job_name_ + " --output=" +
+                                  worker_log.string() + " --wrap '" + PLR_BINARY + " run " +
+                                  worker.string() + " --report " + (dir_ / "w").string() + "'",
+                              &out),
+            0)
+      << out;
+  const std::string job = out.substr(0, out.find_first_of(";\n"));
+  for (int i = 0; i < 600 && log("sim_worker").find("running (1 nodes)") == std::string::npos; ++i)
+    std::this_thread::sleep_for(100ms);
+  ASSERT_NE(log("sim_worker").find("running (1 nodes)"), std::string::npos) << log("sim_worker");
+
+  auto generate = [&](const std::string& name, const std::string& workers) {
+    const fs::path file = dir_ / (name + ".yaml");
+    std::ofstream(file) << "pipeline: " << name << "_" << ::getpid() << "\n"
+                        << "nodes:\n  generator:\n    plugin: strategy_generator\n    params:\n"
+                        << "      library: ${report_dir}/library.plrl\n"
+                        << "      checkpoint_dir: ${report_dir}/checkpoint\n"
+                        << "      worlds: [{family: A1, world_file: " << BLOCK_WORLD << "}]\n"
+                        << "      particles: 3\n      horizon: 3\n      trials: 6\n"
+                        << "      progress: false\n"
+                        << "      observation: {h_pile: 0.55, pile_mid: 0.25, pile_high: 0.4, "
+                           "wall_mid: 1.2, wall_high: 1.9}\n"
+                        << workers;
+    return wait(
+        spawn({PLR_BINARY, "run", file.string(), "--report", (dir_ / name).string()}, name));
+  };
+  ASSERT_EQ(generate("in_process", "      workers: 0\n"), 0) << log("in_process");
+  ASSERT_EQ(
+      generate("on_slurm_workers",
+               "      workers: 0\n      remote_workers: 2\nremote:\n  dds: {domain: " +
+                   std::to_string(domain) + ", interfaces: [lo], import: [\"sim/simulate\"]}\n"),
+      0)
+      << log("on_slurm_workers");
+  EXPECT_EQ(plr::sim::testing::library_fingerprint(dir_ / "on_slurm_workers" / "library.plrl"),
+            plr::sim::testing::library_fingerprint(dir_ / "in_process" / "library.plrl"));
+  // Its simulations ran on the Slurm job's worker.
+  std::smatch m;
+  const std::string generated = log("on_slurm_workers");
+  ASSERT_TRUE(std::regex_search(generated, m, std::regex(R"(remote workers: (\d+) jobs answered)")))
+      << generated;
+  EXPECT_GT(std::stoi(m[1]), 0);
+  SlurmCluster::run("scancel " + job, &out);
+  for (int i = 0; i < 100 && !queue().empty(); ++i) std::this_thread::sleep_for(100ms);
   EXPECT_TRUE(queue().empty()) << queue();
 }
 
