@@ -122,6 +122,7 @@ plr::Expected<std::unique_ptr<Rig>> make_rig(const std::string& observation_json
     return plr::make_error(PLR_ERR_INVALID, "observation_json: " + params.error().message);
   ActionOptions options;
   options.observation = *params;
+  options.plan_timeout_s = kOfflinePlanTimeoutS;
   return Rig::create(std::move(options));
 }
 

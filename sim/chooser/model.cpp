@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "plr/sim/framed_file.hpp"
+#include "plr/sim/library.hpp"
 
 namespace plr::chooser {
 
@@ -58,6 +59,7 @@ struct Model::Impl {
   std::vector<Features> vectors;   // scaled
   std::vector<double> coefficients;
   double rho = 0.0;
+  std::string made_by;
 
   // libsvm's view of the above, pointing into it.
   std::vector<Nodes> nodes;
@@ -207,6 +209,14 @@ const Scaling& Model::scaling() const {
 std::uint32_t Model::library_crc() const {
   return impl_->library_crc;
 }
+
+const std::string& Model::made_by() const {
+  return impl_->made_by;
+}
+
+void Model::set_made_by(std::string made_by) {
+  impl_->made_by = std::move(made_by);
+}
 double Model::c() const {
   return impl_->c;
 }
@@ -232,10 +242,11 @@ std::vector<std::uint8_t> Model::serialize() const {
   const auto support = fbb.CreateVector(m.class_support);
   const auto vectors = fbb.CreateVector(flat);
   const auto coefficients = fbb.CreateVector(m.coefficients);
+  const auto made_by = fbb.CreateString(m.made_by);
   msg::FinishChooserModelBuffer(
       fbb, msg::CreateChooserModel(fbb, kModelVersion, kFeatureVersion, kFeatureCount, mean, scale,
                                    m.library_crc, m.c, m.gamma, m.cv_accuracy, m.samples, labels,
-                                   support, vectors, coefficients, m.rho));
+                                   support, vectors, coefficients, m.rho, made_by));
   return plr::frame(fbb.GetBufferPointer(), fbb.GetSize());
 }
 
@@ -276,6 +287,7 @@ plr::Expected<Model> Model::deserialize(const std::uint8_t* data, std::size_t si
   impl->cv_accuracy = m->cv_accuracy();
   impl->samples = m->samples();
   impl->rho = m->rho();
+  if (m->made_by()) impl->made_by = m->made_by()->str().substr(0, sim::kMaxMadeBy);
   if (!(impl->c > 0) || !(impl->gamma > 0) || !std::isfinite(impl->c) ||
       !std::isfinite(impl->gamma) || !std::isfinite(impl->rho))
     return error(origin, "c, gamma: must be finite and > 0, rho finite");

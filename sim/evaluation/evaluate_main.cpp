@@ -147,9 +147,7 @@ int main(int argc, char** argv) {
   auto prepare = [&] {
     plr::actions::ActionOptions options;
     options.observation = settings->observation;
-    // Plans are bounded by expansions, so results do not depend on the
-    // machine's load; the time limit is only a safety net.
-    options.plan_timeout_s = 1800.0;
+    options.plan_timeout_s = plr::actions::kOfflinePlanTimeoutS;
     auto created = plr::actions::Rig::create(options);
     if (!created) die(created.error().message);
     rig = std::move(*created);

@@ -236,11 +236,6 @@ void SlurmRunner::run(const std::vector<Job>& jobs, const std::vector<std::size_
   stats_.wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-std::string this_program() {
-  std::error_code ec;
-  return fs::read_symlink("/proc/self/exe", ec).string();
-}
-
 int run_array_task(const Kinds& kinds, const fs::path& batch_file,
                    const std::function<void()>& prepare) {
   const char* id = std::getenv("SLURM_ARRAY_TASK_ID");

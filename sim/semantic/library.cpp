@@ -112,8 +112,10 @@ std::vector<std::uint8_t> serialize(const Library& library) {
                                               e.lower, e.upper, prov,
                                               fbb.CreateVectorOfStructs(curve)));
   }
+  const auto list = fbb.CreateVector(entries);
   msg::FinishStrategyLibraryBuffer(
-      fbb, msg::CreateStrategyLibrary(fbb, kLibraryVersion, fbb.CreateVector(entries)));
+      fbb, msg::CreateStrategyLibrary(fbb, kLibraryVersion, list, fbb.CreateString(library.made_by),
+                                      fbb.CreateString(library.action_model)));
   return plr::frame(fbb.GetBufferPointer(), fbb.GetSize());
 }
 
@@ -145,6 +147,8 @@ plr::Expected<Library> deserialize_library(const std::uint8_t* data, std::size_t
       library.entries.push_back(std::move(*entry));
     }
   }
+  library.made_by = text(m->made_by()).substr(0, kMaxMadeBy);
+  library.action_model = text(m->action_model()).substr(0, kMaxMadeBy);
   return library;
 }
 

@@ -83,5 +83,6 @@ int main(int argc, char** argv) {
       "%zu support vectors, library CRC %08x\n",
       model_file.c_str(), plr::chooser::kFeatureVersion, plr::chooser::kFeatureCount, model->c(),
       model->gamma(), model->cv_accuracy(), model->support_vectors(), model->library_crc());
+  if (!model->made_by().empty()) std::printf("made by: %s\n", model->made_by().c_str());
   return 0;
 }

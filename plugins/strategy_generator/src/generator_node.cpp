@@ -29,10 +29,12 @@
 
 #include <plr/msg/jobs_generated.h>
 
+#include "plr/actions/fingerprint.hpp"
 #include "plr/jobs/engine.hpp"
 #include "plr/jobs/in_process_runner.hpp"
 #include "plr/jobs/runner_settings.hpp"
 #include "plr/jobs/slurm_runner.hpp"
+#include "plr/jobs/this_process.hpp"
 #include "plr/sim/library.hpp"
 #include "plr/sim/world_io.hpp"
 #include "truck/generate.hpp"
@@ -341,10 +343,18 @@ class GeneratorNode : public Node {
   }
 
   // The library written with `entry` added, and the strategy's tree and
-  // anytime curve beside it.
-  static bool add(sim::Library& library, const fs::path& lib, sim::LibraryEntry entry,
-                  std::string& why) {
+  // anytime curve beside it. The library records how it was made: this
+  // command, the node's settings and the action model.
+  bool add(sim::Library& library, const fs::path& lib, sim::LibraryEntry entry,
+           std::string& why) const {
     library.entries.push_back(std::move(entry));
+    auto action_model = actions::action_model_fingerprint();
+    if (!action_model) {
+      why = action_model.error().message;
+      return false;
+    }
+    library.action_model = *action_model;
+    library.made_by = fmt::format("{}\nsettings: {}", jobs::command_line(), params().json().dump());
     if (auto s = sim::save_library(library, lib); !s) {
       why = s.error().message;
       return false;

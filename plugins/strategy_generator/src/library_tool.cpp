@@ -46,6 +46,8 @@ void list(const plr::sim::Library& lib) {
                 static_cast<unsigned long long>(e.provenance.simulations), e.provenance.wall_s,
                 e.provenance.created.c_str());
   }
+  if (!lib.action_model.empty()) std::printf("action model: %s\n", lib.action_model.c_str());
+  if (!lib.made_by.empty()) std::printf("made by: %s\n", lib.made_by.c_str());
 }
 
 void show(const LibraryEntry& e) {

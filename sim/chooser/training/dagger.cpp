@@ -76,6 +76,7 @@ std::string state_key(const std::string& world, std::uint32_t step,
 plr::Expected<std::unique_ptr<actions::Rig>> make_rig(const TrainingSettings& settings) {
   actions::ActionOptions options;
   options.observation = settings.observation;
+  options.plan_timeout_s = actions::kOfflinePlanTimeoutS;
   return actions::Rig::create(std::move(options));
 }
 
@@ -122,6 +123,9 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
     if (auto ok = save_data_set(d, data_file); !ok) return ok.error();
   }
   const LibraryIndex index(*library, d.scaling, settings.observation);
+  // Not the command line: where the data goes and where rollouts run do
+  // not change the model.
+  const std::string made_by = "plr chooser train: " + settings.describe(library_crc);
   auto rig = make_rig(settings);
   if (!rig) return rig.error();
   // The rollouts: children forked for each job (they inherit the rig and
@@ -156,6 +160,7 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
                           settings.svm);
     if (!m) return m.error();
     model = std::move(*m);
+    model->set_made_by(made_by);
     return {};
   };
   if (!d.training.empty())

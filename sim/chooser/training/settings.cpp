@@ -69,6 +69,10 @@ plr::Expected<sim::World> WorldSource::layout() const {
 }
 
 std::uint64_t TrainingSettings::hash(std::uint32_t library_fingerprint) const {
+  return plr::fnv1a(describe(library_fingerprint));
+}
+
+std::string TrainingSettings::describe(std::uint32_t library_fingerprint) const {
   std::string text = fmt::format(
       "lib {} spw {} ra {} tie {} {} particles {} {} obs {} {} {} {} {} {} {} {} h {} {} svm {} ",
       library_fingerprint, states_per_world, rollout_actions, tie_margin, tie_boxes, particles,
@@ -81,7 +85,7 @@ std::uint64_t TrainingSettings::hash(std::uint32_t library_fingerprint) const {
     text += "| ";
     for (const WorldSource& w : *list) text += w.name + " ";
   }
-  return plr::fnv1a(text);
+  return text;
 }
 
 plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::path& file,

@@ -20,6 +20,11 @@
 
 namespace plr::actions {
 
+// Offline work (generation, chooser training, evaluation) bounds its plans by
+// expansions, so results do not depend on the machine's load; this time
+// limit is only a safety net against a stuck search.
+inline constexpr double kOfflinePlanTimeoutS = 1800.0;
+
 class Rig {
  public:
   static plr::Expected<std::unique_ptr<Rig>> create(ActionOptions options);

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "plr/chooser/features.hpp"
@@ -64,6 +65,9 @@ class Model {
   double gamma() const;
   double cv_accuracy() const;
   std::size_t support_vectors() const;
+  // The command and settings that made it (recorded in the file).
+  const std::string& made_by() const;
+  void set_made_by(std::string made_by);
 
   std::vector<std::uint8_t> serialize() const;
   static plr::Expected<Model> deserialize(const std::uint8_t* data, std::size_t size,

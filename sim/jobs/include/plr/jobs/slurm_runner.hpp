@@ -21,6 +21,7 @@
 #include "plr/jobs/kinds.hpp"
 #include "plr/jobs/runner.hpp"
 #include "plr/jobs/store.hpp"
+#include "plr/jobs/this_process.hpp"
 
 namespace plr::jobs {
 
@@ -72,8 +73,5 @@ class SlurmRunner final : public Runner {
 // job needs, only when it is to run. Returns the exit code.
 int run_array_task(const Kinds& kinds, const std::filesystem::path& batch_file,
                    const std::function<void()>& prepare = {});
-
-// This process's program, by absolute path: what a task command starts with.
-std::string this_program();
 
 }  // namespace plr::jobs

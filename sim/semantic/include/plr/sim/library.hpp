@@ -27,6 +27,8 @@ inline constexpr std::uint32_t kLibraryVersion = 1;
 // Bounds on what a library file may hold.
 inline constexpr std::size_t kMaxLibraryBytes = std::size_t{1} << 30;
 inline constexpr std::size_t kMaxLibraryEntries = 100000;
+// made_by and action_model are cut to this many bytes when read.
+inline constexpr std::size_t kMaxMadeBy = 64 * 1024;
 
 struct BoundPoint {
   double wall_s = 0.0;
@@ -63,6 +65,8 @@ struct LibraryEntry {
 
 struct Library {
   std::vector<LibraryEntry> entries;
+  std::string made_by;       // the command and settings that made it
+  std::string action_model;  // the action model's fingerprint when it was made
 };
 
 std::vector<std::uint8_t> serialize(const Library& library);

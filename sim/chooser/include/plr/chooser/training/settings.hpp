@@ -62,6 +62,8 @@ struct TrainingSettings {
   // `out`): a
   // data set made with other settings is not resumed.
   std::uint64_t hash(std::uint32_t library_fingerprint) const;
+  // The same as text: what a model records of how it was made.
+  std::string describe(std::uint32_t library_fingerprint) const;
 
   // The file, then each "key=value" override (as --set gives them); errors
   // name the file, line and key.
