@@ -259,11 +259,16 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
     const double speed = corner_speed(a);
     const bool fast = speed > options_.wake_speed;
     // At adaptive fidelity a box on a path to the action wakes them moving
-    // slower, as it comes within the margin (not yet touching: boxes in
-    // contact wake by pressing, as at full fidelity, or every nudge in a
+    // slower, as it comes within the margin towards them (closing the gap
+    // between the centres at sleep_speed or more; not yet touching: boxes
+    // in contact wake by pressing, as at full fidelity, or every nudge in a
     // pile would wake the pile).
     const bool approaching =
         !fast && active != nullptr && (*active)[ai] != 0 && speed > options_.sleep_speed;
+    const auto closing = [&](const Body& b) {
+      const Eigen::Vector3d d = b.box.pose.translation() - a.box.pose.translation();
+      return a.v.dot(d) > options_.sleep_speed * d.norm();
+    };
     broad_.query(alo - margin, ahi + margin, BroadPhase::kSleeping | BroadPhase::kMoving, near_);
     for (const int j : near_) {
       const std::size_t bj = static_cast<std::size_t>(j);
@@ -276,12 +281,12 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
           !separated(a.box.pose, 0.5 * a.box.size, b.box.pose, 0.5 * b.box.size, kWakeMargin);
       if (fast && close) wake.push_back(j);
       if (disjoint(alo, ahi, broad_.lo(bj), broad_.hi(bj))) {
-        if (approaching && close) wake.push_back(j);
+        if (approaching && close && closing(b)) wake.push_back(j);
         continue;
       }
       box_box_patch(a.box.size, a.box.pose, b.box.size, b.box.pose, patch_);
       if (!take(patch_)) {
-        if (approaching && close) wake.push_back(j);
+        if (approaching && close && closing(b)) wake.push_back(j);
         continue;
       }
       // Pressed into hard by a slow box (e.g. a growing load): wake up too.
