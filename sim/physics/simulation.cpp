@@ -165,6 +165,7 @@ struct Simulation::Impl {
     pending = Pending{saved.state.slots, saved.state.q, saved.state.u};
     rebuild = saved.state.rebuild;
     moving_stale = true;
+    by_id.clear();  // another world may hold as many boxes
   }
 
   void wake_body(int i) {
@@ -238,7 +239,7 @@ struct Simulation::Impl {
       return mode == Mode::kAwake || mode == Mode::kHeld;
     };
     for (const detail::PairState& p : state.pairs) {
-      if (p.key.kind == 1) {
+      if (p.key.kind == 1) {  // box and robot shape (PairKey)
         const int i = index_of(p.key.a);
         if (i >= 0) touches[static_cast<std::size_t>(i)] = 1;
       } else if (p.key.kind == 0) {

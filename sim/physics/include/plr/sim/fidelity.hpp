@@ -9,8 +9,8 @@
 //             robot, the held boxes, a box moving at wake_speed or more) are
 //             frozen as soon as they have been slow for a fifth of
 //             sleep_time, balanced or not; a frozen box wakes when a box on
-//             such a path comes within the wake margin while moving (see
-//             docs/fidelity.md).
+//             such a path comes within the wake margin while closing on it
+//             at sleep_speed or more (see docs/fidelity.md).
 //   fast      not built: parse_fidelity refuses it.
 #pragma once
 
