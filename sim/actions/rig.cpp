@@ -24,7 +24,14 @@ plr::Expected<std::unique_ptr<Rig>> Rig::create(ActionOptions options) {
 }
 
 void Rig::reset(const sim::World& truth) {
-  simulation_ = UnloaderSimulation(robot_, truth);
+  UnloaderOptions options;
+  options.fidelity = fidelity_;
+  simulation_ = UnloaderSimulation(robot_, truth, home_configuration(), options);
+}
+
+void Rig::set_fidelity(sim::Fidelity fidelity) {
+  fidelity_ = fidelity;
+  simulation_.set_fidelity(fidelity);
 }
 
 std::vector<std::uint8_t> Rig::snapshot(const Memory& memory) const {

@@ -48,6 +48,7 @@ struct UnloaderSimulation::Impl {
   Impl(const sim::RobotModel& r, const sim::World& truth, const JointVector& q0,
        const UnloaderOptions& o)
       : robot(&r), options(o), sim(truth, o.physics), q(q0) {
+    sim.set_fidelity(o.fidelity);
     move_robot(q, false);
   }
 
@@ -242,6 +243,11 @@ double UnloaderSimulation::time() const {
 }
 const sim::Simulation& UnloaderSimulation::physics() const {
   return impl_->sim;
+}
+
+void UnloaderSimulation::set_fidelity(sim::Fidelity fidelity) {
+  impl_->options.fidelity = fidelity;
+  impl_->sim.set_fidelity(fidelity);
 }
 
 std::shared_ptr<const UnloaderSimulation::Saved> UnloaderSimulation::save() const {

@@ -205,7 +205,7 @@ void Contacts::apply(State& state, int a, int b, const Other& o, const PairKey& 
 
 void Contacts::compute(State& state, const std::vector<int>& moving,
                        const std::vector<Mover>& links, double dt, std::vector<Wrench>& wrenches,
-                       std::vector<int>& wake) {
+                       std::vector<int>& wake, const std::vector<std::uint8_t>* active) {
   std::vector<Body>& bodies = state.bodies;
   clear_wrenches(wrenches, bodies.size(), moving);
   merged_.clear();
@@ -256,7 +256,19 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
     }
     // A box moving fast wakes the sleeping boxes next to it even without
     // contact: a support falling away leaves the box above it hanging.
-    const bool fast = corner_speed(a) > options_.wake_speed;
+    const double speed = corner_speed(a);
+    const bool fast = speed > options_.wake_speed;
+    // At adaptive fidelity a box on a path to the action wakes them moving
+    // slower, as it comes within the margin towards them (closing the gap
+    // between the centres at sleep_speed or more; not yet touching: boxes
+    // in contact wake by pressing, as at full fidelity, or every nudge in a
+    // pile would wake the pile).
+    const bool approaching =
+        !fast && active != nullptr && (*active)[ai] != 0 && speed > options_.sleep_speed;
+    const auto closing = [&](const Body& b) {
+      const Eigen::Vector3d d = b.box.pose.translation() - a.box.pose.translation();
+      return a.v.dot(d) > options_.sleep_speed * d.norm();
+    };
     broad_.query(alo - margin, ahi + margin, BroadPhase::kSleeping | BroadPhase::kMoving, near_);
     for (const int j : near_) {
       const std::size_t bj = static_cast<std::size_t>(j);
@@ -264,13 +276,19 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
       if (j == i || (b.mode == Mode::kAwake && j < i)) continue;
       // Near the box itself: its world-aligned bounds reach further when it
       // is turned, and woke boxes it could not touch.
-      if (fast && b.mode == Mode::kAsleep &&
-          !separated(a.box.pose, 0.5 * a.box.size, b.box.pose, 0.5 * b.box.size, kWakeMargin)) {
-        wake.push_back(j);
+      const bool close =
+          (fast || approaching) && b.mode == Mode::kAsleep &&
+          !separated(a.box.pose, 0.5 * a.box.size, b.box.pose, 0.5 * b.box.size, kWakeMargin);
+      if (fast && close) wake.push_back(j);
+      if (disjoint(alo, ahi, broad_.lo(bj), broad_.hi(bj))) {
+        if (approaching && close && closing(b)) wake.push_back(j);
+        continue;
       }
-      if (disjoint(alo, ahi, broad_.lo(bj), broad_.hi(bj))) continue;
       box_box_patch(a.box.size, a.box.pose, b.box.size, b.box.pose, patch_);
-      if (!take(patch_)) continue;
+      if (!take(patch_)) {
+        if (approaching && close && closing(b)) wake.push_back(j);
+        continue;
+      }
       // Pressed into hard by a slow box (e.g. a growing load): wake up too.
       if (b.mode == Mode::kAsleep && deepest() > options_.wake_depth) wake.push_back(j);
       const Other other{b.box.mass, b.box.pose.translation(), b.v, b.w, zero, zero};

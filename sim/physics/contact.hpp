@@ -37,8 +37,12 @@ class Contacts {
   // friction springs in `state.pairs` and lists sleeping boxes that something
   // moving touches in `wake`. `moving`: the awake and held bodies,
   // ascending (the sleeping ones are only found through the broad phase).
+  // `active` (adaptive fidelity; null at full): per body, whether it has a
+  // contact path to the action; such a box wakes the sleeping boxes within
+  // the wake margin as soon as it moves at sleep_speed, not wake_speed.
   void compute(State& state, const std::vector<int>& moving, const std::vector<Mover>& links,
-               double dt, std::vector<Wrench>& wrenches, std::vector<int>& wake);
+               double dt, std::vector<Wrench>& wrenches, std::vector<int>& wake,
+               const std::vector<std::uint8_t>* active = nullptr);
   // From the last compute(), per robot shape: the force the boxes exert on
   // it (world frame), and the force its belt exerts on them along belt_dir.
   const std::vector<Eigen::Vector3d>& link_forces() const { return link_force_; }

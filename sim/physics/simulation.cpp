@@ -111,7 +111,8 @@ struct Simulation::Impl {
     std::vector<double> q, u;
   };
   std::optional<Pending> pending;
-  PhysicsStats stats;  // work done; not part of the simulated state
+  PhysicsStats stats;                   // work done; not part of the simulated state
+  Fidelity fidelity = Fidelity::kFull;  // a setting, not part of the state
   // Scratch, reused every step.
   std::vector<Mover> movers;
   std::vector<Wrench> wrenches;
@@ -164,6 +165,7 @@ struct Simulation::Impl {
     pending = Pending{saved.state.slots, saved.state.q, saved.state.u};
     rebuild = saved.state.rebuild;
     moving_stale = true;
+    by_id.clear();  // another world may hold as many boxes
   }
 
   void wake_body(int i) {
@@ -185,6 +187,97 @@ struct Simulation::Impl {
       moving_stale = false;
     }
     return moving;
+  }
+
+  // Adaptive fidelity: boxes far from the action freeze early. Scratch of
+  // freeze_far(): (box id, body index) sorted by id; per body, its group's
+  // root, and flags.
+  std::vector<std::pair<std::uint32_t, int>> by_id;
+  std::vector<int> group;
+  std::vector<std::uint8_t> active, touches, source, ready;
+
+  int index_of(std::uint32_t id) const {
+    const auto it = std::lower_bound(by_id.begin(), by_id.end(), std::make_pair(id, -1));
+    return it != by_id.end() && it->first == id ? it->second : -1;
+  }
+  int root(int i) {
+    while (group[static_cast<std::size_t>(i)] != i) {
+      const auto k = static_cast<std::size_t>(i);
+      group[k] = group[static_cast<std::size_t>(group[k])];
+      i = group[k];
+    }
+    return i;
+  }
+
+  // Before a fixed step's contacts: the awake and held boxes joined by the
+  // last step's box-box contacts (state.pairs) into groups. A group is in
+  // the action when one of its boxes is held, touches a robot shape or moves
+  // at wake_speed or more; its boxes are marked `active`. A group that is
+  // not has no contact path to the action: once each of its boxes has been
+  // slow (Body::still) for kBalancedSleepFraction of sleep_time, they all
+  // freeze, without waiting for balance or the rest of sleep_time. Only the
+  // state decides (pairs, speeds, still), so restored runs repeat.
+  void freeze_far() {
+    const std::size_t n = state.bodies.size();
+    active.assign(n, 0);
+    const std::vector<int>& list = moving_bodies();
+    if (list.empty()) return;
+    if (by_id.size() != n) {
+      by_id.clear();
+      for (std::size_t i = 0; i < n; ++i)
+        by_id.emplace_back(state.bodies[i].box.id, static_cast<int>(i));
+      std::sort(by_id.begin(), by_id.end());
+    }
+    group.resize(n);
+    touches.assign(n, 0);
+    source.assign(n, 0);
+    ready.assign(n, 0);
+    for (const int i : list) group[static_cast<std::size_t>(i)] = i;
+    const auto moves = [&](int i) {
+      if (i < 0) return false;
+      const Mode mode = state.bodies[static_cast<std::size_t>(i)].mode;
+      return mode == Mode::kAwake || mode == Mode::kHeld;
+    };
+    for (const detail::PairState& p : state.pairs) {
+      if (p.key.kind == 1) {  // box and robot shape (PairKey)
+        const int i = index_of(p.key.a);
+        if (i >= 0) touches[static_cast<std::size_t>(i)] = 1;
+      } else if (p.key.kind == 0) {
+        const int a = index_of(p.key.a), b = index_of(p.key.b);
+        if (moves(a) && moves(b)) group[static_cast<std::size_t>(root(a))] = root(b);
+      }
+    }
+    const double slow_enough = kBalancedSleepFraction * options.sleep_time;
+    for (const int i : list) {
+      const auto k = static_cast<std::size_t>(i);
+      const Body& b = state.bodies[k];
+      const auto r = static_cast<std::size_t>(root(i));
+      if (b.mode == Mode::kHeld || touches[k] != 0 ||
+          b.v.norm() + b.w.norm() * b.radius >= options.wake_speed)
+        source[r] = 1;
+      ready[r] = 1;
+    }
+    for (const int i : list) {
+      const Body& b = state.bodies[static_cast<std::size_t>(i)];
+      if (b.still < slow_enough) ready[static_cast<std::size_t>(root(i))] = 0;
+    }
+    bool froze = false;
+    for (const int i : list) {
+      const auto k = static_cast<std::size_t>(i);
+      const auto r = static_cast<std::size_t>(root(i));
+      active[k] = source[r];
+      if (source[r] != 0 || ready[r] == 0) continue;
+      Body& b = state.bodies[k];
+      b.mode = Mode::kAsleep;
+      b.v.setZero();
+      b.w.setZero();
+      ++stats.frozen;
+      froze = true;
+    }
+    if (froze) {
+      rebuild = true;
+      moving_stale = true;
+    }
   }
 
   // Simbody system for `members` (body indices). Bodies already integrated
@@ -435,12 +528,15 @@ struct Simulation::Impl {
       build_multibody(pending->slots, &pending->q, &pending->u);
       pending.reset();
     }
+    const bool adaptive = fidelity == Fidelity::kAdaptive;
+    if (adaptive) freeze_far();
     if (rebuild) rebuild_awake();
     anything_moves = anything_moves || !slots.empty();
 
     wake.clear();
     if (anything_moves) {
-      contacts.compute(state, moving_bodies(), movers, dt, wrenches, wake);
+      contacts.compute(state, moving_bodies(), movers, dt, wrenches, wake,
+                       adaptive ? &active : nullptr);
       update_loads(dt);
     } else {
       state.pairs.clear();
@@ -631,6 +727,13 @@ void Simulation::step(double duration) {
   for (BeltLoad& d : s.belts) d.mean_force /= static_cast<double>(n);
   m.stats.wall_seconds +=
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void Simulation::set_fidelity(Fidelity fidelity) {
+  impl_->fidelity = fidelity;
+}
+Fidelity Simulation::fidelity() const {
+  return impl_->fidelity;
 }
 
 double Simulation::time() const {

@@ -11,6 +11,7 @@
 #include <plr/messages.hpp>
 #include <plr/node.hpp>
 #include <plr/plugin.hpp>
+#include <plr/sim/fidelity.hpp>
 #include <plr/sim/generators.hpp>
 #include <plr/sim/physics.hpp>
 #include <plr/sim/robot_model.hpp>
@@ -36,7 +37,7 @@ class SimulatorNode : public Node {
   Status on_configure() override {
     params().allow_only({"urdf", "octree_resolution", "control_period_s", "belt_speed",
                          "checkpoint_dir", "max_settle_s", "carry_max_s", "frame_rate_hz",
-                         "real_time_factor"});
+                         "real_time_factor", "fidelity"});
     auto robot = sim::load_robot(params().get<std::string>("urdf", ""));
     if (!robot) return make_error(PLR_ERR_INVALID, "param 'urdf': " + robot.error().message);
     model_.emplace(std::move(*robot));
@@ -48,6 +49,9 @@ class SimulatorNode : public Node {
     carry_max_ = params().get<double>("carry_max_s", 4.0);
     frame_rate_ = params().get<double>("frame_rate_hz", 10.0);
     real_time_factor_ = params().get<double>("real_time_factor", 0.0);
+    auto fidelity = sim::parse_fidelity(params().get<std::string>("fidelity", "full"));
+    if (!fidelity) return make_error(PLR_ERR_INVALID, "param " + fidelity.error().message);
+    fidelity_ = *fidelity;
     // Bounds, so no value makes memory or time grow without end: an octree at
     // 0.1 mm of a trailer does not fit in memory, and at a control period of
     // 1e-7 s an action never ended.
@@ -131,6 +135,7 @@ class SimulatorNode : public Node {
     options.control_period_s = period_;
     options.belt_speed = belt_speed_;
     options.carry_max_s = carry_max_;
+    options.fidelity = fidelity_;
     sim_ = std::make_unique<actions::UnloaderSimulation>(*model_, world, robot.q, options);
     boxes_total_ = total;
     unloaded_before_ = unloaded;
@@ -280,6 +285,7 @@ class SimulatorNode : public Node {
   double belt_speed_ = 0.8;
   double max_settle_ = 6.0;
   double carry_max_ = 4.0;
+  sim::Fidelity fidelity_ = sim::Fidelity::kFull;
   double frame_rate_ = 10.0;
   double real_time_factor_ = 0.0;
   std::string checkpoint_dir_;

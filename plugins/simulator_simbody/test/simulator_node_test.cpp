@@ -246,6 +246,27 @@ TEST(SimulatorParams, RatesAndResolutionsAreBounded) {
   }
 }
 
+// The fidelity is a word: the built levels configure, others name the value.
+TEST(SimulatorParams, FidelityIsFullOrAdaptive) {
+  for (const auto& [params, message] :
+       {std::pair{R"({"fidelity": "adaptive"})", ""},
+        std::pair{R"({"fidelity": "fast"})",
+                  "param fidelity: 'fast' is not built (full or adaptive)"},
+        std::pair{R"({"fidelity": "exact"})",
+                  "param fidelity: 'exact' is not one of full, adaptive"}}) {
+    FakeKernel kernel;
+    auto node = kernel.load_node(SIMULATOR_SO, NodeOptions().with_params(params));
+    ASSERT_TRUE(node) << node.error().message;
+    const Status configured = node->configure();
+    if (std::string(message).empty()) {
+      EXPECT_TRUE(configured) << configured.error().message;
+    } else {
+      ASSERT_FALSE(configured);
+      EXPECT_EQ(configured.error().message, message);
+    }
+  }
+}
+
 TEST(SimulatorCheckpoint, ADamagedOneFailsConfigureWithTheFilesError) {
   const auto dir =
       std::filesystem::temp_directory_path() / ("plr_sim_checkpoint_" + std::to_string(::getpid()));

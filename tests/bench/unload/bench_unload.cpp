@@ -6,7 +6,7 @@
 // run >= 98 % unloaded.
 //
 //   bench_unload [--quick] [--json] [--seeds N] [--first S] [--families A1,C]
-//                [--workers W] [--out DIR] [--timeout S]
+//                [--workers W] [--out DIR] [--timeout S] [--fidelity full|adaptive]
 // Defaults: seeds 1-20 of every family, one worker per core, results in
 // ./bench_unload. --quick: seeds 1-5. Each run is a job (plr/jobs); its
 // result goes to the result store DIR as it finishes, with each action it
@@ -14,7 +14,8 @@
 // (F_seedS.start.yaml) and the world it left (F_seedS.final.yaml) when
 // boxes remain; a stopped benchmark started again with the same DIR runs
 // only what is missing. A run past --timeout (wall seconds, default
-// 3600) is killed and counted as such.
+// 3600) is killed and counted as such. --fidelity: how accurately the boxes
+// are simulated (plr/sim/fidelity.hpp; default full).
 #include <unistd.h>
 
 #include <algorithm>
@@ -59,6 +60,7 @@ struct Options {
   std::string out = "bench_unload";
   double timeout_s = 3600;
   bool json = false;
+  plr::sim::Fidelity fidelity = plr::sim::Fidelity::kFull;
 };
 
 // A run; its settled start and the world it leaves are saved beside
@@ -67,6 +69,7 @@ struct Job {
   EnvFamily family;
   std::uint64_t seed;
   fs::path file;
+  plr::sim::Fidelity fidelity;
 };
 
 constexpr const char* kRunKind = "unload.run";
@@ -88,8 +91,11 @@ nlohmann::json run(const Job& job) {
   const plr::sim::RobotModel robot = value_or_die(plr::sim::load_robot());
   plr::planning::LatticePlanner planner(value_or_die(plr::planning::LatticeConfig::from_file(
       value_or_die(plr::sim::shipped_file("robots/unloader_lattice.yaml")))));
+  plr::actions::UnloaderOptions sim_options;
+  sim_options.fidelity = job.fidelity;
   plr::actions::UnloaderSimulation simulation(robot,
-                                              plr::sim::make_environment(job.family, job.seed));
+                                              plr::sim::make_environment(job.family, job.seed),
+                                              plr::actions::home_configuration(), sim_options);
   plr::actions::InProcessBackend backend(simulation, planner);
   // The settled start, beside the world the run leaves: a run can be replayed
   // or drawn from the two.
@@ -309,7 +315,13 @@ Options parse(int argc, char** argv) {
   app.add_option("--timeout", o.timeout_s, "Wall seconds after which a run is killed")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  std::string fidelity = "full";
+  app.add_option("--fidelity", fidelity, "How accurately the boxes are simulated: full, adaptive")
+      ->capture_default_str();
   plr::bench::parse_or_exit(app, argc, argv);
+  const auto level = plr::sim::parse_fidelity(fidelity);
+  if (!level) die(level.error().message);
+  o.fidelity = *level;
   if (quick) o.seeds = 5;
   if (o.families.empty()) o.families = plr::sim::all_env_families();
   if (o.workers == 0) o.workers = std::max(1L, sysconf(_SC_NPROCESSORS_ONLN));
@@ -326,7 +338,8 @@ int main(int argc, char** argv) {
   std::vector<Job> all;
   for (const EnvFamily f : o.families)
     for (std::uint64_t s = o.first; s < o.first + o.seeds; ++s)
-      all.push_back({f, s, fs::path(o.out) / fmt::format("{}_seed{}", to_string(f), s)});
+      all.push_back(
+          {f, s, fs::path(o.out) / fmt::format("{}_seed{}", to_string(f), s), o.fidelity});
   const std::vector<nlohmann::json> runs = run_all(all, o);
   nlohmann::json families = nlohmann::json::object();
   for (const EnvFamily f : o.families) families[std::string(to_string(f))] = summarize(runs, f);

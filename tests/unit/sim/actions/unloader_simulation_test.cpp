@@ -164,5 +164,23 @@ TEST(Execute, RefusesATrajectoryWithANonFinitePointAndLeavesTheWorldAsItWas) {
   EXPECT_TRUE(sim.execute(drive_forward(q)));
 }
 
+// The fidelity is a setting of the run: restoring a checkpoint (made at any
+// level) or changing the masses keeps it.
+TEST(Fidelity, IsKeptAcrossRestoreAndNewMasses) {
+  const sim::JointVector q = home_configuration();
+  UnloaderOptions options;
+  options.fidelity = sim::Fidelity::kAdaptive;
+  UnloaderSimulation full(robot(), block_ahead_of(q, 10.0));
+  UnloaderSimulation adaptive(robot(), block_ahead_of(q, 10.0), q, options);
+  EXPECT_EQ(full.physics().fidelity(), sim::Fidelity::kFull);
+  EXPECT_EQ(adaptive.physics().fidelity(), sim::Fidelity::kAdaptive);
+  adaptive.restore(*full.save());
+  EXPECT_EQ(adaptive.physics().fidelity(), sim::Fidelity::kAdaptive);
+  ASSERT_TRUE(adaptive.set_masses({{1, 5.0}}).has_value());
+  EXPECT_EQ(adaptive.physics().fidelity(), sim::Fidelity::kAdaptive);
+  adaptive.set_fidelity(sim::Fidelity::kFull);
+  EXPECT_EQ(adaptive.physics().fidelity(), sim::Fidelity::kFull);
+}
+
 }  // namespace
 }  // namespace plr::actions

@@ -29,8 +29,11 @@ class Rig {
  public:
   static plr::Expected<std::unique_ptr<Rig>> create(ActionOptions options);
 
-  // A new simulation of `truth` (with masses), the robot at home.
+  // A new simulation of `truth` (with masses), the robot at home, at the
+  // rig's fidelity.
   void reset(const sim::World& truth);
+  // The fidelity of this simulation and the next ones reset() makes.
+  void set_fidelity(sim::Fidelity fidelity);
   // The simulation's state with what the robot learnt, as the bytes of a
   // TruckState (state_bytes.hpp): to run on from it here or in another
   // process, bit for bit.
@@ -51,6 +54,7 @@ class Rig {
   sim::RobotModel robot_;
   planning::LatticePlanner planner_;
   ActionModel model_;
+  sim::Fidelity fidelity_ = sim::Fidelity::kFull;
   UnloaderSimulation simulation_;  // assigned anew by reset(): the backend keeps its address
   InProcessBackend backend_;
 };

@@ -67,6 +67,9 @@ struct UnloaderOptions {
   double base_max_push_force = 2000.0;  // N
   double base_push_filter_s = 0.1;
   sim::PhysicsOptions physics;
+  // How accurately the boxes are simulated (plr/sim/fidelity.hpp): a
+  // setting of the run, kept across restore().
+  sim::Fidelity fidelity = sim::Fidelity::kFull;
 };
 
 // Where the robot starts: base front edge at the trailer's open rear, arm
@@ -100,6 +103,7 @@ class UnloaderSimulation {
   std::uint32_t boxes_unloaded() const;
   double time() const;
   const sim::Simulation& physics() const;
+  void set_fidelity(sim::Fidelity fidelity);
 
   // In-memory checkpoints; a restored simulation repeats bit for bit.
   struct Saved;

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "plr/expected.hpp"
+#include "plr/sim/fidelity.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/suction_plate.hpp"
 #include "plr/sim/world.hpp"
@@ -125,6 +126,7 @@ struct PhysicsStats {
   std::int64_t rebuilds = 0;            // Simbody systems built for a new awake set
   std::int64_t belt_limited_steps = 0;  // steps with a running belt below its speed
   std::int64_t diverged = 0;            // boxes stopped by the divergence guard
+  std::int64_t frozen = 0;              // boxes put to sleep by the adaptive rule
   double wall_seconds = 0.0;            // time spent in step()
   int awake = 0, asleep = 0, held = 0, removed = 0;
 };
@@ -171,6 +173,11 @@ class Simulation {
   ~Simulation();
   Simulation(Simulation&&) noexcept;
   Simulation& operator=(Simulation&&) noexcept;
+
+  // How accurately the boxes are simulated from the next step on (default
+  // full). Not part of the state: restore() and snapshots leave it alone.
+  void set_fidelity(Fidelity fidelity);
+  Fidelity fidelity() const;
 
   // Advances by `duration` (rounded to whole steps). Robot shapes and the
   // suction plate move from their previous poses to the last ones set,

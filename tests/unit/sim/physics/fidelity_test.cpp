@@ -1,0 +1,151 @@
+// Fidelity levels: full is the simulation as it was; adaptive freezes boxes
+// with no contact path to the action and wakes them when the action comes
+// near.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "plr/sim/fidelity.hpp"
+#include "plr/sim/generators.hpp"
+#include "plr/sim/physics.hpp"
+
+namespace plr::sim {
+namespace {
+
+Box cube(std::uint32_t id, Eigen::Vector3d centre, double mass = 8.0) {
+  Box b;
+  b.id = id;
+  b.size = {0.4, 0.4, 0.4};
+  b.pose.translation() = centre;
+  b.mass = mass;
+  return b;
+}
+
+World small_pile() {
+  World w = generate_world(EnvFamily::kB1, 11);
+  w.boxes.resize(40);
+  return w;
+}
+
+// A paddle driven through the pile from the simulation's current time.
+void sweep(Simulation& sim) {
+  LinkGeometry nose;
+  nose.size = {0.8, 1.2, 0.1};
+  for (int k = 0; k <= 80; ++k) {
+    nose.pose.translation() = Eigen::Vector3d(12.5 + 0.02 * k, 0.0, 0.06);
+    sim.set_robot_links({nose});
+    sim.step(0.005);
+  }
+  sim.set_robot_links({});
+  sim.step(0.5);
+}
+
+TEST(Fidelity, ParsesTheBuiltLevelsAndRefusesTheOthers) {
+  EXPECT_EQ(*parse_fidelity("full"), Fidelity::kFull);
+  EXPECT_EQ(*parse_fidelity("adaptive"), Fidelity::kAdaptive);
+  const auto fast = parse_fidelity("fast");
+  ASSERT_FALSE(fast);
+  EXPECT_NE(fast.error().message.find("not built"), std::string::npos);
+  const auto other = parse_fidelity("medium");
+  ASSERT_FALSE(other);
+  EXPECT_NE(other.error().message.find("'medium'"), std::string::npos);
+  EXPECT_EQ(to_string(Fidelity::kAdaptive), "adaptive");
+}
+
+// Full fidelity is the default, and a simulation set to full after running
+// adaptive continues a snapshot exactly as one that never did: the level is
+// a setting, nothing of it enters the state.
+TEST(Fidelity, FullIsTheDefaultAndLeavesNoTraceInTheState) {
+  Simulation plain(small_pile());
+  EXPECT_EQ(plain.fidelity(), Fidelity::kFull);
+  plain.step(0.4);
+  const Snapshot start = plain.snapshot();
+  sweep(plain);
+  EXPECT_EQ(plain.stats().frozen, 0);
+
+  Simulation switched(small_pile());
+  switched.set_fidelity(Fidelity::kAdaptive);
+  switched.step(0.4);
+  sweep(switched);
+  EXPECT_GT(switched.stats().frozen, 0);
+  switched.set_fidelity(Fidelity::kFull);
+  switched.restore(start);
+  EXPECT_EQ(switched.fidelity(), Fidelity::kFull);
+  sweep(switched);
+  EXPECT_EQ(plain.snapshot().to_bytes(), switched.snapshot().to_bytes());
+}
+
+// Adaptive runs are decided by the state alone: a restored run repeats.
+TEST(Fidelity, AdaptiveRestoredRunRepeatsBitForBit) {
+  Simulation sim(small_pile());
+  sim.set_fidelity(Fidelity::kAdaptive);
+  sim.step(0.4);
+  const Snapshot start = sim.snapshot();
+  sweep(sim);
+  const std::vector<std::uint8_t> first = sim.snapshot().to_bytes();
+  sim.restore(start);
+  EXPECT_EQ(sim.fidelity(), Fidelity::kAdaptive);
+  sweep(sim);
+  EXPECT_EQ(first, sim.snapshot().to_bytes());
+}
+
+// A pile falling into shape, no robot: groups of boxes that touch nothing
+// moving fast freeze as soon as they are slow, before they are balanced;
+// fewer box-steps are integrated and the boxes come to rest near where they
+// do at full fidelity.
+TEST(Fidelity, AdaptiveFreezesSlowGroupsAwayFromTheAction) {
+  Simulation full(small_pile()), adaptive(small_pile());
+  adaptive.set_fidelity(Fidelity::kAdaptive);
+  full.step(0.4);
+  adaptive.step(0.4);
+  EXPECT_EQ(full.stats().frozen, 0);
+  EXPECT_GT(adaptive.stats().frozen, 0);
+  EXPECT_LT(adaptive.stats().body_steps, full.stats().body_steps);
+  const World a = adaptive.world(), f = full.world();
+  ASSERT_EQ(a.boxes.size(), f.boxes.size());
+  for (std::size_t i = 0; i < a.boxes.size(); ++i) {
+    EXPECT_LT((a.boxes[i].pose.translation() - f.boxes[i].pose.translation()).norm(), 0.05)
+        << "box " << a.boxes[i].id;
+  }
+}
+
+// Box 2 is pushed slowly (under wake_speed) towards box 1, which has been
+// asleep (frozen). Returns the gap between them (m) when box 1 woke.
+double gap_when_woken(Fidelity fidelity) {
+  World w;
+  w.boxes.push_back(cube(1, {10.6, 0.0, 0.2}));
+  w.boxes.push_back(cube(2, {10.0, 0.0, 0.2}));
+  Simulation sim(w);
+  sim.set_fidelity(fidelity);
+  EXPECT_GE(sim.settle(2.0), 0.0);
+  EXPECT_EQ(sim.stats().asleep, 2);
+  LinkGeometry pusher;
+  pusher.size = {0.1, 0.3, 0.2};
+  const double speed = 0.04;  // m/s, under wake_speed (0.05)
+  for (int k = 0; k <= 1200; ++k) {
+    pusher.pose.translation() = Eigen::Vector3d(9.75 + speed * 0.01 * k, 0.0, 0.15);
+    sim.set_robot_links({pusher});
+    sim.step(0.01);
+    const World now = sim.world();
+    const double gap =
+        now.boxes[0].pose.translation().x() - now.boxes[1].pose.translation().x() - 0.4;
+    if (sim.stats().asleep == 0) return gap;  // both awake
+  }
+  ADD_FAILURE() << "box 1 never woke";
+  return 1.0;
+}
+
+TEST(Fidelity, FrozenBoxWakesWhenAPushedBoxComesWithinTheMargin) {
+  const double adaptive_gap = gap_when_woken(Fidelity::kAdaptive);
+  // Woken before the boxes touch, within the wake margin (1 cm) and a
+  // control period's travel.
+  EXPECT_GT(adaptive_gap, 0.0);
+  EXPECT_LT(adaptive_gap, 0.01 + 0.04 * 0.01 + 1e-4);
+  // At full fidelity a box this slow wakes it only by pressing into it.
+  const double full_gap = gap_when_woken(Fidelity::kFull);
+  EXPECT_LT(full_gap, 0.0);
+}
+
+}  // namespace
+}  // namespace plr::sim
