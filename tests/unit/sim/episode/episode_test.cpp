@@ -13,6 +13,7 @@
 #include "plr/actions/instantiate.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/hardcoded_strategy.hpp"
+#include "plr/sim/physics.hpp"
 
 #include "scene.hpp"
 
@@ -206,6 +207,28 @@ TEST(RunHardcoded, UnloadsASmallWall) {
   EXPECT_EQ(e->robot_trailer_contacts, 0u);
   EXPECT_EQ(static_cast<std::uint64_t>(steps), e->actions);
   EXPECT_GT(e->robot_time_s, 0.0);
+}
+
+// A ceiling-high wall (D1's cartons, two columns, two deep, in an 8 m
+// trailer): 0.5 m cartons in five layers up to 5 cm under the ceiling. H
+// with the families' settings empties it without touching the trailer.
+TEST(RunHardcoded, UnloadsACeilingHighWall) {
+  sim::CartonWall narrow = sim::carton_wall(sim::EnvFamily::kD1);
+  narrow.columns = 2;
+  narrow.slabs = 2;
+  auto w = sim::make_carton_wall(narrow, 1, sim::Trailer{2.5, 2.7, 8.0});
+  ASSERT_TRUE(w) << w.error().message;
+  sim::Simulation settle(*w);
+  settle.settle(6.0);
+  UnloaderSimulation simulation(robot(), settle.world());
+  InProcessBackend backend(simulation, planner());
+  const ActionModel model(robot(), ActionOptions{});
+  const auto e = run_hardcoded(model, backend, sim::HardcodedParams{}, {});
+  ASSERT_TRUE(e) << e.error().message;
+  EXPECT_EQ(e->boxes_total, 20u);
+  EXPECT_EQ(e->boxes_unloaded, 20u) << e->stop_reason;
+  EXPECT_TRUE(e->left.empty());
+  EXPECT_EQ(e->robot_trailer_contacts, 0u);
 }
 
 // A 40 ft ISO container is 2.35 m wide inside and 2.39 m high: the nose
