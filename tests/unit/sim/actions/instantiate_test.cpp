@@ -120,6 +120,10 @@ TEST(PickCandidates, EveryTopBoxOfTheFrontRowOfACeilingHighWallIsAPickPoint) {
       const sim::JointVector at = home(k->base_x);
       EXPECT_FALSE(robot().arm_ik(k->grasp, at).empty());
       EXPECT_FALSE(robot().arm_ik(k->pregrasp, at).empty());
+      // Lifted off the box under it, it stays under the ceiling.
+      const double lift = k->lift.position.z() - k->grasp.position.z();
+      EXPECT_GT(lift, 0.0);
+      EXPECT_LE(sim::bounds(b).z1 + lift, w.trailer.height - 0.02 + 1e-9) << "box " << b.id;
     }
     EXPECT_EQ(tops, 4);
   }
