@@ -69,28 +69,92 @@ bool behind_robot(const sim::Box& box, const sim::JointVector& q) {
   return sim::bounds(box).x1 < q[sim::kBaseX];
 }
 
+namespace {
+
+// Whether the box lies (partly) on one of the robot's link shapes: a point
+// of its lowest face, a little above or inside a shape (`shapes`: poses and
+// half sizes). Points 10 % in from its edges: a shape beside the box (the
+// plate against its face) is not under it.
+bool rests_on_shapes(const sim::Box& box,
+                     const std::vector<std::pair<Eigen::Isometry3d, Eigen::Vector3d>>& shapes) {
+  constexpr double kBelow = 0.03;  // m under the face a supporting shape may stand
+  constexpr double kSlack = 0.01;  // m the shapes are grown by
+  const Eigen::Matrix3d& r = box.pose.linear();
+  int down = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::abs(r(2, k)) > std::abs(r(2, down))) down = k;
+  const int u = (down + 1) % 3, v = (down + 2) % 3;
+  const Eigen::Vector3d half = box.size / 2;
+  const Eigen::Vector3d face =
+      box.pose.translation() - std::copysign(half[down], r(2, down)) * r.col(down);
+  for (double a : {-0.8, -0.4, 0.0, 0.4, 0.8})
+    for (double b : {-0.8, -0.4, 0.0, 0.4, 0.8})
+      for (double d : {0.0, kBelow / 2, kBelow}) {
+        const Eigen::Vector3d p =
+            face + a * half[u] * r.col(u) + b * half[v] * r.col(v) - d * Eigen::Vector3d::UnitZ();
+        for (const auto& [pose, h] : shapes) {
+          const Eigen::Vector3d local = pose.inverse() * p;
+          if ((local.cwiseAbs().array() <= h.array() + kSlack).all()) return true;
+        }
+      }
+  return false;
+}
+
+}  // namespace
+
 std::vector<std::uint32_t> boxes_on_robot(const sim::World& world, const sim::RobotModel& robot,
                                           const sim::JointVector& q,
                                           const std::vector<std::uint32_t>& held) {
   constexpr double kOffFloor = 0.02;  // m: a box touching the robot this high lies on it
   constexpr double kUnder = 0.03;     // m: a box whose top is this close under another carries it
-  std::vector<std::uint32_t> out;
   const auto touching = boxes_touching(world, robot, q);
-  for (const auto& box : world.boxes) {
-    const sim::Bounds b = sim::bounds(box);
-    if (b.z0 <= kOffFloor ||
-        std::find(touching.begin(), touching.end(), box.id) == touching.end() ||
-        std::find(held.begin(), held.end(), box.id) != held.end())
-      continue;
-    // A box standing on other boxes (a wall box beside the plate) is the
-    // trailer's, not the robot's.
-    const bool on_boxes = std::any_of(world.boxes.begin(), world.boxes.end(), [&](const auto& o) {
-      const sim::Bounds u = sim::bounds(o);
-      return o.id != box.id && u.z1 < b.z0 + kUnder && u.z1 > b.z0 - kUnder && u.x0 < b.x1 &&
-             b.x0 < u.x1 && u.y0 < b.y1 && b.y0 < u.y1;
-    });
-    if (!on_boxes) out.push_back(box.id);
+  std::vector<Eigen::Isometry3d> poses;
+  robot.forward_kinematics(q, poses);
+  // The nose's links are left out: the scoop goes under what it sweeps, and
+  // the boxes on it and on others are the pile's until the belt takes them.
+  std::vector<std::pair<Eigen::Isometry3d, Eigen::Vector3d>> shapes;
+  for (std::size_t l = 0; l < robot.links().size(); ++l)
+    for (const auto& shape : robot.links()[l].shapes)
+      if (robot.links()[l].name.rfind("nose_", 0) != 0)
+        if (shape.type == sim::CollisionShape::Type::kBox)
+          shapes.emplace_back(poses[l] * shape.origin, shape.size / 2);
+  const std::size_t n = world.boxes.size();
+  // What each box rests on: the boxes whose tops are just under its bottom.
+  std::vector<std::vector<std::size_t>> under(n);
+  std::vector<sim::Bounds> bounds(n);
+  for (std::size_t i = 0; i < n; ++i) bounds[i] = sim::bounds(world.boxes[i]);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j) {
+      const sim::Bounds &b = bounds[i], &u = bounds[j];
+      if (j != i && u.z1 < b.z0 + kUnder && u.z1 > b.z0 - kUnder && u.x0 < b.x1 && b.x0 < u.x1 &&
+          u.y0 < b.y1 && b.y0 < u.y1)
+        under[i].push_back(j);
+    }
+  std::vector<bool> free(n), on(n, false);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto id = world.boxes[i].id;
+    free[i] = bounds[i].z0 > kOffFloor && std::find(held.begin(), held.end(), id) == held.end();
+    if (!free[i] || std::find(touching.begin(), touching.end(), id) == touching.end()) continue;
+    // A box touching the robot and standing on other boxes (a wall box
+    // beside the plate) is the trailer's, unless a link is under it too: a
+    // box dragged onto the arm, half on the wall it came from, rides on it.
+    on[i] = under[i].empty() || rests_on_shapes(world.boxes[i], shapes);
   }
+  // What rests only on boxes lying on the robot lies on it too (a box
+  // dragged out on top of another onto the arm).
+  for (bool grew = true; grew;) {
+    grew = false;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (on[i] || !free[i] || under[i].empty()) continue;
+      if (std::all_of(under[i].begin(), under[i].end(), [&](std::size_t j) { return on[j]; })) {
+        on[i] = true;
+        grew = true;
+      }
+    }
+  }
+  std::vector<std::uint32_t> out;
+  for (std::size_t i = 0; i < n; ++i)
+    if (on[i]) out.push_back(world.boxes[i].id);
   return out;
 }
 

@@ -112,6 +112,13 @@ double lift_height(const PickScene& s, const Geometry& g, const std::vector<std:
   return lift;
 }
 
+double ceiling_room(const PickScene& s, const Geometry& g, const std::vector<std::size_t>& group,
+                    const Eigen::Vector3d& p) {
+  double top = p.z() + g.plate_half_height();
+  for (auto j : group) top = std::max(top, s.bounds[j].z1);
+  return std::max(0.0, s.world.trailer.height - kClearance - top);
+}
+
 std::vector<std::size_t> riders_on(const PickScene& s, const std::vector<std::size_t>& group,
                                    double lift) {
   const auto& b = s.bounds;

@@ -45,7 +45,7 @@ std::optional<Grip> best_grip(const PickScene& s, const Geometry& g, const Appro
     grip.pregrasp = room.room;
     grip.group = std::move(sealed.group);
     grip.cups = std::move(sealed.cups);
-    grip.lift = lift_height(s, g, grip.group);
+    grip.lift = std::min(lift_height(s, g, grip.group), ceiling_room(s, g, grip.group, p));
     double depth = 0;
     for (auto j : grip.group) depth = std::max(depth, s.bounds[j].x1 - s.bounds[j].x0);
     grip.out_depth = std::max(2 * a.face.half_d, depth) + kMargin;

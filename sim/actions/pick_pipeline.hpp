@@ -176,6 +176,12 @@ Sealed sealed_group(const PickScene& s, const Geometry& g, const Approach& a,
 // nose) before it comes out; lifted clear of a tilted top it rests on.
 double lift_height(const PickScene& s, const Geometry& g, const std::vector<std::size_t>& group);
 
+// How far the group and the plate (its centre at p) can rise and stay
+// kClearance under the ceiling: a carton of a ceiling-high wall lifted
+// 5 cm pressed into it, and the cups let go (D2: 1,080 N on 1,080).
+double ceiling_room(const PickScene& s, const Geometry& g, const std::vector<std::size_t>& group,
+                    const Eigen::Vector3d& p);
+
 // The boxes resting on `group` that may ride on it, unsealed, as it comes
 // out: upright wall boxes, at most kMaxRiders, each resting on the group
 // alone and with its centre over it (else it stays behind, or tips off

@@ -71,7 +71,7 @@ plr::Expected<EvaluationSettings> EvaluationSettings::load(
       if (auto family = sim::parse_env_family(*f))
         env.family = *family;
       else
-        e.required("family").error("not a family (A1, A2, B1, B2, C)");
+        e.required("family").error("not a family (" + sim::env_family_names() + ")");
     }
     if (auto t = e.find("training").boolean()) env.training = *t;
     if (auto w = e.find("world").string()) env.world = *w;

@@ -1,6 +1,7 @@
 // Environment families. Walls are built column by column from the front wall
 // backwards; piles are built by dropping boxes onto a height map.
 #include <fcl/fcl.h>
+#include <fmt/format.h>
 
 #include <Eigen/QR>
 #include <algorithm>
@@ -547,6 +548,99 @@ World make_mixed(std::uint64_t seed, const Trailer& given) {
   return world;
 }
 
+// Family D and make_carton_wall: the columns of the lower layers, then the
+// loose layers carton by carton, each kept only where it overlaps nothing
+// and the wall under it still stands.
+World carton_wall_world(const CartonWall& spec, std::uint64_t seed, const Trailer& trailer) {
+  constexpr double kShift = 0.2;  // of the carton: how far a loose carton is off its place
+  constexpr double kTurn = 0.25;  // rad
+  constexpr int kTries = 20;      // places tried per loose carton
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::uniform_real_distribution<double> jitter(-0.4 * kGap, 0.4 * kGap);
+  const double top = trailer.height - spec.headroom;
+  const int layers = static_cast<int>(std::floor(top / spec.carton + 1e-9));
+  const double h = top / layers;
+  const int fit = static_cast<int>(std::floor((trailer.width - kGap) / (spec.carton + kGap)));
+  const int columns = spec.columns > 0 ? spec.columns : fit;
+  // Centred columns; the width they leave spreads evenly between them when
+  // they fill the trailer, and stays at the sides when fewer are asked for.
+  const double spare = spec.columns > 0 ? 0.0
+                                        : (trailer.width - kGap - columns * (spec.carton + kGap)) /
+                                              static_cast<double>(columns + 1);
+  const double pitch = spec.carton + kGap + spare;
+  const double y0 = -0.5 * (columns - 1) * pitch;
+  const auto mass = [&] {
+    return draw_mass(rng, spec.mass.median, spec.mass.spread, spec.mass.min, spec.mass.max);
+  };
+  World world;
+  world.trailer = trailer;
+  const auto place = [&](int slab, int column, int layer) {
+    Box box;
+    box.id = static_cast<std::uint32_t>(world.boxes.size() + 1);
+    box.size = {spec.carton, spec.carton, h};
+    box.pose = Eigen::Isometry3d::Identity();
+    box.pose.translation() =
+        Eigen::Vector3d(trailer.depth - kGap - (slab + 0.5) * spec.carton - slab * kGap,
+                        y0 + column * pitch, (layer + 0.5) * h);
+    return box;
+  };
+  const int fixed = layers - spec.loose_layers;
+  for (int slab = 0; slab < spec.slabs; ++slab)
+    for (int column = 0; column < columns; ++column)
+      for (int layer = 0; layer < fixed; ++layer) {
+        Box box = place(slab, column, layer);
+        box.pose.translation() += Eigen::Vector3d(jitter(rng), jitter(rng), 0.0);
+        box.mass = mass();
+        world.boxes.push_back(box);
+      }
+  std::vector<int> all(world.boxes.size());
+  std::iota(all.begin(), all.end(), 0);
+  std::vector<Support> supports;
+  for (const Box& box : world.boxes) supports.push_back(find_support(box, world.boxes, all));
+  // Loose cartons: overlap is tested on footprints grown by the gap and
+  // heights shrunk by it, so that neighbours keep a gap and the layer
+  // below does not count.
+  const fcl::Boxd shape(Eigen::Vector3d(spec.carton + kGap, spec.carton + kGap, h - kGap));
+  fcl::CollisionRequestd request;
+  for (int layer = fixed; layer < layers; ++layer)
+    for (int slab = 0; slab < spec.slabs; ++slab)
+      for (int column = 0; column < columns; ++column) {
+        const Box home = place(slab, column, layer);
+        const double m = mass();
+        for (int t = 0; t < kTries; ++t) {
+          Box box = home;
+          box.mass = m;
+          box.pose.linear() =
+              Eigen::AngleAxisd(kTurn * (2 * unit(rng) - 1), Eigen::Vector3d::UnitZ())
+                  .toRotationMatrix();
+          box.pose.translation() += Eigen::Vector3d(kShift * spec.carton * (2 * unit(rng) - 1),
+                                                    kShift * spec.carton * (2 * unit(rng) - 1), 0);
+          const Eigen::Vector3d e = box.pose.linear().cwiseAbs() * (0.5 * box.size);
+          const Eigen::Vector3d c = box.pose.translation();
+          if (c.x() + e.x() > trailer.depth - kGap ||
+              std::abs(c.y()) + e.y() > 0.5 * trailer.width - kGap)
+            continue;
+          const bool overlaps =
+              std::any_of(world.boxes.begin(), world.boxes.end(), [&](const Box& o) {
+                fcl::CollisionResultd result;
+                return fcl::collide(&shape, box.pose, &shape, o.pose, request, result) > 0;
+              });
+          if (overlaps) continue;
+          world.boxes.push_back(box);
+          all.push_back(static_cast<int>(all.size()));
+          supports.push_back(find_support(box, world.boxes, all));
+          std::vector<bool> check(world.boxes.size(), false);
+          check.back() = true;
+          if (tipping(world.boxes, supports, top_down(world.boxes), check).empty()) break;
+          world.boxes.pop_back();
+          all.pop_back();
+          supports.pop_back();
+        }
+      }
+  return world;
+}
+
 }  // namespace
 
 std::string_view to_string(EnvFamily family) {
@@ -561,12 +655,19 @@ std::string_view to_string(EnvFamily family) {
       return "B2";
     case EnvFamily::kC:
       return "C";
+    case EnvFamily::kD1:
+      return "D1";
+    case EnvFamily::kD2:
+      return "D2";
+    case EnvFamily::kD3:
+      return "D3";
   }
   return "?";
 }
 
 std::vector<EnvFamily> all_env_families() {
-  return {EnvFamily::kA1, EnvFamily::kA2, EnvFamily::kB1, EnvFamily::kB2, EnvFamily::kC};
+  return {EnvFamily::kA1, EnvFamily::kA2, EnvFamily::kB1, EnvFamily::kB2,
+          EnvFamily::kC,  EnvFamily::kD1, EnvFamily::kD2, EnvFamily::kD3};
 }
 
 std::string env_family_names() {
@@ -604,6 +705,8 @@ std::vector<std::uint32_t> toppling_boxes(const World& world) {
 }
 
 MassPrior mass_prior(EnvFamily family) {
+  if (family == EnvFamily::kD1 || family == EnvFamily::kD2 || family == EnvFamily::kD3)
+    return carton_wall(family).mass;
   // C draws every mass from A2's prior (make_mixed).
   if (family == EnvFamily::kC) family = EnvFamily::kA2;
   if (family == EnvFamily::kA1 || family == EnvFamily::kA2) {
@@ -657,7 +760,51 @@ World generate_world(EnvFamily family, std::uint64_t seed, const Trailer& traile
     return make_wall(family, seed, trailer);
   }
   if (family == EnvFamily::kC) return make_mixed(seed, trailer);
-  return make_pile(family, seed, trailer);
+  if (family == EnvFamily::kB1 || family == EnvFamily::kB2) return make_pile(family, seed, trailer);
+  auto wall = make_carton_wall(carton_wall(family), seed, trailer);
+  if (!wall) throw std::invalid_argument("generate_world: " + wall.error().message);
+  return std::move(*wall);
+}
+
+CartonWall carton_wall(EnvFamily family) {
+  CartonWall wall;
+  if (family == EnvFamily::kD2) wall.mass = {18.0, 0.25, 10.0, 28.0};  // heavy cartons
+  if (family == EnvFamily::kD3) wall.loose_layers = 2;
+  return wall;
+}
+
+plr::Status check(const CartonWall& w, const Trailer& t) {
+  const auto bad = [](const std::string& what) {
+    return plr::make_error(PLR_ERR_INVALID, "carton wall: " + what);
+  };
+  if (!(w.carton >= 0.1 && w.carton <= 1.5))
+    return bad(fmt::format("carton {} m: must be within 0.1-1.5 m", w.carton));
+  if (!(w.headroom >= 0 && t.height - w.headroom >= w.carton))
+    return bad(
+        fmt::format("headroom {} m: must be >= 0 and leave a {} m carton under the {} m ceiling",
+                    w.headroom, w.carton, t.height));
+  if (w.slabs < 1 || w.slabs * (w.carton + kGap) > 0.5 * t.depth)
+    return bad(
+        fmt::format("slabs {}: must be >= 1 and fill at most the front half of a {} m trailer",
+                    w.slabs, t.depth));
+  const int fit = static_cast<int>(std::floor((t.width - kGap) / (w.carton + kGap)));
+  if (w.columns < 0 || w.columns > fit || fit < 1)
+    return bad(fmt::format("columns {}: a {} m trailer holds 1-{} columns of {} m cartons",
+                           w.columns, t.width, fit, w.carton));
+  const int layers = static_cast<int>(std::floor((t.height - w.headroom) / w.carton + 1e-9));
+  if (w.loose_layers < 0 || w.loose_layers > layers)
+    return bad(fmt::format("loose_layers {}: must be within 0-{} (the wall's layers)",
+                           w.loose_layers, layers));
+  const MassPrior& m = w.mass;
+  if (!(m.min > 0 && m.min <= m.median && m.median <= m.max && m.spread >= 0))
+    return bad("mass: needs 0 < min <= median <= max and spread >= 0");
+  return {};
+}
+
+plr::Expected<World> make_carton_wall(const CartonWall& wall, std::uint64_t seed,
+                                      const Trailer& trailer) {
+  if (auto ok = check(wall, trailer); !ok) return ok.error();
+  return carton_wall_world(wall, seed, trailer);
 }
 
 std::uint64_t particle_seed(std::uint64_t seed, int particle) {

@@ -92,7 +92,7 @@ TEST_F(SimulatorService, ServicesBeforeResetSayWhatIsMissing) {
 TEST_F(SimulatorService, BadResetRequestsNameTheProblem) {
   const auto family = reset("C7", "");
   ASSERT_FALSE(family);
-  EXPECT_EQ(family.error().message, "env 'C7': expected A1, A2, B1, B2 or C");
+  EXPECT_EQ(family.error().message, "env 'C7': expected A1, A2, B1, B2, C, D1, D2 or D3");
   const auto file = reset("", "/nonexistent/world.yaml");
   ASSERT_FALSE(file);
   EXPECT_EQ(file.error().message,

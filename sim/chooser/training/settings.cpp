@@ -120,7 +120,7 @@ plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::pa
   if (const yaml::Node n = top.find("mass_prior"); n.present()) {
     if (auto name = n.string()) {
       s.mass_prior = sim::parse_env_family(*name);
-      if (!s.mass_prior) n.error("not a family (A1, A2, B1, B2, C)");
+      if (!s.mass_prior) n.error("not a family (" + sim::env_family_names() + ")");
     }
   }
   if (auto n = top.find("workers").integer(1, 64)) s.workers = static_cast<int>(*n);

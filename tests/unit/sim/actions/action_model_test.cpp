@@ -2,7 +2,9 @@
 // real physics, the real lattice planner, hand-made worlds.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <set>
+#include <string>
 #include <vector>
 
 #include "plr/sim/generators.hpp"
@@ -320,6 +322,57 @@ TEST(ActionModel, ABoxRidingOnTheLoadWeighsOnTheCups) {
   const auto [b, heavy_dropped] = run(heavy);
   EXPECT_TRUE(heavy_dropped);
   EXPECT_GE(b.drops, 1u);
+}
+
+// Two boxes dragged onto the arm, one lying on the upper arm and one on top
+// of it (a ceiling-high wall, issue 46): both ride on the robot. The arm
+// folds with them ignored, so they fall, and the pick goes on; taken for
+// the wall's, the upper one refused the fold ("goal: arm_fore - box") and
+// every later move of the arm through where it lay.
+TEST(ActionModel, BoxesLyingOnTheArmAreShakenOffAndThePickGoesOn) {
+  constexpr double kBase = 4.0;
+  sim::JointVector q;
+  q << kBase, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0;  // arm straight out, level
+  std::vector<Eigen::Isometry3d> poses;
+  robot().forward_kinematics(q, poses);
+  double top = 0;  // of the upper arm
+  for (std::size_t l = 0; l < robot().links().size(); ++l)
+    if (robot().links()[l].name == "arm_upper")
+      for (const auto& shape : robot().links()[l].shapes)
+        top = std::max(top, sim::half_extents(shape, poses[l] * shape.origin).z() +
+                                (poses[l] * shape.origin).translation().z());
+  ASSERT_GT(top, 1.0);
+  sim::World w = wall(6.6, 3, 2);
+  const std::uint32_t lower = 20, upper = 21;
+  w.boxes.push_back(box(lower, kBase + 0.3, 0.0, top + 0.002, 3.0));
+  w.boxes.push_back(box(upper, kBase + 0.3, 0.0, top + 0.404, 3.0));
+  // The folded arm goes through where the upper box lies.
+  sim::JointVector folded = q;
+  const auto& clear = options().arm_clear;
+  for (int k = 0; k < 4; ++k) folded[sim::kArm1 + k] = clear[static_cast<std::size_t>(k)];
+  const auto in_the_way = boxes_touching(w, robot(), folded, {"arm_fore"});
+  ASSERT_NE(std::find(in_the_way.begin(), in_the_way.end(), upper), in_the_way.end());
+  auto riding = boxes_on_robot(w, robot(), q);
+  std::sort(riding.begin(), riding.end());
+  EXPECT_EQ(riding, (std::vector<std::uint32_t>{lower, upper}));
+
+  Fixture f(q, w);
+  const ActionModel model(robot(), options());
+  std::vector<std::string> notes;
+  Reporter reporter;
+  reporter.note = [&](const std::string& line) { notes.push_back(line); };
+  const auto out =
+      model.run(sim::make_pick(Height::kLow, Side::kCenter), f.backend, f.memory, reporter);
+  ASSERT_TRUE(out) << out.error().message;
+  for (const auto& n : notes) EXPECT_EQ(n.find("not planned"), std::string::npos) << n;
+  EXPECT_TRUE(out->applicable) << out->why;
+  EXPECT_GE(out->boxes, 1u);
+  const auto end = f.backend.observe();
+  ASSERT_TRUE(end);
+  // Cleared: off the robot (onto the belt, or the floor).
+  const auto after = boxes_on_robot(end->world, robot(), end->q, end->held);
+  EXPECT_EQ(std::count(after.begin(), after.end(), lower), 0);
+  EXPECT_EQ(std::count(after.begin(), after.end(), upper), 0);
 }
 
 TEST(Outcome, CountsTheBoxesThatMovedOrTurnedButStayed) {

@@ -89,6 +89,46 @@ TEST(PickCandidates, EveryTopBoxOfTheFrontRowOfAnA1WallIsAPickPoint) {
   EXPECT_GE(tops, 4);
 }
 
+TEST(PickCandidates, EveryTopBoxOfTheFrontRowOfACeilingHighWallIsAPickPoint) {
+  // D1: 0.5 m cartons in five layers up to 5 cm under the ceiling. From
+  // where the arm is at its preferred reach, the top face is out of it; the
+  // base stands back until the arm reaches it.
+  const sim::ObservationParams obs;
+  for (std::uint64_t seed : {1, 2}) {
+    const sim::World w = sim::without_masses(sim::generate_world(sim::EnvFamily::kD1, seed));
+    double front = 1e9, top = 0;
+    for (const auto& b : w.boxes) {
+      front = std::min(front, sim::bounds(b).x0);
+      top = std::max(top, sim::bounds(b).z1);
+    }
+    std::vector<PickCandidate> all;
+    std::vector<PickRejection> why;
+    for (auto h : kHeights)
+      for (auto side : kSides)
+        for (auto& c : pick_candidates(w, sim::analyse(w, obs), sim::make_pick(h, side), obs,
+                                       robot(), {}, home(8.0), 1000, {}, &why))
+          all.push_back(std::move(c));
+    int tops = 0;
+    for (const auto& b : w.boxes) {
+      if (sim::bounds(b).x0 > front + 0.05 || sim::bounds(b).z1 < top - 0.01) continue;
+      ++tops;
+      const PickCandidate* k = find(all, b.id);
+      std::string rejected;
+      for (const auto& r : why)
+        if (r.box == b.id) rejected += r.why + "; ";
+      ASSERT_NE(k, nullptr) << "seed " << seed << " box " << b.id << ": " << rejected;
+      const sim::JointVector at = home(k->base_x);
+      EXPECT_FALSE(robot().arm_ik(k->grasp, at).empty());
+      EXPECT_FALSE(robot().arm_ik(k->pregrasp, at).empty());
+      // Lifted off the box under it, it stays under the ceiling.
+      const double lift = k->lift.position.z() - k->grasp.position.z();
+      EXPECT_GT(lift, 0.0);
+      EXPECT_LE(sim::bounds(b).z1 + lift, w.trailer.height - 0.02 + 1e-9) << "box " << b.id;
+    }
+    EXPECT_EQ(tops, 4);
+  }
+}
+
 TEST(PickCandidates, PlateStopsShortOfAProudNeighbourWithinTheCupsReach) {
   // A 0.3 m box on one standing out 1 cm: the 0.4 m plate overlaps the lower
   // box, so it stops 5 mm short of that one, 1.5 cm from its target.
@@ -182,6 +222,32 @@ TEST(PickCandidates, BoxesAboveTheNoseDoNotKeepTheBaseBack) {
   const auto c = pick_candidates(w, scene, action, obs, robot(), {}, home(base_x), 1000, {});
   ASSERT_NE(find(c, 3), nullptr);
   EXPECT_EQ(find(c, 3)->base_x, find(clear, 3)->base_x);
+}
+
+TEST(BoxesOnRobot, ABoxHalfOnTheArmHalfOnTheWallAndWhatLiesOnItRideOnTheRobot) {
+  // The arm straight out and level; beside its forearm a column as high as
+  // the forearm's top. A box lies across both, another on top of it: the
+  // arm carries them (moved, the arm takes them along or drops them).
+  sim::JointVector q;
+  q << 4.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0;
+  std::vector<Eigen::Isometry3d> poses;
+  robot().forward_kinematics(q, poses);
+  double top = 0;
+  for (std::size_t l = 0; l < robot().links().size(); ++l)
+    if (robot().links()[l].name == "arm_fore")
+      for (const auto& shape : robot().links()[l].shapes)
+        top = (poses[l] * shape.origin).translation().z() +
+              sim::half_extents(shape, poses[l] * shape.origin).z();
+  sim::World w = trailer_world();
+  sim::Box column = sim::testing::make_box(1, 5.1, 0.3, 0.0, {0.4, 0.4, top});
+  w.boxes.push_back(column);
+  w.boxes.push_back(sim::testing::make_box(2, 5.1, 0.1, top + 0.001));
+  w.boxes.push_back(sim::testing::make_box(3, 5.1, 0.1, top + 0.402));
+  EXPECT_EQ(boxes_on_robot(w, robot(), q), (std::vector<std::uint32_t>{2, 3}));
+  // Off the arm (the column alone under it), the box is the wall's.
+  w.boxes[1] = sim::testing::make_box(2, 5.1, 0.35, top + 0.001);
+  w.boxes[2] = sim::testing::make_box(3, 5.1, 0.35, top + 0.402);
+  EXPECT_TRUE(boxes_on_robot(w, robot(), q).empty());
 }
 
 TEST(PickCandidates, ABoxRestingOnTheTargetKeepsItInPlace) {

@@ -204,6 +204,22 @@ TEST(LiftHeight, OverTheNoseOffTheFloorClearOfATiltedSupport) {
   EXPECT_NEAR(lift_height(scene_of(sunk), g, {1}), 0.065 + kClearance + kLiftSlack, 1e-12);
 }
 
+TEST(CeilingRoom, WhatTheGroupAndThePlateCanRiseUnderTheCeiling) {
+  const Geometry g;
+  // A carton of a ceiling-high wall, 5 cm under a 2.7 m ceiling: it rises
+  // 3 cm, not the 5 cm of the retract lift.
+  const sim::World top = trailer_world({make_box(1, 10.2, 0, 2.12, {0.5, 0.5, 0.53})});
+  const PickScene s = scene_of(top);
+  EXPECT_NEAR(ceiling_room(s, g, {0}, {10.0, 0.0, 2.385}), 0.03, 1e-12);
+  // A plate higher than the box: its top sets the room.
+  EXPECT_NEAR(ceiling_room(s, g, {0}, {10.0, 0.0, 2.47}), 0.01, 1e-12);
+  // Against the ceiling: none.
+  EXPECT_EQ(ceiling_room(s, g, {0}, {10.0, 0.0, 2.6}), 0.0);
+  // Lower down, far more than any lift.
+  const sim::World low = trailer_world({make_box(1, 10.2, 0, 0)});
+  EXPECT_GT(ceiling_room(scene_of(low), g, {0}, {10.0, 0.0, 0.2}), 2.0);
+}
+
 TEST(RidersOn, OneWallBoxOnTheGroupRidesTwoDoNot) {
   // Columns of three: the top box rests on the two taken under it.
   const sim::World one = trailer_world(

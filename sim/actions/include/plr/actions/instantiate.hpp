@@ -54,10 +54,12 @@ std::vector<std::uint32_t> boxes_touching(const sim::World& world, const sim::Ro
                                           const sim::JointVector& q,
                                           const std::vector<std::string>& links = {});
 
-// Boxes lying on the robot: touching one of its links, off the trailer's
-// floor, not held (fallen onto the arm, or onto the nose and not carried
-// off). They ride along with the robot and are not part of what stands in
-// front of it.
+// Boxes lying on the robot: off the trailer's floor, not held, and touching
+// one of its links with nothing but the robot under them (fallen onto the
+// arm, or onto the nose and not carried off), or with a link other than the
+// nose's under them (dragged onto the arm, half on the wall they came from),
+// or resting only on such boxes. They ride along with the robot and are not
+// part of what stands in front of it.
 std::vector<std::uint32_t> boxes_on_robot(const sim::World& world, const sim::RobotModel& robot,
                                           const sim::JointVector& q,
                                           const std::vector<std::uint32_t>& held = {});

@@ -1,6 +1,6 @@
 // Seeded environment families (the paper's A1, A2: stacked walls; B1, B2:
-// unstructured piles). Every call seeds its own std::mt19937_64; the same
-// (family, seed) always gives the same world on one machine.
+// unstructured piles; C: mixed scenes; D1-D3: ceiling-high carton walls). Every call seeds its own
+// std::mt19937_64; the same (family, seed) always gives the same world on one machine.
 //
 // Boxes fill the trailer from the front wall (x = depth) towards the rear;
 // the rear part stays free for the robot. Walls come out resting (boxes touch
@@ -25,16 +25,23 @@ namespace plr::sim {
 // unloaded (stair-stepped) front, or a loose layer of flat boxes before it;
 // in a trailer or in a 40/45 ft ISO container (2.35 m wide, 2.39 or 2.69 m
 // high: C chooses the width and height, the depth is the caller's).
-enum class EnvFamily { kA1, kA2, kB1, kB2, kC };
+//
+// D: walls of one size of cartons stacked to just under the ceiling
+// (make_carton_wall below): D1 light 0.5 m cartons, 2.65 m high in a 2.7 m
+// trailer; D2 the same cartons heavy; D3 light, its two top layers set down
+// loosely. The top boxes are as high as a trailer allows.
+enum class EnvFamily { kA1, kA2, kB1, kB2, kC, kD1, kD2, kD3 };
 
 std::string_view to_string(EnvFamily family);
 // Every family, in order.
 std::vector<EnvFamily> all_env_families();
-// "A1, A2, B1, B2 or C", for messages.
+// "A1, A2, B1, B2, C, D1, D2 or D3", for messages.
 std::string env_family_names();
 // "A1", "a1", ... ; nullopt for anything else.
 std::optional<EnvFamily> parse_env_family(std::string_view name);
 
+// Throws std::invalid_argument for a trailer smaller than 1 x 1 x 4 m, or one
+// a D family's wall does not fit in.
 World generate_world(EnvFamily family, std::uint64_t seed, const Trailer& trailer = {});
 
 // Pairs of box ids whose volumes overlap by more than `tolerance` (m), and
@@ -61,6 +68,34 @@ struct MassPrior {
   double min = 0.0, max = 0.0;  // kg
 };
 MassPrior mass_prior(EnvFamily family);
+
+// A wall of equal cartons from the front wall backwards, its columns as
+// high as the trailer allows: layers = floor((height - headroom) / carton)
+// of cartons carton x carton wide and (height - headroom) / layers high, so
+// every column's top is `headroom` under the ceiling. Columns spread evenly
+// across the width; a jitter of a few mm keeps the wall from being a grid.
+// Loose layers (the top ones) are not in columns: each carton is shifted
+// (up to a fifth of its size) and turned (up to 0.25 rad) off its place,
+// and left out where it would overlap one already set down or tip over.
+struct CartonWall {
+  double carton = 0.5;                  // m, edge of the square footprint
+  double headroom = 0.05;               // m, from the top of the wall to the ceiling
+  int slabs = 3;                        // rows of columns, from the front wall backwards
+  int columns = 0;                      // across the width, centred; 0: as many as fit
+  int loose_layers = 0;                 // top layers set down loosely
+  MassPrior mass{3.0, 0.35, 1.0, 6.0};  // light cartons
+};
+
+// The wall of a D family.
+CartonWall carton_wall(EnvFamily family);
+
+// Whether the wall fits the trailer (in its front half) and its values make
+// sense; the error names the field.
+plr::Status check(const CartonWall& wall, const Trailer& trailer);
+
+// The wall (seeded as generate_world), or check's error.
+plr::Expected<World> make_carton_wall(const CartonWall& wall, std::uint64_t seed,
+                                      const Trailer& trailer = {});
 
 // A particle of the belief over W^t: `visible` with every unknown mass (0)
 // drawn from the family's prior; masses already known (> 0, e.g. measured by
