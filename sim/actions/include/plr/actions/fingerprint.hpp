@@ -12,9 +12,9 @@
 
 namespace plr::actions {
 
-inline constexpr std::uint32_t kActionModelVersion = 1;
+inline constexpr std::uint32_t kActionModelVersion = 2;
 
-// "v1-3f2a09c1": the version and a CRC-32 of the shipped robot files.
+// "v2-3f2a09c1": the version and a CRC-32 of the shipped robot files.
 plr::Expected<std::string> action_model_fingerprint();
 
 }  // namespace plr::actions
