@@ -2,8 +2,10 @@
 // (the action model on the simulation, no bus), in parallel worker processes.
 // Per family: the unloaded fraction (mean and the worst seed), robot time,
 // boxes per robot-second, why runs stopped, why boxes were left,
-// robot-trailer collisions. Issue 18's target is printed beside them: every
-// run >= 98 % unloaded.
+// robot-trailer collisions, the share of robot time wasted (issue 46), and
+// the planner's searches per mode: the expansions of the solved ones and
+// how many spent a whole budget. Issue 18's target is printed beside them:
+// every run >= 98 % unloaded.
 //
 //   bench_unload [--quick] [--json] [--seeds N] [--first S] [--families A1,C]
 //                [--workers W] [--out DIR] [--timeout S]
@@ -12,13 +14,16 @@
 // result goes to the result store DIR as it finishes, with each action it
 // took; beside it in DIR the settled start
 // (F_seedS.start.yaml) and the world it left (F_seedS.final.yaml) when
-// boxes remain; a stopped benchmark started again with the same DIR runs
+// boxes remain, and the queries that spent a whole budget
+// (F_seedS.failed_queries.bin; all runs' in DIR/failed_queries.bin, a
+// query set for bench_planner); a stopped benchmark started again with the same DIR runs
 // only what is missing. A run past --timeout (wall seconds, default
 // 3600) is killed and counted as such.
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -38,6 +43,7 @@
 #include "plr/jobs/process_runner.hpp"
 #include "plr/jobs/progress.hpp"
 #include "plr/planning/lattice_planner.hpp"
+#include "plr/planning/query_set.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/physics.hpp"
 #include "plr/sim/shipped_files.hpp"
@@ -82,6 +88,39 @@ T value_or_die(plr::Expected<T> e) {
   return std::move(*e);
 }
 
+// The planner's answers during a run: the expansions each solved query
+// took, per mode (what sizes a mode's budget, docs/planner.md), and the
+// queries that spent a whole budget, kept with their world as frames of a
+// query set (plr/planning/query_set.hpp) for bench_planner.
+class Recorder final : public plr::actions::Backend {
+ public:
+  explicit Recorder(plr::actions::Backend& inner) : inner_(inner) {}
+  plr::Expected<plr::actions::Perceived> observe() override { return inner_.observe(); }
+  plr::Expected<plr::actions::Executed> execute(const plr::actions::Motion& m) override {
+    return inner_.execute(m);
+  }
+  plr::Expected<plr::planning::DecodedPlanResponse> plan(const plr::planning::PlanQuery& q,
+                                                         const plr::sim::World& world) override {
+    auto r = inner_.plan(q, world);
+    if (!r) return r;
+    const std::string mode = fmt::format("M{}", static_cast<int>(q.mode));
+    if (r->status == plr::planning::PlanStatus::kSolved) {
+      solved[mode].push_back(r->stats.expansions);
+    } else if (r->stats.budget_exhausted) {
+      ++spent[mode];
+      frames.push_back(plr::planning::frame_query(q, world));
+    }
+    return r;
+  }
+
+  std::map<std::string, std::vector<std::uint64_t>> solved;
+  std::map<std::string, std::uint64_t> spent;
+  std::vector<std::vector<std::uint8_t>> frames;
+
+ private:
+  plr::actions::Backend& inner_;
+};
+
 // One run, in the worker process: H from the family's environment to the end.
 nlohmann::json run(const Job& job) {
   const auto start = Clock::now();
@@ -90,7 +129,8 @@ nlohmann::json run(const Job& job) {
       value_or_die(plr::sim::shipped_file("robots/unloader_lattice.yaml")))));
   plr::actions::UnloaderSimulation simulation(robot,
                                               plr::sim::make_environment(job.family, job.seed));
-  plr::actions::InProcessBackend backend(simulation, planner);
+  plr::actions::InProcessBackend in_process(simulation, planner);
+  Recorder backend(in_process);
   // The settled start, beside the world the run leaves: a run can be replayed
   // or drawn from the two.
   auto start_world = job.file;
@@ -130,6 +170,10 @@ nlohmann::json run(const Job& job) {
         !saved)
       die(saved.error().message);
   }
+  auto failed_queries = job.file;
+  failed_queries.replace_extension(".failed_queries.bin");
+  if (auto saved = plr::planning::save_query_set(backend.frames, failed_queries); !saved)
+    die(saved.error().message);
   nlohmann::json left = nlohmann::json::array();
   for (const auto& l : episode.left)
     left.push_back({{"id", l.id}, {"reason", to_string(l.reason)}, {"detail", l.detail}});
@@ -147,6 +191,8 @@ nlohmann::json run(const Job& job) {
           {"left", left},
           {"left_by_reason", plr::episode::count_by_reason(episode.left)},
           {"steps", steps},
+          {"solved_expansions", backend.solved},
+          {"budget_spent", backend.spent},
           {"wall_s", std::chrono::duration<double>(Clock::now() - start).count()}};
 }
 
@@ -198,6 +244,37 @@ std::vector<nlohmann::json> run_all(const std::vector<Job>& runs, const Options&
     results.push_back(std::move(j));
   }
   return results;
+}
+
+// The q-quantile of `v` (nearest rank); 0 for none.
+std::uint64_t quantile(std::vector<std::uint64_t> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
+  return v[std::clamp<std::size_t>(rank, 1, v.size()) - 1];
+}
+
+// Per mode: the expansions of the solved queries (how many, quantiles) and
+// the queries that spent a whole budget.
+nlohmann::json searches(const std::vector<nlohmann::json>& runs, const std::string& family) {
+  std::map<std::string, std::vector<std::uint64_t>> solved;
+  std::map<std::string, std::uint64_t> spent;
+  for (const auto& r : runs) {
+    if (family != "all" && r.value("family", "") != family) continue;
+    if (r.contains("solved_expansions"))
+      for (const auto& [mode, v] : r["solved_expansions"].items())
+        for (const auto& n : v) solved[mode].push_back(n.get<std::uint64_t>());
+    if (r.contains("budget_spent"))
+      for (const auto& [mode, n] : r["budget_spent"].items()) spent[mode] += n.get<std::uint64_t>();
+  }
+  nlohmann::json out = nlohmann::json::object();
+  for (const auto& [mode, v] : solved)
+    out[mode] = {{"solved", v.size()},       {"p50", quantile(v, 0.5)},
+                 {"p95", quantile(v, 0.95)}, {"p99", quantile(v, 0.99)},
+                 {"max", quantile(v, 1.0)},  {"budget_spent", spent[mode]}};
+  for (const auto& [mode, n] : spent)
+    if (!out.contains(mode)) out[mode] = {{"solved", 0}, {"budget_spent", n}};
+  return out;
 }
 
 nlohmann::json summarize(const std::vector<nlohmann::json>& runs, EnvFamily family) {
@@ -254,7 +331,8 @@ nlohmann::json summarize(const std::vector<nlohmann::json>& runs, EnvFamily fami
           {"robot_trailer_collisions", collisions},
           {"stop_reasons", stops},
           {"left_by_reason", left},
-          {"observations", seen}};
+          {"observations", seen},
+          {"searches", searches(runs, std::string(to_string(family)))}};
 }
 
 void print_table(const nlohmann::json& families) {
@@ -286,6 +364,14 @@ void print_table(const nlohmann::json& families) {
       std::printf("\n");
     }
   }
+  std::printf(
+      "\nsearches: expansions of the solved queries (p50/p95/p99/max), queries that "
+      "spent a whole budget\n");
+  for (const auto& [name, f] : families.items())
+    for (const auto& [mode, m] : f["searches"].items())
+      std::printf("  %-3s %s %6d solved %6d %6d %6d %6d   %4d spent\n", name.c_str(), mode.c_str(),
+                  m["solved"].get<int>(), m.value("p50", 0), m.value("p95", 0), m.value("p99", 0),
+                  m.value("max", 0), m["budget_spent"].get<int>());
   std::printf("\nwhy runs stopped / why boxes were left:\n");
   for (const auto& [name, f] : families.items()) {
     for (const auto& [why, n] : f["stop_reasons"].items())
@@ -339,7 +425,19 @@ int main(int argc, char** argv) {
   const std::vector<nlohmann::json> runs = run_all(all, o);
   nlohmann::json families = nlohmann::json::object();
   for (const EnvFamily f : o.families) families[std::string(to_string(f))] = summarize(runs, f);
-  const nlohmann::json report = {{"families", families}, {"runs", runs}};
+  // The queries that spent a whole budget, of every run: one query set.
+  std::vector<std::vector<std::uint8_t>> failed;
+  for (const Job& j : all) {
+    auto file = j.file;
+    auto set = plr::planning::load_query_set(file.replace_extension(".failed_queries.bin"));
+    if (!set) continue;  // a run that failed or was killed left none
+    for (const auto& q : *set) failed.push_back(plr::planning::frame_query(q.query, q.world));
+  }
+  if (auto saved = plr::planning::save_query_set(failed, fs::path(o.out) / "failed_queries.bin");
+      !saved)
+    die(saved.error().message);
+  const nlohmann::json report = {
+      {"families", families}, {"runs", runs}, {"searches", searches(runs, "all")}};
   save(fs::path(o.out) / "report.json", report);
   if (o.json)
     std::printf("%s\n", families.dump().c_str());
