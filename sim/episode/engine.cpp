@@ -123,6 +123,7 @@ void Engine::record(sim::Action action, const sim::SceneAnalysis& scene, actions
   }
   e.curve.add(e.robot_time_s, e.boxes_unloaded, o);
   e.robot_time_s += o.robot_time_s;
+  e.wasted_s += o.boxes == 0 ? o.robot_time_s : o.plan_model_s;
   e.plan_wall_s += o.plan_wall_s;
   e.robot_trailer_contacts += o.robot_trailer_contacts;
   if (o.sim_time_s > 0) e.sim_time_s = o.sim_time_s;

@@ -258,6 +258,8 @@ nlohmann::json run_one(actions::Rig& rig, const EvaluationSettings& settings,
     out["boxes_total"] = e.boxes_total;
     out["boxes_unloaded"] = e.boxes_unloaded;
     out["robot_time_s"] = e.robot_time_s;
+    out["wasted_s"] = e.wasted_s;
+    out["wasted_share"] = episode::wasted_share(e);
     out["actions"] = e.actions;
     out["library_actions"] = library_actions;
     out["strategies_asked"] = e.strategies_asked;

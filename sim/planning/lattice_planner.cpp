@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include <fmt/format.h>
+
 #include "lattice/robot_lattice.hpp"
 #include "plr/planning/shortcut.hpp"
 #include "plr/search/arastar.hpp"
@@ -65,7 +67,11 @@ PlanResult LatticePlanner::do_plan(const PlanQuery& query, sim::CollisionChecker
   PlanResult result;
   search::SearchOptions o;
   o.time_limit_s = query.time_limit_s;
-  o.max_expansions = query.max_expansions;
+  // The smaller of the query's budget and the mode's; 0 is no budget.
+  const bool mode_budget =
+      lattice.max_expansions != 0 &&
+      (query.max_expansions == 0 || lattice.max_expansions < query.max_expansions);
+  o.max_expansions = mode_budget ? lattice.max_expansions : query.max_expansions;
   o.improve_time_s = query.improve_time_s;
   o.eps_initial = query.eps_initial;
   o.eps_final = query.eps_final;
@@ -97,7 +103,10 @@ PlanResult LatticePlanner::do_plan(const PlanQuery& query, sim::CollisionChecker
   if (sr.status != search::SearchStatus::kSolved) {
     result.status =
         sr.status == search::SearchStatus::kTimeout ? PlanStatus::kTimeout : PlanStatus::kNoPath;
-    if (result.message.empty()) {
+    if (sr.budget_exhausted && mode_budget) {
+      result.message = fmt::format("no solution within {}'s budget of {} expansions",
+                                   to_string(query.mode), lattice.max_expansions);
+    } else if (result.message.empty()) {
       result.message = sr.status == search::SearchStatus::kTimeout
                            ? "no solution within the time limit"
                            : "no path: the lattice was exhausted";

@@ -3,6 +3,10 @@
 #include <time.h>
 
 #include <chrono>
+#include <cmath>
+#include <optional>
+
+#include <fmt/format.h>
 
 #include "lattice/robot_lattice.hpp"
 #include "plr/search/arastar.hpp"
@@ -27,19 +31,111 @@ std::string budget_message(std::uint64_t budget) {
   return "no solution within the expansion budget of " + std::to_string(budget);
 }
 
-// kSolved unless the goal can be judged unreachable before any search: a
-// joint goal in collision, a pose goal without a collision-free IK solution
-// (M2 excepted: moving the base may bring one into reach).
+// Step of the base reachability walk: the M5 lattice's.
+constexpr double kBaseStep = 0.01;  // m
+
+// How far base_x can go from `start` along its rail towards `toward`, in
+// kBaseStep steps, with the links no arm joint moves (base, nose, scoop)
+// clear of the world. Whatever the arm does on the way, a motion that moves
+// the base cannot get past where these collide: a relaxed, one-dimensional
+// reachability check. `blocked` says what stops it ("" at a joint limit).
+struct BaseWalk {
+  double reached = 0.0;
+  std::string blocked;
+};
+BaseWalk walk_base(const JointVector& start, double toward, const sim::CollisionChecker& checker) {
+  const double dir = toward >= start[sim::kBaseX] ? 1.0 : -1.0;
+  const int steps = static_cast<int>(std::ceil(std::abs(toward - start[sim::kBaseX]) / kBaseStep));
+  BaseWalk w{start[sim::kBaseX], {}};
+  JointVector q = start;
+  for (int k = 1; k <= steps; ++k) {
+    q[sim::kBaseX] = k == steps ? toward : start[sim::kBaseX] + dir * k * kBaseStep;
+    if (std::string hit = checker.base_collision(q); !hit.empty()) {
+      w.blocked = std::move(hit);
+      return w;
+    }
+    w.reached = q[sim::kBaseX];
+  }
+  return w;
+}
+
+// The first collision-free configuration whose arm puts the plate on
+// `target`, base_x anywhere the base reaches from `start` (nearest first);
+// the search could end nowhere else. Beyond the arm's reach of the target
+// no base needs to be tried. Empty with `why` set when there is none.
+std::optional<JointVector> reachable_pose(const JointVector& start, const PlateTarget& target,
+                                          const sim::CollisionChecker& checker, std::string& why) {
+  const sim::RobotModel& robot = checker.robot();
+  const auto& arm = robot.arm();
+  const double reach = arm.upper + arm.fore + arm.plate;
+  const sim::JointLimits& lb = robot.limits(sim::kBaseX);
+  // Bases from which the arm's yaw axis is within reach of the target in x.
+  const double lo = std::max(lb.lower, target.position.x() - arm.yaw_origin.x() - reach);
+  const double hi = std::min(lb.upper, target.position.x() - arm.yaw_origin.x() + reach);
+  const double b0 = start[sim::kBaseX];
+  const BaseWalk back = walk_base(start, std::min(b0, std::max(lo, lb.lower)), checker);
+  const BaseWalk ahead = walk_base(start, std::max(b0, std::min(hi, lb.upper)), checker);
+  std::size_t ik = 0, colliding = 0;
+  std::string first_hit;
+  JointVector q = start;
+  const int n_back = static_cast<int>(std::floor((b0 - back.reached) / kBaseStep + 1e-9));
+  const int n_ahead = static_cast<int>(std::floor((ahead.reached - b0) / kBaseStep + 1e-9));
+  for (int k = 0; k <= std::max(n_back, n_ahead); ++k) {
+    for (double sign : {1.0, -1.0}) {
+      if ((sign > 0 && k > n_ahead) || (sign < 0 && (k > n_back || k == 0))) continue;
+      q[sim::kBaseX] = b0 + sign * k * kBaseStep;
+      if (q[sim::kBaseX] < lo - 1e-9 || q[sim::kBaseX] > hi + 1e-9) continue;
+      for (const JointVector& s : robot.arm_ik(target, q)) {
+        ++ik;
+        if (checker.is_valid(s)) return s;
+        if (++colliding == 1) first_hit = checker.describe_collision(s);
+      }
+    }
+  }
+  std::string where =
+      fmt::format("the base reaches x {:.2f}..{:.2f} m", back.reached, ahead.reached);
+  for (const BaseWalk* w : {&back, &ahead})
+    if (!w->blocked.empty()) where += fmt::format(", stopped by {}", w->blocked);
+  where += fmt::format("; the arm can reach the target from x {:.2f}..{:.2f} m", lo, hi);
+  why = ik == 0 ? "no arm IK solution within joint limits from any base the base reaches (" +
+                      where + ")"
+                : fmt::format(
+                      "every IK solution from the bases the base reaches collides ({} of "
+                      "them; {}; {})",
+                      ik, first_hit, where);
+  return std::nullopt;
+}
+
+// kSolved unless the goal can be judged unreachable before any search, by
+// cheap necessary conditions: a joint goal in collision; a pose goal
+// without a collision-free IK solution (M2: from any base position the base
+// reaches); a base goal the base cannot drive to, its own links blocked on
+// the way (M2, M5).
 PlanResult judge_goal(const PlanQuery& query, const JointVector& start,
                       const sim::CollisionChecker& checker) {
   const sim::RobotModel& robot = checker.robot();
+  const bool base_moves = query.mode == PlanMode::kArmBase || query.mode == PlanMode::kBaseLine;
   if (const auto* jg = std::get_if<JointGoal>(&query.goal)) {
     JointVector g = start;
     for (int j : planned_joints(query.mode)) g[j] = jg->q[j];
     if (!checker.is_valid(g))
       return fail(PlanStatus::kGoalInvalid, "goal: " + checker.describe_collision(g));
-  } else if (const auto* pg = std::get_if<PoseGoal>(&query.goal);
-             pg && query.mode != PlanMode::kArmBase) {
+    if (base_moves && std::abs(g[sim::kBaseX] - start[sim::kBaseX]) > jg->tolerance) {
+      const BaseWalk w = walk_base(start, g[sim::kBaseX], checker);
+      if (!w.blocked.empty()) {
+        return fail(PlanStatus::kGoalInvalid,
+                    fmt::format("goal: the base cannot reach x {:.2f} m: it stops at x {:.2f} m "
+                                "({})",
+                                g[sim::kBaseX], w.reached, w.blocked));
+      }
+    }
+  } else if (const auto* pg = std::get_if<PoseGoal>(&query.goal)) {
+    if (query.mode == PlanMode::kArmBase) {
+      std::string why;
+      if (!reachable_pose(start, pg->target, checker, why))
+        return fail(PlanStatus::kGoalInvalid, "goal: " + why);
+      return fail(PlanStatus::kSolved, {});
+    }
     const auto solutions = robot.arm_ik(pg->target, start);
     if (solutions.empty())
       return fail(PlanStatus::kGoalInvalid, "goal: no arm IK solution within joint limits");
@@ -190,7 +286,10 @@ PlanResult Planner::plan(const PlanQuery& query, sim::CollisionChecker& checker)
   planned.stats.escape_time_s = result.stats.escape_time_s;
   planned.stats.escape_cpu_s = result.stats.escape_cpu_s;
   if (planned.status != PlanStatus::kSolved) {
-    if (planned.stats.budget_exhausted) planned.message = budget_message(query.max_expansions);
+    // The query's budget, unless the planner's own for the mode was smaller
+    // (and said so).
+    if (planned.stats.budget_exhausted && planned.message.find("budget") == std::string::npos)
+      planned.message = budget_message(query.max_expansions);
     planned.path.clear();
     planned.trajectory = {};
     return finish(planned);

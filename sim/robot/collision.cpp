@@ -796,6 +796,24 @@ std::string CollisionChecker::describe_collision(const JointVector& q) const {
   return m.first_hit();
 }
 
+std::string CollisionChecker::base_collision(const JointVector& q) const {
+  const Impl& m = *impl_;
+  ++m.stats.state_checks;
+  m.place(q);
+  const auto& links = m.robot->links();
+  for (int i = 0; i < m.robot_shape_count; ++i) {
+    const RobotShape& s = m.shapes[static_cast<std::size_t>(i)];
+    bool on_arm = false;
+    for (int k = s.link; k >= 0 && !on_arm; k = links[k].parent_link)
+      on_arm = links[k].joint >= kArm1 && links[k].joint <= kArm4;
+    if (on_arm) continue;
+    if (m.hits_octree(s.exact.get(), s.exact_obb)) return s.label + " - trailer";
+    if (const long b = m.hit_box(s.exact.get(), s.exact_obb); b >= 0)
+      return s.label + " - box " + std::to_string(m.boxes[static_cast<std::size_t>(b)].id);
+  }
+  return {};
+}
+
 const CollisionStats& CollisionChecker::stats() const {
   return impl_->stats;
 }

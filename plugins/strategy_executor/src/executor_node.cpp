@@ -358,6 +358,7 @@ class ExecutorNode : public plr::Node, private episode::Observer {
     stats_.boxes_unloaded = e.boxes_unloaded;
     stats_.robot_time_s = e.robot_time_s;
     stats_.plan_wall_s = e.plan_wall_s;
+    stats_.wasted_s = e.wasted_s;
     stats_.sim_time_s = e.sim_time_s;
     stats_.robot_trailer_collisions = e.robot_trailer_contacts;
     stats_.failed_grasps = e.failed_grasps;

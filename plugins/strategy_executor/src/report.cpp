@@ -37,6 +37,8 @@ nlohmann::json to_json(const RunStats& s) {
           {"sim_time_s", s.sim_time_s},
           {"robot_time_s", s.robot_time_s},
           {"plan_wall_s", s.plan_wall_s},
+          {"wasted_s", s.wasted_s},
+          {"wasted_share", s.robot_time_s > 0 ? s.wasted_s / s.robot_time_s : 0.0},
           {"wall_time_s", s.wall_time_s},
           {"boxes_per_robot_s", s.robot_time_s > 0 ? s.boxes_unloaded / s.robot_time_s : 0.0},
           // Boxes a pick moved out: per applicable pick, and per pick that moved any.

@@ -43,6 +43,7 @@ struct RunStats {
   double sim_time_s = 0;
   double robot_time_s = 0;  // execution + modelled planning (deterministic)
   double plan_wall_s = 0;   // what planning took on this machine
+  double wasted_s = 0;      // robot time that bought nothing (episode::Episode::wasted_s)
   double wall_time_s = 0;
   std::uint64_t robot_trailer_collisions = 0;
   std::uint64_t failed_grasps = 0;

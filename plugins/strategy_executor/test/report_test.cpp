@@ -24,6 +24,7 @@ TEST(Report, JsonHasTheFiguresOfTheTables) {
   s.boxes_total = 10;
   s.boxes_unloaded = 4;
   s.robot_time_s = 20.0;
+  s.wasted_s = 5.0;
   s.planner.modes[5].queries = 3;
   s.planner.modes[5].failures = 1;
   s.planner.modes[5].ms.add(2.0);
@@ -41,6 +42,8 @@ TEST(Report, JsonHasTheFiguresOfTheTables) {
   EXPECT_EQ(j["boxes_unloaded"], 4);
   EXPECT_DOUBLE_EQ(j["unloaded_fraction"].get<double>(), 0.4);
   EXPECT_DOUBLE_EQ(j["boxes_per_robot_s"].get<double>(), 0.2);
+  EXPECT_DOUBLE_EQ(j["wasted_s"].get<double>(), 5.0);
+  EXPECT_DOUBLE_EQ(j["wasted_share"].get<double>(), 0.25);
   EXPECT_EQ(j["planner_modes"]["M5"]["queries"], 3);
   EXPECT_NEAR(j["planner_modes"]["M5"]["failure_rate"].get<double>(), 1.0 / 3.0, 1e-12);
   EXPECT_EQ(j["planner_modes"]["M5"]["name"], "M5 base line");

@@ -14,10 +14,11 @@ namespace {
 constexpr std::size_t kMaxSteps = 64;
 constexpr std::int64_t kMaxStep = 10'000;
 constexpr std::size_t kMaxPrimitives = 4096;
+constexpr std::int64_t kMaxBudget = 100'000'000;
 
-const std::vector<std::string> kModeKeys = {"resolution",     "steps",     "primitives",
-                                            "snap_distance",  "snap_time", "ee_speed",
-                                            "line_tolerance", "plate_step"};
+const std::vector<std::string> kModeKeys = {"resolution",     "steps",      "primitives",
+                                            "snap_distance",  "snap_time",  "ee_speed",
+                                            "line_tolerance", "plate_step", "max_expansions"};
 
 ModeLattice read_mode(const yaml::Map& fields, PlanMode mode) {
   ModeLattice m;
@@ -49,6 +50,8 @@ ModeLattice read_mode(const yaml::Map& fields, PlanMode mode) {
   m.ee_speed = fields.find("ee_speed").positive().value_or(m.ee_speed);
   m.line_tolerance = fields.find("line_tolerance").positive().value_or(m.line_tolerance);
   m.plate_step = fields.find("plate_step").number(0.0).value_or(m.plate_step);
+  m.max_expansions =
+      static_cast<std::uint64_t>(fields.find("max_expansions").integer(0, kMaxBudget).value_or(0));
   return m;
 }
 

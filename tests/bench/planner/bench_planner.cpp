@@ -2,9 +2,14 @@
 // executor asks for during Pick and Sweep actions on generated walls (A1) and
 // piles (B1); ARA* lattice planner and RRTConnect side by side.
 //   bench_planner [--quick] [--json] [--seed N] [--mode 1-6] [--budget N]
-//                 [--primitives FILE] [--verbose]
+//                 [--primitives FILE] [--failing FILE] [--verbose]
 // --budget sets every query's max_expansions (deterministic planning);
-// --primitives another lattice file than the shipped one.
+// --primitives another lattice file than the shipped one. --failing: a
+// query set (plr/planning/query_set.hpp) of queries that spent their whole
+// budget in bench_unload runs (default: the recorded one,
+// tests/bench/planner/data); infeasible_refused_share is the share of them
+// the ARA* planner refuses within 100 expansions (judged unsolvable, not
+// out of budget).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -20,6 +25,7 @@
 #include "bench_cli.hpp"
 #include "plr/planning/lattice_planner.hpp"
 #include "plr/planning/ompl_planner.hpp"
+#include "plr/planning/query_set.hpp"
 #include "plr/sim/collision.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/octree.hpp"
@@ -228,6 +234,39 @@ double percentile(std::vector<double> v, double p) {
   return v[lo] + (idx - lo) * (v[hi] - v[lo]);
 }
 
+// The recorded failing set: how many of its queries the planner refuses
+// within kRefuseWithin expansions, and why each of the others went on.
+constexpr std::uint64_t kRefuseWithin = 100;
+
+struct FailingSet {
+  std::size_t queries = 0, refused = 0;
+  std::map<std::string, int> answers;  // "M2 arm+base refused: goal invalid", ...
+  double share() const { return queries ? static_cast<double>(refused) / queries : NAN; }
+};
+
+FailingSet run_failing_set(const std::vector<RecordedQuery>& set, Planner& planner,
+                           const RobotModel& robot, bool verbose) {
+  FailingSet out;
+  for (const RecordedQuery& rq : set) {
+    PlanQuery q = rq.query;
+    // One more than the bound: a search still going at kRefuseWithin ends
+    // with its budget spent, not refused.
+    q.max_expansions = kRefuseWithin + 1;
+    CollisionChecker checker(robot, rq.world);
+    const PlanResult r = planner.plan(q, checker);
+    const bool refused = r.status != PlanStatus::kSolved && !r.stats.budget_exhausted &&
+                         !r.stats.time_limit_hit && r.stats.expansions <= kRefuseWithin;
+    ++out.queries;
+    out.refused += refused ? 1 : 0;
+    ++out.answers[std::string(to_string(q.mode)) + (refused ? " refused: " : " not refused: ") +
+                  (r.status == PlanStatus::kSolved ? "solved" : to_string(r.status))];
+    if (verbose)
+      std::fprintf(stderr, "failing set %s: %s after %zu expansions: %s\n", to_string(q.mode),
+                   to_string(r.status), r.stats.expansions, r.message.c_str());
+  }
+  return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -235,6 +274,7 @@ int main(int argc, char** argv) {
   int only_mode = 0;
   std::uint64_t seed = 1, budget = 0;
   std::string primitives = shipped_file("robots/unloader_lattice.yaml").value().string();
+  std::string failing = PLR_PLANNER_FAILING_SET;
   CLI::App app{
       "Seeded planning queries per mode from Pick and Sweep actions on A1 walls and B1 "
       "piles: ARA* lattice planner and RRTConnect side by side"};
@@ -248,6 +288,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--primitives", primitives, "Lattice file instead of the shipped one")
       ->check(CLI::ExistingFile);
+  app.add_option("--failing", failing,
+                 "Query set of queries that spent their whole budget in bench_unload runs")
+      ->check(CLI::ExistingFile)
+      ->capture_default_str();
   app.add_flag("--verbose", verbose, "A line per query on stderr");
   plr::bench::parse_or_exit(app, argc, argv);
   const RobotModel robot = load_robot().value();
@@ -378,7 +422,30 @@ int main(int argc, char** argv) {
                   to_string(mode), med, worst, v.size());
     }
   }
-  if (json)
-    std::printf("%s\n", nlohmann::json{{"rows", out}, {"exec_ratio", ratios}}.dump().c_str());
+  const auto set = load_query_set(failing);
+  if (!set) {
+    std::fprintf(stderr, "bench_planner: %s\n", set.error().message.c_str());
+    return 2;
+  }
+  const FailingSet f = run_failing_set(*set, arastar, robot, verbose);
+  if (json) {
+    std::printf("%s\n", nlohmann::json{{"rows", out},
+                                       {"exec_ratio", ratios},
+                                       {"infeasible_refused_share", f.share()},
+                                       {"failing_set",
+                                        {{"file", failing},
+                                         {"queries", f.queries},
+                                         {"refused", f.refused},
+                                         {"refuse_within_expansions", kRefuseWithin},
+                                         {"answers", f.answers}}}}
+                            .dump()
+                            .c_str());
+  } else {
+    std::printf("\nrecorded failing set (%s): %zu queries, %zu refused within %llu expansions\n",
+                failing.c_str(), f.queries, f.refused,
+                static_cast<unsigned long long>(kRefuseWithin));
+    for (const auto& [what, n] : f.answers) std::printf("  %4d %s\n", n, what.c_str());
+    std::printf("infeasible_refused_share %.2f (issue 46 target >= 0.90)\n", f.share());
+  }
   return 0;
 }

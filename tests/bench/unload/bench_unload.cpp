@@ -2,8 +2,10 @@
 // (the action model on the simulation, no bus), in parallel worker processes.
 // Per family: the unloaded fraction (mean and the worst seed), robot time,
 // boxes per robot-second, why runs stopped, why boxes were left,
-// robot-trailer collisions. Issue 18's target is printed beside them: every
-// run >= 98 % unloaded.
+// robot-trailer collisions, the share of robot time wasted (issue 46), and
+// the planner's searches per mode: the expansions of the solved ones and
+// how many spent a whole budget. Issue 18's target is printed beside them:
+// every run >= 98 % unloaded.
 //
 //   bench_unload [--quick] [--json] [--seeds N] [--first S] [--families A1,C]
 //                [--workers W] [--out DIR] [--timeout S] [--fidelity full|adaptive]
@@ -12,7 +14,9 @@
 // result goes to the result store DIR as it finishes, with each action it
 // took; beside it in DIR the settled start
 // (F_seedS.start.yaml) and the world it left (F_seedS.final.yaml) when
-// boxes remain; a stopped benchmark started again with the same DIR runs
+// boxes remain, and the queries that spent a whole budget
+// (F_seedS.failed_queries.bin; all runs' in DIR/failed_queries.bin, a
+// query set for bench_planner); a stopped benchmark started again with the same DIR runs
 // only what is missing. A run past --timeout (wall seconds, default
 // 3600) is killed and counted as such. --fidelity: how accurately the boxes
 // are simulated (plr/sim/fidelity.hpp; default full).
@@ -20,6 +24,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -39,6 +44,7 @@
 #include "plr/jobs/process_runner.hpp"
 #include "plr/jobs/progress.hpp"
 #include "plr/planning/lattice_planner.hpp"
+#include "plr/planning/query_set.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/physics.hpp"
 #include "plr/sim/shipped_files.hpp"
@@ -85,6 +91,39 @@ T value_or_die(plr::Expected<T> e) {
   return std::move(*e);
 }
 
+// The planner's answers during a run: the expansions each solved query
+// took, per mode (what sizes a mode's budget, docs/planner.md), and the
+// queries that spent a whole budget, kept with their world as frames of a
+// query set (plr/planning/query_set.hpp) for bench_planner.
+class Recorder final : public plr::actions::Backend {
+ public:
+  explicit Recorder(plr::actions::Backend& inner) : inner_(inner) {}
+  plr::Expected<plr::actions::Perceived> observe() override { return inner_.observe(); }
+  plr::Expected<plr::actions::Executed> execute(const plr::actions::Motion& m) override {
+    return inner_.execute(m);
+  }
+  plr::Expected<plr::planning::DecodedPlanResponse> plan(const plr::planning::PlanQuery& q,
+                                                         const plr::sim::World& world) override {
+    auto r = inner_.plan(q, world);
+    if (!r) return r;
+    const std::string mode = fmt::format("M{}", static_cast<int>(q.mode));
+    if (r->status == plr::planning::PlanStatus::kSolved) {
+      solved[mode].push_back(r->stats.expansions);
+    } else if (r->stats.budget_exhausted) {
+      ++spent[mode];
+      frames.push_back(plr::planning::frame_query(q, world));
+    }
+    return r;
+  }
+
+  std::map<std::string, std::vector<std::uint64_t>> solved;
+  std::map<std::string, std::uint64_t> spent;
+  std::vector<std::vector<std::uint8_t>> frames;
+
+ private:
+  plr::actions::Backend& inner_;
+};
+
 // One run, in the worker process: H from the family's environment to the end.
 nlohmann::json run(const Job& job) {
   const auto start = Clock::now();
@@ -96,7 +135,8 @@ nlohmann::json run(const Job& job) {
   plr::actions::UnloaderSimulation simulation(robot,
                                               plr::sim::make_environment(job.family, job.seed),
                                               plr::actions::home_configuration(), sim_options);
-  plr::actions::InProcessBackend backend(simulation, planner);
+  plr::actions::InProcessBackend in_process(simulation, planner);
+  Recorder backend(in_process);
   // The settled start, beside the world the run leaves: a run can be replayed
   // or drawn from the two.
   auto start_world = job.file;
@@ -109,7 +149,7 @@ nlohmann::json run(const Job& job) {
   // net; on a machine the other workers (or other jobs) load tenfold, a
   // budget's search takes minutes, and the run's own timeout is the net.
   plr::actions::ActionOptions options;
-  options.plan_timeout_s = 1800.0;
+  options.plan_timeout_s = plr::actions::kOfflinePlanTimeoutS;
   const plr::actions::ActionModel model(robot, options);
   const auto episode = value_or_die(plr::episode::run_episode(
       model, backend, plr::episode::hardcoded_source(plr::sim::HardcodedParams{})));
@@ -125,6 +165,7 @@ nlohmann::json run(const Job& job) {
                      {"why", s.outcome.why},
                      {"boxes", s.outcome.boxes},
                      {"robot_time_s", s.outcome.robot_time_s},
+                     {"plan_s", s.outcome.plan_model_s},
                      {"failed_grasp", s.outcome.failed_grasp},
                      {"robot_trailer_contacts", s.outcome.robot_trailer_contacts},
                      {"notes", s.notes}});
@@ -135,6 +176,10 @@ nlohmann::json run(const Job& job) {
         !saved)
       die(saved.error().message);
   }
+  auto failed_queries = job.file;
+  failed_queries.replace_extension(".failed_queries.bin");
+  if (auto saved = plr::planning::save_query_set(backend.frames, failed_queries); !saved)
+    die(saved.error().message);
   nlohmann::json left = nlohmann::json::array();
   for (const auto& l : episode.left)
     left.push_back({{"id", l.id}, {"reason", to_string(l.reason)}, {"detail", l.detail}});
@@ -143,6 +188,8 @@ nlohmann::json run(const Job& job) {
           {"boxes_total", episode.boxes_total},
           {"boxes_unloaded", episode.boxes_unloaded},
           {"robot_time_s", episode.robot_time_s},
+          {"wasted_s", episode.wasted_s},
+          {"wasted_share", plr::episode::wasted_share(episode)},
           {"actions", episode.actions},
           {"failed_grasps", episode.failed_grasps},
           {"robot_trailer_collisions", episode.robot_trailer_contacts},
@@ -150,6 +197,8 @@ nlohmann::json run(const Job& job) {
           {"left", left},
           {"left_by_reason", plr::episode::count_by_reason(episode.left)},
           {"steps", steps},
+          {"solved_expansions", backend.solved},
+          {"budget_spent", backend.spent},
           {"wall_s", std::chrono::duration<double>(Clock::now() - start).count()}};
 }
 
@@ -203,8 +252,39 @@ std::vector<nlohmann::json> run_all(const std::vector<Job>& runs, const Options&
   return results;
 }
 
+// The q-quantile of `v` (nearest rank); 0 for none.
+std::uint64_t quantile(std::vector<std::uint64_t> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
+  return v[std::clamp<std::size_t>(rank, 1, v.size()) - 1];
+}
+
+// Per mode: the expansions of the solved queries (how many, quantiles) and
+// the queries that spent a whole budget.
+nlohmann::json searches(const std::vector<nlohmann::json>& runs, const std::string& family) {
+  std::map<std::string, std::vector<std::uint64_t>> solved;
+  std::map<std::string, std::uint64_t> spent;
+  for (const auto& r : runs) {
+    if (family != "all" && r.value("family", "") != family) continue;
+    if (r.contains("solved_expansions"))
+      for (const auto& [mode, v] : r["solved_expansions"].items())
+        for (const auto& n : v) solved[mode].push_back(n.get<std::uint64_t>());
+    if (r.contains("budget_spent"))
+      for (const auto& [mode, n] : r["budget_spent"].items()) spent[mode] += n.get<std::uint64_t>();
+  }
+  nlohmann::json out = nlohmann::json::object();
+  for (const auto& [mode, v] : solved)
+    out[mode] = {{"solved", v.size()},       {"p50", quantile(v, 0.5)},
+                 {"p95", quantile(v, 0.95)}, {"p99", quantile(v, 0.99)},
+                 {"max", quantile(v, 1.0)},  {"budget_spent", spent[mode]}};
+  for (const auto& [mode, n] : spent)
+    if (!out.contains(mode)) out[mode] = {{"solved", 0}, {"budget_spent", n}};
+  return out;
+}
+
 nlohmann::json summarize(const std::vector<nlohmann::json>& runs, EnvFamily family) {
-  std::vector<double> fractions, robot_s;
+  std::vector<double> fractions, robot_s, wasted;
   double boxes = 0, seconds = 0;
   std::uint64_t collisions = 0, below = 0;
   std::map<std::string, int> stops;
@@ -233,6 +313,7 @@ nlohmann::json summarize(const std::vector<nlohmann::json>& runs, EnvFamily fami
       seconds += r["robot_time_s"].get<double>();
       boxes += r.value("boxes_unloaded", 0u);
     }
+    if (r.contains("wasted_share")) wasted.push_back(r["wasted_share"].get<double>());
     collisions += r.value("robot_trailer_collisions", 0u);
     if (r.contains("left_by_reason"))
       for (const auto& [k, v] : r["left_by_reason"].items()) left[k] += v.get<std::uint64_t>();
@@ -251,25 +332,31 @@ nlohmann::json summarize(const std::vector<nlohmann::json>& runs, EnvFamily fami
           {"worst", worst},
           {"runs_below_target", below},
           {"robot_time_s_median", plr::bench::median(robot_s)},
+          {"wasted_share_median", plr::bench::median(wasted)},
           {"boxes_per_robot_s", seconds > 0 ? boxes / seconds : 0.0},
           {"robot_trailer_collisions", collisions},
           {"stop_reasons", stops},
           {"left_by_reason", left},
-          {"observations", seen}};
+          {"observations", seen},
+          {"searches", searches(runs, std::string(to_string(family)))}};
 }
 
 void print_table(const nlohmann::json& families) {
   std::printf("strategy H, in process; target: every run >= %.0f %% unloaded, no collision\n\n",
               100 * kTargetFraction);
-  std::printf("%-6s %5s %8s %24s %7s %10s %9s %6s\n", "family", "runs", "mean", "worst", "<98 %",
-              "robot s", "boxes/s", "coll.");
+  std::printf("%-6s %5s %8s %24s %7s %10s %9s %8s %6s\n", "family", "runs", "mean", "worst",
+              "<98 %", "robot s", "boxes/s", "wasted", "coll.");
+  auto number = [](const nlohmann::json& v) { return v.is_number() ? v.get<double>() : 0.0; };
   for (const auto& [name, f] : families.items()) {
-    std::printf("%-6s %5d %7.1f%% %24s %7d %10.0f %9.3f %6d\n", name.c_str(), f["runs"].get<int>(),
-                100 * f["unloaded_fraction_mean"].get<double>(),
+    std::printf("%-6s %5d %7.1f%% %24s %7d %10.0f %9.3f %7.1f%% %6d\n", name.c_str(),
+                f["runs"].get<int>(), 100 * f["unloaded_fraction_mean"].get<double>(),
                 f["worst"].get<std::string>().c_str(), f["runs_below_target"].get<int>(),
-                f["robot_time_s_median"].is_number() ? f["robot_time_s_median"].get<double>() : 0.0,
-                f["boxes_per_robot_s"].get<double>(), f["robot_trailer_collisions"].get<int>());
+                number(f["robot_time_s_median"]), f["boxes_per_robot_s"].get<double>(),
+                100 * number(f["wasted_share_median"]), f["robot_trailer_collisions"].get<int>());
   }
+  std::printf(
+      "wasted: median share of robot time in actions that unloaded no box, and in "
+      "the others' planning (issue 46 target <= 10 %%)\n");
   // ObservationParams split what H meets: every structure's three height
   // classes should occur on every family that has that structure.
   if (!families.empty()) {
@@ -283,6 +370,14 @@ void print_table(const nlohmann::json& families) {
       std::printf("\n");
     }
   }
+  std::printf(
+      "\nsearches: expansions of the solved queries (p50/p95/p99/max), queries that "
+      "spent a whole budget\n");
+  for (const auto& [name, f] : families.items())
+    for (const auto& [mode, m] : f["searches"].items())
+      std::printf("  %-3s %s %6d solved %6d %6d %6d %6d   %4d spent\n", name.c_str(), mode.c_str(),
+                  m["solved"].get<int>(), m.value("p50", 0), m.value("p95", 0), m.value("p99", 0),
+                  m.value("max", 0), m["budget_spent"].get<int>());
   std::printf("\nwhy runs stopped / why boxes were left:\n");
   for (const auto& [name, f] : families.items()) {
     for (const auto& [why, n] : f["stop_reasons"].items())
@@ -343,7 +438,19 @@ int main(int argc, char** argv) {
   const std::vector<nlohmann::json> runs = run_all(all, o);
   nlohmann::json families = nlohmann::json::object();
   for (const EnvFamily f : o.families) families[std::string(to_string(f))] = summarize(runs, f);
-  const nlohmann::json report = {{"families", families}, {"runs", runs}};
+  // The queries that spent a whole budget, of every run: one query set.
+  std::vector<std::vector<std::uint8_t>> failed;
+  for (const Job& j : all) {
+    auto file = j.file;
+    auto set = plr::planning::load_query_set(file.replace_extension(".failed_queries.bin"));
+    if (!set) continue;  // a run that failed or was killed left none
+    for (const auto& q : *set) failed.push_back(plr::planning::frame_query(q.query, q.world));
+  }
+  if (auto saved = plr::planning::save_query_set(failed, fs::path(o.out) / "failed_queries.bin");
+      !saved)
+    die(saved.error().message);
+  const nlohmann::json report = {
+      {"families", families}, {"runs", runs}, {"searches", searches(runs, "all")}};
   save(fs::path(o.out) / "report.json", report);
   if (o.json)
     std::printf("%s\n", families.dump().c_str());

@@ -137,6 +137,25 @@ TEST(Engine, TheCurveAndTheFiguresAreTheSteps) {
   EXPECT_EQ(e->pick.executions + e->sweep.executions + e->not_applicable, e->actions);
 }
 
+// Wasted robot time: all of an action that unloaded nothing, only the
+// planning of one that did.
+TEST(Engine, WastedTimeIsTheIdleActionsAndTheOthersPlanning) {
+  Fixture f(wall(6.0, 3, 2));
+  const actions::ActionModel model(robot(), options());
+  const auto e = run_episode(model, f.backend, hardcoded());
+  ASSERT_TRUE(e) << e.error().message;
+  double wasted = 0, planning = 0;
+  for (const auto& s : e->steps) {
+    wasted += s.outcome.boxes == 0 ? s.outcome.robot_time_s : s.outcome.plan_model_s;
+    planning += s.outcome.plan_model_s;
+  }
+  EXPECT_DOUBLE_EQ(e->wasted_s, wasted);
+  EXPECT_GT(e->wasted_s, 0.0);       // every pick plans before it moves
+  EXPECT_GE(e->wasted_s, planning);  // planning is waited for, whatever it bought
+  EXPECT_LT(e->wasted_s, e->robot_time_s);
+  EXPECT_DOUBLE_EQ(wasted_share(*e), e->wasted_s / e->robot_time_s);
+}
+
 // The in-process backend with a simulator that dies once when told to: its
 // next execute fails as a lost host's would. Restoring it repeats the run
 // bit for bit (UnloaderSimulation::save).

@@ -1,6 +1,7 @@
 // The ARA* lattice planner in-process, where it differs from any planner
-// (what every planner does is the planner conformance suite's): lattice
-// exhaustion against the time limit, budgets that end improvement.
+// (what every planner does is the planner conformance suite's): the time
+// limit, budgets that end improvement, a mode's own budget; and the cheap
+// checks before any search (sim/planning/planner.cpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -71,8 +72,10 @@ PlanQuery joint_query(PlanMode mode, const JointVector& start, const JointVector
 
 }  // namespace
 
-TEST(Arastar, ExhaustedLatticeIsNoPathAndALargeOneTimesOut) {
-  // A floor-to-ceiling wall across the trailer; valid goals behind it.
+TEST(Arastar, AWallTheBaseCannotPassIsJudgedBeforeTheSearchAndTheTimeLimitEndsOne) {
+  // A floor-to-ceiling wall across the trailer; valid goals behind it. The
+  // base line and the arm+base lattice used to be searched (exhausted, or
+  // ended by the time limit): the base's own links stop at the wall.
   World w;
   Box wall;
   wall.id = 1;
@@ -82,22 +85,28 @@ TEST(Arastar, ExhaustedLatticeIsNoPathAndALargeOneTimesOut) {
   CollisionChecker cc(robot(), w);
   ASSERT_TRUE(cc.is_valid(home(1.0)));
   ASSERT_TRUE(cc.is_valid(home(5.0)));
-
-  // M5: the base line is exhausted on this side of the wall.
   PlanQuery base = joint_query(PlanMode::kBaseLine, home(1.0), home(5.0));
   base.time_limit_s = 2.0;
   const PlanResult nb = arastar().plan(base, cc);
-  EXPECT_EQ(nb.status, PlanStatus::kNoPath) << nb.message;
-  EXPECT_FALSE(nb.stats.time_limit_hit);
-
-  // M2: the lattice is too large to exhaust; the time limit ends it.
+  EXPECT_EQ(nb.status, PlanStatus::kGoalInvalid) << nb.message;
+  EXPECT_EQ(nb.stats.expansions, 0u);
+  EXPECT_NE(nb.message.find("box 1"), std::string::npos) << nb.message;
   PlanQuery arm = pose_query(PlanMode::kArmBase, home(1.0), Eigen::Vector3d(5.2, 0.0, 1.2), 0.0);
   arm.time_limit_s = 0.5;
   const PlanResult na = arastar().plan(arm, cc);
-  EXPECT_EQ(na.status, PlanStatus::kTimeout) << na.message;
-  EXPECT_EQ(na.message, "no solution within the time limit");
-  EXPECT_TRUE(na.stats.time_limit_hit);
-  EXPECT_TRUE(na.path.empty());
+  EXPECT_EQ(na.status, PlanStatus::kGoalInvalid) << na.message;
+  EXPECT_EQ(na.stats.expansions, 0u);
+
+  // With nothing in the way, a time limit too short for the search ends it.
+  const World empty;
+  CollisionChecker free(robot(), empty);
+  PlanQuery far = pose_query(PlanMode::kArmBase, home(1.0), Eigen::Vector3d(6.2, 0.5, 1.2), 0.0);
+  far.time_limit_s = 1e-6;
+  const PlanResult nt = arastar().plan(far, free);
+  EXPECT_EQ(nt.status, PlanStatus::kTimeout) << nt.message;
+  EXPECT_EQ(nt.message, "no solution within the time limit");
+  EXPECT_TRUE(nt.stats.time_limit_hit);
+  EXPECT_TRUE(nt.path.empty());
 }
 
 // ARA* with a budget that ends it while it improves: the last completed
@@ -117,4 +126,92 @@ TEST(Arastar, BudgetEndingTheImprovementReturnsTheLastSolution) {
   const PlanResult again = arastar().plan(q, cc);
   EXPECT_EQ(again.path, cut.path);
   EXPECT_EQ(again.stats.final_eps, cut.stats.final_eps);
+}
+
+// Cheap necessary conditions refuse what no search can solve, before it
+// starts: no expansion, and a message that says why.
+TEST(Arastar, AGoalWithoutAnIkSolutionIsRefusedBeforeAnyExpansion) {
+  const World empty;
+  CollisionChecker checker(robot(), empty);
+  // 4 m up: out of the arm's reach from wherever the base stands.
+  for (PlanMode mode : {PlanMode::kArm, PlanMode::kArmBase}) {
+    const PlanResult r =
+        arastar().plan(pose_query(mode, home(2.0), Eigen::Vector3d(4.0, 0.0, 4.0), 0.0), checker);
+    EXPECT_EQ(r.status, PlanStatus::kGoalInvalid) << to_string(mode);
+    EXPECT_EQ(r.stats.expansions, 0u) << to_string(mode);
+    EXPECT_NE(r.message.find("no arm IK solution"), std::string::npos) << r.message;
+  }
+  // M2 says over which bases it looked.
+  const PlanResult r = arastar().plan(
+      pose_query(PlanMode::kArmBase, home(2.0), Eigen::Vector3d(4.0, 0.0, 4.0), 0.0), checker);
+  EXPECT_NE(r.message.find("from any base the base reaches (the base reaches x"), std::string::npos)
+      << r.message;
+}
+
+TEST(Arastar, AGoalInCollisionIsRefusedBeforeAnyExpansion) {
+  const World w = wall(3.0);
+  CollisionChecker checker(robot(), w);
+  // The plate 10 cm inside the middle box of the second row (id 8): every
+  // arm pose, from every base, puts it there.
+  const Eigen::Vector3d inside(3.1, 0.0, 0.605);
+  for (PlanMode mode : {PlanMode::kArm, PlanMode::kArmBase}) {
+    const PlanResult r = arastar().plan(pose_query(mode, home(1.5), inside, 0.0), checker);
+    EXPECT_EQ(r.status, PlanStatus::kGoalInvalid) << to_string(mode);
+    EXPECT_EQ(r.stats.expansions, 0u) << to_string(mode);
+    EXPECT_NE(r.message.find("collides"), std::string::npos) << r.message;
+    EXPECT_NE(r.message.find("box "), std::string::npos) << r.message;
+  }
+  // A joint goal whose arm reaches into the wall.
+  const auto into = robot().arm_ik({inside, 0.0}, home(1.5));
+  ASSERT_FALSE(into.empty());
+  const PlanResult r = arastar().plan(joint_query(PlanMode::kArmBase, home(1.5), into[0]), checker);
+  EXPECT_EQ(r.status, PlanStatus::kGoalInvalid);
+  EXPECT_EQ(r.stats.expansions, 0u);
+  EXPECT_NE(r.message.find("goal: "), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("box "), std::string::npos) << r.message;
+}
+
+TEST(Arastar, ABaseGoalPastABoxTheBaseHitsIsRefusedBeforeAnyExpansion) {
+  World w;
+  Box b;
+  b.id = 7;
+  b.pose.translation() = Eigen::Vector3d(3.2, 0.0, 0.2);  // on the floor, across the scoop's path
+  w.boxes.push_back(b);
+  CollisionChecker checker(robot(), w);
+  const JointVector goal = home(0.5);
+  ASSERT_TRUE(checker.is_valid(home(-0.5)));
+  ASSERT_TRUE(checker.is_valid(goal));
+  // Forward over the box: the goal is beyond it, the robot there clear of it.
+  JointVector far = home(3.2);
+  while (!checker.is_valid(far) && far[kBaseX] < robot().limits(kBaseX).upper) far[kBaseX] += 0.1;
+  ASSERT_TRUE(checker.is_valid(far));
+  for (PlanMode mode : {PlanMode::kBaseLine, PlanMode::kArmBase}) {
+    const PlanResult r = arastar().plan(joint_query(mode, home(0.5), far), checker);
+    EXPECT_EQ(r.status, PlanStatus::kGoalInvalid) << to_string(mode);
+    EXPECT_EQ(r.stats.expansions, 0u) << to_string(mode);
+    EXPECT_NE(r.message.find("the base cannot reach"), std::string::npos) << r.message;
+    EXPECT_NE(r.message.find("box 7"), std::string::npos) << r.message;
+  }
+}
+
+// A mode's own budget ends a search the query would let go on, and the
+// answer says whose budget it was.
+TEST(Arastar, AModesBudgetEndsTheSearchBeforeTheQuerys) {
+  auto config =
+      LatticeConfig::from_file(shipped_file("robots/unloader_lattice.yaml").value()).value();
+  config.modes.at(PlanMode::kArmBase).max_expansions = 5;
+  LatticePlanner small(std::move(config));
+  const World empty;
+  CollisionChecker checker(robot(), empty);
+  // 5 m ahead: the base alone needs more than 5 expansions to get there.
+  PlanQuery q = pose_query(PlanMode::kArmBase, home(1.0), Eigen::Vector3d(6.2, 0.5, 1.2), 0.0);
+  q.max_expansions = 5000;
+  const PlanResult r = small.plan(q, checker);
+  ASSERT_NE(r.status, PlanStatus::kSolved);
+  EXPECT_TRUE(r.stats.budget_exhausted);
+  EXPECT_LE(r.stats.expansions, 6u);
+  EXPECT_NE(r.message.find("M2 arm+base's budget of 5 expansions"), std::string::npos) << r.message;
+  const PlanResult full = arastar().plan(q, checker);
+  EXPECT_EQ(full.status, PlanStatus::kSolved) << full.message;
+  EXPECT_GT(full.stats.expansions, 5u);
 }

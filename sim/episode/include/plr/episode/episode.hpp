@@ -30,7 +30,10 @@ struct Episode {
   std::uint32_t boxes_unloaded = 0;
   double robot_time_s = 0.0;  // execution + modelled planning (deterministic)
   double plan_wall_s = 0.0;   // what planning took on this machine
-  double sim_time_s = 0.0;    // the simulator's clock at the last action's end
+  // Robot time that bought nothing: all of each action that unloaded no box,
+  // and the planning the robot waited for in the others (issue 46).
+  double wasted_s = 0.0;
+  double sim_time_s = 0.0;  // the simulator's clock at the last action's end
   std::uint64_t actions = 0;
   std::uint64_t not_applicable = 0;  // actions with nothing to do in their region
   std::uint64_t robot_trailer_contacts = 0;
@@ -46,5 +49,10 @@ struct Episode {
   std::vector<LeftBox> left;
   sim::World final_world;  // as perceived at the end
 };
+
+// wasted_s as a share of robot_time_s (0 before any robot time).
+inline double wasted_share(const Episode& e) {
+  return e.robot_time_s > 0 ? e.wasted_s / e.robot_time_s : 0.0;
+}
 
 }  // namespace plr::episode

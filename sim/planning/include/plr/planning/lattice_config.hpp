@@ -3,6 +3,7 @@
 // documents the format).
 #pragma once
 
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
@@ -22,6 +23,10 @@ struct ModeLattice {
   double ee_speed = 1.0;                     // m/s, arm heuristic
   double line_tolerance = 0.005;             // m, M4 deviation from the line
   double plate_step = 0.0;                   // m, M6 Cartesian plate steps (0: none)
+  // The mode's own expansion budget (0: none): a search that has not found
+  // a solution by then gives up, whatever budget the query allows. Sized
+  // from the expansions successful searches took (docs/planner.md).
+  std::uint64_t max_expansions = 0;
 };
 
 struct LatticeConfig {

@@ -110,6 +110,11 @@ class CollisionChecker {
   // What collides at q, e.g. "arm_fore - box 12", "plate - trailer",
   // "arm_1 beyond limits"; empty if q is valid.
   std::string describe_collision(const JointVector& q) const;
+  // The first world collision at q of the links no arm joint moves (the
+  // base, the nose and its scoop), e.g. "scoop - box 12"; empty if they
+  // are clear. The arm and what it holds are left out: where the base can
+  // stand whatever the arm does, a planner's cheap necessary condition.
+  std::string base_collision(const JointVector& q) const;
 
   const CollisionStats& stats() const;
   void reset_stats();

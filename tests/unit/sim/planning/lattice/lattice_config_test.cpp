@@ -74,6 +74,18 @@ TEST(LatticeConfig, ErrorsNameTheFileLineColumnAndKey) {
             "/nonexistent/lattice.yaml: cannot read the lattice: No such file or directory");
 }
 
+// A mode's own expansion budget: absent is none (0); a negative one is refused.
+TEST(LatticeConfig, AModesBudgetIsReadWhereGiven) {
+  const auto c = LatticeConfig::from_string(
+      with("snap_time: 3.0", "snap_time: 3.0, max_expansions: 250"), "test.yaml");
+  ASSERT_TRUE(c) << c.error().message;
+  EXPECT_EQ(c->modes.at(PlanMode::kNose).max_expansions, 250u);
+  EXPECT_EQ(c->modes.at(PlanMode::kArm).max_expansions, 0u);
+  EXPECT_NE(error_of(with("snap_time: 3.0", "snap_time: 3.0, max_expansions: -1"))
+                .find("M3.max_expansions"),
+            std::string::npos);
+}
+
 TEST(LatticeConfig, BadTypesUnknownKeysAndRangesAreLocated) {
   // A value of the wrong type.
   EXPECT_EQ(error_of(with("ee_speed: 0.5", "ee_speed: fast")),
