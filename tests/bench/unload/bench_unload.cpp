@@ -39,6 +39,7 @@
 #include "bench_families.hpp"
 #include "bench_util.hpp"
 #include "plr/actions/in_process.hpp"
+#include "plr/actions/rig.hpp"
 #include "plr/atomic_file.hpp"
 #include "plr/episode/engine.hpp"
 #include "plr/jobs/process_runner.hpp"

@@ -76,12 +76,14 @@ TEST(Model, WithOneClassAlwaysSaysIt) {
 }
 
 TEST(Model, ASavedModelLoadsWithTheSameVerdicts) {
-  const Model m = trained();
+  Model m = trained();
+  m.set_made_by("plr chooser train: lib 77");
   const fs::path file = temp("round.plrm");
   ASSERT_TRUE(m.save(file));
   const Model back = Model::load(file).value();
   EXPECT_EQ(back.serialize(), m.serialize());
   EXPECT_EQ(back.library_crc(), 77u);
+  EXPECT_EQ(back.made_by(), "plr chooser train: lib 77");
   for (const Features& f : make_data(4, 50).x) EXPECT_EQ(back.decide(f).margin, m.decide(f).margin);
   fs::remove(file);
 }
