@@ -311,6 +311,19 @@ std::string Location::str() const {
   return file + ":" + std::to_string(line) + ":" + std::to_string(column);
 }
 
+Expected<Document> open_with_overrides(const std::string& path, std::string_view what,
+                                       const std::vector<std::string>& overrides) {
+  auto doc = Document::open(path, what);
+  if (!doc) return doc.error();
+  for (const std::string& o : overrides) {
+    const auto eq = o.find('=');
+    if (eq == std::string::npos)
+      return make_error(PLR_ERR_INVALID, "--set " + o + ": expected key=value");
+    doc->set(o.substr(0, eq), o.substr(eq + 1), "--set " + o.substr(0, eq));
+  }
+  return doc;
+}
+
 std::string did_you_mean(std::string_view word, const std::vector<std::string>& choices,
                          std::string_view label) {
   const std::string* best = nullptr;
@@ -534,10 +547,10 @@ nlohmann::json Node::to_json(std::size_t& budget, std::size_t depth) const {
   // Aliases may repeat a value many times over (a "billion laughs"), and nest
   // one anchored value in another deeper than the text does.
   if (--budget == 0 || depth > tree_->limits.max_depth) {
-    error(budget == 0 ? fmt::format("more than {} values with aliases expanded",
-                                    tree_->limits.max_values)
-                      : fmt::format("nested deeper than {} levels with aliases expanded",
-                                    tree_->limits.max_depth));
+    error(budget == 0
+              ? fmt::format("more than {} values with aliases expanded", tree_->limits.max_values)
+              : fmt::format("nested deeper than {} levels with aliases expanded",
+                            tree_->limits.max_depth));
     budget = 0;
     return nullptr;
   }

@@ -42,14 +42,8 @@ bool needs_training_world(Method method) {
 
 plr::Expected<EvaluationSettings> EvaluationSettings::load(
     const std::filesystem::path& file, const std::vector<std::string>& overrides) {
-  auto doc = yaml::Document::open(file.string(), "the evaluation settings");
+  auto doc = yaml::open_with_overrides(file.string(), "the evaluation settings", overrides);
   if (!doc) return doc.error();
-  for (const std::string& o : overrides) {
-    const auto eq = o.find('=');
-    if (eq == std::string::npos)
-      return plr::make_error(PLR_ERR_INVALID, "--set " + o + ": expected key=value");
-    doc->set(o.substr(0, eq), o.substr(eq + 1), "--set " + o.substr(0, eq));
-  }
   EvaluationSettings s;
   const yaml::Map top = doc->root().map(
       "evaluation settings", {"format", "library", "model", "environments", "methods", "first_seed",

@@ -26,11 +26,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "plr/chooser/testing/library.hpp"
 #include "plr/jobs/store.hpp"
 #include "plr/sim/library.hpp"
-#include "plr/sim/strategy.hpp"
 #include "plr/sim/testing/library_fingerprint.hpp"
-#include "plr/sim/world_io.hpp"
 #include "slurm_cluster.hpp"
 #include "small_evaluation.hpp"
 
@@ -284,19 +283,8 @@ TEST_F(SlurmTest, AGenerationsStrategiesAsArrayTasksEqualALocalOnes) {
 // array; the model is the one a local training makes, byte for byte, and
 // no rollout result is left behind.
 TEST_F(SlurmTest, AChooserTrainingsRolloutsAsArraysMakeTheLocalModel) {
-  // One strategy per world: a sweep for the row on the floor, a pick for
-  // the wall (as the chooser's own training test).
   const fs::path data = CHOOSER_TEST_DATA;
-  plr::sim::Library library;
-  for (const auto& [name, action] :
-       {std::pair{"floor_row", plr::sim::make_sweep(plr::sim::Height::kLow)},
-        {"two_columns", plr::sim::make_pick(plr::sim::Height::kMid, plr::sim::Side::kLeft)}}) {
-    plr::sim::LibraryEntry e;
-    e.name = name;
-    e.world = plr::sim::load_world(data / (std::string(name) + ".yaml")).value();
-    e.strategy = plr::sim::single_action(action, name);
-    library.entries.push_back(std::move(e));
-  }
+  const plr::sim::Library library = plr::chooser::testing::two_world_library(data);
   ASSERT_TRUE(plr::sim::save_library(library, dir_ / "library.plrl"));
   std::ofstream(dir_ / "train.yaml")
       << "format: plr-chooser-training\nlibrary: " << (dir_ / "library.plrl").string()

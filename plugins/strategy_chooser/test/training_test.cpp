@@ -12,10 +12,10 @@
 #include <fstream>
 #include <thread>
 
+#include "plr/chooser/testing/library.hpp"
 #include "plr/chooser/training/data_set.hpp"
 #include "plr/chooser/training/settings.hpp"
 #include "plr/sim/library.hpp"
-#include "plr/sim/world_io.hpp"
 
 namespace fs = std::filesystem;
 using namespace plr::chooser;
@@ -32,17 +32,7 @@ class TrainingTest : public ::testing::Test {
             ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    // One strategy per world: a sweep for the row on the floor, picks for the wall.
-    plr::sim::Library library;
-    for (const auto& [name, action] :
-         {std::pair{"floor_row", plr::sim::make_sweep(plr::sim::Height::kLow)},
-          {"two_columns", plr::sim::make_pick(plr::sim::Height::kMid, plr::sim::Side::kLeft)}}) {
-      plr::sim::LibraryEntry e;
-      e.name = name;
-      e.world = plr::sim::load_world(kData / (std::string(name) + ".yaml")).value();
-      e.strategy = plr::sim::single_action(action, name);
-      library.entries.push_back(std::move(e));
-    }
+    const plr::sim::Library library = plr::chooser::testing::two_world_library(kData);
     ASSERT_TRUE(plr::sim::save_library(library, dir_ / "library.plrl"));
     std::ofstream(dir_ / "train.yaml")
         << "format: plr-chooser-training\nlibrary: " << (dir_ / "library.plrl").string()

@@ -210,6 +210,12 @@ class Document {
   std::unique_ptr<detail::Tree> tree_;  // on the heap: Nodes point to it
 };
 
+// A settings file: `path` opened as Document::open does, then each
+// "key=value" override (as --set gives them) put in, located as "--set key".
+// An override without '=' is the error.
+Expected<Document> open_with_overrides(const std::string& path, std::string_view what,
+                                       const std::vector<std::string>& overrides);
+
 // " (did you mean 'x'?)" for a near miss of `word`, else " (<label>: a, b, c)".
 std::string did_you_mean(std::string_view word, const std::vector<std::string>& choices,
                          std::string_view label);

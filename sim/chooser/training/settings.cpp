@@ -90,14 +90,8 @@ std::string TrainingSettings::describe(std::uint32_t library_fingerprint) const 
 
 plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::path& file,
                                                        const std::vector<std::string>& overrides) {
-  auto doc = yaml::Document::open(file.string(), "the training settings");
+  auto doc = yaml::open_with_overrides(file.string(), "the training settings", overrides);
   if (!doc) return doc.error();
-  for (const std::string& o : overrides) {
-    const auto eq = o.find('=');
-    if (eq == std::string::npos)
-      return plr::make_error(PLR_ERR_INVALID, "--set " + o + ": expected key=value");
-    doc->set(o.substr(0, eq), o.substr(eq + 1), "--set " + o.substr(0, eq));
-  }
   TrainingSettings s;
   const yaml::Map top = doc->root().map("chooser training settings",
                                         {"format",          "library",      "out",
