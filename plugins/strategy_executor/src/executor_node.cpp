@@ -373,7 +373,7 @@ class ExecutorNode : public plr::Node, private episode::Observer {
     for (const auto& p : e.curve.points()) stats_.curve.push_back({p.robot_time_s, p.boxes});
     stats_.steps.clear();
     for (const auto& s : e.steps)
-      stats_.steps.push_back({sim::to_string(s.action), sim::to_string(s.observation),
+      stats_.steps.push_back({s.source, sim::to_string(s.action), sim::to_string(s.observation),
                               s.wall_height, s.pile_height, s.pile_depth, s.outcome.applicable,
                               s.outcome.boxes, s.outcome.robot_time_s});
     stats_.boxes_left.clear();

@@ -22,7 +22,8 @@ nlohmann::json to_json(const RunStats& s) {
   const auto to_90 = actions::robot_time_to_share(curve, s.boxes_total, 0.9);
   nlohmann::json steps = nlohmann::json::array();
   for (const auto& r : s.steps)
-    steps.push_back({{"action", r.action},
+    steps.push_back({{"source", r.source},
+                     {"action", r.action},
                      {"observation", r.observation},
                      {"wall_height", r.wall_height},
                      {"pile_height", r.pile_height},

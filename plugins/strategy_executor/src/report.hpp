@@ -25,6 +25,7 @@ struct CurvePoint {
 
 // One action of the run: what the robot saw, did, and got.
 struct StepRecord {
+  std::string source;  // where its strategy came from ("library:A1-1", "hardcoded", ...)
   std::string action;
   std::string observation;
   double wall_height = 0, pile_height = 0, pile_depth = 0;  // m, the scene's raw figures

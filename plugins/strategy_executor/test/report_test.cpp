@@ -38,8 +38,13 @@ TEST(Report, JsonHasTheFiguresOfTheTables) {
                   {13, "blocked", "in front: 12"},
                   {14, "blocked", "in front: 12"}};
   s.curve = {{0.0, 0}, {20.0, 4}};
+  s.steps = {{"library:A1-1", "Pick(mid, left)", "wall/mid/center", 2.0, 0.0, 0.0, true, 1, 12.0}};
   const auto j = to_json(s);
   EXPECT_EQ(j["boxes_unloaded"], 4);
+  // Each step says which strategy it came from.
+  ASSERT_EQ(j["steps"].size(), 1u);
+  EXPECT_EQ(j["steps"][0]["source"], "library:A1-1");
+  EXPECT_EQ(j["steps"][0]["action"], "Pick(mid, left)");
   EXPECT_DOUBLE_EQ(j["unloaded_fraction"].get<double>(), 0.4);
   EXPECT_DOUBLE_EQ(j["boxes_per_robot_s"].get<double>(), 0.2);
   EXPECT_DOUBLE_EQ(j["wasted_s"].get<double>(), 5.0);
