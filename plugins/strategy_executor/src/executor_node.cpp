@@ -235,14 +235,14 @@ class ExecutorNode : public plr::Node, private episode::Observer {
                    first_strategy_->nodes.size());
         return episode::StrategyChoice{*first_strategy_, "config", {}};
       }
-      auto s = ask_strategy(*scene.observation, rules);
-      if (!s) return s.error();
-      return episode::StrategyChoice{std::move(*s), "strategy/next", {}};
+      return ask_strategy(*scene.observation, rules);
     };
   }
 
-  plr::Expected<sim::Strategy> ask_strategy(sim::Observation observation,
-                                            const episode::RunRules& rules) {
+  // strategy/next's answer, with where it says the strategy came from
+  // ("library:A1-1", "hardcoded"; the service's name if it does not say).
+  plr::Expected<episode::StrategyChoice> ask_strategy(sim::Observation observation,
+                                                      const episode::RunRules& rules) {
     const auto& world = backend_->last_world();
     const auto view = world->view();
     flatbuffers::FlatBufferBuilder fbb;
@@ -262,11 +262,12 @@ class ExecutorNode : public plr::Node, private episode::Observer {
     auto s = sim::from_message(*r.value()->strategy(), "strategy/next reply");
     if (!s) return make_error(PLR_ERR_INTERNAL, s.error().message);
     const auto* reason = r.value()->reason();
-    log().info("strategy '{}' from {}{} ({} nodes) for {}", s->name,
-               r.value()->source() ? r.value()->source()->str() : "?",
+    const auto* from = r.value()->source();
+    const std::string source = from && from->size() > 0 ? from->str() : "strategy/next";
+    log().info("strategy '{}' from {}{} ({} nodes) for {}", s->name, source,
                reason && reason->size() > 0 ? " (" + reason->str() + ")" : std::string(),
                s->nodes.size(), sim::to_string(observation));
-    return std::move(*s);
+    return episode::StrategyChoice{std::move(*s), source, {}};
   }
 
   void run() {
