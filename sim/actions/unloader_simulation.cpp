@@ -23,12 +23,6 @@ constexpr double kStartTolerance = 1e-4;
 
 }  // namespace
 
-JointVector home_configuration() {
-  JointVector q;
-  q << 0.0, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
-  return q;
-}
-
 struct UnloaderSimulation::Saved {
   sim::Snapshot physics;
   JointVector q;

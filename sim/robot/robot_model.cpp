@@ -180,6 +180,12 @@ std::optional<std::size_t> line_nested_deeper(const std::string& xml, std::size_
 
 }  // namespace
 
+JointVector home_configuration(double base_x) {
+  JointVector q;
+  q << base_x, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
+  return q;
+}
+
 plr::Expected<RobotModel> RobotModel::from_urdf_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return plr::make_error(PLR_ERR_INVALID, path + ": cannot open file");

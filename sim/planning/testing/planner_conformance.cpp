@@ -30,12 +30,6 @@ const RobotModel& robot() {
   return m;
 }
 
-JointVector home(double base) {
-  JointVector q;
-  q << base, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
-  return q;
-}
-
 // A wall of 0.4 m boxes across the trailer, front face at x = face: 5
 // columns, the middle one on the trailer's axis.
 World wall(double face, int rows = 5) {
@@ -54,7 +48,9 @@ World wall(double face, int rows = 5) {
 }
 
 // Box in row r (from the floor), column c (0..4, 2 centred).
-const Box& at(const World& w, int r, int c) { return w.boxes[static_cast<std::size_t>(5 * r + c)]; }
+const Box& at(const World& w, int r, int c) {
+  return w.boxes[static_cast<std::size_t>(5 * r + c)];
+}
 
 PlanQuery pose_query(PlanMode mode, const JointVector& start, const Eigen::Vector3d& p,
                      double yaw) {
@@ -133,15 +129,15 @@ std::string dense_collision(const std::vector<TimedPoint>& points, const World& 
         for (const Box& b : world.boxes) {
           if (std::find(ignored.begin(), ignored.end(), b.id) != ignored.end()) continue;
           if (hits(std::make_shared<fcl::Boxd>(b.size), b.pose))
-            return m.links()[l].name + " - box " + std::to_string(b.id) + " at t=" +
-                   std::to_string(t);
+            return m.links()[l].name + " - box " + std::to_string(b.id) +
+                   " at t=" + std::to_string(t);
         }
         // Walls only inside the trailer (x >= 0): the rear is open.
         for (std::size_t i = 0; i < planes.size(); ++i) {
           if (i >= 2 && p.translation().x() < 0.0) continue;
           if (hits(planes[i], Eigen::Isometry3d::Identity()))
-            return m.links()[l].name + " - trailer plane " + std::to_string(i) + " at t=" +
-                   std::to_string(t);
+            return m.links()[l].name + " - trailer plane " + std::to_string(i) +
+                   " at t=" + std::to_string(t);
         }
       }
     }
@@ -175,8 +171,10 @@ class PlanClient {
       return;
     }
     node_ = *node;
-    if (auto s = node_->configure(); !s) error_ = "configure: " + s.error().message;
-    else if (auto a = node_->activate(); !a) error_ = "activate: " + a.error().message;
+    if (auto s = node_->configure(); !s)
+      error_ = "configure: " + s.error().message;
+    else if (auto a = node_->activate(); !a)
+      error_ = "activate: " + a.error().message;
   }
 
   const std::string& error() const { return error_; }
@@ -218,8 +216,8 @@ bool unsupported(const DecodedPlanResponse& r) {
          r.message.find("is not a mode of planner") != std::string::npos;
 }
 
-#define PLR_SKIP_IF_UNSUPPORTED(r)                                    \
-  do {                                                                \
+#define PLR_SKIP_IF_UNSUPPORTED(r)                                     \
+  do {                                                                 \
     if (unsupported(r)) GTEST_SKIP() << "planner says: " << r.message; \
   } while (0)
 
@@ -239,7 +237,7 @@ using Check = std::function<void(PlanClient&)>;
 
 void arm_to_pre_grasp(PlanClient& c) {
   const World w = wall(4.0);
-  const JointVector start = home(4.0 - 1.35);
+  const JointVector start = home_configuration(4.0 - 1.35);
   // Plate 15 cm in front of a box's face (row 2, column 1), square to it.
   const Eigen::Vector3d target(3.85, at(w, 2, 1).pose.translation().y(),
                                at(w, 2, 1).pose.translation().z());
@@ -256,25 +254,26 @@ void arm_to_pre_grasp(PlanClient& c) {
 
 void arm_and_base_from_far_back(PlanClient& c) {
   const World w = wall(5.0);
-  const PlanQuery q = pose_query(PlanMode::kArmBase, home(2.0), {4.85, 0.4, 1.8}, 0.0);
+  const PlanQuery q =
+      pose_query(PlanMode::kArmBase, home_configuration(2.0), {4.85, 0.4, 1.8}, 0.0);
   const auto r = c.plan(q, w);
   PLR_SKIP_IF_UNSUPPORTED(r);
   expect_solved_cleanly(r, q, w);
   if (r.points.empty()) return;
   EXPECT_GT(r.points.back().position[kBaseX], q.start[kBaseX] + 0.3) << "it had to drive";
-  EXPECT_LT((robot().plate_target(r.points.back().position).position -
-             Eigen::Vector3d(4.85, 0.4, 1.8))
-                .norm(),
-            0.005 + 1e-6);
+  EXPECT_LT(
+      (robot().plate_target(r.points.back().position).position - Eigen::Vector3d(4.85, 0.4, 1.8))
+          .norm(),
+      0.005 + 1e-6);
 }
 
 void nose_down(PlanClient& c) {
   const World w = wall(6.0);
-  JointVector down = home(4.0);
+  JointVector down = home_configuration(4.0);
   down[kNose1] = 0.0;
   down[kNose2] = 0.05;
   down[kNose3] = 0.3;
-  const PlanQuery q = joint_query(PlanMode::kNose, home(4.0), down);
+  const PlanQuery q = joint_query(PlanMode::kNose, home_configuration(4.0), down);
   const auto r = c.plan(q, w);
   PLR_SKIP_IF_UNSUPPORTED(r);
   expect_solved_cleanly(r, q, w);
@@ -285,9 +284,9 @@ void nose_down(PlanClient& c) {
 
 void base_line(PlanClient& c) {
   const World w = wall(6.0);
-  JointVector back = home(4.0);
+  JointVector back = home_configuration(4.0);
   back[kBaseX] = 2.5;
-  const PlanQuery q = joint_query(PlanMode::kBaseLine, home(4.0), back);
+  const PlanQuery q = joint_query(PlanMode::kBaseLine, home_configuration(4.0), back);
   const auto r = c.plan(q, w);
   PLR_SKIP_IF_UNSUPPORTED(r);
   expect_solved_cleanly(r, q, w);
@@ -305,7 +304,8 @@ void cartesian_line(PlanClient& c) {
   const World w = wall(4.0);
   const Box& box = at(w, 2, 2);
   const Eigen::Vector3d face(4.0, box.pose.translation().y(), box.pose.translation().z());
-  const auto pre = robot().arm_ik({face - Eigen::Vector3d(0.15, 0, 0), 0.0}, home(4.0 - 1.35));
+  const auto pre =
+      robot().arm_ik({face - Eigen::Vector3d(0.15, 0, 0), 0.0}, home_configuration(4.0 - 1.35));
   ASSERT_FALSE(pre.empty());
   PlanQuery q =
       pose_query(PlanMode::kArmCartesian, pre.front(), face - Eigen::Vector3d(0.005, 0, 0), 0.0);
@@ -320,9 +320,9 @@ void cartesian_line(PlanClient& c) {
 }
 
 void goal_in_collision(PlanClient& c) {
-  JointVector goal = home(4.0 - 1.35);
+  JointVector goal = home_configuration(4.0 - 1.35);
   goal[kBaseX] = 4.5;  // inside the wall
-  const auto r = c.plan(joint_query(PlanMode::kBaseLine, home(2.0), goal), wall(4.0));
+  const auto r = c.plan(joint_query(PlanMode::kBaseLine, home_configuration(2.0), goal), wall(4.0));
   PLR_SKIP_IF_UNSUPPORTED(r);
   EXPECT_EQ(r.status, PlanStatus::kGoalInvalid) << r.message;
   EXPECT_NE(r.message.find("box"), std::string::npos) << "say what the goal hits: " << r.message;
@@ -332,19 +332,19 @@ void invalid_requests(PlanClient& c) {
   const World empty;
   PlanQuery q;
   q.mode = PlanMode::kNose;
-  q.start = home(1.0);
+  q.start = home_configuration(1.0);
   q.goal = PoseGoal{};
   auto r = c.plan(q, empty);
   EXPECT_EQ(r.status, PlanStatus::kInvalidRequest);
   EXPECT_EQ(r.message, "M3 nose needs a joint goal");
 
-  q = joint_query(PlanMode::kArm, home(1.0), home(1.0));
+  q = joint_query(PlanMode::kArm, home_configuration(1.0), home_configuration(1.0));
   std::get<JointGoal>(q.goal).q[kArm2] = 20.0;
   r = c.plan(q, empty);
   EXPECT_EQ(r.status, PlanStatus::kInvalidRequest);
   EXPECT_EQ(r.message.rfind("joint goal arm_2 = 20.000000 is beyond limits", 0), 0u) << r.message;
 
-  q = joint_query(PlanMode::kArm, home(1.0), home(1.0));
+  q = joint_query(PlanMode::kArm, home_configuration(1.0), home_configuration(1.0));
   q.start[kArm1] = std::nan("");
   r = c.plan(q, empty);
   EXPECT_EQ(r.status, PlanStatus::kInvalidRequest);
@@ -368,7 +368,8 @@ void escapes_light_contact(PlanClient& c) {
   const World w = wall(4.0);
   const Box& box = at(w, 2, 2);
   const Eigen::Vector3d face(4.0, box.pose.translation().y(), box.pose.translation().z());
-  const auto pre = robot().arm_ik({face - Eigen::Vector3d(0.08, 0, 0), 0.0}, home(4.0 - 1.35));
+  const auto pre =
+      robot().arm_ik({face - Eigen::Vector3d(0.08, 0, 0), 0.0}, home_configuration(4.0 - 1.35));
   ASSERT_FALSE(pre.empty());
   JointVector pressed = pre.front();
   pressed[kBaseX] += 0.088;
@@ -386,11 +387,12 @@ void escapes_light_contact(PlanClient& c) {
             0.03)
       << "the nearest free state, not a long retreat";
 
-  const PlanQuery q = joint_query(PlanMode::kArm, pressed, home(pressed[kBaseX]));
+  const PlanQuery q = joint_query(PlanMode::kArm, pressed, home_configuration(pressed[kBaseX]));
   const auto r = c.plan(q, w);
   ASSERT_EQ(r.status, PlanStatus::kSolved) << r.message;
   EXPECT_TRUE(r.stats.escaped);
-  EXPECT_LT((r.points.back().position - home(pressed[kBaseX])).cwiseAbs().maxCoeff(), 1e-3);
+  EXPECT_LT((r.points.back().position - home_configuration(pressed[kBaseX])).cwiseAbs().maxCoeff(),
+            1e-3);
   // Free of collisions once out of the contact.
   double out_s = 0.0;
   {
@@ -408,7 +410,7 @@ void escapes_light_contact(PlanClient& c) {
 // With an expansion budget the answer is a function of the request.
 void budget_is_deterministic(PlanClient& c) {
   const World w = wall(5.0);
-  PlanQuery q = pose_query(PlanMode::kArmBase, home(2.0), {4.85, 0.4, 1.8}, 0.0);
+  PlanQuery q = pose_query(PlanMode::kArmBase, home_configuration(2.0), {4.85, 0.4, 1.8}, 0.0);
   q.max_expansions = 400;
   q.time_limit_s = 120.0;  // the budget decides, not the clock
   const auto a = c.plan(q, w);

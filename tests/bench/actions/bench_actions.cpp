@@ -51,6 +51,7 @@
 #include "bench_cli.hpp"
 #include "bench_families.hpp"
 #include "bench_util.hpp"
+#include "h_states.hpp"
 #include "plr/actions/action_model.hpp"
 #include "plr/actions/in_process.hpp"
 #include "plr/planning/lattice_planner.hpp"
@@ -74,8 +75,12 @@ using plr::sim::Action;
 using plr::sim::EnvFamily;
 using plr::sim::World;
 using Clock = std::chrono::steady_clock;
+using plr::bench::fixed;
 using plr::bench::median;
+using plr::bench::number;
+using plr::bench::pct;
 using plr::bench::Progress;
+using plr::bench::seconds_since;
 
 // Issue 17's targets.
 constexpr double kTargetSensitivity = 0.30;  // on A2 and B1
@@ -95,10 +100,6 @@ double thread_cpu_s() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-double seconds_since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
 double mean(const std::vector<double>& v) {
   if (v.empty()) return std::nan("");
   double s = 0;
@@ -106,27 +107,11 @@ double mean(const std::vector<double>& v) {
   return s / static_cast<double>(v.size());
 }
 
-// NaN as null in JSON.
-nlohmann::json number(double x) {
-  return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr);
-}
-
 std::vector<Action> all_actions() {
   std::vector<Action> all;
   for (int a = 0; a < plr::sim::kNumActions; ++a) all.push_back(static_cast<Action>(a));
   return all;
 }
-
-// A state H visits.
-struct State {
-  EnvFamily family;
-  std::uint64_t seed = 0;
-  int after = 0;  // H actions before it
-  std::shared_ptr<const UnloaderSimulation::Saved> saved;
-  Memory memory;
-  std::size_t boxes = 0;
-  std::string observation;
-};
 
 // The world after an action: who left, where the rest lie.
 struct Result {
@@ -172,66 +157,7 @@ struct Context {
   plr::sim::HardcodedParams h;
   InProcessOptions backend;
   InProcessStats stats;  // summed over the backends
-
-  void add(const InProcessBackend& b) {
-    const InProcessStats& s = b.stats();
-    stats.queries += s.queries;
-    stats.motions += s.motions;
-    stats.checker_s += s.checker_s;
-    stats.plan_s += s.plan_s;
-    stats.sample_s += s.sample_s;
-    stats.execute_s += s.execute_s;
-    stats.observe_s += s.observe_s;
-  }
 };
-
-// Runs H from the family's environment, saving the state every `every`
-// actions (the first before any), until `count` states or the trailer is
-// done.
-std::vector<State> visit(Context& c, EnvFamily family, std::uint64_t seed, int count,
-                         const Options& o, Progress& progress) {
-  std::vector<State> states;
-  const World truth = plr::sim::make_environment(family, seed);
-  UnloaderSimulation simulation(c.robot, truth);
-  InProcessBackend backend(simulation, c.planner, c.backend);
-  Memory memory;
-  std::vector<Action> excluded;
-  const std::string name = std::string(to_string(family)) + " seed " + std::to_string(seed);
-  for (int done = 0; done <= o.max_h_actions && static_cast<int>(states.size()) < count;) {
-    const World seen = simulation.perceived();
-    if (seen.boxes.empty()) break;
-    const plr::sim::SceneAnalysis scene = plr::sim::analyse(seen, c.model.options().observation);
-    if (!scene.observation) break;
-    if (done % o.every == 0 && excluded.empty()) {
-      states.push_back(State{family, seed, done, simulation.save(), memory, seen.boxes.size(),
-                             plr::sim::to_string(*scene.observation)});
-      progress.step(name + ": state after " + std::to_string(done) + " H actions");
-      if (static_cast<int>(states.size()) >= count) break;
-    }
-    if (excluded.size() == static_cast<std::size_t>(plr::sim::kNumActions)) break;
-    std::optional<Action> action;
-    for (const Action a : plr::sim::hardcoded_ranking(scene, c.h)) {
-      if (std::find(excluded.begin(), excluded.end(), a) == excluded.end()) {
-        action = a;
-        break;
-      }
-    }
-    if (!action) break;
-    const auto out = c.model.run(*action, backend, memory);
-    if (!out) {
-      std::fprintf(stderr, "\nbench_actions: %s: %s\n", name.c_str(), out.error().message.c_str());
-      break;
-    }
-    if (out->boxes > 0) {
-      excluded.clear();
-      ++done;
-    } else {
-      excluded.push_back(*action);
-    }
-  }
-  c.add(backend);
-  return states;
-}
 
 Result result_of(const UnloaderSimulation& s, const Outcome& o) {
   Result r;
@@ -251,8 +177,8 @@ std::uint64_t particle_seed(std::uint64_t seed, std::size_t state, int particle)
   return 1000003ULL * seed + 7919ULL * state + static_cast<std::uint64_t>(particle) + 1;
 }
 
-void run_state(Context& c, const State& st, std::size_t index, const Options& o, FamilyFigures& fig,
-               Progress& progress) {
+void run_state(Context& c, const plr::bench::HState& st, std::size_t index, const Options& o,
+               FamilyFigures& fig, Progress& progress) {
   UnloaderSimulation simulation(c.robot, World{});
   simulation.restore(*st.saved);
   const World seen = simulation.perceived();
@@ -306,7 +232,7 @@ void run_state(Context& c, const State& st, std::size_t index, const Options& o,
   fig.state_names.push_back("seed " + std::to_string(st.seed) + " after " +
                             std::to_string(st.after) + " H actions");
   ++fig.states;
-  c.add(backend);
+  plr::bench::add(c.stats, backend.stats());
 }
 
 // Figures of a set of cells (one action, or all of a family's).
@@ -362,19 +288,6 @@ nlohmann::json to_json(const Figures& f) {
           {"pairs", f.pairs},
           {"mass_sensitivity", number(f.sensitivity)},
           {"real_time_factor", number(f.rtf)}};
-}
-
-std::string pct(double x) {
-  if (!std::isfinite(x)) return "-";
-  char b[32];
-  std::snprintf(b, sizeof b, "%.0f%%", 100 * x);
-  return b;
-}
-std::string fixed(double x, int digits) {
-  if (!std::isfinite(x)) return "-";
-  char b[32];
-  std::snprintf(b, sizeof b, "%.*f", digits, x);
-  return b;
 }
 
 void print_row(const std::string& name, const Figures& f) {
@@ -455,23 +368,20 @@ int main(int argc, char** argv) {
   const std::size_t per_state = o.actions.size() * static_cast<std::size_t>(o.particles);
   Progress progress("bench_actions",
                     o.families.size() * static_cast<std::size_t>(o.states) * (1 + per_state));
-  std::map<EnvFamily, std::vector<State>> states;
-  for (const EnvFamily f : o.families) {
-    auto& list = states[f];
-    for (std::uint64_t s = o.seed; static_cast<int>(list.size()) < o.states && s < o.seed + 20;
-         ++s) {
-      const int want = std::min(o.states_per_seed, o.states - static_cast<int>(list.size()));
-      auto more = visit(c, f, s, want, o, progress);
-      list.insert(list.end(), more.begin(), more.end());
-    }
+  const plr::bench::HWalk walk{*robot,  planner,         c.model,           c.h,     c.backend,
+                               o.every, o.max_h_actions, o.states_per_seed, &c.stats};
+  auto states = plr::bench::visit_families(walk, o.families, o.states, o.seed, progress);
+  if (!states) {
+    std::fprintf(stderr, "\nbench_actions: %s\n", states.error().message.c_str());
+    return 1;
   }
   const double visit_s = seconds_since(start);
   c.stats = {};  // from here on, the action runs alone
 
   std::map<EnvFamily, FamilyFigures> figs;
   for (const EnvFamily f : o.families) {
-    for (std::size_t i = 0; i < states[f].size(); ++i)
-      run_state(c, states[f][i], i, o, figs[f], progress);
+    for (std::size_t i = 0; i < (*states)[f].size(); ++i)
+      run_state(c, (*states)[f][i], i, o, figs[f], progress);
   }
   progress.finish();
   const double total_s = seconds_since(start);

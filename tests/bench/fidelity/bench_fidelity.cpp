@@ -37,6 +37,7 @@
 #include "bench_cli.hpp"
 #include "bench_families.hpp"
 #include "bench_util.hpp"
+#include "h_states.hpp"
 #include "plr/actions/action_model.hpp"
 #include "plr/actions/in_process.hpp"
 #include "plr/planning/lattice_planner.hpp"
@@ -60,8 +61,12 @@ using plr::sim::EnvFamily;
 using plr::sim::Fidelity;
 using plr::sim::World;
 using Clock = std::chrono::steady_clock;
+using plr::bench::fixed;
 using plr::bench::median;
+using plr::bench::number;
+using plr::bench::pct;
 using plr::bench::Progress;
+using plr::bench::seconds_since;
 
 // Issue 45's targets for adaptive.
 constexpr double kTargetSame = 0.95, kTargetWithinOne = 0.95, kTargetSweepSpeedup = 3.0;
@@ -85,28 +90,12 @@ constexpr std::size_t kAdaptive = 1, kPerturbed = 2;
   std::exit(1);
 }
 
-double seconds_since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
-nlohmann::json number(double x) {
-  return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr);
-}
-
 struct Options {
   int states = 4, every = 10, max_h_actions = 40, states_per_seed = 2;
   std::uint64_t seed = 1;
   std::vector<EnvFamily> families{EnvFamily::kA1, EnvFamily::kA2, EnvFamily::kB1, EnvFamily::kB2,
                                   EnvFamily::kC};
   double h_pile = 1.35, h_min = 0.5, d_min = 0.6;  // as configs/unload_sim.yaml runs H
-};
-
-struct State {
-  EnvFamily family;
-  std::uint64_t seed = 0;
-  int after = 0;  // H actions before it
-  std::shared_ptr<const UnloaderSimulation::Saved> saved;
-  Memory memory;
 };
 
 // One action from one state at one level.
@@ -132,7 +121,6 @@ struct Context {
   const plr::sim::RobotModel& robot;
   plr::planning::LatticePlanner& planner;
   ActionModel model;
-  plr::sim::HardcodedParams h;
 };
 
 std::string observe(const World& seen, const ActionModel& model) {
@@ -140,49 +128,8 @@ std::string observe(const World& seen, const ActionModel& model) {
   return scene.observation ? plr::sim::to_string(*scene.observation) : "none";
 }
 
-// States H visits from the family's environment at full fidelity: the first
-// before any action, then every `every` actions that unloaded something.
-std::vector<State> visit(Context& c, EnvFamily family, std::uint64_t seed, int count,
-                         const Options& o, Progress& progress) {
-  std::vector<State> states;
-  UnloaderSimulation simulation(c.robot, plr::sim::make_environment(family, seed));
-  InProcessBackend backend(simulation, c.planner);
-  Memory memory;
-  std::vector<Action> excluded;
-  const std::string name = std::string(to_string(family)) + " seed " + std::to_string(seed);
-  for (int done = 0; done <= o.max_h_actions && static_cast<int>(states.size()) < count;) {
-    const World seen = simulation.perceived();
-    if (seen.boxes.empty()) break;
-    const plr::sim::SceneAnalysis scene = plr::sim::analyse(seen, c.model.options().observation);
-    if (!scene.observation) break;
-    if (done % o.every == 0 && excluded.empty()) {
-      states.push_back(State{family, seed, done, simulation.save(), memory});
-      progress.step(name + ": state after " + std::to_string(done) + " H actions");
-      if (static_cast<int>(states.size()) >= count) break;
-    }
-    if (excluded.size() == static_cast<std::size_t>(plr::sim::kNumActions)) break;
-    std::optional<Action> action;
-    for (const Action a : plr::sim::hardcoded_ranking(scene, c.h)) {
-      if (std::find(excluded.begin(), excluded.end(), a) == excluded.end()) {
-        action = a;
-        break;
-      }
-    }
-    if (!action) break;
-    const auto out = c.model.run(*action, backend, memory);
-    if (!out) die(name + ": " + out.error().message);
-    if (out->boxes > 0) {
-      excluded.clear();
-      ++done;
-    } else {
-      excluded.push_back(*action);
-    }
-  }
-  return states;
-}
-
 // Every action from the state at every level, on one mass particle.
-void run_state(Context& c, const State& st, std::size_t index, const Options& o,
+void run_state(Context& c, const plr::bench::HState& st, std::size_t index, const Options& o,
                std::vector<Trial>& trials, Progress& progress) {
   UnloaderSimulation simulation(c.robot, World{});
   simulation.restore(*st.saved);
@@ -283,19 +230,6 @@ nlohmann::json to_json(const Figures& f) {
           {"rebuilds_of_full", number(f.rebuilds)}};
 }
 
-std::string fixed(double x, int digits) {
-  if (!std::isfinite(x)) return "-";
-  char b[32];
-  std::snprintf(b, sizeof b, "%.*f", digits, x);
-  return b;
-}
-std::string pct(double x) {
-  if (!std::isfinite(x)) return "-";
-  char b[32];
-  std::snprintf(b, sizeof b, "%.0f%%", 100 * x);
-  return b;
-}
-
 void print_row(const std::string& name, const std::string& level, const Figures& f) {
   std::printf("  %-12s %-9s %5d %9s %9s %8s %8s %9s %8s %8s %7s %6s %6s\n", name.c_str(),
               level.c_str(), f.runs, fixed(f.rtf_pick, 0).c_str(), fixed(f.rtf_sweep, 1).c_str(),
@@ -342,26 +276,20 @@ int main(int argc, char** argv) {
   plr::sim::HardcodedParams h;
   h.h_min = o.h_min;
   h.d_min = o.d_min;
-  Context c{*robot, planner, ActionModel(*robot, options), h};
+  Context c{*robot, planner, ActionModel(*robot, options)};
 
   const auto start = Clock::now();
   Progress progress("bench_fidelity",
                     o.families.size() * static_cast<std::size_t>(o.states) *
                         (1 + kVariants.size() * static_cast<std::size_t>(plr::sim::kNumActions)));
-  std::map<EnvFamily, std::vector<State>> states;
-  for (const EnvFamily f : o.families) {
-    auto& list = states[f];
-    for (std::uint64_t s = o.seed; static_cast<int>(list.size()) < o.states && s < o.seed + 20;
-         ++s) {
-      const int want = std::min(o.states_per_seed, o.states - static_cast<int>(list.size()));
-      auto more = visit(c, f, s, want, o, progress);
-      list.insert(list.end(), more.begin(), more.end());
-    }
-  }
+  const plr::bench::HWalk walk{*robot, planner, c.model,         h,
+                               {},     o.every, o.max_h_actions, o.states_per_seed};
+  auto states = plr::bench::visit_families(walk, o.families, o.states, o.seed, progress);
+  if (!states) die(states.error().message);
   std::vector<Trial> trials;
   for (const EnvFamily f : o.families)
-    for (std::size_t i = 0; i < states[f].size(); ++i)
-      run_state(c, states[f][i], i, o, trials, progress);
+    for (std::size_t i = 0; i < (*states)[f].size(); ++i)
+      run_state(c, (*states)[f][i], i, o, trials, progress);
   progress.finish();
   const double total_s = seconds_since(start);
 

@@ -287,7 +287,7 @@ nlohmann::json searches(const std::vector<nlohmann::json>& runs, const std::stri
 nlohmann::json summarize(const std::vector<nlohmann::json>& runs, EnvFamily family) {
   std::vector<double> fractions, robot_s, wasted;
   double boxes = 0, seconds = 0;
-  std::uint64_t collisions = 0, below = 0;
+  std::uint64_t collisions = 0, below = 0, emptied = 0, boxes_left = 0;
   std::map<std::string, int> stops;
   std::map<std::string, std::uint64_t> left;
   // How often H met each structure and height class (its steps' observations).
@@ -304,6 +304,8 @@ nlohmann::json summarize(const std::vector<nlohmann::json>& runs, EnvFamily fami
     const double f = total > 0 ? r.value("boxes_unloaded", 0u) / static_cast<double>(total) : 0.0;
     fractions.push_back(f);
     if (f < kTargetFraction) ++below;
+    if (total > 0 && r.value("boxes_unloaded", 0u) == total) ++emptied;
+    boxes_left += total - std::min(total, r.value("boxes_unloaded", 0u));
     if (f < worst_fraction) {
       worst_fraction = f;
       worst =
@@ -332,6 +334,8 @@ nlohmann::json summarize(const std::vector<nlohmann::json>& runs, EnvFamily fami
           {"unloaded_fraction_worst", fractions.empty() ? 0.0 : worst_fraction},
           {"worst", worst},
           {"runs_below_target", below},
+          {"emptied", emptied},
+          {"boxes_left", boxes_left},
           {"robot_time_s_median", plr::bench::median(robot_s)},
           {"wasted_share_median", plr::bench::median(wasted)},
           {"boxes_per_robot_s", seconds > 0 ? boxes / seconds : 0.0},
@@ -345,12 +349,13 @@ nlohmann::json summarize(const std::vector<nlohmann::json>& runs, EnvFamily fami
 void print_table(const nlohmann::json& families) {
   std::printf("strategy H, in process; target: every run >= %.0f %% unloaded, no collision\n\n",
               100 * kTargetFraction);
-  std::printf("%-6s %5s %8s %24s %7s %10s %9s %8s %6s\n", "family", "runs", "mean", "worst",
-              "<98 %", "robot s", "boxes/s", "wasted", "coll.");
+  std::printf("%-6s %5s %7s %5s %8s %24s %7s %10s %9s %8s %6s\n", "family", "runs", "emptied",
+              "left", "mean", "worst", "<98 %", "robot s", "boxes/s", "wasted", "coll.");
   auto number = [](const nlohmann::json& v) { return v.is_number() ? v.get<double>() : 0.0; };
   for (const auto& [name, f] : families.items()) {
-    std::printf("%-6s %5d %7.1f%% %24s %7d %10.0f %9.3f %7.1f%% %6d\n", name.c_str(),
-                f["runs"].get<int>(), 100 * f["unloaded_fraction_mean"].get<double>(),
+    std::printf("%-6s %5d %7d %5d %7.1f%% %24s %7d %10.0f %9.3f %7.1f%% %6d\n", name.c_str(),
+                f["runs"].get<int>(), f["emptied"].get<int>(), f["boxes_left"].get<int>(),
+                100 * f["unloaded_fraction_mean"].get<double>(),
                 f["worst"].get<std::string>().c_str(), f["runs_below_target"].get<int>(),
                 number(f["robot_time_s_median"]), f["boxes_per_robot_s"].get<double>(),
                 100 * number(f["wasted_share_median"]), f["robot_trailer_collisions"].get<int>());

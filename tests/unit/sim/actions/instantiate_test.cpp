@@ -21,12 +21,6 @@ const sim::RobotModel& robot() {
   return m;
 }
 
-sim::JointVector home(double base_x) {
-  sim::JointVector q;
-  q << base_x, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
-  return q;
-}
-
 constexpr std::array<sim::Height, 3> kHeights{sim::Height::kLow, sim::Height::kMid,
                                               sim::Height::kHigh};
 constexpr std::array<sim::Side, 3> kSides{sim::Side::kLeft, sim::Side::kCenter, sim::Side::kRight};
@@ -35,8 +29,8 @@ std::vector<PickCandidate> candidates(const sim::World& w, sim::Action action, d
                                       const Geometry& g = {},
                                       const std::unordered_set<std::uint32_t>& most_cups = {}) {
   const auto obs = sim::testing::small_scene_observation();
-  return pick_candidates(w, sim::analyse(w, obs), action, obs, robot(), g, home(base_x), 1000,
-                         most_cups);
+  return pick_candidates(w, sim::analyse(w, obs), action, obs, robot(), g,
+                         plr::sim::home_configuration(base_x), 1000, most_cups);
 }
 
 // The candidates of all nine Pick actions.
@@ -105,8 +99,9 @@ TEST(PickCandidates, EveryTopBoxOfTheFrontRowOfACeilingHighWallIsAPickPoint) {
     std::vector<PickRejection> why;
     for (auto h : kHeights)
       for (auto side : kSides)
-        for (auto& c : pick_candidates(w, sim::analyse(w, obs), sim::make_pick(h, side), obs,
-                                       robot(), {}, home(8.0), 1000, {}, &why))
+        for (auto& c :
+             pick_candidates(w, sim::analyse(w, obs), sim::make_pick(h, side), obs, robot(), {},
+                             plr::sim::home_configuration(8.0), 1000, {}, &why))
           all.push_back(std::move(c));
     int tops = 0;
     for (const auto& b : w.boxes) {
@@ -117,7 +112,7 @@ TEST(PickCandidates, EveryTopBoxOfTheFrontRowOfACeilingHighWallIsAPickPoint) {
       for (const auto& r : why)
         if (r.box == b.id) rejected += r.why + "; ";
       ASSERT_NE(k, nullptr) << "seed " << seed << " box " << b.id << ": " << rejected;
-      const sim::JointVector at = home(k->base_x);
+      const sim::JointVector at = plr::sim::home_configuration(k->base_x);
       EXPECT_FALSE(robot().arm_ik(k->grasp, at).empty());
       EXPECT_FALSE(robot().arm_ik(k->pregrasp, at).empty());
       // Lifted off the box under it, it stays under the ceiling.
@@ -214,12 +209,15 @@ TEST(PickCandidates, BoxesAboveTheNoseDoNotKeepTheBaseBack) {
   const auto scene = sim::analyse(w, obs);
   const double base_x = 8.0;
   const auto action = sim::make_pick(sim::Height::kMid, sim::Side::kCenter);
-  const auto clear = pick_candidates(w, scene, action, obs, robot(), {}, home(base_x), 1000, {});
+  const auto clear = pick_candidates(w, scene, action, obs, robot(), {},
+                                     plr::sim::home_configuration(base_x), 1000, {});
   ASSERT_NE(find(clear, 3), nullptr);
   w.boxes.push_back(sim::testing::make_box(9, base_x - 1.3, 0.35, 0.55));
   w.boxes.push_back(sim::testing::make_box(10, 9.5, -0.7, 0.8));
-  ASSERT_EQ(boxes_on_robot(w, robot(), home(base_x)), std::vector<std::uint32_t>{9});
-  const auto c = pick_candidates(w, scene, action, obs, robot(), {}, home(base_x), 1000, {});
+  ASSERT_EQ(boxes_on_robot(w, robot(), plr::sim::home_configuration(base_x)),
+            std::vector<std::uint32_t>{9});
+  const auto c = pick_candidates(w, scene, action, obs, robot(), {},
+                                 plr::sim::home_configuration(base_x), 1000, {});
   ASSERT_NE(find(c, 3), nullptr);
   EXPECT_EQ(find(c, 3)->base_x, find(clear, 3)->base_x);
 }
@@ -528,9 +526,9 @@ TEST(PickCandidates, EachBoxOfARegionWithoutCandidatesSaysWhatHoldsIt) {
   w.boxes.push_back(sim::testing::make_box(4, 5.95, -0.8, 0.0, {0.1, 0.4, 0.2}));
   const auto obs = sim::testing::small_scene_observation();
   std::vector<PickRejection> rejected;
-  const auto c =
-      pick_candidates(w, sim::analyse(w, obs), sim::make_pick(sim::Height::kMid, sim::Side::kRight),
-                      obs, robot(), Geometry{}, home(8.0), 10, {}, &rejected);
+  const auto c = pick_candidates(w, sim::analyse(w, obs),
+                                 sim::make_pick(sim::Height::kMid, sim::Side::kRight), obs, robot(),
+                                 Geometry{}, plr::sim::home_configuration(8.0), 10, {}, &rejected);
   EXPECT_TRUE(c.empty());
   ASSERT_FALSE(rejected.empty());
   EXPECT_EQ(rejected.front().box, 3u);
@@ -617,7 +615,7 @@ TEST(DropOff, PlacesHoldTheBoxOverTheConveyorAndTurnTheWristSideways) {
   sim::World w = trailer_world();
   w.boxes.push_back(sim::testing::make_box(7, 6.0, 0.0, 1.0, {0.45, 0.55, 0.35}));
   const Geometry g;
-  const sim::JointVector at = home(5.0);
+  const sim::JointVector at = plr::sim::home_configuration(5.0);
   const auto places = dropoff_targets(w, {7}, robot(), g, at, 6);
   ASSERT_FALSE(places.empty());
   EXPECT_NEAR(std::abs(places.front().yaw), M_PI / 2, 1e-9);
@@ -634,7 +632,7 @@ TEST(DropOff, PlacesHoldTheBoxOverTheConveyorAndTurnTheWristSideways) {
 }
 
 TEST(FollowsLines, SeesALineLeaveTheArmsReach) {
-  const sim::JointVector q = home(5.0);
+  const sim::JointVector q = plr::sim::home_configuration(5.0);
   const sim::PlateTarget here = robot().plate_target(q);
   const Eigen::Vector3d ahead = here.position + Eigen::Vector3d(0.3, 0.0, 0.0);
   EXPECT_TRUE(follows_lines(robot(), q, {{ahead, 0.0}, {here.position, 0.0}}));

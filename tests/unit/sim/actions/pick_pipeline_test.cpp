@@ -15,12 +15,6 @@ namespace {
 
 using sim::testing::make_box;
 
-sim::JointVector home(double base_x) {
-  sim::JointVector q;
-  q << base_x, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
-  return q;
-}
-
 sim::World trailer_world(std::vector<sim::Box> boxes) {
   sim::World w;
   w.trailer = {2.5, 2.7, 16.0};
@@ -37,7 +31,8 @@ sim::Box turned(sim::Box b, double yaw) {
 PickScene scene_of(const sim::World& w,
                    sim::Action action = sim::make_pick(sim::Height::kLow, sim::Side::kCenter)) {
   const auto obs = sim::testing::small_scene_observation();
-  return query_scene(w, sim::analyse(w, obs), action, obs, testing::robot(), Geometry{}, home(8.0));
+  return query_scene(w, sim::analyse(w, obs), action, obs, testing::robot(), Geometry{},
+                     plr::sim::home_configuration(8.0));
 }
 
 Approach square(const PickScene& s, std::size_t i, bool alternative = false) {
@@ -264,14 +259,14 @@ TEST(ReachRefusal, APoseTheArmCannotReachFromTheBaseRefuses) {
   const sim::World w = trailer_world({make_box(1, 10.2, 0, 0)});
   const auto obs = sim::testing::small_scene_observation();
   // A lone 0.4 m box is a pile, high for a pile.
-  const auto c = pick_candidates(w, sim::analyse(w, obs),
-                                 sim::make_pick(sim::Height::kHigh, sim::Side::kCenter), obs,
-                                 testing::robot(), Geometry{}, home(8.0), 1);
+  const auto c = pick_candidates(
+      w, sim::analyse(w, obs), sim::make_pick(sim::Height::kHigh, sim::Side::kCenter), obs,
+      testing::robot(), Geometry{}, plr::sim::home_configuration(8.0), 1);
   ASSERT_EQ(c.size(), 1u);
-  EXPECT_FALSE(reach_refusal(testing::robot(), c[0], home(8.0)));
+  EXPECT_FALSE(reach_refusal(testing::robot(), c[0], plr::sim::home_configuration(8.0)));
   PickCandidate far = c[0];
   far.base_x = 2.0;
-  const auto why = reach_refusal(testing::robot(), far, home(8.0));
+  const auto why = reach_refusal(testing::robot(), far, plr::sim::home_configuration(8.0));
   ASSERT_TRUE(why);
   EXPECT_EQ(why->kind, Refusal::Kind::kUnreachable);
   EXPECT_EQ(to_string(*why), "no arm pose reaches its face from base x 2.00 m");

@@ -145,10 +145,6 @@ const LeftBox& reason_of(const std::vector<LeftBox>& left, std::uint32_t id) {
   return *it;
 }
 
-sim::JointVector home() {
-  return home_configuration();
-}
-
 TEST(BoxesLeft, EachBoxHasTheReasonItIsLeftFor) {
   // Two columns of two, two deep: the back ones are behind the front ones.
   sim::World w = wall(7.0, 2, 2);
@@ -165,7 +161,7 @@ TEST(BoxesLeft, EachBoxHasTheReasonItIsLeftFor) {
   memory.grips[1].why = "too heavy for every grip";
   memory.unreached[2] = "pre-grasp not planned";
   const ActionModel model(robot(), options());
-  const auto left = boxes_left(w, home(), memory, model);
+  const auto left = boxes_left(w, home_configuration(), memory, model);
   ASSERT_EQ(left.size(), w.boxes.size());
   EXPECT_EQ(reason_of(left, 1).reason, LeftReason::kGivenUp);
   EXPECT_EQ(reason_of(left, 1).detail, "too heavy for every grip");
@@ -188,7 +184,7 @@ TEST(BoxesLeft, ABoxNoArmPoseReachesIsOutOfReach) {
   high.pose.translation().z() = 2.34;
   w.boxes.push_back(high);
   const ActionModel model(robot(), options());
-  const auto left = boxes_left(w, home(), Memory{}, model);
+  const auto left = boxes_left(w, home_configuration(), Memory{}, model);
   ASSERT_EQ(left.size(), 1u);
   EXPECT_EQ(left[0].reason, LeftReason::kOutOfReach);
 }
@@ -252,7 +248,7 @@ TEST(RunHardcoded, UnloadsAWallInANarrowContainer) {
 // out of the wall's reach.)
 TEST(RunHardcoded, ABoxOnTheTurretIsCarriedOff) {
   sim::World w = wall(6.0, 3, 1);
-  sim::JointVector q = home();
+  sim::JointVector q = home_configuration();
   q[sim::kBaseX] = 2.5;
   w.boxes.push_back(box(9, 2.5 - 1.3, 0.35, 0.55));
   UnloaderSimulation simulation(robot(), w, q);
@@ -272,7 +268,7 @@ TEST(RunHardcoded, ABoxOnTheTurretIsCarriedOff) {
 // then unloads the wall.
 TEST(RunHardcoded, ABoxLyingOnTheNoseIsShakenOffAndTheWallUnloaded) {
   sim::World w = wall(6.0, 3, 1);
-  sim::JointVector q = home();
+  sim::JointVector q = home_configuration();
   q[sim::kBaseX] = 2.5;
   sim::Box heavy = box(9, 2.5 + 0.35, 0.5, 0.62, 200.0);
   heavy.size = {0.5, 0.6, 0.3};
@@ -375,7 +371,7 @@ TEST(RunHardcoded, ABoxBehindTheRobotIsSetAsideThenPushedOutOfTheDoor) {
   sim::World w = wall(6.0, 3, 2);
   const std::uint32_t behind = static_cast<std::uint32_t>(w.boxes.size() + 1);
   w.boxes.push_back(box(behind, 1.0, 0.0, 0.0));
-  sim::JointVector q = home();
+  sim::JointVector q = home_configuration();
   q[sim::kBaseX] = 3.0;
   UnloaderSimulation simulation(robot(), w, q);
   InProcessBackend backend(simulation, planner());
@@ -416,7 +412,7 @@ TEST(RunHardcoded, ABoxTheNosePushesIsBackedOutOfTheDoorAtOnce) {
   lane.mass = 8.0;
   lane.pose.translation() = Eigen::Vector3d(1.22, 1.04, 0.3);
   w.boxes.push_back(lane);
-  sim::JointVector q = home();
+  sim::JointVector q = home_configuration();
   q[sim::kBaseX] = 1.47;
   UnloaderSimulation simulation(robot(), w, q);
   InProcessBackend backend(simulation, planner());
@@ -452,7 +448,7 @@ TEST(ActionModel, ABoxAgainstTheBasesFlankKeepsNoMoveFromBeingPlanned) {
   lane.size = {0.4, 0.555, 0.3};
   lane.pose.translation().z() = 0.15;
   w.boxes.push_back(lane);
-  sim::JointVector q = home();
+  sim::JointVector q = home_configuration();
   q[sim::kBaseX] = 3.0;
   Fixture f(q, w);
   const ActionModel model(robot(), options());
@@ -468,7 +464,7 @@ TEST(ActionModel, ABoxAgainstTheBasesFlankKeepsNoMoveFromBeingPlanned) {
 TEST(BoxesLeft, ABoxBehindTheRobotsFrontEdgeIsBehindIt) {
   sim::World w = wall(6.0, 1, 1);
   w.boxes.push_back(box(2, 1.0, 0.0, 0.0));
-  sim::JointVector q = home();
+  sim::JointVector q = home_configuration();
   q[sim::kBaseX] = 3.0;
   const ActionModel model(robot(), options());
   const auto left = boxes_left(w, q, Memory{}, model);
@@ -482,7 +478,7 @@ TEST(BoxesLeft, ABoxBehindTheRobotsFrontEdgeIsBehindIt) {
 // nose lifts off the box and the base backs away to start the sweep.
 TEST(ActionModel, ABaseHeldByABoxWedgedUnderTheNoseLiftsTheNoseAndBacksAway) {
   sim::World w = wall(6.0, 3, 1);
-  sim::JointVector q = home();
+  sim::JointVector q = home_configuration();
   q[sim::kBaseX] = 2.5;
   sim::Box wedged = box(9, 2.6, 0.3, 0.0, 20.0);
   wedged.size = {0.5, 0.5, 0.6};

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "paddle_through_pile.hpp"
 #include "plr/sim/fidelity.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/physics.hpp"
@@ -22,21 +23,9 @@ Box cube(std::uint32_t id, Eigen::Vector3d centre, double mass = 8.0) {
   return b;
 }
 
-World small_pile() {
-  World w = generate_world(EnvFamily::kB1, 11);
-  w.boxes.resize(40);
-  return w;
-}
-
-// A paddle driven through the pile from the simulation's current time.
+// A paddle driven through the pile, then the pile left to settle.
 void sweep(Simulation& sim) {
-  LinkGeometry nose;
-  nose.size = {0.8, 1.2, 0.1};
-  for (int k = 0; k <= 80; ++k) {
-    nose.pose.translation() = Eigen::Vector3d(12.5 + 0.02 * k, 0.0, 0.06);
-    sim.set_robot_links({nose});
-    sim.step(0.005);
-  }
+  test::drive_paddle(sim);
   sim.set_robot_links({});
   sim.step(0.5);
 }
@@ -57,14 +46,14 @@ TEST(Fidelity, ParsesTheBuiltLevelsAndRefusesTheOthers) {
 // adaptive continues a snapshot exactly as one that never did: the level is
 // a setting, nothing of it enters the state.
 TEST(Fidelity, FullIsTheDefaultAndLeavesNoTraceInTheState) {
-  Simulation plain(small_pile());
+  Simulation plain(test::small_pile());
   EXPECT_EQ(plain.fidelity(), Fidelity::kFull);
   plain.step(0.4);
   const Snapshot start = plain.snapshot();
   sweep(plain);
   EXPECT_EQ(plain.stats().frozen, 0);
 
-  Simulation switched(small_pile());
+  Simulation switched(test::small_pile());
   switched.set_fidelity(Fidelity::kAdaptive);
   switched.step(0.4);
   sweep(switched);
@@ -78,7 +67,7 @@ TEST(Fidelity, FullIsTheDefaultAndLeavesNoTraceInTheState) {
 
 // Adaptive runs are decided by the state alone: a restored run repeats.
 TEST(Fidelity, AdaptiveRestoredRunRepeatsBitForBit) {
-  Simulation sim(small_pile());
+  Simulation sim(test::small_pile());
   sim.set_fidelity(Fidelity::kAdaptive);
   sim.step(0.4);
   const Snapshot start = sim.snapshot();
@@ -95,7 +84,7 @@ TEST(Fidelity, AdaptiveRestoredRunRepeatsBitForBit) {
 // fewer box-steps are integrated and the boxes come to rest near where they
 // do at full fidelity.
 TEST(Fidelity, AdaptiveFreezesSlowGroupsAwayFromTheAction) {
-  Simulation full(small_pile()), adaptive(small_pile());
+  Simulation full(test::small_pile()), adaptive(test::small_pile());
   adaptive.set_fidelity(Fidelity::kAdaptive);
   full.step(0.4);
   adaptive.step(0.4);

@@ -4,6 +4,7 @@
 #include <array>
 #include <chrono>
 
+#include "paddle_through_pile.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/physics.hpp"
 
@@ -261,26 +262,13 @@ TEST(Physics, BoxesStayInsideTheTrailer) {
   EXPECT_LT(b.pose.translation().y(), 1.25 - 0.19);  // and the side wall
 }
 
-World small_pile() {
-  World w = generate_world(EnvFamily::kB1, 11);
-  w.boxes.resize(40);
-  return w;
-}
-
-// Drives a paddle through the pile from `sim`'s current time.
 World run_sweep(Simulation& sim) {
-  LinkGeometry nose;
-  nose.size = {0.8, 1.2, 0.1};
-  for (int k = 0; k <= 80; ++k) {
-    nose.pose.translation() = Eigen::Vector3d(12.5 + 0.02 * k, 0.0, 0.06);
-    sim.set_robot_links({nose});
-    sim.step(0.005);
-  }
+  test::drive_paddle(sim);
   return sim.world();
 }
 
 TEST(Physics, RestoreThenRepeatIsIdentical) {
-  Simulation sim(small_pile());
+  Simulation sim(test::small_pile());
   sim.step(0.4);  // boxes still tumbling: the snapshot holds moving bodies
   const Snapshot snap = sim.snapshot();
   const World first = run_sweep(sim);
@@ -291,11 +279,11 @@ TEST(Physics, RestoreThenRepeatIsIdentical) {
   bool moved = false;
   for (std::size_t i = 0; i < first.boxes.size(); ++i) {
     EXPECT_EQ(first.boxes[i].pose.matrix(), second.boxes[i].pose.matrix()) << i;
-    moved = moved || !first.boxes[i].pose.isApprox(small_pile().boxes[i].pose);
+    moved = moved || !first.boxes[i].pose.isApprox(test::small_pile().boxes[i].pose);
   }
   EXPECT_TRUE(moved);
   // A second simulation from the same world and commands agrees too.
-  Simulation other(small_pile());
+  Simulation other(test::small_pile());
   other.step(0.4);
   const World third = run_sweep(other);
   for (std::size_t i = 0; i < first.boxes.size(); ++i) {

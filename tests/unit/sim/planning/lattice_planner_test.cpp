@@ -20,12 +20,6 @@ const RobotModel& robot() {
   return m;
 }
 
-JointVector home(double base) {
-  JointVector q;
-  q << base, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
-  return q;
-}
-
 // A wall of 0.4 m boxes across the trailer, front face at x = face; 5
 // columns, the middle one centred on the trailer axis.
 World wall(double face, int rows = 5) {
@@ -83,15 +77,17 @@ TEST(Arastar, AWallTheBaseCannotPassIsJudgedBeforeTheSearchAndTheTimeLimitEndsOn
   wall.pose.translation() = Eigen::Vector3d(3.2, 0.0, 1.345);
   w.boxes.push_back(wall);
   CollisionChecker cc(robot(), w);
-  ASSERT_TRUE(cc.is_valid(home(1.0)));
-  ASSERT_TRUE(cc.is_valid(home(5.0)));
-  PlanQuery base = joint_query(PlanMode::kBaseLine, home(1.0), home(5.0));
+  ASSERT_TRUE(cc.is_valid(plr::sim::home_configuration(1.0)));
+  ASSERT_TRUE(cc.is_valid(plr::sim::home_configuration(5.0)));
+  PlanQuery base = joint_query(PlanMode::kBaseLine, plr::sim::home_configuration(1.0),
+                               plr::sim::home_configuration(5.0));
   base.time_limit_s = 2.0;
   const PlanResult nb = arastar().plan(base, cc);
   EXPECT_EQ(nb.status, PlanStatus::kGoalInvalid) << nb.message;
   EXPECT_EQ(nb.stats.expansions, 0u);
   EXPECT_NE(nb.message.find("box 1"), std::string::npos) << nb.message;
-  PlanQuery arm = pose_query(PlanMode::kArmBase, home(1.0), Eigen::Vector3d(5.2, 0.0, 1.2), 0.0);
+  PlanQuery arm = pose_query(PlanMode::kArmBase, plr::sim::home_configuration(1.0),
+                             Eigen::Vector3d(5.2, 0.0, 1.2), 0.0);
   arm.time_limit_s = 0.5;
   const PlanResult na = arastar().plan(arm, cc);
   EXPECT_EQ(na.status, PlanStatus::kGoalInvalid) << na.message;
@@ -100,7 +96,8 @@ TEST(Arastar, AWallTheBaseCannotPassIsJudgedBeforeTheSearchAndTheTimeLimitEndsOn
   // With nothing in the way, a time limit too short for the search ends it.
   const World empty;
   CollisionChecker free(robot(), empty);
-  PlanQuery far = pose_query(PlanMode::kArmBase, home(1.0), Eigen::Vector3d(6.2, 0.5, 1.2), 0.0);
+  PlanQuery far = pose_query(PlanMode::kArmBase, plr::sim::home_configuration(1.0),
+                             Eigen::Vector3d(6.2, 0.5, 1.2), 0.0);
   far.time_limit_s = 1e-6;
   const PlanResult nt = arastar().plan(far, free);
   EXPECT_EQ(nt.status, PlanStatus::kTimeout) << nt.message;
@@ -113,7 +110,8 @@ TEST(Arastar, AWallTheBaseCannotPassIsJudgedBeforeTheSearchAndTheTimeLimitEndsOn
 // iteration's solution, the same every time.
 TEST(Arastar, BudgetEndingTheImprovementReturnsTheLastSolution) {
   const World w = wall(5.0);
-  PlanQuery q = pose_query(PlanMode::kArmBase, home(2.0), Eigen::Vector3d(4.85, 0.4, 1.8), 0.0);
+  PlanQuery q = pose_query(PlanMode::kArmBase, plr::sim::home_configuration(2.0),
+                           Eigen::Vector3d(4.85, 0.4, 1.8), 0.0);
   // The budget ends it; the time limits are only safety nets, far enough
   // that a loaded machine does not reach them first.
   q.time_limit_s = 600.0;
@@ -138,15 +136,18 @@ TEST(Arastar, AGoalWithoutAnIkSolutionIsRefusedBeforeAnyExpansion) {
   CollisionChecker checker(robot(), empty);
   // 4 m up: out of the arm's reach from wherever the base stands.
   for (PlanMode mode : {PlanMode::kArm, PlanMode::kArmBase}) {
-    const PlanResult r =
-        arastar().plan(pose_query(mode, home(2.0), Eigen::Vector3d(4.0, 0.0, 4.0), 0.0), checker);
+    const PlanResult r = arastar().plan(
+        pose_query(mode, plr::sim::home_configuration(2.0), Eigen::Vector3d(4.0, 0.0, 4.0), 0.0),
+        checker);
     EXPECT_EQ(r.status, PlanStatus::kGoalInvalid) << to_string(mode);
     EXPECT_EQ(r.stats.expansions, 0u) << to_string(mode);
     EXPECT_NE(r.message.find("no arm IK solution"), std::string::npos) << r.message;
   }
   // M2 says over which bases it looked.
-  const PlanResult r = arastar().plan(
-      pose_query(PlanMode::kArmBase, home(2.0), Eigen::Vector3d(4.0, 0.0, 4.0), 0.0), checker);
+  const PlanResult r =
+      arastar().plan(pose_query(PlanMode::kArmBase, plr::sim::home_configuration(2.0),
+                                Eigen::Vector3d(4.0, 0.0, 4.0), 0.0),
+                     checker);
   EXPECT_NE(r.message.find("from any base the base reaches (the base reaches x"), std::string::npos)
       << r.message;
 }
@@ -158,16 +159,18 @@ TEST(Arastar, AGoalInCollisionIsRefusedBeforeAnyExpansion) {
   // arm pose, from every base, puts it there.
   const Eigen::Vector3d inside(3.1, 0.0, 0.605);
   for (PlanMode mode : {PlanMode::kArm, PlanMode::kArmBase}) {
-    const PlanResult r = arastar().plan(pose_query(mode, home(1.5), inside, 0.0), checker);
+    const PlanResult r =
+        arastar().plan(pose_query(mode, plr::sim::home_configuration(1.5), inside, 0.0), checker);
     EXPECT_EQ(r.status, PlanStatus::kGoalInvalid) << to_string(mode);
     EXPECT_EQ(r.stats.expansions, 0u) << to_string(mode);
     EXPECT_NE(r.message.find("collides"), std::string::npos) << r.message;
     EXPECT_NE(r.message.find("box "), std::string::npos) << r.message;
   }
   // A joint goal whose arm reaches into the wall.
-  const auto into = robot().arm_ik({inside, 0.0}, home(1.5));
+  const auto into = robot().arm_ik({inside, 0.0}, plr::sim::home_configuration(1.5));
   ASSERT_FALSE(into.empty());
-  const PlanResult r = arastar().plan(joint_query(PlanMode::kArmBase, home(1.5), into[0]), checker);
+  const PlanResult r = arastar().plan(
+      joint_query(PlanMode::kArmBase, plr::sim::home_configuration(1.5), into[0]), checker);
   EXPECT_EQ(r.status, PlanStatus::kGoalInvalid);
   EXPECT_EQ(r.stats.expansions, 0u);
   EXPECT_NE(r.message.find("goal: "), std::string::npos) << r.message;
@@ -181,15 +184,16 @@ TEST(Arastar, ABaseGoalPastABoxTheBaseHitsIsRefusedBeforeAnyExpansion) {
   b.pose.translation() = Eigen::Vector3d(3.2, 0.0, 0.2);  // on the floor, across the scoop's path
   w.boxes.push_back(b);
   CollisionChecker checker(robot(), w);
-  const JointVector goal = home(0.5);
-  ASSERT_TRUE(checker.is_valid(home(-0.5)));
+  const JointVector goal = plr::sim::home_configuration(0.5);
+  ASSERT_TRUE(checker.is_valid(plr::sim::home_configuration(-0.5)));
   ASSERT_TRUE(checker.is_valid(goal));
   // Forward over the box: the goal is beyond it, the robot there clear of it.
-  JointVector far = home(3.2);
+  JointVector far = plr::sim::home_configuration(3.2);
   while (!checker.is_valid(far) && far[kBaseX] < robot().limits(kBaseX).upper) far[kBaseX] += 0.1;
   ASSERT_TRUE(checker.is_valid(far));
   for (PlanMode mode : {PlanMode::kBaseLine, PlanMode::kArmBase}) {
-    const PlanResult r = arastar().plan(joint_query(mode, home(0.5), far), checker);
+    const PlanResult r =
+        arastar().plan(joint_query(mode, plr::sim::home_configuration(0.5), far), checker);
     EXPECT_EQ(r.status, PlanStatus::kGoalInvalid) << to_string(mode);
     EXPECT_EQ(r.stats.expansions, 0u) << to_string(mode);
     EXPECT_NE(r.message.find("the base cannot reach"), std::string::npos) << r.message;
@@ -207,7 +211,8 @@ TEST(Arastar, AModesBudgetEndsTheSearchBeforeTheQuerys) {
   const World empty;
   CollisionChecker checker(robot(), empty);
   // 5 m ahead: the base alone needs more than 5 expansions to get there.
-  PlanQuery q = pose_query(PlanMode::kArmBase, home(1.0), Eigen::Vector3d(6.2, 0.5, 1.2), 0.0);
+  PlanQuery q = pose_query(PlanMode::kArmBase, plr::sim::home_configuration(1.0),
+                           Eigen::Vector3d(6.2, 0.5, 1.2), 0.0);
   q.max_expansions = 5000;
   const PlanResult r = small.plan(q, checker);
   ASSERT_NE(r.status, PlanStatus::kSolved);

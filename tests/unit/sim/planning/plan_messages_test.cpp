@@ -12,12 +12,6 @@ namespace {
 
 using namespace plr::sim;
 
-JointVector home(double base) {
-  JointVector q;
-  q << base, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
-  return q;
-}
-
 template <class T>
 const T& root(const flatbuffers::FlatBufferBuilder& fbb) {
   return *flatbuffers::GetRoot<T>(fbb.GetBufferPointer());
@@ -34,7 +28,7 @@ TEST(PlanMessages, AQueryCrossesTheBusWhole) {
   }
   PlanQuery q;
   q.mode = PlanMode::kArmBase;
-  q.start = home(1.0);
+  q.start = plr::sim::home_configuration(1.0);
   q.goal = PoseGoal{{Eigen::Vector3d(4.5, 0.2, 1.1), 0.3}};
   q.time_limit_s = 2.5;
   q.max_expansions = 1234;
@@ -88,7 +82,7 @@ TEST(PlanMessages, BadRequestsNameTheField) {
 TEST(PlanMessages, AnAnswerCrossesBackWithItsStopReasons) {
   PlanResult r;
   r.status = PlanStatus::kSolved;
-  r.path = {home(1.0), home(2.5)};
+  r.path = {plr::sim::home_configuration(1.0), plr::sim::home_configuration(2.5)};
   r.trajectory = Trajectory::from_waypoints(r.path, load_robot().value().all_limits());
   r.stats.expansions = 3;
   r.stats.budget_exhausted = true;
@@ -107,8 +101,8 @@ TEST(PlanMessages, AnAnswerCrossesBackWithItsStopReasons) {
   EXPECT_FALSE(d->stats.time_limit_hit);
   EXPECT_TRUE(d->stats.escaped);
   ASSERT_GE(d->points.size(), 2u);
-  EXPECT_EQ(d->points.front().position, home(1.0));
-  EXPECT_EQ(d->points.back().position, home(2.5));
+  EXPECT_EQ(d->points.front().position, plr::sim::home_configuration(1.0));
+  EXPECT_EQ(d->points.back().position, plr::sim::home_configuration(2.5));
   EXPECT_NEAR(d->points.back().time_s, r.trajectory.duration(), 1e-12);
   EXPECT_NEAR(d->points[1].time_s, 0.02, 1e-12);
 }

@@ -15,12 +15,6 @@ const RobotModel& robot() {
   return m;
 }
 
-JointVector home() {
-  JointVector q;
-  q << 1.0, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
-  return q;
-}
-
 std::string why(const PlanQuery& q) {
   const auto ok = check_query(q, robot());
   return ok ? "" : ok.error().message;
@@ -29,8 +23,8 @@ std::string why(const PlanQuery& q) {
 PlanQuery joint(PlanMode mode) {
   PlanQuery q;
   q.mode = mode;
-  q.start = home();
-  q.goal = JointGoal{home(), 1e-3};
+  q.start = plr::sim::home_configuration(1.0);
+  q.goal = JointGoal{plr::sim::home_configuration(1.0), 1e-3};
   return q;
 }
 

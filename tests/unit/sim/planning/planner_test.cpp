@@ -15,12 +15,6 @@ const RobotModel& robot() {
   return m;
 }
 
-JointVector home(double base) {
-  JointVector q;
-  q << base, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
-  return q;
-}
-
 class StraightPlanner final : public Planner {
  public:
   std::string name() const override { return "straight"; }
@@ -70,9 +64,12 @@ TEST(Planner, SolvedPathsAreTimedAndCounted) {
   StraightPlanner p;
   const World empty;
   CollisionChecker checker(robot(), empty);
-  const PlanResult r = p.plan(joint_query(PlanMode::kBaseLine, home(1.0), home(2.5)), checker);
+  const PlanResult r = p.plan(joint_query(PlanMode::kBaseLine, plr::sim::home_configuration(1.0),
+                                          plr::sim::home_configuration(2.5)),
+                              checker);
   ASSERT_EQ(r.status, PlanStatus::kSolved) << r.message;
-  EXPECT_EQ(r.path, (std::vector<JointVector>{home(1.0), home(2.5)}));
+  EXPECT_EQ(r.path, (std::vector<JointVector>{plr::sim::home_configuration(1.0),
+                                              plr::sim::home_configuration(2.5)}));
   // 1.5 m at 0.6 m/s and 0.8 m/s^2.
   EXPECT_NEAR(r.trajectory.duration(), 1.5 / 0.6 + 0.6 / 0.8, 1e-9);
   EXPECT_EQ(r.stats.expansions, 1u);
@@ -84,12 +81,15 @@ TEST(Planner, BadQueriesAndOtherModesNeverReachTheHook) {
   StraightPlanner p;
   const World empty;
   CollisionChecker checker(robot(), empty);
-  PlanQuery bad = joint_query(PlanMode::kBaseLine, home(1.0), home(2.5));
+  PlanQuery bad = joint_query(PlanMode::kBaseLine, plr::sim::home_configuration(1.0),
+                              plr::sim::home_configuration(2.5));
   bad.time_limit_s = -1.0;
   PlanResult r = p.plan(bad, checker);
   EXPECT_EQ(r.status, PlanStatus::kInvalidRequest);
   EXPECT_EQ(r.message, "time_limit_s must be positive and finite");
-  r = p.plan(joint_query(PlanMode::kNose, home(1.0), home(1.0)), checker);
+  r = p.plan(joint_query(PlanMode::kNose, plr::sim::home_configuration(1.0),
+                         plr::sim::home_configuration(1.0)),
+             checker);
   EXPECT_EQ(r.status, PlanStatus::kInvalidRequest);
   EXPECT_EQ(r.message, "M3 nose is not a mode of planner straight");
   EXPECT_EQ(p.calls, 0);
@@ -99,7 +99,9 @@ TEST(Planner, GoalsInCollisionAreJudgedBeforeTheSearch) {
   StraightPlanner p;
   const World w = box_at(3.0, 0.0, 0.2);
   CollisionChecker checker(robot(), w);
-  const PlanResult r = p.plan(joint_query(PlanMode::kBaseLine, home(1.0), home(3.2)), checker);
+  const PlanResult r = p.plan(joint_query(PlanMode::kBaseLine, plr::sim::home_configuration(1.0),
+                                          plr::sim::home_configuration(3.2)),
+                              checker);
   EXPECT_EQ(r.status, PlanStatus::kGoalInvalid);
   EXPECT_NE(r.message.find("box 3"), std::string::npos) << r.message;
   EXPECT_EQ(p.calls, 0);
@@ -108,12 +110,12 @@ TEST(Planner, GoalsInCollisionAreJudgedBeforeTheSearch) {
 TEST(Planner, StartInCollisionIsEscapedThenPlannedFrom) {
   StraightPlanner p;
   // The plate 8 mm into a box.
-  const JointVector start = home(2.0);
+  const JointVector start = plr::sim::home_configuration(2.0);
   const Eigen::Vector3d plate = robot().plate_pose(start).translation();
   const World w = box_at(plate.x() - 0.008, plate.y(), plate.z());
   CollisionChecker checker(robot(), w);
   ASSERT_FALSE(checker.is_valid(start));
-  const JointVector goal = home(1.5);
+  const JointVector goal = plr::sim::home_configuration(1.5);
   const PlanResult r = p.plan(joint_query(PlanMode::kBaseLine, start, goal), checker);
   ASSERT_EQ(r.status, PlanStatus::kSolved) << r.message;
   EXPECT_TRUE(r.stats.escaped);
@@ -132,11 +134,11 @@ TEST(Planner, StartInCollisionIsEscapedThenPlannedFrom) {
 
 TEST(Planner, AnEscapeThatSpendsTheBudgetLeavesNothingForTheHook) {
   StraightPlanner p;
-  const JointVector start = home(2.0);
+  const JointVector start = plr::sim::home_configuration(2.0);
   const Eigen::Vector3d plate = robot().plate_pose(start).translation();
   const World w = box_at(plate.x() - 0.008, plate.y(), plate.z());
   CollisionChecker checker(robot(), w);
-  PlanQuery q = joint_query(PlanMode::kBaseLine, start, home(1.5));
+  PlanQuery q = joint_query(PlanMode::kBaseLine, start, plr::sim::home_configuration(1.5));
   q.max_expansions = 1;
   const PlanResult r = p.plan(q, checker);
   EXPECT_EQ(r.status, PlanStatus::kStartInvalid);
@@ -148,13 +150,13 @@ TEST(Planner, HeldBoxesMoveWithThePlateForOneQueryOnly) {
   StraightPlanner p;
   const World empty;
   CollisionChecker checker(robot(), empty);
-  const JointVector start = home(2.0);
+  const JointVector start = plr::sim::home_configuration(2.0);
   // A tall box held in front of the plate reaches the ceiling when raised.
   Box held;
   held.id = 9;
   held.size = {0.4, 0.4, 0.4};
   held.pose = robot().plate_pose(start) * Eigen::Translation3d(0.2, 0.0, 0.0);
-  PlanQuery q = joint_query(PlanMode::kBaseLine, start, home(2.5));
+  PlanQuery q = joint_query(PlanMode::kBaseLine, start, plr::sim::home_configuration(2.5));
   q.held_boxes = {held};
   EXPECT_EQ(p.plan(q, checker).status, PlanStatus::kSolved);
   // Afterwards the checker holds nothing: the box is not where the plate was.

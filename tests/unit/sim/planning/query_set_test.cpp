@@ -12,12 +12,6 @@ namespace {
 
 using namespace plr::sim;
 
-JointVector home(double base) {
-  JointVector q;
-  q << base, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
-  return q;
-}
-
 std::filesystem::path temp_file(const std::string& name) {
   return std::filesystem::path(::testing::TempDir()) / name;
 }
@@ -34,8 +28,8 @@ TEST(QuerySet, QueriesComeBackWithTheirWorlds) {
     }
     PlanQuery q;
     q.mode = PlanMode::kArmBase;
-    q.start = home(1.0 + k);
-    q.goal = JointGoal{home(2.0 + k), 1e-3};
+    q.start = plr::sim::home_configuration(1.0 + k);
+    q.goal = JointGoal{plr::sim::home_configuration(2.0 + k), 1e-3};
     q.max_expansions = 5000;
     frames.push_back(frame_query(q, w));
   }
@@ -47,8 +41,8 @@ TEST(QuerySet, QueriesComeBackWithTheirWorlds) {
   for (int k = 0; k < 3; ++k) {
     const RecordedQuery& r = (*set)[static_cast<std::size_t>(k)];
     EXPECT_EQ(r.query.mode, PlanMode::kArmBase);
-    EXPECT_EQ(r.query.start, home(1.0 + k));
-    EXPECT_EQ(std::get<JointGoal>(r.query.goal).q, home(2.0 + k));
+    EXPECT_EQ(r.query.start, plr::sim::home_configuration(1.0 + k));
+    EXPECT_EQ(std::get<JointGoal>(r.query.goal).q, plr::sim::home_configuration(2.0 + k));
     EXPECT_EQ(r.query.max_expansions, 5000u);
     EXPECT_EQ(r.world.boxes.size(), static_cast<std::size_t>(k + 1));
   }
@@ -57,8 +51,8 @@ TEST(QuerySet, QueriesComeBackWithTheirWorlds) {
 TEST(QuerySet, ADamagedFileIsRefusedNamingTheQuery) {
   PlanQuery q;
   q.mode = PlanMode::kBaseLine;
-  q.start = home(1.0);
-  q.goal = JointGoal{home(2.0), 1e-3};
+  q.start = plr::sim::home_configuration(1.0);
+  q.goal = JointGoal{plr::sim::home_configuration(2.0), 1e-3};
   const auto frame = frame_query(q, World{});
   const auto file = temp_file("query_set_damaged.bin");
   {

@@ -29,12 +29,6 @@ const RobotModel& robot() {
 }
 
 // Arm folded above the raised nose, robot 1 m inside the trailer.
-JointVector home(double base_x = 1.0) {
-  JointVector q;
-  q << base_x, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
-  return q;
-}
-
 Box box(std::uint32_t id, double x, double y, double z, double s = 0.4) {
   Box b;
   b.id = id;
@@ -48,14 +42,15 @@ Box box(std::uint32_t id, double x, double y, double z, double s = 0.4) {
 TEST(Collision, HomeIsFreeInEmptyTrailer) {
   World w;
   CollisionChecker cc(robot(), w);
-  EXPECT_TRUE(cc.is_valid(home())) << cc.describe_collision(home());
-  EXPECT_EQ(cc.describe_collision(home()), "");
+  EXPECT_TRUE(cc.is_valid(plr::sim::home_configuration(1.0)))
+      << cc.describe_collision(plr::sim::home_configuration(1.0));
+  EXPECT_EQ(cc.describe_collision(plr::sim::home_configuration(1.0)), "");
 }
 
 TEST(Collision, LimitsAreReported) {
   World w;
   CollisionChecker cc(robot(), w);
-  JointVector q = home();
+  JointVector q = plr::sim::home_configuration(1.0);
   q[plr::sim::kArm2] = 3.0;
   EXPECT_FALSE(cc.is_valid(q));
   EXPECT_EQ(cc.describe_collision(q), "arm_2 beyond limits");
@@ -63,19 +58,19 @@ TEST(Collision, LimitsAreReported) {
 
 TEST(Collision, BoxAtThePlateCollides) {
   World w;
-  const Eigen::Vector3d plate = robot().plate_pose(home()).translation();
+  const Eigen::Vector3d plate = robot().plate_pose(plr::sim::home_configuration(1.0)).translation();
   w.boxes.push_back(box(12, plate.x() + 0.19, plate.y(), plate.z()));
   CollisionChecker cc(robot(), w);
-  EXPECT_FALSE(cc.is_valid(home()));
-  EXPECT_EQ(cc.describe_collision(home()), "plate - box 12");
+  EXPECT_FALSE(cc.is_valid(plr::sim::home_configuration(1.0)));
+  EXPECT_EQ(cc.describe_collision(plr::sim::home_configuration(1.0)), "plate - box 12");
   cc.ignore_box(12);
-  EXPECT_TRUE(cc.is_valid(home()));
+  EXPECT_TRUE(cc.is_valid(plr::sim::home_configuration(1.0)));
 }
 
 TEST(Collision, WallsAndFloorCollide) {
   World w;
   CollisionChecker cc(robot(), w);
-  JointVector q = home();
+  JointVector q = plr::sim::home_configuration(1.0);
   q[plr::sim::kArm1] = 1.57;  // arm sideways
   q[plr::sim::kArm2] = 0.0;
   q[plr::sim::kArm3] = 0.0;
@@ -83,7 +78,7 @@ TEST(Collision, WallsAndFloorCollide) {
   EXPECT_FALSE(cc.is_valid(q));
   EXPECT_NE(cc.describe_collision(q).find("trailer"), std::string::npos)
       << cc.describe_collision(q);
-  JointVector front = home(15.5);  // nose through the front wall
+  JointVector front = plr::sim::home_configuration(15.5);  // nose through the front wall
   EXPECT_FALSE(cc.is_valid(front));
 }
 
@@ -91,7 +86,7 @@ TEST(Collision, SelfCollisionButNotAdjacentLinks) {
   World w;
   CollisionChecker cc(robot(), w);
   // Forearm folded back down into the base.
-  JointVector q = home(3.0);
+  JointVector q = plr::sim::home_configuration(3.0);
   q[plr::sim::kArm2] = 0.3;
   q[plr::sim::kArm3] = 2.5;
   q[plr::sim::kArm4] = 0.0;
@@ -103,7 +98,7 @@ TEST(Collision, SelfCollisionButNotAdjacentLinks) {
 
 TEST(Collision, HeldBoxCountsAsArm) {
   World w;
-  const JointVector q = home();
+  const JointVector q = plr::sim::home_configuration(1.0);
   const Eigen::Isometry3d plate = robot().plate_pose(q);
   Box held = box(5, 0, 0, 0, 0.5);
   held.pose = plate * Eigen::Translation3d(0.25, 0.0, 0.0);
@@ -130,7 +125,7 @@ TEST(Collision, HeldBoxCountsAsArm) {
 }
 
 TEST(Collision, HeldBoxMayTouchWhatItWasTakenFrom) {
-  const JointVector q = home();
+  const JointVector q = plr::sim::home_configuration(1.0);
   Box held = box(5, 0, 0, 0, 0.5);
   held.pose = robot().plate_pose(q) * Eigen::Translation3d(0.25, 0.0, 0.0);
   World w;
@@ -151,14 +146,14 @@ TEST(Collision, MotionThroughThinObstacleIsCaughtBetweenEndpoints) {
   // A thin board between two free configurations: endpoints are free, the
   // straight motion is not.
   World w;
-  JointVector a = home(2.0), b = home(2.0);
+  JointVector a = plr::sim::home_configuration(2.0), b = plr::sim::home_configuration(2.0);
   a[plr::sim::kArm1] = -0.8;
   b[plr::sim::kArm1] = 0.8;
   Box board;
   board.id = 1;
   board.size = Eigen::Vector3d(3.0, 0.03, 0.3);
-  board.pose.translation() =
-      robot().plate_pose(home(2.0)).translation() + Eigen::Vector3d(0.5, 0, 0);
+  board.pose.translation() = robot().plate_pose(plr::sim::home_configuration(2.0)).translation() +
+                             Eigen::Vector3d(0.5, 0, 0);
   w.boxes.push_back(board);
   CollisionChecker cc(robot(), w);
   ASSERT_TRUE(cc.is_valid(a)) << cc.describe_collision(a);
@@ -173,7 +168,8 @@ TEST(Collision, FreeMotionFarFromObstaclesIsCheap) {
   World w;
   CollisionChecker cc(robot(), w);
   cc.reset_stats();
-  EXPECT_TRUE(cc.is_motion_valid(home(1.0), home(3.0)));
+  EXPECT_TRUE(
+      cc.is_motion_valid(plr::sim::home_configuration(1.0), plr::sim::home_configuration(3.0)));
   // One sweep for the whole 2 m when nothing is near; a few more at most.
   EXPECT_LE(cc.stats().sweep_checks, 8u);
 }
@@ -182,7 +178,7 @@ TEST(Collision, NoseDownDriveOverTheFloorIsOneSweepAndABoxAheadStillStopsIt) {
   // Nose lowered and pitched (scoop tip just above the floor): a tilted box
   // stretched along its own axes would dip into the floor on a 2 m drive.
   World w;
-  JointVector a = home(1.0), b = home(3.0);
+  JointVector a = plr::sim::home_configuration(1.0), b = plr::sim::home_configuration(3.0);
   for (JointVector* q : {&a, &b}) {
     (*q)[plr::sim::kNose1] = 0.0;
     (*q)[plr::sim::kNose2] = 0.05;
@@ -272,7 +268,7 @@ bool valid_by_fcl_alone(const JointVector& q, const World& w,
 TEST(Collision, AHeldBoxAgainstAContainerWallOffTheOctreeGridIsClearOfIt) {
   World w;
   w.trailer = {2.35, 2.39, 12.0};
-  const JointVector q = home();
+  const JointVector q = plr::sim::home_configuration(1.0);
   const double side = 0.5 * w.trailer.width;
   const auto held_at = [&](double y, double z) {
     CollisionChecker cc(robot(), w);
@@ -296,7 +292,7 @@ TEST(Collision, AHeldBoxAgainstAContainerWallOffTheOctreeGridIsClearOfIt) {
 TEST(Collision, AHeldBoxTurnedAgainstAContainerWallIsClearOfIt) {
   World w;
   w.trailer = {2.35, 2.39, 12.0};
-  const JointVector q = home();
+  const JointVector q = plr::sim::home_configuration(1.0);
   const double side = 0.5 * w.trailer.width;
   const double turn = 0.115;  // rad
   const auto held_at = [&](double gap) {
@@ -326,7 +322,7 @@ TEST(Collision, AgreesWithFclAloneOnRandomStates) {
   int valid = 0, invalid = 0;
   for (int n = 0; n < 1500; ++n) {
     // Around the folded arm, an eighth of each joint's range either way.
-    JointVector q = home(0.5 + 2.5 * u(rng));
+    JointVector q = plr::sim::home_configuration(0.5 + 2.5 * u(rng));
     for (int j = plr::sim::kArm1; j < plr::sim::kNumJoints; ++j) {
       const auto& l = robot().limits(j);
       q[j] = std::clamp(q[j] + (l.upper - l.lower) * (u(rng) - 0.5) / 4.0, l.lower, l.upper);
@@ -352,11 +348,13 @@ std::vector<JointVector> random_states(int count, double base, double span, std:
   auto perturb = [&](JointVector& q, int from, int to) {
     for (int j = from; j < to; ++j) {
       const auto& l = robot().limits(j);
-      q[j] = std::clamp(home()[j] + (l.upper - l.lower) * (u(rng) - 0.5) / 3.0, l.lower, l.upper);
+      q[j] = std::clamp(
+          plr::sim::home_configuration(1.0)[j] + (l.upper - l.lower) * (u(rng) - 0.5) / 3.0,
+          l.lower, l.upper);
     }
   };
   std::vector<JointVector> out;
-  JointVector q = home(base);
+  JointVector q = plr::sim::home_configuration(base);
   for (int i = 0; i < count; ++i) {
     if (i % 3 == 0) {
       q[plr::sim::kBaseX] = base + span * u(rng);
@@ -495,7 +493,7 @@ TEST(Collision, UpdatedCheckerAnswersAsAFreshOneOnRandomWorlds) {
 // results from the old world are cached: a box put on it must still count.
 TEST(Collision, UpdateForgetsWhatWasFreeInTheOldWorld) {
   // Nose down and out, away from the arm, which turns the plate a little.
-  JointVector a = home(2.0);
+  JointVector a = plr::sim::home_configuration(2.0);
   a[plr::sim::kNose1] = 0.0;
   a[plr::sim::kNose3] = 0.3;
   JointVector b = a;
@@ -600,8 +598,8 @@ TEST(Collision, CheckersOnTheSameOctreeShareTheTrailerTables) {
   built.set_world(shell);
   CollisionChecker built_again(robot(), shell);
   EXPECT_EQ(CollisionChecker::trailer_builds(), n0 + 5);
-  EXPECT_TRUE(on_a.is_valid(home()));
-  EXPECT_FALSE(on_alias.is_valid(home(15.5)));
+  EXPECT_TRUE(on_a.is_valid(plr::sim::home_configuration(1.0)));
+  EXPECT_FALSE(on_alias.is_valid(plr::sim::home_configuration(15.5)));
 }
 
 // Checkers on several threads share one trailer's tables and answer as one

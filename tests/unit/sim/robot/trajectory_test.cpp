@@ -13,12 +13,6 @@ const RobotModel& robot() {
   return m;
 }
 
-JointVector home(double base) {
-  JointVector q;
-  q << base, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
-  return q;
-}
-
 void expect_within_limits(const Trajectory& traj) {
   const Limits& lim = robot().all_limits();
   for (const auto& [t, s] : traj.sampled(0.005)) {
@@ -34,7 +28,9 @@ void expect_within_limits(const Trajectory& traj) {
 
 TEST(Trajectory, TrapezoidRespectsLimitsAndReachesWaypoints) {
   const Limits& lim = robot().all_limits();
-  const std::vector<JointVector> wps = {home(1.0), home(3.0), home(2.6)};
+  const std::vector<JointVector> wps = {plr::sim::home_configuration(1.0),
+                                        plr::sim::home_configuration(3.0),
+                                        plr::sim::home_configuration(2.6)};
   const Trajectory t = Trajectory::from_waypoints(wps, lim);
   EXPECT_NEAR(t.sample(t.waypoint_time(1)).position[kBaseX], 3.0, 1e-9);
   EXPECT_LT((t.sample(t.duration()).position - wps.back()).norm(), 1e-12);
@@ -47,7 +43,7 @@ TEST(Trajectory, TrapezoidRespectsLimitsAndReachesWaypoints) {
 }
 
 TEST(Trajectory, JointsAreSynchronisedOnTheStraightSegment) {
-  JointVector a = home(1.0), b = home(1.5);
+  JointVector a = plr::sim::home_configuration(1.0), b = plr::sim::home_configuration(1.5);
   b[kArm1] = 0.8;  // the arm's yaw moves too
   const Trajectory t = Trajectory::from_waypoints({a, b}, robot().all_limits());
   for (const auto& [time, s] : t.sampled(0.05)) {
@@ -60,9 +56,10 @@ TEST(Trajectory, JointsAreSynchronisedOnTheStraightSegment) {
 }
 
 TEST(Trajectory, OneWaypointStandsStill) {
-  const Trajectory t = Trajectory::from_waypoints({home(2.0)}, robot().all_limits());
+  const Trajectory t =
+      Trajectory::from_waypoints({plr::sim::home_configuration(2.0)}, robot().all_limits());
   EXPECT_EQ(t.duration(), 0.0);
-  EXPECT_EQ(t.sample(0.0).position, home(2.0));
+  EXPECT_EQ(t.sample(0.0).position, plr::sim::home_configuration(2.0));
 }
 
 }  // namespace

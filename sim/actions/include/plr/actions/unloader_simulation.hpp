@@ -72,9 +72,8 @@ struct UnloaderOptions {
   sim::Fidelity fidelity = sim::Fidelity::kFull;
 };
 
-// Where the robot starts: base front edge at the trailer's open rear, arm
-// folded, nose raised.
-sim::JointVector home_configuration();
+// Where the robot starts (plr/sim/robot_model.hpp).
+using sim::home_configuration;
 
 class UnloaderSimulation {
  public:

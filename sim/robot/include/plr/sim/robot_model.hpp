@@ -34,6 +34,10 @@ enum JointIndex : int {
   kNose3 = 7,
 };
 
+// The robot's home: arm folded, nose raised, the base at `base_x` (0: its
+// front edge at the trailer's open rear).
+JointVector home_configuration(double base_x = 0.0);
+
 // Joint names in configuration order; the URDF must define all of them.
 inline constexpr std::array<const char*, kNumJoints> kJointNames = {
     "base_x", "arm_1", "arm_2", "arm_3", "arm_4", "nose_1", "nose_2", "nose_3"};

@@ -20,25 +20,19 @@ const LatticeConfig& config() {
   return c;
 }
 
-JointVector home(double base) {
-  JointVector q;
-  q << base, 0.0, -1.0, 2.0, 0.0, 0.5, 0.0, 0.0;
-  return q;
-}
-
 TEST(JointLattice, SuccessorsMoveOnlyTheModesJointsAndCostTheirTime) {
   const World empty;
   const CollisionChecker checker(robot(), empty);
-  JointVector far = home(2.0);
+  JointVector far = plr::sim::home_configuration(2.0);
   far[kNose1] = 0.0;
   far[kNose3] = 0.3;
   const ModeLattice& m3 = config().modes.at(PlanMode::kNose);
-  JointLattice graph(m3, checker, home(2.0), JointGoal{far, 1e-3}, false);
+  JointLattice graph(m3, checker, plr::sim::home_configuration(2.0), JointGoal{far, 1e-3}, false);
   std::vector<search::Successor> out;
   graph.successors(graph.start(), out);
   ASSERT_FALSE(out.empty());
   for (const auto& s : out) {
-    const JointVector d = graph.config(s.id) - home(2.0);
+    const JointVector d = graph.config(s.id) - plr::sim::home_configuration(2.0);
     for (int j : {kBaseX, kArm1, kArm2, kArm3, kArm4}) EXPECT_EQ(d[j], 0.0);
     double t = 0.0;
     for (int j : m3.joints) t = std::max(t, std::abs(d[j]) / robot().limits(j).velocity);
@@ -47,16 +41,18 @@ TEST(JointLattice, SuccessorsMoveOnlyTheModesJointsAndCostTheirTime) {
   EXPECT_FALSE(graph.is_goal(graph.start()));
   // The heuristic is the straight move's time: admissible.
   double t = 0.0;
-  for (int j : m3.joints) t = std::max(t, std::abs(far[j] - home(2.0)[j]) / robot().limits(j).velocity);
+  for (int j : m3.joints)
+    t = std::max(
+        t, std::abs(far[j] - plr::sim::home_configuration(2.0)[j]) / robot().limits(j).velocity);
   EXPECT_NEAR(graph.heuristic(graph.start()), t, 1e-12);
 }
 
 TEST(JointLattice, ANearJointGoalIsReachedByOneSnap) {
   const World empty;
   const CollisionChecker checker(robot(), empty);
-  const JointVector goal = home(2.3);
-  JointLattice graph(config().modes.at(PlanMode::kBaseLine), checker, home(2.0),
-                     JointGoal{goal, 1e-3}, false);
+  const JointVector goal = plr::sim::home_configuration(2.3);
+  JointLattice graph(config().modes.at(PlanMode::kBaseLine), checker,
+                     plr::sim::home_configuration(2.0), JointGoal{goal, 1e-3}, false);
   std::vector<search::Successor> out;
   graph.successors(graph.start(), out);
   ASSERT_EQ(out.size(), 1u) << "a snap within snap_time is the only successor";
@@ -68,13 +64,13 @@ TEST(JointLattice, EscapeGoalsAreFreeStates) {
   World w;
   Box b;
   b.id = 1;
-  const Eigen::Vector3d plate = robot().plate_pose(home(2.0)).translation();
+  const Eigen::Vector3d plate = robot().plate_pose(plr::sim::home_configuration(2.0)).translation();
   b.pose.translation() = plate + Eigen::Vector3d(0.195, 0.0, 0.0);  // 5 mm into the plate
   w.boxes.push_back(b);
   const CollisionChecker checker(robot(), w);
-  ASSERT_FALSE(checker.is_valid(home(2.0)));
-  JointLattice graph(config().modes.at(PlanMode::kEscape), checker, home(2.0), std::monostate{},
-                     true);
+  ASSERT_FALSE(checker.is_valid(plr::sim::home_configuration(2.0)));
+  JointLattice graph(config().modes.at(PlanMode::kEscape), checker,
+                     plr::sim::home_configuration(2.0), std::monostate{}, true);
   EXPECT_FALSE(graph.is_goal(graph.start()));
   std::vector<search::Successor> out;
   graph.successors(graph.start(), out);
@@ -86,7 +82,7 @@ TEST(JointLattice, EscapeGoalsAreFreeStates) {
 TEST(LineLattice, StatesFollowTheLine) {
   const World empty;
   const CollisionChecker checker(robot(), empty);
-  const JointVector start = home(2.0);
+  const JointVector start = plr::sim::home_configuration(2.0);
   const PlateTarget from = robot().plate_target(start);
   PoseGoal goal;
   goal.target = {from.position + Eigen::Vector3d(0.2, 0.0, 0.0), from.yaw};
