@@ -216,7 +216,7 @@ plr::Expected<GenerateResult> generate(
     return plr::make_error(PLR_ERR_INTERNAL, problem.name + ": " + ok.error().message);
   sim::Provenance& p = e.provenance;
   p.seed = options.seed;
-  p.particles = static_cast<std::uint32_t>(problem.particles.size());
+  p.particles = static_cast<std::uint32_t>(roots.size());
   p.horizon = static_cast<std::uint32_t>(options.truck.horizon);
   p.trial_budget = options.trials;
   p.simulations = model.results();
