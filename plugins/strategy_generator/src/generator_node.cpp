@@ -363,8 +363,8 @@ class GeneratorNode : public Node {
       for (const sim::Observation o : l.path) path += (path.empty() ? "" : ">") + sim::to_string(o);
       std::uint32_t left = 0;
       for (const auto& s : l.states) left += s.boxes_left;
-      out += fmt::format(" {}{}{} {} ({} boxes left)", path, l.empty ? ">" : "",
-                         l.empty ? "empty" : "", l.particles.size(), left);
+      if (l.empty) path += path.empty() ? "empty" : ">empty";
+      out += fmt::format(" {} {} ({} boxes left)", path, l.particles.size(), left);
     }
     return out;
   }
