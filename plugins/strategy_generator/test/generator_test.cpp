@@ -340,13 +340,17 @@ TEST(Continuation, EveryLeafReachedByTheShareGetsOneAndTheMostReachedAlways) {
     l.path = std::move(path);
     l.empty = empty;
     l.particles.resize(n);
+    l.states.resize(n);
     l.share = static_cast<double>(n) / 5.0;
     return l;
   };
   const auto o = [](int i) { return static_cast<sim::Observation>(i); };
-  const std::vector<Leaf> leaves = {leaf({o(1)}, 1), leaf({o(2)}, 2), leaf({o(3)}, 2),
-                                    leaf({}, 0, true)};
+  std::vector<Leaf> leaves = {leaf({o(1)}, 1), leaf({o(2)}, 2), leaf({o(3)}, 2), leaf({}, 0, true)};
   EXPECT_EQ(continued_leaves(leaves, 1.0), std::vector<std::size_t>{1});
+  // On a tie, where more is left to unload.
+  leaves[2].states[1].boxes_left = 1;
+  EXPECT_EQ(continued_leaves(leaves, 1.0), std::vector<std::size_t>{2});
+  leaves[2].states[1].boxes_left = 0;
   EXPECT_EQ(continued_leaves(leaves, 0.4), (std::vector<std::size_t>{1, 2}));
   EXPECT_EQ(continued_leaves(leaves, 0.2), (std::vector<std::size_t>{0, 1, 2}));
   EXPECT_TRUE(continued_leaves({leaf({}, 5, true)}, 0.2).empty());

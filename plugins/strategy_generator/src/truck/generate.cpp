@@ -261,11 +261,21 @@ plr::Expected<std::vector<Leaf>> replay_leaves(const Problem& problem,
 }
 
 std::vector<std::size_t> continued_leaves(const std::vector<Leaf>& leaves, double min_share) {
+  // A continuation pays where runs get to (the share of particles) and by
+  // what is left to unload there: on a tie of shares, the most boxes left.
+  const auto left = [](const Leaf& l) {
+    std::uint64_t n = 0;
+    for (const SimOutcome& s : l.states) n += s.boxes_left;
+    return l.states.empty() ? 0.0 : static_cast<double>(n) / static_cast<double>(l.states.size());
+  };
   std::vector<std::size_t> out;
   std::optional<std::size_t> most;
   for (std::size_t i = 0; i < leaves.size(); ++i) {
     if (leaves[i].empty) continue;
-    if (!most || leaves[i].particles.size() > leaves[*most].particles.size()) most = i;
+    if (!most || leaves[i].particles.size() > leaves[*most].particles.size() ||
+        (leaves[i].particles.size() == leaves[*most].particles.size() &&
+         left(leaves[i]) > left(leaves[*most])))
+      most = i;
     if (leaves[i].share >= min_share - 1e-12) out.push_back(i);
   }
   if (most && std::find(out.begin(), out.end(), *most) == out.end()) {

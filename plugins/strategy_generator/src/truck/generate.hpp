@@ -117,7 +117,8 @@ plr::Expected<std::vector<Leaf>> replay_leaves(const Problem& problem,
 
 // The leaves that get a continuation: every leaf (trailer not empty) that at
 // least `min_share` of the particles reach, and always the one most reach
-// (the first in path order on a tie). Indices into `leaves`.
+// (on a tie, the one with the most boxes left; then the first in path
+// order). Indices into `leaves`.
 std::vector<std::size_t> continued_leaves(const std::vector<Leaf>& leaves, double min_share);
 
 // The problem of the continuation of `parent` at `leaves[index]`: named
