@@ -38,6 +38,12 @@ std::vector<const sim::LibraryEntry*> training_entries(const Resources& r, sim::
   return out;
 }
 
+// The entry with its continuations (load_resources makes them), if known.
+const sim::Chain* chain_of(const Resources& r, const sim::LibraryEntry* entry) {
+  const auto i = static_cast<std::size_t>(entry - r.library.entries.data());
+  return i < r.chains.size() ? &r.chains[i] : nullptr;
+}
+
 bool excluded_root(const sim::Strategy& s, const episode::RunRules& rules) {
   return rules.excluded(s.nodes[s.root].action);
 }
@@ -55,8 +61,8 @@ episode::StrategySource method_source(const EvaluationSettings& settings, const 
       // generated: the training world's strategy and, where its tree ends,
       // the continuation for the leaf reached (grafted: plr/sim/chain.hpp),
       // and nothing after the last.
-      const sim::Strategy& chained =
-          r.chains[static_cast<std::size_t>(own - r.library.entries.data())].strategy;
+      const sim::Chain* c = chain_of(r, own);
+      const sim::Strategy& chained = c ? c->strategy : own->strategy;
       auto used = std::make_shared<bool>(false);
       return [own, used, &chained](
                  const actions::Perceived&, const sim::SceneAnalysis&,
@@ -271,9 +277,9 @@ nlohmann::json run_one(actions::Rig& rig, const EvaluationSettings& settings,
   episode::EngineSettings engine_settings;
   engine_settings.limits = {settings.max_actions, 24, settings.max_robot_time_s};
   std::optional<LinkRecorder> links;
-  if (needs_training_world(run.method) && start->entry) {
-    links.emplace(resources.library, resources.chains[static_cast<std::size_t>(
-                                         start->entry - resources.library.entries.data())]);
+  if (const sim::Chain* c = start->entry ? chain_of(resources, start->entry) : nullptr;
+      c && needs_training_world(run.method)) {
+    links.emplace(resources.library, *c);
     engine_settings.observers.push_back(&*links);
   }
   episode::Engine engine(rig.model(), rig.backend(),
