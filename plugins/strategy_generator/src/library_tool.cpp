@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -58,12 +59,16 @@ const LibraryEntry* find(const plr::sim::Library& lib, const std::string& key) {
 }
 
 void list(const plr::sim::Library& lib) {
-  std::printf("%-3s %-12s %-6s %5s %5s %5s %6s %-22s %7s %6s %8s %s\n", "#", "name", "family",
+  // Continuations' names grow with the chain ("B1-1.1.1.2").
+  int width = 12;
+  for (const LibraryEntry& e : lib.entries)
+    width = std::max(width, static_cast<int>(e.name.size()));
+  std::printf("%-3s %-*s %-6s %5s %5s %5s %6s %-22s %7s %6s %8s %s\n", "#", width, "name", "family",
               "seed", "boxes", "nodes", "depth", "root bounds [s]", "trials", "sims", "wall",
               "made");
   for (std::size_t i = 0; i < lib.entries.size(); ++i) {
     const LibraryEntry& e = lib.entries[i];
-    std::printf("%-3zu %-12s %-6s %5llu %5zu %5zu %6zu %-22s %7llu %6llu %7.0fs %s\n", i,
+    std::printf("%-3zu %-*s %-6s %5llu %5zu %5zu %6zu %-22s %7llu %6llu %7.0fs %s\n", i, width,
                 e.name.c_str(), e.family.c_str(), static_cast<unsigned long long>(e.world_seed),
                 e.world.boxes.size(), e.strategy.nodes.size(), e.strategy.depth(),
                 fmt::format("[{:.1f}, {:.1f}]", e.lower, e.upper).c_str(),
