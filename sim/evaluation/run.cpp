@@ -166,6 +166,13 @@ plr::Expected<Resources> load_resources(const EvaluationSettings& settings) {
       return plr::make_error(PLR_ERR_INVALID, settings.library.string() + ": the library is empty");
     r.library = std::move(*library);
     for (std::size_t i = 0; i < r.library.entries.size(); ++i) {
+      // Runs start from strategies for fresh trailers; a continuation
+      // stands for itself.
+      if (r.library.entries[i].is_continuation()) {
+        const sim::LibraryEntry& e = r.library.entries[i];
+        r.chains.push_back({e.strategy, std::vector<std::size_t>(e.strategy.nodes.size(), i), 1});
+        continue;
+      }
       auto chain = sim::chain(r.library, i);
       if (!chain)
         return plr::make_error(PLR_ERR_INVALID,

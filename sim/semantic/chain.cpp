@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <string_view>
+#include <unordered_map>
 
 namespace plr::sim {
 
@@ -20,12 +22,18 @@ plr::Expected<Chain> chain(const Library& library, std::size_t entry, std::size_
   const LibraryEntry& first = library.entries.at(entry);
   out.strategy = first.strategy;
   out.entry_of_node.assign(first.strategy.nodes.size(), entry);
+  // Each entry's continuations, found once.
+  std::unordered_map<std::string_view, std::vector<std::size_t>> children;
+  for (std::size_t i = 0; i < library.entries.size(); ++i)
+    if (library.entries[i].is_continuation()) children[library.entries[i].parent].push_back(i);
   // Breadth first: a parent's nodes are in place before its continuations'.
   std::vector<Graft> queue{{entry, 0}};
   for (std::size_t k = 0; k < queue.size(); ++k) {
     const Graft parent = queue[k];
     const Strategy& tree = library.entries[parent.entry].strategy;
-    for (const std::size_t c : continuations(library, parent.entry)) {
+    const auto found = children.find(library.entries[parent.entry].name);
+    if (found == children.end()) continue;
+    for (const std::size_t c : found->second) {
       const LibraryEntry& next = library.entries[c];
       const auto bad = [&](const std::string& why) {
         return plr::make_error(PLR_ERR_INVALID,

@@ -24,8 +24,9 @@ namespace plr::evaluation {
 // The library L and the chooser's model M, as the methods need them.
 struct Resources {
   sim::Library library;
-  // Each entry with its continuations grafted (plr/sim/chain.hpp): what
-  // open-loop and expected-offline follow; by entry index.
+  // Each strategy for a fresh trailer with its continuations grafted
+  // (plr/sim/chain.hpp): what open-loop and expected-offline follow; by
+  // entry index (a continuation's is its own strategy).
   std::vector<sim::Chain> chains;
   std::optional<chooser::Model> model;
   std::optional<chooser::LibraryIndex> index;
