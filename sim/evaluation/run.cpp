@@ -7,6 +7,8 @@
 #include <fstream>
 #include <iterator>
 #include <memory>
+#include <optional>
+#include <set>
 
 #include <plr/frame.hpp>
 
@@ -30,9 +32,16 @@ std::uint64_t mass_seed(std::uint64_t seed) {
 
 std::vector<const sim::LibraryEntry*> training_entries(const Resources& r, sim::EnvFamily family) {
   std::vector<const sim::LibraryEntry*> out;
+  // Continuations start mid-trailer: a training world is a strategy's for a fresh one.
   for (const auto& e : r.library.entries)
-    if (e.family == sim::to_string(family)) out.push_back(&e);
+    if (e.family == sim::to_string(family) && !e.is_continuation()) out.push_back(&e);
   return out;
+}
+
+// The entry with its continuations (load_resources makes them), if known.
+const sim::Chain* chain_of(const Resources& r, const sim::LibraryEntry* entry) {
+  const auto i = static_cast<std::size_t>(entry - r.library.entries.data());
+  return i < r.chains.size() ? &r.chains[i] : nullptr;
 }
 
 bool excluded_root(const sim::Strategy& s, const episode::RunRules& rules) {
@@ -48,19 +57,23 @@ episode::StrategySource method_source(const EvaluationSettings& settings, const 
       return h;
     case Method::kOpenLoop:
     case Method::kExpectedOffline: {
-      // The precomputed strategy from the start, followed as it was
-      // generated, and nothing after it: the library holds one strategy per
-      // training world.
+      // The precomputed sequence from the start, followed as it was
+      // generated: the training world's strategy and, where its tree ends,
+      // the continuation for the leaf reached (grafted: plr/sim/chain.hpp),
+      // and nothing after the last.
+      const sim::Chain* c = chain_of(r, own);
+      const sim::Strategy& chained = c ? c->strategy : own->strategy;
       auto used = std::make_shared<bool>(false);
-      return [own, used](const actions::Perceived&, const sim::SceneAnalysis&,
-                         const episode::RunRules&) -> plr::Expected<episode::StrategyChoice> {
+      return [own, used, &chained](
+                 const actions::Perceived&, const sim::SceneAnalysis&,
+                 const episode::RunRules&) -> plr::Expected<episode::StrategyChoice> {
         if (*used)
           return episode::StrategyChoice{
               std::nullopt, "library:" + own->name,
               "the precomputed strategy ended (its tree ended or did not plan for what was "
               "seen)"};
         *used = true;
-        return episode::StrategyChoice{own->strategy, "library:" + own->name, {}, true};
+        return episode::StrategyChoice{chained, "library:" + own->name, {}, true};
       };
     }
     case Method::kNearest:
@@ -106,6 +119,29 @@ const char* ending(const EvaluationSettings& settings, const episode::Episode& e
   return "stuck";
 }
 
+// Which library entry of a chain each action came from (the link), for
+// open-loop and expected-offline.
+class LinkRecorder final : public episode::Observer {
+ public:
+  LinkRecorder(const sim::Library& library, const sim::Chain& chain)
+      : library_(library), chain_(chain) {}
+  void starting(const episode::ActionStart& a, const episode::Episode&) override {
+    pending_ = a.node < chain_.entry_of_node.size() && a.strategy.name == chain_.strategy.name
+                   ? library_.entries[chain_.entry_of_node[a.node]].name
+                   : std::string();
+  }
+  void recorded(const episode::EpisodeStep&, const episode::Episode&) override {
+    links_.push_back(pending_);
+  }
+  const std::vector<std::string>& links() const { return links_; }
+
+ private:
+  const sim::Library& library_;
+  const sim::Chain& chain_;
+  std::string pending_;
+  std::vector<std::string> links_;
+};
+
 }  // namespace
 
 plr::Expected<Resources> load_resources(const EvaluationSettings& settings) {
@@ -129,6 +165,20 @@ plr::Expected<Resources> load_resources(const EvaluationSettings& settings) {
     if (library->entries.empty())
       return plr::make_error(PLR_ERR_INVALID, settings.library.string() + ": the library is empty");
     r.library = std::move(*library);
+    for (std::size_t i = 0; i < r.library.entries.size(); ++i) {
+      // Runs start from strategies for fresh trailers; a continuation
+      // stands for itself.
+      if (r.library.entries[i].is_continuation()) {
+        const sim::LibraryEntry& e = r.library.entries[i];
+        r.chains.push_back({e.strategy, std::vector<std::size_t>(e.strategy.nodes.size(), i), 1});
+        continue;
+      }
+      auto chain = sim::chain(r.library, i);
+      if (!chain)
+        return plr::make_error(PLR_ERR_INVALID,
+                               settings.library.string() + ": " + chain.error().message);
+      r.chains.push_back(std::move(*chain));
+    }
   }
   if (uses_model) {
     if (!std::filesystem::exists(settings.model))
@@ -233,6 +283,12 @@ nlohmann::json run_one(actions::Rig& rig, const EvaluationSettings& settings,
   rig.reset(start->truth);
   episode::EngineSettings engine_settings;
   engine_settings.limits = {settings.max_actions, 24, settings.max_robot_time_s};
+  std::optional<LinkRecorder> links;
+  if (const sim::Chain* c = start->entry ? chain_of(resources, start->entry) : nullptr;
+      c && needs_training_world(run.method)) {
+    links.emplace(resources.library, *c);
+    engine_settings.observers.push_back(&*links);
+  }
   episode::Engine engine(rig.model(), rig.backend(),
                          method_source(settings, resources, run.method, start->entry),
                          std::move(engine_settings));
@@ -243,7 +299,9 @@ nlohmann::json run_one(actions::Rig& rig, const EvaluationSettings& settings,
   for (const auto& p : e.curve.points()) curve.push_back({p.robot_time_s, p.boxes});
   nlohmann::json steps = nlohmann::json::array();
   std::uint64_t library_actions = 0;
-  for (const auto& s : e.steps) {
+  std::set<std::string> links_run;
+  for (std::size_t i = 0; i < e.steps.size(); ++i) {
+    const auto& s = e.steps[i];
     if (s.source.rfind("library:", 0) == 0) ++library_actions;
     steps.push_back({{"action", sim::to_string(s.action)},
                      {"source", s.source},
@@ -251,6 +309,11 @@ nlohmann::json run_one(actions::Rig& rig, const EvaluationSettings& settings,
                      {"applicable", s.outcome.applicable},
                      {"boxes", s.outcome.boxes},
                      {"robot_time_s", s.outcome.robot_time_s}});
+    // The chain's entry the action came from, where the run follows one.
+    if (links && i < links->links().size() && !links->links()[i].empty()) {
+      steps.back()["link"] = links->links()[i];
+      links_run.insert(links->links()[i]);
+    }
   }
   if (!ran) {
     out["error"] = ran.error().message;
@@ -264,6 +327,7 @@ nlohmann::json run_one(actions::Rig& rig, const EvaluationSettings& settings,
     out["library_actions"] = library_actions;
     out["strategies_asked"] = e.strategies_asked;
     out["strategy_steps"] = e.strategy_steps;
+    if (links) out["links_run"] = links_run.size();
     out["robot_trailer_collisions"] = e.robot_trailer_contacts;
     out["stop_reason"] = e.stop_reason;
     out["ended"] = ending(settings, e);

@@ -19,6 +19,8 @@ namespace msg = plr::msg;
 constexpr std::size_t kMaxBoxes = 100000;
 constexpr std::size_t kMaxCurve = 1000000;
 constexpr std::size_t kMaxText = 1 << 16;
+constexpr std::size_t kMaxPath = 10000;
+constexpr std::size_t kMaxStart = 100000;
 
 flatbuffers::Offset<msg::WorldState> build_world(flatbuffers::FlatBufferBuilder& fbb,
                                                  const World& w) {
@@ -87,10 +89,38 @@ plr::Expected<LibraryEntry> read_entry(const msg::LibraryEntry& m, const std::st
       e.curve.push_back({b.wall_s(), b.lower(), b.upper(), b.trials()});
     }
   }
+  if (m.parent() && m.parent()->size() > kMaxText) return error(where, "parent: too long");
+  e.parent = text(m.parent());
+  if (m.leaf()) {
+    if (m.leaf()->size() > kMaxPath) return error(where, "leaf: too many observations");
+    for (const auto o : *m.leaf()) {
+      if (static_cast<int>(o) >= kNumObservations)
+        return error(where, fmt::format("leaf: observation {} out of range", static_cast<int>(o)));
+      e.leaf.push_back(static_cast<Observation>(o));
+    }
+  }
+  if (m.start()) {
+    if (m.start()->size() > kMaxStart) return error(where, "start: too many particles");
+    for (flatbuffers::uoffset_t i = 0; i < m.start()->size(); ++i) {
+      const msg::StartParticle p = element(*m.start(), i);
+      e.start.push_back({p.particle(), p.state_hash(), p.boxes_left()});
+    }
+  }
+  if (e.is_continuation() && (e.leaf.empty() || e.start.empty()))
+    return error(where, "a continuation (parent '" + e.parent.substr(0, 64) +
+                            "') needs its leaf and the belief it starts from");
   return e;
 }
 
 }  // namespace
+
+std::vector<std::size_t> continuations(const Library& library, std::size_t entry) {
+  std::vector<std::size_t> out;
+  const std::string& name = library.entries.at(entry).name;
+  for (std::size_t i = 0; i < library.entries.size(); ++i)
+    if (library.entries[i].parent == name) out.push_back(i);
+  return out;
+}
 
 std::vector<std::uint8_t> serialize(const Library& library) {
   flatbuffers::FlatBufferBuilder fbb;
@@ -108,9 +138,25 @@ std::vector<std::uint8_t> serialize(const Library& library) {
                                      p.epsilon2, p.seconds_per_box, fbb.CreateString(p.created));
     std::vector<msg::BoundPoint> curve;
     for (const BoundPoint& b : e.curve) curve.emplace_back(b.wall_s, b.lower, b.upper, b.trials);
+    const auto curve_offset = fbb.CreateVectorOfStructs(curve);
+    // A strategy for a fresh trailer writes none of the continuation's
+    // fields: its bytes are those of a library made before they existed.
+    flatbuffers::Offset<flatbuffers::String> parent;
+    flatbuffers::Offset<flatbuffers::Vector<msg::Observation>> leaf;
+    flatbuffers::Offset<flatbuffers::Vector<const msg::StartParticle*>> start;
+    if (e.is_continuation()) {
+      parent = fbb.CreateString(e.parent);
+      std::vector<msg::Observation> path;
+      for (const Observation o : e.leaf) path.push_back(static_cast<msg::Observation>(o));
+      leaf = fbb.CreateVector(path);
+      std::vector<msg::StartParticle> particles;
+      for (const StartParticle& p : e.start)
+        particles.emplace_back(p.particle, p.state_hash, p.boxes_left);
+      start = fbb.CreateVectorOfStructs(particles);
+    }
     entries.push_back(msg::CreateLibraryEntry(fbb, name, family, e.world_seed, world, obs, strategy,
-                                              e.lower, e.upper, prov,
-                                              fbb.CreateVectorOfStructs(curve)));
+                                              e.lower, e.upper, prov, curve_offset, parent, leaf,
+                                              start));
   }
   const auto list = fbb.CreateVector(entries);
   msg::FinishStrategyLibraryBuffer(

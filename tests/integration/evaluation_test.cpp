@@ -18,10 +18,12 @@
 
 #include <nlohmann/json.hpp>
 
+#include "plr/actions/rig.hpp"
 #include "plr/actions/run_stats.hpp"
 #include "plr/chooser/features.hpp"
 #include "plr/chooser/model.hpp"
 #include "plr/chooser/nearest.hpp"
+#include "plr/evaluation/run.hpp"
 #include "plr/evaluation/summary.hpp"
 #include "plr/jobs/store.hpp"
 #include "plr/sim/generators.hpp"
@@ -331,3 +333,78 @@ TEST(EvaluationSummary, PlrAgainstHSaysHowItsActionsSplit) {
 }
 
 }  // namespace
+
+// Open-loop runs the paper's sequence of precomputed strategies: where the
+// training world's strategy ends, the continuation made for the leaf the run
+// reached (by the observations it saw) goes on. The strategy here is one
+// action; it has a continuation of one action at each of its 18 leaves, so
+// whatever the first action shows, the run crosses into one.
+TEST(EvaluationChain, OpenLoopFollowsTheContinuationOfTheLeafItReaches) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("plr_evaluation_chain_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  auto world = plr::sim::load_world(SMALL_WORLD);
+  ASSERT_TRUE(world) << world.error().message;
+  plr::sim::LibraryEntry root;
+  root.name = "S-1";
+  root.family = "A1";
+  root.world_seed = 1;
+  root.world = plr::sim::without_masses(*world);
+  root.observation_json = "{}";
+  root.provenance.seed = 1;
+  root.provenance.particles = 2;
+  root.strategy =
+      plr::sim::single_action(plr::sim::hardcoded_action(plr::sim::analyse(root.world), {}), "S-1");
+  plr::sim::Library library;
+  library.entries.push_back(root);
+  const plr::sim::Action next = plr::sim::make_sweep(plr::sim::Height::kHigh);
+  for (int o = 0; o < plr::sim::kNumObservations; ++o) {
+    plr::sim::LibraryEntry c = root;
+    c.name = "S-1." + std::to_string(o);
+    c.parent = "S-1";
+    c.leaf = {static_cast<plr::sim::Observation>(o)};
+    c.start = {{0, 1, 1}};
+    c.strategy = plr::sim::single_action(next, c.name);
+    library.entries.push_back(c);
+  }
+  ASSERT_TRUE(plr::sim::save_library(library, dir / "library.plrl"));
+
+  plr::evaluation::EvaluationSettings settings;
+  settings.library = dir / "library.plrl";
+  settings.environments = {{"S", plr::sim::EnvFamily::kA1, true, {}}};
+  settings.methods = {plr::evaluation::Method::kOpenLoop};
+  settings.max_robot_time_s = 120;
+  auto resources = plr::evaluation::load_resources(settings);
+  ASSERT_TRUE(resources) << resources.error().message;
+  plr::actions::ActionOptions options;
+  options.observation = settings.observation;
+  auto rig = plr::actions::Rig::create(options);
+  ASSERT_TRUE(rig) << rig.error().message;
+  // Seed 2 would be the second training world if continuations were
+  // training worlds; they start mid-trailer, so S-1 is the only one.
+  const nlohmann::json run = plr::evaluation::run_one(**rig, settings, *resources,
+                                                      {0, plr::evaluation::Method::kOpenLoop, 2});
+  ASSERT_FALSE(run.contains("error")) << run.dump();
+  EXPECT_EQ(run["world"], "S-1, masses of seed 2");
+  const auto& steps = run["steps"];
+  ASSERT_EQ(steps.size(), 2u) << run.dump();
+  EXPECT_EQ(steps[0]["link"], "S-1");
+  // The observation seen before the second action is the leaf's.
+  const auto seen = plr::sim::parse_observation(steps[1]["observation"].get<std::string>());
+  ASSERT_TRUE(seen);
+  EXPECT_EQ(steps[1]["link"], "S-1." + std::to_string(static_cast<int>(*seen)));
+  EXPECT_EQ(steps[1]["action"], plr::sim::to_string(next));
+  EXPECT_EQ(steps[1]["source"], "library:S-1");
+  EXPECT_EQ(run["links_run"], 2);
+
+  // Without its continuations, the run ends where the strategy does.
+  library.entries.resize(1);
+  ASSERT_TRUE(plr::sim::save_library(library, dir / "library.plrl"));
+  auto alone = plr::evaluation::load_resources(settings);
+  ASSERT_TRUE(alone) << alone.error().message;
+  const nlohmann::json single =
+      plr::evaluation::run_one(**rig, settings, *alone, {0, plr::evaluation::Method::kOpenLoop, 2});
+  EXPECT_EQ(single["steps"].size(), 1u) << single.dump();
+  fs::remove_all(dir);
+}

@@ -99,12 +99,13 @@ class GeneratorNode : public Node {
 
  protected:
   Status on_configure() override {
-    params().allow_only(
-        {"library",         "checkpoint_dir",   "worlds",      "particles",      "horizon",
-         "epsilon1",        "epsilon2",         "trials",      "target_gap",     "seed",
-         "seconds_per_box", "action_s",         "workers",     "worker_program", "remote_workers",
-         "remote_service",  "remote_timeout_s", "observation", "progress",       "max_wall_s",
-         "complete_tree",   "runner",           "slurm"});
+    params().allow_only({"library",           "checkpoint_dir", "worlds",          "particles",
+                         "horizon",           "epsilon1",       "epsilon2",        "trials",
+                         "target_gap",        "seed",           "seconds_per_box", "action_s",
+                         "workers",           "worker_program", "remote_workers",  "remote_service",
+                         "remote_timeout_s",  "observation",    "progress",        "max_wall_s",
+                         "complete_tree",     "runner",         "slurm",           "continuations",
+                         "continuation_share"});
     library_ = params().require<std::string>("library");
     checkpoint_dir_ = params().get<std::string>("checkpoint_dir", library_ + ".checkpoint");
     particles_ = params().get<int>("particles", 5);
@@ -126,6 +127,13 @@ class GeneratorNode : public Node {
     o.max_wall_s = params().get<double>("max_wall_s", o.max_wall_s);
     o.complete_tree = params().get<bool>("complete_tree", o.complete_tree);
     o.seed = seed_;
+    continuations_ = params().get<int>("continuations", 0);
+    continuation_share_ = params().get<double>("continuation_share", 1.0);
+    if (continuations_ < 0 || continuations_ > 1000)
+      return make_error(PLR_ERR_INVALID,
+                        fmt::format("param 'continuations': {} is not in 0..1000", continuations_));
+    if (!(continuation_share_ > 0) || continuation_share_ > 1)
+      return make_error(PLR_ERR_INVALID, "param 'continuation_share': must be in (0, 1]");
     if (particles_ < 1 || particles_ > 100)
       return make_error(PLR_ERR_INVALID,
                         fmt::format("param 'particles': {} is not in 1..100", particles_));
@@ -150,6 +158,10 @@ class GeneratorNode : public Node {
       return runner.error();
     else
       runner_ = std::move(*runner);
+    if (continuations_ > 0 && runner_.kind == jobs::RunnerSettings::Kind::kSlurm)
+      return make_error(PLR_ERR_INVALID,
+                        "param 'continuations': not made with runner: slurm (each link needs its "
+                        "parent's leaves); use local or remote workers");
     const nlohmann::json observation = params().json().value("observation", nlohmann::json());
     if (auto obs = sim::ObservationParams::from_json(observation); !obs)
       return make_error(PLR_ERR_INVALID, "param 'observation': " + obs.error().message);
@@ -267,63 +279,12 @@ class GeneratorNode : public Node {
     generator::Simulator simulator(*runner, workers, observation_json_);
     std::size_t made = 0;
     for (std::size_t i = 0; i < worlds_.size(); ++i) {
-      if (stop_) {
-        why = "stopped";
+      auto problem = generator::make_problem(job_for(worlds_[i]));
+      if (!problem) {
+        why = problem.error().message;
         return false;
       }
-      auto made_problem = generator::make_problem(job_for(worlds_[i]));
-      if (!made_problem) {
-        why = made_problem.error().message;
-        return false;
-      }
-      const generator::Problem& problem = *made_problem;
-      if (has(library, problem.name)) {
-        log().info("{}: in the library already", problem.name);
-        continue;
-      }
-      auto store = jobs::Store::open(fs::path(checkpoint_dir_) / problem.name);
-      if (!store) {
-        why = store.error().message;
-        return false;
-      }
-      const auto t0 = Clock::now();
-      // The line is drawn again every second, also while a batch of
-      // simulations runs (workers busy, ETA), from the last trial's figures.
-      std::mutex m;
-      std::condition_variable cv;
-      bool finished = false;
-      generator::GenerateProgress last;
-      std::thread ticker([&] {
-        std::unique_lock lock(m);
-        while (!cv.wait_for(lock, std::chrono::seconds(1), [&] { return finished; })) {
-          show(problem.name, i, last, simulator, t0);
-        }
-      });
-      auto result = generator::generate(problem, options_, **rig, simulator, &*store,
-                                        [&](const generator::GenerateProgress& p) {
-                                          std::lock_guard lock(m);
-                                          last = p;
-                                          return !stop_.load();
-                                        });
-      {
-        std::lock_guard lock(m);
-        finished = true;
-      }
-      cv.notify_all();
-      ticker.join();
-      if (!result) {
-        why = result.error().message;
-        return false;
-      }
-      if (!add(library, lib, std::move(result->entry), why)) return false;
-      const sim::LibraryEntry& e = library.entries.back();
-      if (show_progress_ && tty_) std::fputs("\n", stderr);
-      log().info(
-          "{}: {} nodes, root bounds [{:.1f}, {:.1f}], {} trials, {} simulations ({} run now), "
-          "{:.0f} s",
-          e.name, e.strategy.nodes.size(), e.lower, e.upper, e.provenance.trials,
-          e.provenance.simulations, result->simulated, e.provenance.wall_s);
-      ++made;
+      if (!make_chain(*problem, 0, i, library, lib, **rig, simulator, made, why)) return false;
     }
     if (worker_runner && remote_workers_ > 0)
       log().info("remote workers: {} jobs answered, {} calls failed (re-issued)",
@@ -331,6 +292,114 @@ class GeneratorNode : public Node {
     why = fmt::format("library {}: {} strategies ({} made now)", library_, library.entries.size(),
                       made);
     return true;
+  }
+
+  // `problem`'s strategy (made, or found in the library), then, while the
+  // chain is shorter than `continuations`, one for each leaf of it that
+  // continued_leaves() picks, depth first. Resumable: a strategy in the
+  // library is not made again, and its leaves are replayed from its store.
+  bool make_chain(const generator::Problem& problem, int link, std::size_t world,
+                  sim::Library& library, const fs::path& lib, actions::Rig& rig,
+                  generator::Simulator& simulator, std::size_t& made, std::string& why) {
+    if (stop_) {
+      why = "stopped";
+      return false;
+    }
+    const auto have =
+        std::find_if(library.entries.begin(), library.entries.end(),
+                     [&](const sim::LibraryEntry& e) { return e.name == problem.name; });
+    const bool in_library = have != library.entries.end();
+    if (in_library) log().info("{}: in the library already", problem.name);
+    if (in_library && link >= continuations_) return true;
+    auto store = jobs::Store::open(fs::path(checkpoint_dir_) / problem.name);
+    if (!store) {
+      why = store.error().message;
+      return false;
+    }
+    std::vector<generator::Leaf> leaves;
+    if (in_library) {
+      auto replayed = generator::replay_leaves(problem, *have, options_, rig, simulator, &*store);
+      if (!replayed) {
+        why = replayed.error().message;
+        return false;
+      }
+      leaves = std::move(*replayed);
+    } else {
+      auto result = generate_one(problem, world, rig, simulator, *store);
+      if (!result) {
+        why = result.error().message;
+        return false;
+      }
+      leaves = std::move(result->leaves);
+      if (!add(library, lib, std::move(result->entry), why)) return false;
+      const sim::LibraryEntry& e = library.entries.back();
+      if (show_progress_ && tty_) std::fputs("\n", stderr);
+      log().info(
+          "{}: {} nodes, root bounds [{:.1f}, {:.1f}], {} trials, {} simulations ({} run now), "
+          "{:.0f} s; {}",
+          e.name, e.strategy.nodes.size(), e.lower, e.upper, e.provenance.trials,
+          e.provenance.simulations, result->simulated, e.provenance.wall_s, describe(leaves));
+      ++made;
+    }
+    if (link >= continuations_) return true;
+    for (const std::size_t k : generator::continued_leaves(leaves, continuation_share_)) {
+      auto next = generator::continuation(problem, leaves, k, rig);
+      if (!next) {
+        why = next.error().message;
+        return false;
+      }
+      if (!make_chain(*next, link + 1, world, library, lib, rig, simulator, made, why))
+        return false;
+    }
+    return true;
+  }
+
+  // Where a strategy ends on its particles, for the log:
+  // "leaves: wall/low/left>pile/mid/center 3 (41 boxes left), empty 1".
+  static std::string describe(const std::vector<generator::Leaf>& leaves) {
+    std::string out = "leaves:";
+    for (const generator::Leaf& l : leaves) {
+      std::string path;
+      for (const sim::Observation o : l.path) path += (path.empty() ? "" : ">") + sim::to_string(o);
+      std::uint32_t left = 0;
+      for (const auto& s : l.states) left += s.boxes_left;
+      if (l.empty) path += path.empty() ? "empty" : ">empty";
+      out += fmt::format(" {} {} ({} boxes left)", path, l.particles.size(), left);
+    }
+    return out;
+  }
+
+  // One strategy, with the progress line drawn every second.
+  Expected<generator::GenerateResult> generate_one(const generator::Problem& problem,
+                                                   std::size_t world, actions::Rig& rig,
+                                                   generator::Simulator& simulator,
+                                                   const jobs::Store& store) {
+    const auto t0 = Clock::now();
+    // The line is drawn again every second, also while a batch of
+    // simulations runs (workers busy, ETA), from the last trial's figures.
+    std::mutex m;
+    std::condition_variable cv;
+    bool finished = false;
+    generator::GenerateProgress last;
+    std::thread ticker([&] {
+      std::unique_lock lock(m);
+      while (!cv.wait_for(lock, std::chrono::seconds(1), [&] { return finished; })) {
+        show(problem.name, world, last, simulator, t0);
+      }
+    });
+    auto result = generator::generate(problem, options_, rig, simulator, &store,
+                                      [&](const generator::GenerateProgress& p) {
+                                        std::lock_guard lock(m);
+                                        last = p;
+                                        return !stop_.load();
+                                      });
+    {
+      std::lock_guard lock(m);
+      finished = true;
+    }
+    cv.notify_all();
+    ticker.join();
+    return result;
   }
 
   generator::StrategyJob job_for(const WorldSpec& world) const {
@@ -463,7 +532,8 @@ class GeneratorNode : public Node {
   }
 
   std::string library_, checkpoint_dir_, worker_program_, observation_json_, remote_service_;
-  int particles_ = 5, workers_ = 2, remote_workers_ = 0;
+  int particles_ = 5, workers_ = 2, remote_workers_ = 0, continuations_ = 0;
+  double continuation_share_ = 1.0;
   double remote_timeout_s_ = 600;
   std::uint64_t seed_ = 1;
   bool show_progress_ = true, tty_ = false;

@@ -2,7 +2,7 @@
 // library file, writes an entry's strategy as a strategy file for the
 // executor, and draws its pictures.
 //
-//   plr library list FILE
+//   plr library list FILE                  (with the chains: parent -> continuations)
 //   plr library show FILE ENTRY            (ENTRY: a name or an index)
 //   plr library export FILE ENTRY OUT      (OUT: .plrs or .yaml)
 //   plr library svg FILE DIR               (DIR/<name>.svg, <name>-anytime.svg)
@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -21,6 +22,31 @@
 namespace {
 
 using plr::sim::LibraryEntry;
+
+// "wall/low/left > pile/mid/center": a leaf's observations from its parent's root.
+std::string path(const LibraryEntry& e) {
+  std::string out;
+  for (const plr::sim::Observation o : e.leaf)
+    out += (out.empty() ? "" : " > ") + plr::sim::to_string(o);
+  return out;
+}
+
+std::uint32_t boxes_left(const LibraryEntry& e) {
+  std::uint32_t n = 0;
+  for (const auto& p : e.start) n += p.boxes_left;
+  return e.start.empty() ? 0 : n / static_cast<std::uint32_t>(e.start.size());
+}
+
+// Each continuation under its parent, with the leaf it starts at.
+void print_chain(const plr::sim::Library& lib, std::size_t entry, int depth) {
+  for (const std::size_t c : plr::sim::continuations(lib, entry)) {
+    const LibraryEntry& e = lib.entries[c];
+    std::printf("%*s-> %s at [%s]: %zu particle%s, %u boxes left, %zu nodes\n", 2 + 4 * depth, "",
+                e.name.c_str(), path(e).c_str(), e.start.size(), e.start.size() == 1 ? "" : "s",
+                boxes_left(e), e.strategy.nodes.size());
+    if (depth < 1000) print_chain(lib, c, depth + 1);
+  }
+}
 
 const LibraryEntry* find(const plr::sim::Library& lib, const std::string& key) {
   for (const LibraryEntry& e : lib.entries) {
@@ -33,12 +59,16 @@ const LibraryEntry* find(const plr::sim::Library& lib, const std::string& key) {
 }
 
 void list(const plr::sim::Library& lib) {
-  std::printf("%-3s %-12s %-6s %5s %5s %5s %6s %-22s %7s %6s %8s %s\n", "#", "name", "family",
+  // Continuations' names grow with the chain ("B1-1.1.1.2").
+  int width = 12;
+  for (const LibraryEntry& e : lib.entries)
+    width = std::max(width, static_cast<int>(e.name.size()));
+  std::printf("%-3s %-*s %-6s %5s %5s %5s %6s %-22s %7s %6s %8s %s\n", "#", width, "name", "family",
               "seed", "boxes", "nodes", "depth", "root bounds [s]", "trials", "sims", "wall",
               "made");
   for (std::size_t i = 0; i < lib.entries.size(); ++i) {
     const LibraryEntry& e = lib.entries[i];
-    std::printf("%-3zu %-12s %-6s %5llu %5zu %5zu %6zu %-22s %7llu %6llu %7.0fs %s\n", i,
+    std::printf("%-3zu %-*s %-6s %5llu %5zu %5zu %6zu %-22s %7llu %6llu %7.0fs %s\n", i, width,
                 e.name.c_str(), e.family.c_str(), static_cast<unsigned long long>(e.world_seed),
                 e.world.boxes.size(), e.strategy.nodes.size(), e.strategy.depth(),
                 fmt::format("[{:.1f}, {:.1f}]", e.lower, e.upper).c_str(),
@@ -46,14 +76,36 @@ void list(const plr::sim::Library& lib) {
                 static_cast<unsigned long long>(e.provenance.simulations), e.provenance.wall_s,
                 e.provenance.created.c_str());
   }
+  bool chains = false;
+  for (std::size_t i = 0; i < lib.entries.size(); ++i) {
+    if (lib.entries[i].is_continuation() || plr::sim::continuations(lib, i).empty()) continue;
+    if (!chains) std::printf("chains (parent -> continuation at the leaf [observations]):\n");
+    chains = true;
+    std::printf("  %s\n", lib.entries[i].name.c_str());
+    print_chain(lib, i, 0);
+  }
   if (!lib.action_model.empty()) std::printf("action model: %s\n", lib.action_model.c_str());
   if (!lib.made_by.empty()) std::printf("made by: %s\n", lib.made_by.c_str());
 }
 
-void show(const LibraryEntry& e) {
+void show(const plr::sim::Library& lib, const LibraryEntry& e) {
   const plr::sim::Provenance& p = e.provenance;
   std::printf("name: %s\nfamily: %s\nworld_seed: %llu\n", e.name.c_str(), e.family.c_str(),
               static_cast<unsigned long long>(e.world_seed));
+  if (e.is_continuation()) {
+    std::printf("parent: %s\nleaf: [%s]\nstart:\n", e.parent.c_str(), path(e).c_str());
+    for (const auto& s : e.start)
+      std::printf("  - {particle: %u, state_hash: %016llx, boxes_left: %u}\n", s.particle,
+                  static_cast<unsigned long long>(s.state_hash), s.boxes_left);
+  }
+  const auto index = static_cast<std::size_t>(&e - lib.entries.data());
+  const auto next = plr::sim::continuations(lib, index);
+  if (!next.empty()) {
+    std::printf("continuations:\n");
+    for (const std::size_t c : next)
+      std::printf("  - {name: %s, leaf: [%s]}\n", lib.entries[c].name.c_str(),
+                  path(lib.entries[c]).c_str());
+  }
   std::printf("world: %zu boxes in a %.2f x %.2f x %.2f m trailer\n", e.world.boxes.size(),
               e.world.trailer.width, e.world.trailer.height, e.world.trailer.depth);
   std::printf("observation: %s\n", e.observation_json.c_str());
@@ -91,9 +143,12 @@ int main(int argc, char** argv) {
   const auto entry = [&key](CLI::App* cmd) {
     cmd->add_option("entry", key, "The entry: its name or its index")->required();
   };
-  auto* list_cmd = app.add_subcommand("list", "A line per entry");
+  auto* list_cmd = app.add_subcommand("list", "A line per entry, then the chains of continuations");
   library_file(list_cmd);
-  auto* show_cmd = app.add_subcommand("show", "An entry's world, bounds, provenance and strategy");
+  auto* show_cmd = app.add_subcommand(
+      "show",
+      "An entry's world, its parent and leaf (a continuation), its continuations, bounds, "
+      "provenance and strategy");
   library_file(show_cmd);
   entry(show_cmd);
   auto* export_cmd = app.add_subcommand(
@@ -131,7 +186,7 @@ int main(int argc, char** argv) {
     return fail(fmt::format("{}: no entry '{}' ({} entries)", file, key, lib->entries.size()));
   }
   if (*show_cmd) {
-    show(*e);
+    show(*lib, *e);
     return 0;
   }
   if (auto s = plr::sim::save_strategy(e->strategy, out); !s) return fail(s.error().message);

@@ -124,4 +124,66 @@ TEST(GeneratorNode, KilledWithSigkillAndRunAgainGivesTheSameLibrary) {
                                  fs::file_size(lib), fs::file_size(lib) + 10));
 }
 
+// A generator config for the block world, `extra` added to its params.
+void write_config(const fs::path& file, const std::string& extra) {
+  std::ofstream cfg(file);
+  cfg << "pipeline: generate_test\n"
+         "nodes:\n"
+         "  generator:\n"
+         "    plugin: strategy_generator\n"
+         "    params:\n"
+         "      library: ${report_dir}/library.plrl\n"
+         "      checkpoint_dir: ${report_dir}/checkpoint\n"
+         "      worlds: [{family: A1, world_file: " BLOCK_WORLD
+         "}]\n"
+         "      particles: 2\n"
+         "      horizon: 1\n"
+         "      trials: 2\n"
+         "      workers: 1\n"
+         "      progress: false\n"
+         "      observation: {h_pile: 0.55, pile_mid: 0.25, pile_high: 0.4, wall_mid: 1.2, "
+         "wall_high: 1.9}\n"
+      << extra;
+}
+
+TEST(GeneratorNode, ContinuationsMakeAChainThatResumesFromALibraryWithoutThem) {
+  TempDir dir;
+  write_config(dir / "none.yaml", "");
+  write_config(dir / "zero.yaml", "      continuations: 0\n");
+  write_config(dir / "chain.yaml", "      continuations: 2\n");
+  // continuations: 0 is the default, and makes the strategy alone.
+  ASSERT_EQ(wait_exit(start(dir / "none.yaml", dir / "none")), 0);
+  ASSERT_EQ(wait_exit(start(dir / "zero.yaml", dir / "resumed")), 0);
+  const std::string alone = plr::sim::testing::library_fingerprint(dir / "none/library.plrl");
+  EXPECT_EQ(plr::sim::testing::library_fingerprint(dir / "resumed/library.plrl"), alone);
+
+  // The chain in one go, and after the strategy alone (its leaves replayed
+  // from its result store): the same library, the first entry unchanged.
+  ASSERT_EQ(wait_exit(start(dir / "chain.yaml", dir / "chain")), 0);
+  ASSERT_EQ(wait_exit(start(dir / "chain.yaml", dir / "resumed")), 0);
+  const std::string chain = plr::sim::testing::library_fingerprint(dir / "chain/library.plrl");
+  EXPECT_EQ(plr::sim::testing::library_fingerprint(dir / "resumed/library.plrl"), chain);
+  EXPECT_EQ(chain.rfind(alone, 0), 0u) << chain;
+  const auto lib = plr::sim::load_library(dir / "chain/library.plrl");
+  ASSERT_TRUE(lib) << lib.error().message;
+  ASSERT_GE(lib->entries.size(), 2u) << chain;
+  ASSERT_LE(lib->entries.size(), 3u) << chain;
+  for (std::size_t i = 1; i < lib->entries.size(); ++i) {
+    const plr::sim::LibraryEntry& e = lib->entries[i];
+    EXPECT_EQ(e.parent, lib->entries[i - 1].name);
+    EXPECT_EQ(e.leaf.size(), 1u);  // horizon 1: one observation from the parent's root
+    EXPECT_FALSE(e.start.empty());
+    EXPECT_TRUE(fs::exists(dir / "chain" / (e.name + ".svg")));
+  }
+
+  const std::string file = (dir / "chain/library.plrl").string();
+  const std::string list = output(std::string(PLR_BIN) + " library list " + file);
+  EXPECT_NE(list.find("chains (parent -> continuation"), std::string::npos) << list;
+  EXPECT_NE(list.find("-> " + lib->entries[1].name + " at ["), std::string::npos) << list;
+  const std::string show =
+      output(std::string(PLR_BIN) + " library show " + file + " " + lib->entries[1].name);
+  EXPECT_NE(show.find("parent: block\nleaf: ["), std::string::npos) << show;
+  EXPECT_NE(show.find("state_hash: "), std::string::npos) << show;
+}
+
 }  // namespace

@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <thread>
 
@@ -256,6 +257,103 @@ TEST(Generator, ResumedFromItsStoredResultsEndsWithTheSameStrategy) {
   EXPECT_NE(strategy_svg(resumed->entry.strategy)
                 .find(sim::to_string(resumed->entry.strategy.nodes[0].action)),
             std::string::npos);
+}
+
+// Where `strategy` ends on a particle, found by running it by hand (one
+// action at a time on the rig, no truck model): the observations seen, the
+// state there, and whether the trailer is empty.
+struct Walked {
+  std::vector<sim::Observation> path;
+  SimOutcome state;
+  bool empty = false;
+};
+
+Walked walk(const sim::Strategy& strategy, SimOutcome state) {
+  Walked w;
+  std::uint32_t node = strategy.root;
+  for (;;) {
+    auto next = actions::simulate(rig(), {state.state, strategy.nodes[node].action});
+    EXPECT_TRUE(next) << next.error().message;
+    if (!next) return w;
+    state = *next;
+    if (state.observation == kEmptyObservation) {
+      w.empty = true;
+      break;
+    }
+    w.path.push_back(static_cast<sim::Observation>(state.observation));
+    const auto child = strategy.next(node, w.path.back());
+    if (!child) break;
+    node = *child;
+  }
+  w.state = state;
+  return w;
+}
+
+TEST(Continuation, StartsFromTheBeliefItsParentReachesAtTheLeaf) {
+  GenerateOptions o;
+  o.truck.horizon = 1;
+  o.trials = 2;
+  // Light, the block goes at once; heavy, it stays: two leaves at least
+  // until the trailer is empty on both.
+  const Problem p = block_problem("block", {4.0, 30.0, 31.0});
+  InProcess local;
+  const auto parent = generate(p, o, rig(), local.simulator, nullptr);
+  ASSERT_TRUE(parent) << parent.error().message;
+  const auto picked = continued_leaves(parent->leaves, 1.0);
+  ASSERT_EQ(picked.size(), 1u);
+  const Leaf& leaf = parent->leaves[picked[0]];
+  ASSERT_FALSE(leaf.empty);
+  auto next = continuation(p, parent->leaves, picked[0], rig());
+  ASSERT_TRUE(next) << next.error().message;
+  const auto child = generate(*next, o, rig(), local.simulator, nullptr);
+  ASSERT_TRUE(child) << child.error().message;
+  const sim::LibraryEntry& e = child->entry;
+  EXPECT_EQ(e.name, fmt::format("block.{}", picked[0] + 1));
+  EXPECT_EQ(e.parent, "block");
+  EXPECT_EQ(e.leaf, leaf.path);
+
+  // The parent's strategy run by hand on each particle: those whose
+  // observations are the leaf's, in the states they end in, are the
+  // continuation's belief; the others are not in it.
+  std::vector<sim::StartParticle> expected;
+  std::size_t most = 0;
+  std::map<std::pair<std::vector<sim::Observation>, bool>, std::size_t> reached;
+  for (std::uint32_t i = 0; i < p.particles.size(); ++i) {
+    const Walked w =
+        walk(parent->entry.strategy, actions::start_state(rig(), p.particles[i]).value());
+    most = std::max(most, w.empty ? 0 : ++reached[{w.path, w.empty}]);
+    if (!w.empty && w.path == leaf.path)
+      expected.push_back({i, actions::state_hash(*w.state.state), w.state.boxes_left});
+  }
+  ASSERT_FALSE(expected.empty());
+  EXPECT_EQ(expected.size(), most) << "the continued leaf is the one most particles reach";
+  EXPECT_EQ(e.start, expected);
+  EXPECT_EQ(e.provenance.particles, expected.size());
+  EXPECT_LT(e.start.front().boxes_left, p.world.boxes.size());
+  // W is the trailer as the robot sees it there, not the parent's.
+  EXPECT_EQ(e.world.boxes.size(), e.start.front().boxes_left);
+}
+
+TEST(Continuation, EveryLeafReachedByTheShareGetsOneAndTheMostReachedAlways) {
+  const auto leaf = [](std::vector<sim::Observation> path, std::size_t n, bool empty = false) {
+    Leaf l;
+    l.path = std::move(path);
+    l.empty = empty;
+    l.particles.resize(n);
+    l.states.resize(n);
+    l.share = static_cast<double>(n) / 5.0;
+    return l;
+  };
+  const auto o = [](int i) { return static_cast<sim::Observation>(i); };
+  std::vector<Leaf> leaves = {leaf({o(1)}, 1), leaf({o(2)}, 2), leaf({o(3)}, 2), leaf({}, 0, true)};
+  EXPECT_EQ(continued_leaves(leaves, 1.0), std::vector<std::size_t>{1});
+  // On a tie, where more is left to unload.
+  leaves[2].states[1].boxes_left = 1;
+  EXPECT_EQ(continued_leaves(leaves, 1.0), std::vector<std::size_t>{2});
+  leaves[2].states[1].boxes_left = 0;
+  EXPECT_EQ(continued_leaves(leaves, 0.4), (std::vector<std::size_t>{1, 2}));
+  EXPECT_EQ(continued_leaves(leaves, 0.2), (std::vector<std::size_t>{0, 1, 2}));
+  EXPECT_TRUE(continued_leaves({leaf({}, 5, true)}, 0.2).empty());
 }
 
 }  // namespace

@@ -34,6 +34,27 @@ struct Problem {
   sim::World world;                   // W (masses 0)
   std::vector<sim::World> particles;  // W with each particle's masses
   std::string observation_json = "{}";
+  // A continuation: its particles' starting states (a leaf belief of
+  // `parent`, reached by the observations `leaf`), in place of `particles`
+  // at rest; `particle_ids` says which of the generator's mass particles
+  // each is. For a fresh trailer all three are empty (ids 0, 1, ...).
+  std::string parent;
+  std::vector<sim::Observation> leaf;
+  std::vector<SimOutcome> starts;
+  std::vector<std::uint32_t> particle_ids;
+};
+
+// Where a strategy's tree ends for some of its particles: after the
+// observations `path` from its root (the last one has no edge), or where the
+// trailer became empty (`empty`: the path stops before the goal). The
+// particles that end there share the path, so they are one belief of the
+// search: the one a run that saw those observations is in.
+struct Leaf {
+  std::vector<sim::Observation> path;
+  bool empty = false;
+  std::vector<std::uint32_t> particles;  // the generator's mass particles
+  std::vector<SimOutcome> states;        // theirs, in the same order
+  double share = 0.0;                    // of the strategy's particles
 };
 
 // W^t = make_environment(family, world_seed); the particles are W with
@@ -70,6 +91,7 @@ struct GenerateProgress {
 struct GenerateResult {
   sim::LibraryEntry entry;
   pomdp::PolicyTree tree;
+  std::vector<Leaf> leaves;     // in path order
   std::uint64_t simulated = 0;  // by this run (the rest came from the store)
   double simulated_robot_s = 0.0;
   double simulated_wall_s = 0.0;  // inside the workers
@@ -83,6 +105,27 @@ plr::Expected<GenerateResult> generate(
     const Problem& problem, const GenerateOptions& options, actions::Rig& rig, Simulator& simulator,
     const plr::jobs::Store* store,
     const std::function<bool(const GenerateProgress&)>& on_progress = {});
+
+// The leaves of `entry`'s strategy run on `problem`'s particles (the
+// problem it was made for), replayed with the truck model: a resumed
+// generation's way to its continuations' beliefs. The simulations come from
+// `store` (the entry's result store) when it has them.
+plr::Expected<std::vector<Leaf>> replay_leaves(const Problem& problem,
+                                               const sim::LibraryEntry& entry,
+                                               const GenerateOptions& options, actions::Rig& rig,
+                                               Simulator& simulator, const plr::jobs::Store* store);
+
+// The leaves that get a continuation: every leaf (trailer not empty) that at
+// least `min_share` of the particles reach, and always the one most reach
+// (on a tie, the one with the most boxes left; then the first in path
+// order). Indices into `leaves`.
+std::vector<std::size_t> continued_leaves(const std::vector<Leaf>& leaves, double min_share);
+
+// The problem of the continuation of `parent` at `leaves[index]`: named
+// "<parent>.<index + 1>", its particles the leaf's states, its W the world as
+// the robot perceives it on the leaf's first particle (`rig` restores it).
+plr::Expected<Problem> continuation(const Problem& parent, const std::vector<Leaf>& leaves,
+                                    std::size_t index, actions::Rig& rig);
 
 // The policy tree with the truck's labels (observations of an empty
 // trailer end a branch).

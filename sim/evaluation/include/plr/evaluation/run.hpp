@@ -16,6 +16,7 @@
 #include "plr/chooser/model.hpp"
 #include "plr/chooser/nearest.hpp"
 #include "plr/evaluation/settings.hpp"
+#include "plr/sim/chain.hpp"
 #include "plr/sim/library.hpp"
 
 namespace plr::evaluation {
@@ -23,6 +24,10 @@ namespace plr::evaluation {
 // The library L and the chooser's model M, as the methods need them.
 struct Resources {
   sim::Library library;
+  // Each strategy for a fresh trailer with its continuations grafted
+  // (plr/sim/chain.hpp): what open-loop and expected-offline follow; by
+  // entry index (a continuation's is its own strategy).
+  std::vector<sim::Chain> chains;
   std::optional<chooser::Model> model;
   std::optional<chooser::LibraryIndex> index;
 };

@@ -51,6 +51,16 @@ struct Provenance {
   std::string created;
 };
 
+// A particle of the belief a continuation starts from: the generator's mass
+// particle it is (sim::particle_seed(provenance.seed, particle)) and the
+// hash of its state there (actions::state_hash of the TruckState bytes).
+struct StartParticle {
+  std::uint32_t particle = 0;
+  std::uint64_t state_hash = 0;
+  std::uint32_t boxes_left = 0;
+  bool operator==(const StartParticle&) const = default;
+};
+
 struct LibraryEntry {
   std::string name;
   std::string family;
@@ -61,6 +71,14 @@ struct LibraryEntry {
   double lower = 0.0, upper = 0.0;  // the root's value bounds: negated robot seconds
   Provenance provenance;
   std::vector<BoundPoint> curve;
+  // A continuation: it starts where `parent`'s tree ends after the
+  // observations `leaf` (from the parent's root), on the belief `start`.
+  // Empty for a strategy made for a fresh trailer.
+  std::string parent;
+  std::vector<Observation> leaf;
+  std::vector<StartParticle> start;
+
+  bool is_continuation() const { return !parent.empty(); }
 };
 
 struct Library {
@@ -68,6 +86,9 @@ struct Library {
   std::string made_by;       // the command and settings that made it
   std::string action_model;  // the action model's fingerprint when it was made
 };
+
+// The continuations of `library.entries[entry]` (indices, in file order).
+std::vector<std::size_t> continuations(const Library& library, std::size_t entry);
 
 std::vector<std::uint8_t> serialize(const Library& library);
 plr::Expected<Library> deserialize_library(const std::uint8_t* data, std::size_t size,

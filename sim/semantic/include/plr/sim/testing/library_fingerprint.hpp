@@ -18,6 +18,13 @@ inline std::string entry_fingerprint(const LibraryEntry& e) {
                               e.provenance.trials, e.provenance.nodes, e.provenance.simulations);
   for (const auto& p : e.curve)
     s += fmt::format("{} {:.17g} {:.17g}\n", p.trials, p.lower, p.upper);
+  if (e.is_continuation()) {
+    s += "parent " + e.parent + " leaf";
+    for (const Observation o : e.leaf) s += " " + to_string(o);
+    for (const auto& p : e.start)
+      s += fmt::format("\nstart {} {:016x} {}", p.particle, p.state_hash, p.boxes_left);
+    s += "\n";
+  }
   return s;
 }
 
