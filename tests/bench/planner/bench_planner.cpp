@@ -2,14 +2,24 @@
 // executor asks for during Pick and Sweep actions on generated walls (A1) and
 // piles (B1); ARA* lattice planner and RRTConnect side by side.
 //   bench_planner [--quick] [--json] [--seed N] [--mode 1-6] [--budget N]
-//                 [--primitives FILE] [--failing FILE] [--verbose]
+//                 [--primitives FILE] [--failing FILE] [--recurring FILE]... [--verbose]
 // --budget sets every query's max_expansions (deterministic planning);
 // --primitives another lattice file than the shipped one. --failing: a
 // query set (plr/planning/query_set.hpp) of queries that spent their whole
 // budget in bench_unload runs (default: the recorded one,
 // tests/bench/planner/data); infeasible_refused_share is the share of them
 // the ARA* planner refuses within 100 expansions (judged unsolvable, not
-// out of budget).
+// out of budget). --recurring: query sets of one trailer's M1 and M2
+// queries each, in the order a bench_unload run asked them (default: the
+// recorded ones); each is answered in order by a planner that keeps its
+// experience through the trailer and by one that plans every query from
+// scratch. On the recurring queries (those asked once the mode has
+// experience) experience_speedup is the median CPU time of a query from
+// scratch over the median with experience, experience_cost_ratio the
+// median over queries both solved of the path's execution time with
+// experience over from scratch.
+#include <time.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -234,6 +244,12 @@ double percentile(std::vector<double> v, double p) {
   return v[lo] + (idx - lo) * (v[hi] - v[lo]);
 }
 
+double mean(const std::vector<double>& v) {
+  double sum = 0.0;
+  for (double x : v) sum += x;
+  return v.empty() ? NAN : sum / static_cast<double>(v.size());
+}
+
 // The recorded failing set: how many of its queries the planner refuses
 // within kRefuseWithin expansions, and why each of the others went on.
 constexpr std::uint64_t kRefuseWithin = 100;
@@ -267,6 +283,75 @@ FailingSet run_failing_set(const std::vector<RecordedQuery>& set, Planner& plann
   return out;
 }
 
+double thread_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// Recorded trailers replayed with and without experience.
+struct Recurring {
+  std::size_t trailers = 0, queries = 0, recurring = 0, solved_both = 0, solved_scratch = 0,
+              solved_experience = 0, used_experience = 0;
+  std::vector<double> scratch_ms, experience_ms;  // recurring, CPU time of the whole query
+  std::vector<double> scratch_exp, experience_exp;
+  std::vector<double> cost_ratio, time_ratio;  // solved by both
+  double speedup() const {
+    return percentile(scratch_ms, 0.5) / percentile(experience_ms, 0.5);
+  }
+};
+
+Recurring run_recurring(const std::vector<std::string>& files, const LatticeConfig& config,
+                        const RobotModel& robot, bool verbose) {
+  Recurring out;
+  for (const std::string& file : files) {
+    const auto set = load_query_set(file);
+    if (!set) {
+      std::fprintf(stderr, "bench_planner: %s\n", set.error().message.c_str());
+      std::exit(2);
+    }
+    // One trailer: experience starts empty.
+    LatticePlanner scratch(config), experience(config);
+    scratch.set_experience(false);
+    experience.set_experience(true);
+    ++out.trailers;
+    for (const RecordedQuery& rq : *set) {
+      ++out.queries;
+      const bool recurring = experience.experience_paths(rq.query.mode) > 0;
+      CollisionChecker c0(robot, rq.world), c1(robot, rq.world);
+      double t0 = thread_cpu_s();
+      const PlanResult a = scratch.plan(rq.query, c0);
+      const double ms_a = 1e3 * (thread_cpu_s() - t0);
+      t0 = thread_cpu_s();
+      const PlanResult b = experience.plan(rq.query, c1);
+      const double ms_b = 1e3 * (thread_cpu_s() - t0);
+      if (verbose)
+        std::fprintf(stderr, "recurring %s %s: scratch %s %zu exp %.1f ms, experience %s %zu exp "
+                     "(%zu from experience) %.1f ms\n",
+                     to_string(rq.query.mode), recurring ? "again" : "first", to_string(a.status),
+                     a.stats.expansions, ms_a, to_string(b.status), b.stats.expansions,
+                     b.stats.experience_edges, ms_b);
+      if (!recurring) continue;
+      ++out.recurring;
+      const bool sa = a.status == PlanStatus::kSolved, sb = b.status == PlanStatus::kSolved;
+      out.solved_scratch += sa ? 1 : 0;
+      out.solved_experience += sb ? 1 : 0;
+      out.used_experience += b.stats.experience_edges > 0 ? 1 : 0;
+      out.scratch_ms.push_back(ms_a);
+      out.experience_ms.push_back(ms_b);
+      out.scratch_exp.push_back(static_cast<double>(a.stats.expansions));
+      out.experience_exp.push_back(static_cast<double>(b.stats.expansions));
+      if (sa && sb) {
+        ++out.solved_both;
+        if (a.trajectory.duration() > 0)
+          out.cost_ratio.push_back(b.trajectory.duration() / a.trajectory.duration());
+        out.time_ratio.push_back(ms_a / std::max(ms_b, 1e-6));
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -275,6 +360,7 @@ int main(int argc, char** argv) {
   std::uint64_t seed = 1, budget = 0;
   std::string primitives = shipped_file("robots/unloader_lattice.yaml").value().string();
   std::string failing = PLR_PLANNER_FAILING_SET;
+  std::vector<std::string> recurring_sets = {PLR_PLANNER_RECURRING_SETS};
   CLI::App app{
       "Seeded planning queries per mode from Pick and Sweep actions on A1 walls and B1 "
       "piles: ARA* lattice planner and RRTConnect side by side"};
@@ -292,6 +378,9 @@ int main(int argc, char** argv) {
                  "Query set of queries that spent their whole budget in bench_unload runs")
       ->check(CLI::ExistingFile)
       ->capture_default_str();
+  app.add_option("--recurring", recurring_sets,
+                 "Query sets of one trailer's M1 and M2 queries each, in the order asked")
+      ->check(CLI::ExistingFile);
   app.add_flag("--verbose", verbose, "A line per query on stderr");
   plr::bench::parse_or_exit(app, argc, argv);
   const RobotModel robot = load_robot().value();
@@ -300,7 +389,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bench_planner: %s\n", lattice.error().message.c_str());
     return 2;
   }
+  const LatticeConfig config = *lattice;
   LatticePlanner arastar(std::move(*lattice));
+  // Independent queries: each from scratch (experience has its own part).
+  arastar.set_experience(false);
   plr::ompl_planner::OmplPlanner rrt({0.0, static_cast<std::uint32_t>(seed)});
 
   std::mt19937_64 rng(seed);
@@ -428,10 +520,32 @@ int main(int argc, char** argv) {
     return 2;
   }
   const FailingSet f = run_failing_set(*set, arastar, robot, verbose);
+  const Recurring rec = run_recurring(recurring_sets, config, robot, verbose);
   if (json) {
     std::printf("%s\n", nlohmann::json{{"rows", out},
                                        {"exec_ratio", ratios},
                                        {"infeasible_refused_share", f.share()},
+                                       {"experience_speedup", rec.speedup()},
+                                       {"experience_cost_ratio", percentile(rec.cost_ratio, 0.5)},
+                                       {"recurring_set",
+                                        {{"files", recurring_sets},
+                                         {"trailers", rec.trailers},
+                                         {"queries", rec.queries},
+                                         {"recurring", rec.recurring},
+                                         {"solved_scratch", rec.solved_scratch},
+                                         {"solved_experience", rec.solved_experience},
+                                         {"used_experience", rec.used_experience},
+                                         {"scratch_median_ms", percentile(rec.scratch_ms, 0.5)},
+                                         {"experience_median_ms",
+                                          percentile(rec.experience_ms, 0.5)},
+                                         {"scratch_mean_expansions",
+                                          mean(rec.scratch_exp)},
+                                         {"experience_mean_expansions",
+                                          mean(rec.experience_exp)},
+                                         {"speedup_per_query_median",
+                                          percentile(rec.time_ratio, 0.5)},
+                                         {"cost_ratio_p95", percentile(rec.cost_ratio, 0.95)},
+                                         {"cost_ratio_max", percentile(rec.cost_ratio, 1.0)}}},
                                        {"failing_set",
                                         {{"file", failing},
                                          {"queries", f.queries},
@@ -446,6 +560,19 @@ int main(int argc, char** argv) {
                 static_cast<unsigned long long>(kRefuseWithin));
     for (const auto& [what, n] : f.answers) std::printf("  %4d %s\n", n, what.c_str());
     std::printf("infeasible_refused_share %.2f (issue 46 target >= 0.90)\n", f.share());
+    std::printf(
+        "\nrecurring pick queries (%zu trailers, %zu M1/M2 queries, %zu asked with experience):\n"
+        "  solved from scratch %zu, with experience %zu; experience used in %zu\n"
+        "  CPU ms per query, median: from scratch %.2f, with experience %.2f; expansions, "
+        "mean: %.1f, %.1f\n"
+        "  per-query speedup median %.2f; cost ratio p95 %.2f, max %.2f (%zu solved by both)\n",
+        rec.trailers, rec.queries, rec.recurring, rec.solved_scratch, rec.solved_experience,
+        rec.used_experience, percentile(rec.scratch_ms, 0.5), percentile(rec.experience_ms, 0.5),
+        mean(rec.scratch_exp), mean(rec.experience_exp), percentile(rec.time_ratio, 0.5),
+        percentile(rec.cost_ratio, 0.95), percentile(rec.cost_ratio, 1.0), rec.solved_both);
+    std::printf("experience_speedup %.2f (issue 46 target >= 10), experience_cost_ratio %.2f "
+                "(<= 1.5)\n",
+                rec.speedup(), percentile(rec.cost_ratio, 0.5));
   }
   return 0;
 }
