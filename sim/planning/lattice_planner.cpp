@@ -67,7 +67,9 @@ void LatticePlanner::set_experience(bool enabled) {
   if (!enabled) clear_experience();
 }
 
-void LatticePlanner::clear_experience() { experience_.clear(); }
+void LatticePlanner::clear_experience() {
+  experience_.clear();
+}
 
 std::size_t LatticePlanner::experience_paths(PlanMode mode) const {
   const auto it = experience_.find(mode);

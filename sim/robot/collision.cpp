@@ -714,7 +714,9 @@ void CollisionChecker::set_world(const World& world,
   set_boxes(world.boxes);
 }
 
-std::uint64_t CollisionChecker::trailer_serial() const { return impl_->trailer->serial; }
+std::uint64_t CollisionChecker::trailer_serial() const {
+  return impl_->trailer->serial;
+}
 
 std::uint64_t CollisionChecker::trailer_builds() {
   return g_trailer_builds.load(std::memory_order_relaxed);

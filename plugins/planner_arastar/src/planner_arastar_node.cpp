@@ -1,6 +1,8 @@
 // Plug-in: the ARA* lattice planner (plr/planning/lattice_planner.hpp)
 // behind the `plan` service. Parameter `lattice`: a lattice file (the
-// shipped robots/unloader_lattice.yaml by default).
+// shipped robots/unloader_lattice.yaml by default); `experience` (bool,
+// default true): M1 and M2 searches reuse the paths of earlier requests on
+// the same trailer (docs/planner.md, "Experience for recurring motions").
 #include <plr/interface.hpp>
 #include <plr/messages.hpp>
 #include <plr/plugin.hpp>
@@ -19,7 +21,7 @@ class PlannerArastarNode final : public plr::planning::PlannerNode {
   using PlannerNode::PlannerNode;
 
  protected:
-  std::vector<std::string> planner_params() const override { return {"lattice"}; }
+  std::vector<std::string> planner_params() const override { return {"lattice", "experience"}; }
 
   plr::Expected<std::unique_ptr<Planner>> make_planner() override {
     std::string file = params().get<std::string>("lattice", "");
@@ -32,6 +34,9 @@ class PlannerArastarNode final : public plr::planning::PlannerNode {
     auto config = LatticeConfig::from_file(file);
     if (!config)
       return plr::make_error(PLR_ERR_INVALID, "param 'lattice': " + config.error().message);
+    // On by default: in bench_unload it cut A1's robot time and unloaded
+    // no box less (docs/planner.md).
+    config->experience.enabled = params().get<bool>("experience", true);
     return std::unique_ptr<Planner>(
         std::make_unique<plr::planning::LatticePlanner>(std::move(*config)));
   }

@@ -43,8 +43,8 @@ ExperienceGraph::ExperienceGraph(
     done[u] = true;
     for (std::size_t v = 0; v < n; ++v) {
       if (done[v]) continue;
-      const bool along = nodes_[u].path == nodes_[v].path &&
-                         std::abs(nodes_[u].index - nodes_[v].index) == 1;
+      const bool along =
+          nodes_[u].path == nodes_[v].path && std::abs(nodes_[u].index - nodes_[v].index) == 1;
       const double t = pair_time_(nodes_[v].q, nodes_[u].q);
       const double c = along ? t : weight_ * t;
       if (dist[u] + c < dist[v]) dist[v] = dist[u] + c;

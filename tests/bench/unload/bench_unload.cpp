@@ -199,8 +199,8 @@ nlohmann::json run(const Job& job) {
     die(saved.error().message);
   if (job.record_queries) {
     auto picks = job.file;
-    if (auto saved =
-            plr::planning::save_query_set(backend.picks, picks.replace_extension(".pick_queries.bin"));
+    if (auto saved = plr::planning::save_query_set(backend.picks,
+                                                   picks.replace_extension(".pick_queries.bin"));
         !saved)
       die(saved.error().message);
   }

@@ -35,7 +35,10 @@ struct ExperienceSettings {
   bool enabled = false;
   // w_E: moves off the stored paths count w_E times their heuristic; a
   // first solution at ε costs at most ε w_E times the optimal lattice path.
-  double weight = 2.0;
+  // A stored path is only followed when its cost beats w_E times the
+  // straight-line estimate; with 2 no recorded A1 query followed one (the
+  // search was only greedier), with 5 the hard ones did (docs/planner.md).
+  double weight = 5.0;
   std::size_t max_paths = 16;  // per mode; the oldest is dropped
 };
 
