@@ -189,11 +189,16 @@ void JointLattice::successors(StateId s, std::vector<search::Successor>& out) {
   }
 }
 
-StateId JointLattice::node_state(std::int32_t node) {
+JointLattice::Key JointLattice::node_key(std::int32_t node) {
   // Keyed by node, not configuration: each node has its own path to follow.
   Key key{};
   key[0] = node;
   key[sim::kNumJoints - 1] = 2;
+  return key;
+}
+
+StateId JointLattice::node_state(std::int32_t node) {
+  const Key key = node_key(node);
   const StateId id = intern(key, experience_->nodes()[static_cast<std::size_t>(node)].q, true);
   states_[static_cast<std::size_t>(id)].node = node;
   return id;
@@ -203,7 +208,11 @@ void JointLattice::experience_successors(const State& from, std::vector<search::
   const auto& nodes = experience_->nodes();
   if (from.node < 0) {
     // Onto the stored path h_E leads to, when it is near.
-    if (from.via < 0) return;
+    // Each node is joined once, from the first state that leads there: a
+    // node the search has reached is followed from there, and joining it
+    // again from every state near it only pulls the search back (a stored
+    // path that does not lead to this goal held M1 searches at their budget).
+    if (from.via < 0 || index_.count(node_key(from.via)) != 0) return;
     const JointVector& q = nodes[static_cast<std::size_t>(from.via)].q;
     if (time(from.q, q) > lattice_.snap_time) return;
     const StateId id = node_state(from.via);

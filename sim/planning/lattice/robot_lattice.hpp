@@ -87,6 +87,7 @@ class JointLattice final : public search::Graph {
   bool valid(search::StateId s);
   bool within_goal(const State& st) const;
   double plain_heuristic(const State& st) const;
+  static Key node_key(std::int32_t node);
   search::StateId node_state(std::int32_t node);
   void experience_successors(const State& from, std::vector<search::Successor>& out);
   double time(const sim::JointVector& a, const sim::JointVector& b) const;
