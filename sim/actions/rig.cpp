@@ -10,7 +10,12 @@ Rig::Rig(sim::RobotModel robot, planning::LatticeConfig lattice, ActionOptions o
       planner_(std::move(lattice)),
       model_(robot_, std::move(options)),
       simulation_(robot_, sim::World{}),
-      backend_(simulation_, planner_) {}
+      backend_(simulation_, planner_) {
+  // An outcome here must be a function of the state it starts from (a
+  // snapshot restored elsewhere runs on bit for bit): no answers that depend
+  // on the queries before.
+  planner_.set_experience(false);
+}
 
 plr::Expected<std::unique_ptr<Rig>> Rig::create(ActionOptions options) {
   auto robot = sim::load_robot();

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include "lattice/experience.hpp"
 #include "lattice/robot_lattice.hpp"
 #include "plr/planning/shortcut.hpp"
 #include "plr/search/arastar.hpp"
@@ -61,6 +62,20 @@ LatticePlanner::LatticePlanner(LatticeConfig config)
 
 LatticePlanner::~LatticePlanner() = default;
 
+void LatticePlanner::set_experience(bool enabled) {
+  config_.experience.enabled = enabled;
+  if (!enabled) clear_experience();
+}
+
+void LatticePlanner::clear_experience() {
+  experience_.clear();
+}
+
+std::size_t LatticePlanner::experience_paths(PlanMode mode) const {
+  const auto it = experience_.find(mode);
+  return it == experience_.end() ? 0 : it->second->paths().size();
+}
+
 PlanResult LatticePlanner::do_plan(const PlanQuery& query, sim::CollisionChecker& checker) {
   const ModeLattice& lattice = config_.modes.at(query.mode);
   const JointVector& start = query.start;
@@ -78,6 +93,8 @@ PlanResult LatticePlanner::do_plan(const PlanQuery& query, sim::CollisionChecker
   o.eps_decrement = query.eps_decrement;
   search::SearchResult sr;
   std::vector<JointVector> path;
+  const bool experience = config_.experience.enabled;
+  ExperienceStore* store = nullptr;
   if (query.mode == PlanMode::kArmCartesian) {
     LineLattice graph(lattice, checker, start, std::get<PoseGoal>(query.goal));
     GraphHeuristic<LineLattice> h(graph);
@@ -90,10 +107,22 @@ PlanResult LatticePlanner::do_plan(const PlanQuery& query, sim::CollisionChecker
                        std::to_string(graph.broken_at() * lattice.resolution[0]) + " m";
     }
   } else {
-    JointLattice graph(lattice, checker, start, query.goal, false);
+    // The recurring motions with long searches: to a pre-grasp (M1, M2),
+    // to the drop-off and home (M1).
+    const bool recurring = query.mode == PlanMode::kArm || query.mode == PlanMode::kArmBase;
+    if (experience && recurring) {
+      if (checker.trailer_serial() != trailer_) clear_experience();
+      trailer_ = checker.trailer_serial();
+      auto& slot = experience_[query.mode];
+      if (!slot) slot = std::make_unique<ExperienceStore>(config_.experience.max_paths);
+      store = slot.get();
+    }
+    JointLattice graph(lattice, checker, start, query.goal, false, store,
+                       config_.experience.weight);
     GraphHeuristic<JointLattice> h(graph);
     sr = search_->search(graph, h, graph.start(), o);
-    for (auto id : sr.path) path.push_back(graph.config(id));
+    path = graph.path_configs(sr.path);
+    result.stats.experience_edges = graph.experience_edges();
   }
   result.stats.expansions = sr.expansions;
   result.stats.budget_exhausted = sr.budget_exhausted;
@@ -123,6 +152,7 @@ PlanResult LatticePlanner::do_plan(const PlanQuery& query, sim::CollisionChecker
     if (const auto* pg = std::get_if<PoseGoal>(&query.goal))
       aim_at_quickest_goal(path, *pg, lattice, checker);
   }
+  if (store != nullptr) store->add(path);
   result.path = std::move(path);
   return result;
 }

@@ -213,6 +213,7 @@ struct TrailerKey {
 // octree collision keeps its traversal state on the stack).
 struct TrailerTables {
   TrailerKey key;
+  std::uint64_t serial = 0;  // which build (CollisionChecker::trailer_serial)
   std::shared_ptr<const octomap::OcTree> octree;
   fcl::CollisionObjectd object;
   OccupancyGrid grid;
@@ -244,7 +245,7 @@ class TrailerCache {
         octree
             ? TrailerKey{octree, octree.get(), {}}
             : TrailerKey{{}, nullptr, {trailer.width, trailer.height, trailer.depth, resolution}};
-    g_trailer_builds.fetch_add(1, std::memory_order_relaxed);
+    built->serial = g_trailer_builds.fetch_add(1, std::memory_order_relaxed) + 1;
     std::lock_guard lock(mutex_);
     if (auto hit = find_locked(octree, trailer, resolution)) return hit;
     std::erase_if(entries_, [](const auto& e) { return e.expired(); });
@@ -711,6 +712,10 @@ void CollisionChecker::set_world(const World& world,
     m.trailer = trailer_cache().get(octree, world.trailer, m.options.octree_resolution);
   m.inner = world.trailer;
   set_boxes(world.boxes);
+}
+
+std::uint64_t CollisionChecker::trailer_serial() const {
+  return impl_->trailer->serial;
 }
 
 std::uint64_t CollisionChecker::trailer_builds() {

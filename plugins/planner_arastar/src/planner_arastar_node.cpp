@@ -1,6 +1,8 @@
 // Plug-in: the ARA* lattice planner (plr/planning/lattice_planner.hpp)
 // behind the `plan` service. Parameter `lattice`: a lattice file (the
-// shipped robots/unloader_lattice.yaml by default).
+// shipped robots/unloader_lattice.yaml by default); `experience` (bool,
+// default false): M1 and M2 searches reuse the paths of earlier requests on
+// the same trailer (docs/planner.md, "Experience for recurring motions").
 #include <plr/interface.hpp>
 #include <plr/messages.hpp>
 #include <plr/plugin.hpp>
@@ -19,7 +21,7 @@ class PlannerArastarNode final : public plr::planning::PlannerNode {
   using PlannerNode::PlannerNode;
 
  protected:
-  std::vector<std::string> planner_params() const override { return {"lattice"}; }
+  std::vector<std::string> planner_params() const override { return {"lattice", "experience"}; }
 
   plr::Expected<std::unique_ptr<Planner>> make_planner() override {
     std::string file = params().get<std::string>("lattice", "");
@@ -32,6 +34,10 @@ class PlannerArastarNode final : public plr::planning::PlannerNode {
     auto config = LatticeConfig::from_file(file);
     if (!config)
       return plr::make_error(PLR_ERR_INVALID, "param 'lattice': " + config.error().message);
+    // Off by default: with it an answer depends on the requests before, and
+    // the planner contract (conformance: BudgetIsDeterministic) promises one
+    // that is a function of the request.
+    config->experience.enabled = params().get<bool>("experience", false);
     return std::unique_ptr<Planner>(
         std::make_unique<plr::planning::LatticePlanner>(std::move(*config)));
   }

@@ -57,10 +57,16 @@ ModeLattice read_mode(const yaml::Map& fields, PlanMode mode) {
 
 Expected<LatticeConfig> read(Expected<yaml::Document> doc) {
   if (!doc) return doc.error();
-  const yaml::Map top =
-      doc->root().map("a map of mode -> lattice", {"M1", "M2", "M3", "M4", "M5", "M6"});
+  const yaml::Map top = doc->root().map(
+      "a map of mode -> lattice",
+      {"M1", "M2", "M3", "M4", "M5", "M6", "experience", "experience_weight", "experience_paths"});
   LatticeConfig c;
   if (!top) return doc->error();
+  c.experience.enabled = top.find("experience").boolean().value_or(c.experience.enabled);
+  c.experience.weight =
+      top.find("experience_weight").number(1.0, 100.0).value_or(c.experience.weight);
+  c.experience.max_paths = static_cast<std::size_t>(
+      top.find("experience_paths").integer(1, 1000).value_or(c.experience.max_paths));
   for (int i = 1; i <= 6; ++i) {
     const auto mode = static_cast<PlanMode>(i);
     const std::string key = "M" + std::to_string(i);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 
 namespace plr::planning {
 
@@ -12,7 +13,8 @@ using sim::JointVector;
 // ---- JointLattice -------------------------------------------------------
 
 JointLattice::JointLattice(const ModeLattice& lattice, const sim::CollisionChecker& checker,
-                           const JointVector& start, const Goal& goal, bool escape)
+                           const JointVector& start, const Goal& goal, bool escape,
+                           const ExperienceStore* experience, double experience_weight)
     : lattice_(lattice),
       checker_(checker),
       robot_(checker.robot()),
@@ -22,6 +24,17 @@ JointLattice::JointLattice(const ModeLattice& lattice, const sim::CollisionCheck
   if (const auto* jg = std::get_if<JointGoal>(&goal_)) {
     joint_goal_ = start;
     for (int j : lattice_.joints) joint_goal_[j] = jg->q[j];
+  }
+  if (experience != nullptr && !experience->paths().empty() && !escape_) {
+    experience_ = std::make_unique<ExperienceGraph>(
+        *experience, start, lattice_.joints, experience_weight,
+        [this](const JointVector& a, const JointVector& b) { return time(a, b); },
+        [this](const JointVector& q) {
+          State st;
+          st.q = q;
+          fill_plate(st);
+          return plain_heuristic(st);
+        });
   }
   states_.reserve(4096);
   intern(Key{}, start);
@@ -64,6 +77,11 @@ StateId JointLattice::intern(const Key& key, const JointVector& q, bool off_latt
   st.off_lattice = off_lattice || key[sim::kNumJoints - 1] != 0;
   fill_plate(st);
   st.goal = !escape_ && within_goal(st);
+  if (experience_) {
+    const auto e = experience_->estimate(q, plain_heuristic(st));
+    st.h_e = e.h;
+    st.via = e.via;
+  }
   states_.push_back(st);
   index_.emplace(key, id);
   return id;
@@ -97,6 +115,10 @@ bool JointLattice::is_goal(StateId s) {
 
 double JointLattice::heuristic(StateId s) const {
   const State& st = states_[static_cast<std::size_t>(s)];
+  return experience_ ? st.h_e : plain_heuristic(st);
+}
+
+double JointLattice::plain_heuristic(const State& st) const {
   if (std::holds_alternative<JointGoal>(goal_)) return time(st.q, joint_goal_);
   if (const auto* pg = std::get_if<PoseGoal>(&goal_)) {
     return (st.plate - pg->target.position).norm() / lattice_.ee_speed;
@@ -126,6 +148,7 @@ void JointLattice::successors(StateId s, std::vector<search::Successor>& out) {
     out.push_back({add_goal_state(joint_goal_), std::max(time(from.q, joint_goal_), 1e-6)});
     return;
   }
+  if (experience_) experience_successors(from, out);
 
   const std::size_t dims = lattice_.joints.size();
   for (const auto& prim : lattice_.primitives) {
@@ -164,6 +187,90 @@ void JointLattice::successors(StateId s, std::vector<search::Successor>& out) {
       }
     }
   }
+}
+
+JointLattice::Key JointLattice::node_key(std::int32_t node) {
+  // Keyed by node, not configuration: each node has its own path to follow.
+  Key key{};
+  key[0] = node;
+  key[sim::kNumJoints - 1] = 2;
+  return key;
+}
+
+StateId JointLattice::node_state(std::int32_t node) {
+  const Key key = node_key(node);
+  const StateId id = intern(key, experience_->nodes()[static_cast<std::size_t>(node)].q, true);
+  states_[static_cast<std::size_t>(id)].node = node;
+  return id;
+}
+
+void JointLattice::experience_successors(const State& from, std::vector<search::Successor>& out) {
+  const auto& nodes = experience_->nodes();
+  if (from.node < 0) {
+    // Onto the stored path h_E leads to, when it is near.
+    // Each node is joined once, from the first state that leads there: a
+    // node the search has reached is followed from there, and joining it
+    // again from every state near it only pulls the search back (a stored
+    // path that does not lead to this goal held M1 searches at their budget).
+    if (from.via < 0 || index_.count(node_key(from.via)) != 0) return;
+    const JointVector& q = nodes[static_cast<std::size_t>(from.via)].q;
+    if (time(from.q, q) > lattice_.snap_time) return;
+    const StateId id = node_state(from.via);
+    if (!valid(id) || !checker_.is_motion_valid(from.q, q, false)) return;
+    out.push_back({id, std::max(time(from.q, q), 1e-6)});
+    ++experience_edges_;
+    return;
+  }
+  // Along the stored path both ways: the next node, and the node of least
+  // h_E reached while the segments are free (one edge; path_configs
+  // unfolds it).
+  const ExperienceGraph::Node& here = nodes[static_cast<std::size_t>(from.node)];
+  for (int dir : {1, -1}) {
+    double cost = 0.0, best_h = std::numeric_limits<double>::infinity(), best_cost = 0.0;
+    StateId best = search::kNoState;
+    std::int32_t prev = from.node;
+    for (std::int32_t i = here.index + dir;; i += dir) {
+      const std::int32_t n = experience_->node_at(here.path, i);
+      if (n < 0) break;
+      const StateId id = node_state(n);
+      const JointVector& a = nodes[static_cast<std::size_t>(prev)].q;
+      const JointVector& b = nodes[static_cast<std::size_t>(n)].q;
+      std::int8_t& free = experience_->segment_free(std::min(n, prev));
+      if (free < 0) free = valid(id) && checker_.is_motion_valid(a, b, false) ? 1 : 0;
+      if (free == 0) break;
+      cost += std::max(time(a, b), 1e-6);
+      if (i == here.index + dir) {
+        out.push_back({id, cost});
+      } else if (nodes[static_cast<std::size_t>(n)].h < best_h) {
+        best = id;
+        best_h = nodes[static_cast<std::size_t>(n)].h;
+        best_cost = cost;
+      }
+      prev = n;
+    }
+    if (best != search::kNoState) out.push_back({best, best_cost});
+  }
+  ++experience_edges_;
+}
+
+std::vector<JointVector> JointLattice::path_configs(const std::vector<StateId>& ids) const {
+  std::vector<JointVector> path;
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    const State& st = states_[static_cast<std::size_t>(ids[k])];
+    if (k > 0 && st.node >= 0) {
+      const State& before = states_[static_cast<std::size_t>(ids[k - 1])];
+      if (before.node >= 0) {
+        const auto& nodes = experience_->nodes();
+        const auto& a = nodes[static_cast<std::size_t>(before.node)];
+        const auto& b = nodes[static_cast<std::size_t>(st.node)];
+        const int dir = b.index > a.index ? 1 : -1;
+        for (std::int32_t i = a.index + dir; i != b.index; i += dir)
+          path.push_back(nodes[static_cast<std::size_t>(experience_->node_at(a.path, i))].q);
+      }
+    }
+    path.push_back(st.q);
+  }
+  return path;
 }
 
 JointLattice::Key JointLattice::off_lattice_key(const JointVector& q) const {

@@ -9,6 +9,8 @@
 // the primitive's execution time under velocity limits (slowest joint).
 // In escape mode (M6) edges are not collision-checked (the robot starts in
 // contact) and every collision-free state is a goal; run it with Dijkstra.
+// Given stored paths (experience.hpp), the heuristic is h_E and the stored
+// paths' nodes and segments join the successors.
 //
 // LineLattice (M4): the plate moves along the straight line from its start
 // position to the goal (yaw interpolated). States are progress steps along
@@ -19,10 +21,12 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <unordered_map>
 #include <variant>
 #include <vector>
 
+#include "experience.hpp"
 #include "plr/planning/lattice_config.hpp"
 #include "plr/search/graph.hpp"
 
@@ -32,8 +36,11 @@ using Goal = std::variant<std::monostate, JointGoal, PoseGoal>;
 
 class JointLattice final : public search::Graph {
  public:
+  // `experience` (may be null or empty: none) is read during construction
+  // only; `experience_weight` is w_E.
   JointLattice(const ModeLattice& lattice, const sim::CollisionChecker& checker,
-               const sim::JointVector& start, const Goal& goal, bool escape);
+               const sim::JointVector& start, const Goal& goal, bool escape,
+               const ExperienceStore* experience = nullptr, double experience_weight = 1.0);
 
   search::StateId start() const { return 0; }
   const sim::JointVector& config(search::StateId s) const {
@@ -42,8 +49,14 @@ class JointLattice final : public search::Graph {
   void successors(search::StateId s, std::vector<search::Successor>& out) override;
   bool is_goal(search::StateId s) override;
 
-  // Execution-time lower bound to the goal (the heuristic).
+  // Execution-time lower bound to the goal (the heuristic); with
+  // experience, h_E.
   double heuristic(search::StateId s) const;
+  // The configurations of a path of state ids: a shortcut along a stored
+  // path is unfolded into the stored waypoints it passes.
+  std::vector<sim::JointVector> path_configs(const std::vector<search::StateId>& ids) const;
+  // Expansions that followed a stored path or jumped onto one.
+  std::size_t experience_edges() const { return experience_edges_; }
 
  private:
   using Key = std::array<std::int32_t, sim::kNumJoints>;
@@ -63,6 +76,9 @@ class JointLattice final : public search::Graph {
     bool goal = false;
     bool snapped = false;      // reached by a snap primitive (not on the lattice)
     bool off_lattice = false;  // reached by a Cartesian step (M6)
+    std::int32_t node = -1;    // the experience node it is
+    std::int32_t via = -1;     // the experience node its h_E goes through
+    double h_e = 0.0;
   };
 
   search::StateId intern(const Key& key, const sim::JointVector& q, bool off_lattice = false);
@@ -70,6 +86,10 @@ class JointLattice final : public search::Graph {
   search::StateId add_goal_state(const sim::JointVector& q);
   bool valid(search::StateId s);
   bool within_goal(const State& st) const;
+  double plain_heuristic(const State& st) const;
+  static Key node_key(std::int32_t node);
+  search::StateId node_state(std::int32_t node);
+  void experience_successors(const State& from, std::vector<search::Successor>& out);
   double time(const sim::JointVector& a, const sim::JointVector& b) const;
   void fill_plate(State& st) const;
 
@@ -83,6 +103,8 @@ class JointLattice final : public search::Graph {
   std::vector<State> states_;
   std::unordered_map<Key, search::StateId, KeyHash> index_;
   std::vector<search::StateId> snapped_;
+  std::unique_ptr<ExperienceGraph> experience_;
+  std::size_t experience_edges_ = 0;
 };
 
 class LineLattice final : public search::Graph {

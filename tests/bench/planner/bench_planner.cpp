@@ -2,17 +2,28 @@
 // executor asks for during Pick and Sweep actions on generated walls (A1) and
 // piles (B1); ARA* lattice planner and RRTConnect side by side.
 //   bench_planner [--quick] [--json] [--seed N] [--mode 1-6] [--budget N]
-//                 [--primitives FILE] [--failing FILE] [--verbose]
+//                 [--primitives FILE] [--failing FILE] [--recurring FILE]... [--verbose]
 // --budget sets every query's max_expansions (deterministic planning);
 // --primitives another lattice file than the shipped one. --failing: a
 // query set (plr/planning/query_set.hpp) of queries that spent their whole
 // budget in bench_unload runs (default: the recorded one,
 // tests/bench/planner/data); infeasible_refused_share is the share of them
 // the ARA* planner refuses within 100 expansions (judged unsolvable, not
-// out of budget).
+// out of budget). --recurring: query sets of one trailer's M1 and M2
+// queries each, in the order a bench_unload run asked them (default: the
+// recorded ones); each is answered in order by a planner that keeps its
+// experience through the trailer and by one that plans every query from
+// scratch. On the recurring queries (those asked once the mode has
+// experience) experience_speedup is the median CPU time of a query from
+// scratch over the median with experience, experience_cost_ratio the
+// median over queries both solved of the path's execution time with
+// experience over from scratch. --quick replays the first 40 queries of each.
+#include <time.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -234,6 +245,12 @@ double percentile(std::vector<double> v, double p) {
   return v[lo] + (idx - lo) * (v[hi] - v[lo]);
 }
 
+double mean(const std::vector<double>& v) {
+  double sum = 0.0;
+  for (double x : v) sum += x;
+  return v.empty() ? NAN : sum / static_cast<double>(v.size());
+}
+
 // The recorded failing set: how many of its queries the planner refuses
 // within kRefuseWithin expansions, and why each of the others went on.
 constexpr std::uint64_t kRefuseWithin = 100;
@@ -267,6 +284,103 @@ FailingSet run_failing_set(const std::vector<RecordedQuery>& set, Planner& plann
   return out;
 }
 
+double thread_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// Recorded trailers replayed with and without experience.
+struct Recurring {
+  std::size_t trailers = 0, queries = 0, recurring = 0, solved_both = 0, solved_scratch = 0,
+              solved_experience = 0, used_experience = 0;
+  std::vector<double> scratch_ms, experience_ms;  // recurring, CPU time of the whole query
+  std::vector<double> scratch_exp, experience_exp;
+  // The recurring queries a search from scratch needed more than one
+  // expansion for (the others are a direct move either way).
+  std::vector<double> search_scratch_ms, search_experience_ms;
+  std::vector<double> cost_ratio, time_ratio;  // solved by both
+  // From scratch with the heuristic inflated as much as h_E may be (ε w_E):
+  // what experience gains beyond a greedier search.
+  std::size_t solved_inflated = 0;
+  std::vector<double> inflated_ms, inflated_exp;
+  double speedup() const { return percentile(scratch_ms, 0.5) / percentile(experience_ms, 0.5); }
+  double search_speedup() const {
+    return percentile(search_scratch_ms, 0.5) / percentile(search_experience_ms, 0.5);
+  }
+};
+
+Recurring run_recurring(const std::vector<std::string>& files, const LatticeConfig& config,
+                        const RobotModel& robot, std::size_t limit, bool verbose) {
+  Recurring out;
+  for (const std::string& file : files) {
+    const auto set = load_query_set(file);
+    if (!set) {
+      std::fprintf(stderr, "bench_planner: %s\n", set.error().message.c_str());
+      std::exit(2);
+    }
+    // One trailer: experience starts empty.
+    LatticePlanner scratch(config), inflated(config), experience(config);
+    scratch.set_experience(false);
+    inflated.set_experience(false);
+    experience.set_experience(true);
+    ++out.trailers;
+    for (std::size_t i = 0; i < set->size() && i < limit; ++i) {
+      const RecordedQuery& rq = (*set)[i];
+      ++out.queries;
+      const bool recurring = experience.experience_paths(rq.query.mode) > 0;
+      CollisionChecker c0(robot, rq.world), c1(robot, rq.world);
+      double t0 = thread_cpu_s();
+      const PlanResult a = scratch.plan(rq.query, c0);
+      const double ms_a = 1e3 * (thread_cpu_s() - t0);
+      t0 = thread_cpu_s();
+      const PlanResult b = experience.plan(rq.query, c1);
+      const double ms_b = 1e3 * (thread_cpu_s() - t0);
+      if (verbose)
+        std::fprintf(stderr,
+                     "recurring %s %s: scratch %s %zu exp %.1f ms, experience %s %zu exp "
+                     "(%zu from experience) %.1f ms\n",
+                     to_string(rq.query.mode), recurring ? "again" : "first", to_string(a.status),
+                     a.stats.expansions, ms_a, to_string(b.status), b.stats.expansions,
+                     b.stats.experience_edges, ms_b);
+      if (!recurring) continue;
+      PlanQuery greedy = rq.query;
+      greedy.eps_initial *= config.experience.weight;
+      greedy.eps_final *= config.experience.weight;
+      CollisionChecker c2(robot, rq.world);
+      t0 = thread_cpu_s();
+      const PlanResult g = inflated.plan(greedy, c2);
+      out.inflated_ms.push_back(1e3 * (thread_cpu_s() - t0));
+      out.inflated_exp.push_back(static_cast<double>(g.stats.expansions));
+      out.solved_inflated += g.status == PlanStatus::kSolved ? 1 : 0;
+      if (verbose)
+        std::fprintf(stderr, "recurring %s inflated: %s %zu exp %.1f ms\n",
+                     to_string(rq.query.mode), to_string(g.status), g.stats.expansions,
+                     out.inflated_ms.back());
+      ++out.recurring;
+      const bool sa = a.status == PlanStatus::kSolved, sb = b.status == PlanStatus::kSolved;
+      out.solved_scratch += sa ? 1 : 0;
+      out.solved_experience += sb ? 1 : 0;
+      out.used_experience += b.stats.experience_edges > 0 ? 1 : 0;
+      out.scratch_ms.push_back(ms_a);
+      out.experience_ms.push_back(ms_b);
+      out.scratch_exp.push_back(static_cast<double>(a.stats.expansions));
+      out.experience_exp.push_back(static_cast<double>(b.stats.expansions));
+      if (a.stats.expansions > 1) {
+        out.search_scratch_ms.push_back(ms_a);
+        out.search_experience_ms.push_back(ms_b);
+      }
+      if (sa && sb) {
+        ++out.solved_both;
+        if (a.trajectory.duration() > 0)
+          out.cost_ratio.push_back(b.trajectory.duration() / a.trajectory.duration());
+        out.time_ratio.push_back(ms_a / std::max(ms_b, 1e-6));
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -275,10 +389,12 @@ int main(int argc, char** argv) {
   std::uint64_t seed = 1, budget = 0;
   std::string primitives = shipped_file("robots/unloader_lattice.yaml").value().string();
   std::string failing = PLR_PLANNER_FAILING_SET;
+  std::vector<std::string> recurring_sets = {PLR_PLANNER_RECURRING_A1, PLR_PLANNER_RECURRING_B2};
   CLI::App app{
       "Seeded planning queries per mode from Pick and Sweep actions on A1 walls and B1 "
       "piles: ARA* lattice planner and RRTConnect side by side"};
-  plr::bench::add_quick_flag(app, quick, "2 walls and 1 pile, 3 picks each");
+  plr::bench::add_quick_flag(
+      app, quick, "2 walls and 1 pile, 3 picks each; 40 queries of each recorded trailer");
   plr::bench::add_json_flag(app, json);
   app.add_option("--seed", seed, "Random seed (worlds and queries)")->capture_default_str();
   app.add_option("--mode", only_mode, "Only the queries of this planning mode (0: all)")
@@ -292,6 +408,13 @@ int main(int argc, char** argv) {
                  "Query set of queries that spent their whole budget in bench_unload runs")
       ->check(CLI::ExistingFile)
       ->capture_default_str();
+  app.add_option("--recurring", recurring_sets,
+                 "Query sets of one trailer's M1 and M2 queries each, in the order asked")
+      ->check(CLI::ExistingFile);
+  double experience_weight = 0.0;
+  app.add_option("--experience-weight", experience_weight,
+                 "w_E of the recurring replay (default: the lattice file's)")
+      ->check(CLI::Range(1.0, 100.0));
   app.add_flag("--verbose", verbose, "A line per query on stderr");
   plr::bench::parse_or_exit(app, argc, argv);
   const RobotModel robot = load_robot().value();
@@ -300,7 +423,11 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bench_planner: %s\n", lattice.error().message.c_str());
     return 2;
   }
+  LatticeConfig config = *lattice;
+  if (experience_weight > 0) config.experience.weight = experience_weight;
   LatticePlanner arastar(std::move(*lattice));
+  // Independent queries: each from scratch (experience has its own part).
+  arastar.set_experience(false);
   plr::ompl_planner::OmplPlanner rrt({0.0, static_cast<std::uint32_t>(seed)});
 
   std::mt19937_64 rng(seed);
@@ -428,24 +555,73 @@ int main(int argc, char** argv) {
     return 2;
   }
   const FailingSet f = run_failing_set(*set, arastar, robot, verbose);
+  // --quick: the first 40 queries of each trailer (a few picks).
+  const Recurring rec =
+      run_recurring(recurring_sets, config, robot, quick ? 40 : SIZE_MAX, verbose);
   if (json) {
-    std::printf("%s\n", nlohmann::json{{"rows", out},
-                                       {"exec_ratio", ratios},
-                                       {"infeasible_refused_share", f.share()},
-                                       {"failing_set",
-                                        {{"file", failing},
-                                         {"queries", f.queries},
-                                         {"refused", f.refused},
-                                         {"refuse_within_expansions", kRefuseWithin},
-                                         {"answers", f.answers}}}}
-                            .dump()
-                            .c_str());
+    std::printf("%s\n",
+                nlohmann::json{{"rows", out},
+                               {"exec_ratio", ratios},
+                               {"infeasible_refused_share", f.share()},
+                               {"experience_speedup", rec.speedup()},
+                               {"experience_cost_ratio", percentile(rec.cost_ratio, 0.5)},
+                               {"recurring_set",
+                                {{"files", recurring_sets},
+                                 {"trailers", rec.trailers},
+                                 {"queries", rec.queries},
+                                 {"recurring", rec.recurring},
+                                 {"solved_scratch", rec.solved_scratch},
+                                 {"solved_experience", rec.solved_experience},
+                                 {"used_experience", rec.used_experience},
+                                 {"scratch_median_ms", percentile(rec.scratch_ms, 0.5)},
+                                 {"experience_median_ms", percentile(rec.experience_ms, 0.5)},
+                                 {"scratch_mean_expansions", mean(rec.scratch_exp)},
+                                 {"experience_mean_expansions", mean(rec.experience_exp)},
+                                 {"speedup_per_query_median", percentile(rec.time_ratio, 0.5)},
+                                 {"cost_ratio_p95", percentile(rec.cost_ratio, 0.95)},
+                                 {"searches", rec.search_scratch_ms.size()},
+                                 {"searches_speedup", rec.search_speedup()},
+                                 {"inflated_solved", rec.solved_inflated},
+                                 {"inflated_median_ms", percentile(rec.inflated_ms, 0.5)},
+                                 {"inflated_mean_expansions", mean(rec.inflated_exp)},
+                                 {"cost_ratio_max", percentile(rec.cost_ratio, 1.0)}}},
+                               {"failing_set",
+                                {{"file", failing},
+                                 {"queries", f.queries},
+                                 {"refused", f.refused},
+                                 {"refuse_within_expansions", kRefuseWithin},
+                                 {"answers", f.answers}}}}
+                    .dump()
+                    .c_str());
   } else {
     std::printf("\nrecorded failing set (%s): %zu queries, %zu refused within %llu expansions\n",
                 failing.c_str(), f.queries, f.refused,
                 static_cast<unsigned long long>(kRefuseWithin));
     for (const auto& [what, n] : f.answers) std::printf("  %4d %s\n", n, what.c_str());
     std::printf("infeasible_refused_share %.2f (issue 46 target >= 0.90)\n", f.share());
+    std::printf(
+        "\nrecurring pick queries (%zu trailers, %zu M1/M2 queries, %zu asked with experience):\n"
+        "  solved from scratch %zu, with experience %zu; experience used in %zu\n"
+        "  CPU ms per query, median: from scratch %.2f, with experience %.2f; expansions, "
+        "mean: %.1f, %.1f\n"
+        "  per-query speedup median %.2f; cost ratio p95 %.2f, max %.2f (%zu solved by both)\n",
+        rec.trailers, rec.queries, rec.recurring, rec.solved_scratch, rec.solved_experience,
+        rec.used_experience, percentile(rec.scratch_ms, 0.5), percentile(rec.experience_ms, 0.5),
+        mean(rec.scratch_exp), mean(rec.experience_exp), percentile(rec.time_ratio, 0.5),
+        percentile(rec.cost_ratio, 0.95), percentile(rec.cost_ratio, 1.0), rec.solved_both);
+    std::printf(
+        "  the %zu that needed a search from scratch (> 1 expansion): CPU ms median %.2f "
+        "from scratch, %.2f with experience: speedup %.2f\n",
+        rec.search_scratch_ms.size(), percentile(rec.search_scratch_ms, 0.5),
+        percentile(rec.search_experience_ms, 0.5), rec.search_speedup());
+    std::printf(
+        "  from scratch at eps x w_E (no experience): solved %zu, CPU ms median %.2f, "
+        "expansions mean %.1f\n",
+        rec.solved_inflated, percentile(rec.inflated_ms, 0.5), mean(rec.inflated_exp));
+    std::printf(
+        "experience_speedup %.2f (issue 46 target >= 10), experience_cost_ratio %.2f "
+        "(<= 1.5)\n",
+        rec.speedup(), percentile(rec.cost_ratio, 0.5));
   }
   return 0;
 }

@@ -9,6 +9,7 @@
 //
 //   bench_unload [--quick] [--json] [--seeds N] [--first S] [--families A1,C]
 //                [--workers W] [--out DIR] [--timeout S] [--fidelity full|adaptive]
+//                [--experience on|off] [--record-queries]
 // Defaults: seeds 1-20 of every family, one worker per core, results in
 // ./bench_unload. --quick: seeds 1-5. Each run is a job (plr/jobs); its
 // result goes to the result store DIR as it finishes, with each action it
@@ -19,7 +20,11 @@
 // query set for bench_planner); a stopped benchmark started again with the same DIR runs
 // only what is missing. A run past --timeout (wall seconds, default
 // 3600) is killed and counted as such. --fidelity: how accurately the boxes
-// are simulated (plr/sim/fidelity.hpp; default full).
+// are simulated (plr/sim/fidelity.hpp; default full). --experience: the
+// lattice planner reuses earlier paths within a trailer, or not (default:
+// as the shipped lattice file says). --record-queries: every M1 and M2
+// query of a run, in order, with its world (F_seedS.pick_queries.bin, one
+// trailer's recurring motions for bench_planner --recurring).
 #include <unistd.h>
 
 #include <algorithm>
@@ -68,6 +73,8 @@ struct Options {
   double timeout_s = 3600;
   bool json = false;
   plr::sim::Fidelity fidelity = plr::sim::Fidelity::kFull;
+  std::string experience;  // "on", "off", "" (the lattice file's)
+  bool record_queries = false;
 };
 
 // A run; its settled start and the world it leaves are saved beside
@@ -77,6 +84,8 @@ struct Job {
   std::uint64_t seed;
   fs::path file;
   plr::sim::Fidelity fidelity;
+  std::string experience;
+  bool record_queries = false;
 };
 
 constexpr const char* kRunKind = "unload.run";
@@ -98,7 +107,8 @@ T value_or_die(plr::Expected<T> e) {
 // query set (plr/planning/query_set.hpp) for bench_planner.
 class Recorder final : public plr::actions::Backend {
  public:
-  explicit Recorder(plr::actions::Backend& inner) : inner_(inner) {}
+  Recorder(plr::actions::Backend& inner, bool record_picks)
+      : inner_(inner), record_picks_(record_picks) {}
   plr::Expected<plr::actions::Perceived> observe() override { return inner_.observe(); }
   plr::Expected<plr::actions::Executed> execute(const plr::actions::Motion& m) override {
     return inner_.execute(m);
@@ -107,6 +117,9 @@ class Recorder final : public plr::actions::Backend {
                                                          const plr::sim::World& world) override {
     auto r = inner_.plan(q, world);
     if (!r) return r;
+    if (record_picks_ &&
+        (q.mode == plr::planning::PlanMode::kArm || q.mode == plr::planning::PlanMode::kArmBase))
+      picks.push_back(plr::planning::frame_query(q, world));
     const std::string mode = fmt::format("M{}", static_cast<int>(q.mode));
     if (r->status == plr::planning::PlanStatus::kSolved) {
       solved[mode].push_back(r->stats.expansions);
@@ -120,9 +133,11 @@ class Recorder final : public plr::actions::Backend {
   std::map<std::string, std::vector<std::uint64_t>> solved;
   std::map<std::string, std::uint64_t> spent;
   std::vector<std::vector<std::uint8_t>> frames;
+  std::vector<std::vector<std::uint8_t>> picks;
 
  private:
   plr::actions::Backend& inner_;
+  bool record_picks_;
 };
 
 // One run, in the worker process: H from the family's environment to the end.
@@ -131,13 +146,14 @@ nlohmann::json run(const Job& job) {
   const plr::sim::RobotModel robot = value_or_die(plr::sim::load_robot());
   plr::planning::LatticePlanner planner(value_or_die(plr::planning::LatticeConfig::from_file(
       value_or_die(plr::sim::shipped_file("robots/unloader_lattice.yaml")))));
+  if (!job.experience.empty()) planner.set_experience(job.experience == "on");
   plr::actions::UnloaderOptions sim_options;
   sim_options.fidelity = job.fidelity;
   plr::actions::UnloaderSimulation simulation(robot,
                                               plr::sim::make_environment(job.family, job.seed),
                                               plr::actions::home_configuration(), sim_options);
   plr::actions::InProcessBackend in_process(simulation, planner);
-  Recorder backend(in_process);
+  Recorder backend(in_process, job.record_queries);
   // The settled start, beside the world the run leaves: a run can be replayed
   // or drawn from the two.
   auto start_world = job.file;
@@ -181,11 +197,19 @@ nlohmann::json run(const Job& job) {
   failed_queries.replace_extension(".failed_queries.bin");
   if (auto saved = plr::planning::save_query_set(backend.frames, failed_queries); !saved)
     die(saved.error().message);
+  if (job.record_queries) {
+    auto picks = job.file;
+    if (auto saved = plr::planning::save_query_set(backend.picks,
+                                                   picks.replace_extension(".pick_queries.bin"));
+        !saved)
+      die(saved.error().message);
+  }
   nlohmann::json left = nlohmann::json::array();
   for (const auto& l : episode.left)
     left.push_back({{"id", l.id}, {"reason", to_string(l.reason)}, {"detail", l.detail}});
   return {{"family", std::string(to_string(job.family))},
           {"seed", job.seed},
+          {"experience", planner.experience()},
           {"boxes_total", episode.boxes_total},
           {"boxes_unloaded", episode.boxes_unloaded},
           {"robot_time_s", episode.robot_time_s},
@@ -419,6 +443,12 @@ Options parse(int argc, char** argv) {
   std::string fidelity = "full";
   app.add_option("--fidelity", fidelity, "How accurately the boxes are simulated: full, adaptive")
       ->capture_default_str();
+  app.add_option("--experience", o.experience,
+                 "The planner reuses earlier paths within a trailer: on, off (default: as the "
+                 "lattice file says)")
+      ->check(CLI::IsMember({"on", "off"}));
+  app.add_flag("--record-queries", o.record_queries,
+               "Save every M1 and M2 query of a run (F_seedS.pick_queries.bin)");
   plr::bench::parse_or_exit(app, argc, argv);
   const auto level = plr::sim::parse_fidelity(fidelity);
   if (!level) die(level.error().message);
@@ -439,8 +469,8 @@ int main(int argc, char** argv) {
   std::vector<Job> all;
   for (const EnvFamily f : o.families)
     for (std::uint64_t s = o.first; s < o.first + o.seeds; ++s)
-      all.push_back(
-          {f, s, fs::path(o.out) / fmt::format("{}_seed{}", to_string(f), s), o.fidelity});
+      all.push_back({f, s, fs::path(o.out) / fmt::format("{}_seed{}", to_string(f), s), o.fidelity,
+                     o.experience, o.record_queries});
   const std::vector<nlohmann::json> runs = run_all(all, o);
   nlohmann::json families = nlohmann::json::object();
   for (const EnvFamily f : o.families) families[std::string(to_string(f))] = summarize(runs, f);

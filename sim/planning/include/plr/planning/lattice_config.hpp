@@ -29,8 +29,22 @@ struct ModeLattice {
   std::uint64_t max_expansions = 0;
 };
 
+// Reuse of earlier paths within a trailer (experience graphs, Phillips et
+// al. 2012) for the modes whose searches recur and can be long: M1, M2.
+struct ExperienceSettings {
+  bool enabled = false;
+  // w_E: moves off the stored paths count w_E times their heuristic; a
+  // first solution at ε costs at most ε w_E times the optimal lattice path.
+  // A stored path is only followed when its cost beats w_E times the
+  // straight-line estimate; with 2 no recorded A1 query followed one (the
+  // search was only greedier), with 5 the hard ones did (docs/planner.md).
+  double weight = 5.0;
+  std::size_t max_paths = 16;  // per mode; the oldest is dropped
+};
+
 struct LatticeConfig {
   std::map<PlanMode, ModeLattice> modes;
+  ExperienceSettings experience;
 
   // Read with plr/yaml_reader.hpp: unknown keys are errors, step and
   // primitive counts are bounded. The error is the first problem as one line,

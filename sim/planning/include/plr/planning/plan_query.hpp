@@ -105,6 +105,9 @@ struct PlanStats {
   bool time_limit_hit = false;         // time_limit_s ended it: the result depends on load
   double escape_time_s = 0.0;
   double escape_cpu_s = 0.0;
+  // Expansions that joined or followed a path of an earlier query (the
+  // lattice planner's experience graph; 0 without experience).
+  std::size_t experience_edges = 0;
 };
 
 struct PlanResult {

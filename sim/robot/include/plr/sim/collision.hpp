@@ -88,6 +88,10 @@ class CollisionChecker {
   // Trailer tables computed in this process so far (for tests and benchmarks
   // of the sharing).
   static std::uint64_t trailer_builds();
+  // Which computation of the trailer part this checker uses: another serial
+  // is another trailer (or the same one computed again), the same serial
+  // the same trailer part.
+  std::uint64_t trailer_serial() const;
 
   // Links `a` and `b` may touch. Throws std::invalid_argument on an unknown name.
   void allow_collision(const std::string& a, const std::string& b);

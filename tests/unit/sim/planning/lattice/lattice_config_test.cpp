@@ -86,6 +86,22 @@ TEST(LatticeConfig, AModesBudgetIsReadWhereGiven) {
             std::string::npos);
 }
 
+TEST(LatticeConfig, ExperienceIsOffUnlessTheFileTurnsItOn) {
+  const auto off = LatticeConfig::from_string(kMinimal);
+  ASSERT_TRUE(off) << off.error().message;
+  EXPECT_FALSE(off->experience.enabled);
+  const auto on = LatticeConfig::from_string(
+      std::string(kMinimal) + "experience: true\nexperience_weight: 3\nexperience_paths: 8\n");
+  ASSERT_TRUE(on) << on.error().message;
+  EXPECT_TRUE(on->experience.enabled);
+  EXPECT_EQ(on->experience.weight, 3.0);
+  EXPECT_EQ(on->experience.max_paths, 8u);
+  EXPECT_NE(error_of(std::string(kMinimal) + "experience: maybe\n").find("experience"),
+            std::string::npos);
+  EXPECT_NE(error_of(std::string(kMinimal) + "experience_weight: 0.5\n").find("experience_weight"),
+            std::string::npos);
+}
+
 TEST(LatticeConfig, BadTypesUnknownKeysAndRangesAreLocated) {
   // A value of the wrong type.
   EXPECT_EQ(error_of(with("ee_speed: 0.5", "ee_speed: fast")),
