@@ -75,7 +75,7 @@ run_row() {  # name: boxes, robot time, wasted share of a plr run
   echo
   echo "| family | runs | emptied | boxes left | median robot time | median boxes/s | median wasted share |"
   echo "|---|---|---|---|---|---|---|"
-  jq -r '.families | to_entries[] | .value as $f |
+  jq -r 'to_entries[] | .value as $f |
     "| \(.key) | \($f.runs) | \($f.emptied) | \($f.boxes_left) | \($f.robot_time_s_median | floor) s | \($f.boxes_per_robot_s * 1000 | floor / 1000) | \(($f.wasted_share_median // 0) * 100 | floor) % |"' \
     "$out/bench_unload.json"
   echo
@@ -94,7 +94,7 @@ run_row() {  # name: boxes, robot time, wasted share of a plr run
   echo
   echo "| claim | holds | margin (SE) |"
   echo "|---|---|---|"
-  jq -r '.claims[] | "| \(.claim) | \(.holds) | \(.z * 100 | round / 100) |"' "$out/evaluation/report.json"
+  jq -r '.claims[] | "| \(.claim) | \(.holds) | \(if .z == null then "-" else .z * 100 | round / 100 end) |"' "$out/evaluation/report.json"
   echo
   for env in A1 B1 A2 B2 C; do
     [[ -f "docs/img/evaluation_$env.svg" ]] && echo "![evaluation $env](img/evaluation_$env.svg)"

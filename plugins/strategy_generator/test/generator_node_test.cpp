@@ -63,27 +63,32 @@ std::string output(const std::string& command) {
   return out;
 }
 
+// A generator config for the block world, `extra` added to its params.
+struct Sizes {
+  int particles, horizon, trials, workers;
+};
+void write_config(const fs::path& file, Sizes n, const std::string& extra = "") {
+  std::ofstream cfg(file);
+  cfg << "pipeline: generate_test\n"
+         "nodes:\n"
+         "  generator:\n"
+         "    plugin: strategy_generator\n"
+         "    params:\n"
+         "      library: ${report_dir}/library.plrl\n"
+         "      checkpoint_dir: ${report_dir}/checkpoint\n"
+         "      worlds: [{family: A1, world_file: " BLOCK_WORLD "}]\n"
+      << "      particles: " << n.particles << "\n      horizon: " << n.horizon
+      << "\n      trials: " << n.trials << "\n      workers: " << n.workers
+      << "\n"
+         "      progress: false\n"
+         "      observation: {h_pile: 0.55, pile_mid: 0.25, pile_high: 0.4, wall_mid: 1.2, "
+         "wall_high: 1.9}\n"
+      << extra;
+}
+
 TEST(GeneratorNode, KilledWithSigkillAndRunAgainGivesTheSameLibrary) {
   TempDir dir;
-  {
-    std::ofstream cfg(dir / "generate.yaml");
-    cfg << "pipeline: generate_test\n"
-           "nodes:\n"
-           "  generator:\n"
-           "    plugin: strategy_generator\n"
-           "    params:\n"
-           "      library: ${report_dir}/library.plrl\n"
-           "      checkpoint_dir: ${report_dir}/checkpoint\n"
-           "      worlds: [{family: A1, world_file: " BLOCK_WORLD
-           "}]\n"
-           "      particles: 3\n"
-           "      horizon: 3\n"
-           "      trials: 6\n"
-           "      workers: 2\n"
-           "      progress: false\n"
-           "      observation: {h_pile: 0.55, pile_mid: 0.25, pile_high: 0.4, wall_mid: 1.2, "
-           "wall_high: 1.9}\n";
-  }
+  write_config(dir / "generate.yaml", {3, 3, 6, 2});
   ASSERT_EQ(wait_exit(start(dir / "generate.yaml", dir / "whole")), 0);
   const std::string whole = plr::sim::testing::library_fingerprint(dir / "whole/library.plrl");
   ASSERT_EQ(whole.rfind("block\n", 0), 0u) << whole;
@@ -124,33 +129,11 @@ TEST(GeneratorNode, KilledWithSigkillAndRunAgainGivesTheSameLibrary) {
                                  fs::file_size(lib), fs::file_size(lib) + 10));
 }
 
-// A generator config for the block world, `extra` added to its params.
-void write_config(const fs::path& file, const std::string& extra) {
-  std::ofstream cfg(file);
-  cfg << "pipeline: generate_test\n"
-         "nodes:\n"
-         "  generator:\n"
-         "    plugin: strategy_generator\n"
-         "    params:\n"
-         "      library: ${report_dir}/library.plrl\n"
-         "      checkpoint_dir: ${report_dir}/checkpoint\n"
-         "      worlds: [{family: A1, world_file: " BLOCK_WORLD
-         "}]\n"
-         "      particles: 2\n"
-         "      horizon: 1\n"
-         "      trials: 2\n"
-         "      workers: 1\n"
-         "      progress: false\n"
-         "      observation: {h_pile: 0.55, pile_mid: 0.25, pile_high: 0.4, wall_mid: 1.2, "
-         "wall_high: 1.9}\n"
-      << extra;
-}
-
 TEST(GeneratorNode, ContinuationsMakeAChainThatResumesFromALibraryWithoutThem) {
   TempDir dir;
-  write_config(dir / "none.yaml", "");
-  write_config(dir / "zero.yaml", "      continuations: 0\n");
-  write_config(dir / "chain.yaml", "      continuations: 2\n");
+  write_config(dir / "none.yaml", {2, 1, 2, 1});
+  write_config(dir / "zero.yaml", {2, 1, 2, 1}, "      continuations: 0\n");
+  write_config(dir / "chain.yaml", {2, 1, 2, 1}, "      continuations: 2\n");
   // continuations: 0 is the default, and makes the strategy alone.
   ASSERT_EQ(wait_exit(start(dir / "none.yaml", dir / "none")), 0);
   ASSERT_EQ(wait_exit(start(dir / "zero.yaml", dir / "resumed")), 0);
