@@ -135,5 +135,7 @@ TEST(Experience, AStoredPathABoxNowBlocksIsNotFollowed) {
 
   const PlanResult r = with.plan(q, now);
   EXPECT_NE(r.path, learnt.path);
-  if (r.status == PlanStatus::kSolved) EXPECT_TRUE(path_valid(r.path, now));
+  if (r.status == PlanStatus::kSolved) {
+    EXPECT_TRUE(path_valid(r.path, now));
+  }
 }
