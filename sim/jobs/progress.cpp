@@ -54,6 +54,20 @@ plr::Expected<Outcome> run_with_progress(const std::string& name, const std::vec
                       },
                       [&] { return stop(); }, [&](const Result& r) { bar->step(r.key); }});
   if (bar) bar->finish();
+  if (outcome) {
+    // A stored failure is not run again; say so, or a run whose workers
+    // could not start looks finished the next time.
+    std::size_t failed = 0;
+    const Result* first = nullptr;
+    for (const Result& r : outcome->results)
+      if (r.stored && !r.ok && failed++ == 0) first = &r;
+    if (first != nullptr)
+      std::fprintf(stderr,
+                   "%s: %zu of the runs already in %s had failed and were not run again "
+                   "(delete their result files to retry them), e.g. %s: %s\n",
+                   name.c_str(), failed, store.dir().c_str(), first->key.c_str(),
+                   first->error.c_str());
+  }
   return outcome;
 }
 

@@ -6,6 +6,7 @@
 
 #include "plr/jobs/engine.hpp"
 #include "plr/jobs/in_process_runner.hpp"
+#include "plr/jobs/progress.hpp"
 #include "plr/jobs/signals.hpp"
 
 namespace fs = std::filesystem;
@@ -96,6 +97,24 @@ TEST_F(EngineTest, AFailureIsAResultAndIsKept) {
   ASSERT_TRUE(again);
   EXPECT_EQ(again->stored, 2u);
   EXPECT_EQ(again->results[0].error, "no good");
+}
+
+// Run again, the progress line says which stored runs had failed, since
+// they are not run again.
+TEST_F(EngineTest, StoredFailuresAreNamedWhenRunAgain) {
+  auto store = Store::open(dir_);
+  ASSERT_TRUE(store);
+  InProcessRunner runner(kinds_);
+  std::vector<Job> jobs = batch(2);
+  jobs.push_back({"test.fail", "bad", {}});
+  ASSERT_TRUE(run(jobs, runner, &*store));
+  ::testing::internal::CaptureStderr();
+  auto again = run_with_progress("engine_test", jobs, runner, *store);
+  const std::string err = ::testing::internal::GetCapturedStderr();
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->ran, 0u);
+  EXPECT_NE(err.find("1 of the runs already in"), std::string::npos) << err;
+  EXPECT_NE(err.find("bad: no good"), std::string::npos) << err;
 }
 
 TEST_F(EngineTest, RefusesBadAndDuplicateKeys) {
