@@ -134,6 +134,7 @@ struct ShmBridge::Client {
   std::optional<shm::ServiceClient> client;
   std::map<std::uint64_t, std::uint64_t> calls;  // correlation id -> bus call id
   std::atomic<bool> dead{false};
+  std::atomic<bool> finished{false};  // its thread is past its last use of the bridge
   std::thread thread;
 };
 
@@ -398,10 +399,25 @@ void ShmBridge::serve_loop(Server* server) {
   }
 }
 
+void ShmBridge::reap_retired() {
+  std::vector<std::shared_ptr<Client>> done;
+  {
+    std::lock_guard lock(m_);
+    const auto finished = std::partition(retired_.begin(), retired_.end(),
+                                         [](const auto& c) { return !c->finished.load(); });
+    done.assign(std::make_move_iterator(finished), std::make_move_iterator(retired_.end()));
+    retired_.erase(finished, retired_.end());
+  }
+  // Outside the lock: a thread may still be on its way out of bus calls.
+  for (auto& c : done)
+    if (c->thread.joinable()) c->thread.join();
+}
+
 std::shared_ptr<ShmBridge::Client> ShmBridge::client_for(const std::string& service) {
   // How long a host not serving a service is left alone: opening a segment
   // that is not there costs a system call per call otherwise.
   constexpr auto kLookAgain = 100ms;
+  reap_retired();
   const auto now = std::chrono::steady_clock::now();
   std::lock_guard lock(m_);
   auto& by_host = clients_[service];
@@ -477,6 +493,11 @@ bool ShmBridge::forward_call(const std::string& service, const MsgRef& request, 
 }
 
 void ShmBridge::reply_loop(Client* client) {
+  reply_loop_body(client);
+  client->finished = true;
+}
+
+void ShmBridge::reply_loop_body(Client* client) {
   while (!stop_ && !client->dead) {
     auto reply = client->client->take_reply(50ms);
     if (!reply) {
