@@ -127,7 +127,10 @@ struct ShmBridge::Server {
   std::thread thread;
 };
 
-struct ShmBridge::Client {
+// Replies are read in place: each message built on one keeps its client,
+// and so the segment's mapping, alive (a caller may hold a reply long after
+// the server died and the bridge let go of the client).
+struct ShmBridge::Client : std::enable_shared_from_this<ShmBridge::Client> {
   std::string service;
   std::string host;
   std::mutex m;
@@ -268,7 +271,9 @@ void ShmBridge::import_topic(const std::string& topic, std::uint64_t type_id) {
 }
 
 void ShmBridge::read_remote_topic(Incoming* in) {
-  std::optional<shm::Subscriber> sub;
+  // Shared with the messages read from it: a reader may hold one after the
+  // publisher died and this thread moved on to its successor's segment.
+  std::shared_ptr<shm::Subscriber> sub;
   while (!stop_) {
     if (!sub) {
       auto s =
@@ -277,7 +282,7 @@ void ShmBridge::read_remote_topic(Incoming* in) {
         std::this_thread::sleep_for(20ms);  // its publisher is not up (yet, or again)
         continue;
       }
-      sub.emplace(std::move(*s));
+      sub = std::make_shared<shm::Subscriber>(std::move(*s));
     }
     auto sample = sub->take(100ms);
     if (!sample) {
@@ -298,8 +303,9 @@ void ShmBridge::read_remote_topic(Incoming* in) {
       in->publisher = *p;
     }
     received_.fetch_add(1, std::memory_order_relaxed);
-    const auto& ref = *sample;
-    plr_msg* m = wrap_sample(std::move(*sample), ref, this);
+    auto held = std::make_pair(sub, std::move(*sample));
+    const shm::Sample& ref = held.second;
+    plr_msg* m = wrap_sample(std::move(held), ref, this);
     (void)bus_.publish(in->publisher, m);
   }
 }
@@ -537,8 +543,9 @@ void ShmBridge::reply_loop_body(Client* client) {
       (void)bus_.respond(id, status == PLR_OK ? PLR_ERR_INTERNAL : status, nullptr, why);
       continue;
     }
-    const auto& ref = *reply;
-    (void)bus_.respond(id, PLR_OK, wrap_sample(std::move(*reply), ref, this), "");
+    auto held = std::make_pair(client->shared_from_this(), std::move(*reply));
+    const shm::Sample& ref = held.second;
+    (void)bus_.respond(id, PLR_OK, wrap_sample(std::move(held), ref, this), "");
   }
 }
 

@@ -310,6 +310,18 @@ TEST(BridgeServices, AServerThatRestartsLeavesNoOldSegmentMapped) {
   ShmBridge main_bridge(bus_main, *c, "main", {"main", "b"}, run);
   bus_main.attach(&main_bridge);
   TestEndpoint caller("caller");
+  // A reply kept past its server's death and the client's end (a world
+  // the executor observed): read in place, its segment stays mapped for it.
+  struct Keeper {
+    const plr_msg* kept = nullptr;
+    static void on(void* user, plr_status status, const plr_msg* m, const char*) {
+      auto* self = static_cast<Keeper*>(user);
+      if (status == PLR_OK && m != nullptr && self->kept == nullptr) {
+        msg_retain(m);
+        self->kept = m;
+      }
+    }
+  } keeper;
   for (int life = 0; life < 3; ++life) {
     Bus bus_b([&](const std::string& t) { return c->topic(t); });
     auto b_bridge =
@@ -328,6 +340,12 @@ TEST(BridgeServices, AServerThatRestartsLeavesNoOldSegmentMapped) {
       if (!answered) std::this_thread::sleep_for(10ms);
     }
     EXPECT_TRUE(answered) << "life " << life;
+    if (life == 0) {
+      ASSERT_TRUE(
+          bus_main.call(&caller, "blob", type, blob(16, 2), 5s, &Keeper::on, &keeper, nullptr));
+      for (int i = 0; i < 500 && keeper.kept == nullptr; ++i) std::this_thread::sleep_for(10ms);
+      ASSERT_NE(keeper.kept, nullptr);
+    }
     bus_b.remove_endpoint(&provider);
     bus_b.detach(b_bridge.get());
     b_bridge.reset();
@@ -338,6 +356,16 @@ TEST(BridgeServices, AServerThatRestartsLeavesNoOldSegmentMapped) {
     (void)bus_main.call(&caller, "blob", type, blob(16, 2), 1s, &Answer::on, &a, nullptr);
     std::this_thread::sleep_for(10ms);
   }
+  // Only the kept reply's segment is still mapped, and the reply reads as sent.
+  EXPECT_EQ(deleted_segments_mapped(run), 1);
+  const auto view = msg_view(keeper.kept);
+  auto verifier = flatbuffers::Verifier(view.data, view.size);
+  ASSERT_TRUE(verifier.VerifyBuffer<msg::NextStrategyRequest>(nullptr));
+  const auto* reply = flatbuffers::GetRoot<msg::NextStrategyRequest>(view.data);
+  ASSERT_NE(reply->world(), nullptr);
+  EXPECT_EQ(reply->world()->size(), 100u);
+  EXPECT_EQ(reply->world()->Get(99), 1);
+  msg_release(keeper.kept);
   EXPECT_EQ(deleted_segments_mapped(run), 0);
   bus_main.detach(&main_bridge);
 }
