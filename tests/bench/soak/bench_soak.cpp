@@ -126,6 +126,7 @@ struct Proc {
   pid_t pid = 0;
   std::string label;  // main, host:NAME, watchdog
   double rss_mib = 0;
+  double anon_mib = 0;  // of it, the process's own memory (heap, stacks): not code, not /dev/shm
   int fds = 0;
 };
 
@@ -181,7 +182,10 @@ std::vector<Proc> processes(pid_t root) {
       if (args[i] == "--host") p.label = "host:" + args[i + 1];
     std::istringstream status(read_file(fmt::format("/proc/{}/status", pid)));
     for (std::string line; std::getline(status, line);)
-      if (line.rfind("VmRSS:", 0) == 0) p.rss_mib = std::stod(line.substr(6)) / 1024.0;
+      if (line.rfind("VmRSS:", 0) == 0)
+        p.rss_mib = std::stod(line.substr(6)) / 1024.0;
+      else if (line.rfind("RssAnon:", 0) == 0)
+        p.anon_mib = std::stod(line.substr(8)) / 1024.0;
     std::error_code ec;
     for (auto it = fs::directory_iterator(fmt::format("/proc/{}/fd", pid), ec);
          !ec && it != fs::directory_iterator(); it.increment(ec))
@@ -460,6 +464,7 @@ struct Sample {
   double t_s = 0;
   std::vector<Proc> procs;
   double rss_mib = 0;
+  double anon_mib = 0;
   int fds = 0;
   double shm_mib = 0;
   int dds = 0;
@@ -494,7 +499,7 @@ std::string procs_text(const std::vector<Proc>& procs) {
   }
   std::string out;
   for (const auto& [label, v] : by)
-    out += fmt::format("{}{} {:.0f}M/{}", out.empty() ? "" : " ", label, v.first, v.second);
+    out += fmt::format("{}{} {:.0f}M/{}", out.empty() ? "" : ", ", label, v.first, v.second);
   return out;
 }
 
@@ -638,7 +643,7 @@ int main(int argc, char** argv) {
     Sample x;
     x.t_s = since(t0);
     x.procs = processes(run);
-    for (const auto& p : x.procs) x.rss_mib += p.rss_mib, x.fds += p.fds;
+    for (const auto& p : x.procs) x.rss_mib += p.rss_mib, x.anon_mib += p.anon_mib, x.fds += p.fds;
     x.shm_mib = folder_bytes("/dev/shm", "plr_soak_filler") / 1048576.0;
     x.dds = dds.count();
     x.checkpoint_kib = folder_bytes(s.report / "checkpoint") / 1024.0;
@@ -879,6 +884,7 @@ int main(int argc, char** argv) {
   const double from = first_trailer_s >= 0 ? first_trailer_s : 1e18;
   json grow = {
       {"rss", growth(samples, from, [](const Sample& x) { return x.rss_mib; })},
+      {"rss_anon", growth(samples, from, [](const Sample& x) { return x.anon_mib; })},
       {"fds", growth(samples, from, [](const Sample& x) { return double(x.fds); })},
       {"shm", growth(samples, from, [](const Sample& x) { return x.shm_mib; })},
       {"dds_entities", growth(samples, from, [](const Sample& x) { return double(x.dds); })},
@@ -901,12 +907,14 @@ int main(int argc, char** argv) {
     next += row_every_s;
     json procs = json::array();
     for (const auto& p : x.procs)
-      procs.push_back({{"label", p.label}, {"rss_mib", p.rss_mib}, {"fds", p.fds}});
+      procs.push_back(
+          {{"label", p.label}, {"rss_mib", p.rss_mib}, {"anon_mib", p.anon_mib}, {"fds", p.fds}});
     rows.push_back({{"min", x.t_s / 60},
                     {"trailers", x.trailers},
                     {"boxes", x.boxes},
                     {"faults", x.faults},
                     {"rss_mib", x.rss_mib},
+                    {"rss_anon_mib", x.anon_mib},
                     {"fds", x.fds},
                     {"shm_mib", x.shm_mib},
                     {"dds_entities", x.dds},
@@ -942,20 +950,21 @@ int main(int argc, char** argv) {
     std::printf("Soak: %.0f min (seed %llu), %s\n", minutes, static_cast<unsigned long long>(seed),
                 ended.c_str());
     std::printf(
-        "\n| min | trailers | boxes | faults | RSS MiB | fds | /dev/shm MiB | DDS entities | "
+        "\n| min | trailers | boxes | faults | RSS MiB (anon) | fds | /dev/shm MiB | DDS entities "
+        "| "
         "checkpoint KiB | logs KiB | per process (RSS/fds) "
         "|\n|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (const auto& r : rows) {
       std::vector<Proc> procs;
       for (const auto& p : r["processes"])
-        procs.push_back(
-            {0, p["label"].get<std::string>(), p["rss_mib"].get<double>(), p["fds"].get<int>()});
-      std::printf("| %.1f | %d | %ld | %d | %.0f | %d | %.1f | %d | %.0f | %.0f | %s |\n",
+        procs.push_back({0, p["label"].get<std::string>(), p["rss_mib"].get<double>(),
+                         p["anon_mib"].get<double>(), p["fds"].get<int>()});
+      std::printf("| %.1f | %d | %ld | %d | %.0f (%.0f) | %d | %.1f | %d | %.0f | %.0f | %s |\n",
                   r["min"].get<double>(), r["trailers"].get<int>(), r["boxes"].get<long>(),
-                  r["faults"].get<int>(), r["rss_mib"].get<double>(), r["fds"].get<int>(),
-                  r["shm_mib"].get<double>(), r["dds_entities"].get<int>(),
-                  r["checkpoint_kib"].get<double>(), r["log_kib"].get<double>(),
-                  procs_text(procs).c_str());
+                  r["faults"].get<int>(), r["rss_mib"].get<double>(),
+                  r["rss_anon_mib"].get<double>(), r["fds"].get<int>(), r["shm_mib"].get<double>(),
+                  r["dds_entities"].get<int>(), r["checkpoint_kib"].get<double>(),
+                  r["log_kib"].get<double>(), procs_text(procs).c_str());
     }
     std::printf(
         "\n| trailer | boxes | without faults | simulator: out / left | recoveries |\n"
