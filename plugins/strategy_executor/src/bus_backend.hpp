@@ -56,11 +56,11 @@ class BusBackend final : public actions::Backend, public episode::Recovery {
   plr::Expected<Message<Rep>> call_retry(const std::string& service,
                                          const flatbuffers::FlatBufferBuilder& fbb,
                                          double timeout_s);
+  // A simulator that restarted, was restored or reset sets its clock back:
+  // forget the clock seen so far, so the next call does not count as a restart.
+  void forget_clock() { sim_clock_s_ = -1.0; }
 
  private:
-  // A simulator that restarted (or was restored) sets its clock back: forget
-  // the clock seen so far, so the next call does not count as a restart.
-  void forget_clock() { sim_clock_s_ = -1.0; }
   template <class Req, class Rep>
   plr::Expected<Message<Rep>> call_once(const std::string& service,
                                         const flatbuffers::FlatBufferBuilder& fbb,

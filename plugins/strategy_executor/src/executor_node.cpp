@@ -52,6 +52,16 @@ struct SimulatorLost {
   std::string what;
 };
 
+// A trailer to unload: generated (`env`, `seed`) or read (`world_file`).
+struct Trailer {
+  std::string env;
+  std::uint64_t seed = 1;
+  std::string world_file;
+  std::string name() const {
+    return world_file.empty() ? fmt::format("{} seed {}", env, seed) : world_file;
+  }
+};
+
 template <std::size_t N>
 bool read_array(const Params& p, const char* key, std::array<double, N>& to, Status& error) {
   const auto v = p.get<std::vector<double>>(key, std::vector<double>(to.begin(), to.end()));
@@ -97,11 +107,14 @@ class ExecutorNode : public plr::Node, private episode::Observer {
                          "progress",
                          "strategy_file",
                          "strategy_library",
-                         "strategy_entry"});
+                         "strategy_entry",
+                         "trailers",
+                         "cycles"});
     report_dir_ = params().get<std::string>("report_dir", "report");
     env_ = params().get<std::string>("env", "");
     seed_ = params().get<std::uint64_t>("seed", 1);
     world_file_ = params().get<std::string>("world_file", "");
+    if (auto ok = read_trailers(); !ok) return ok;
     // Open loop: the first strategy is a given one (a strategy file, or an
     // entry of a library L) instead of strategy/next's; once it ends, the
     // executor asks strategy/next as usual.
@@ -219,6 +232,39 @@ class ExecutorNode : public plr::Node, private episode::Observer {
     throw std::runtime_error(e.message);
   }
 
+  // `trailers`: a list of {env, seed} or {world_file}, unloaded one after
+  // the other `cycles` times (0: until the run is stopped).
+  plr::Status read_trailers() {
+    trailers_.clear();
+    cycles_ = params().get<std::uint64_t>("cycles", 1);
+    const auto list = params().json().value("trailers", nlohmann::json::array());
+    if (!list.is_array()) return make_error(PLR_ERR_INVALID, "param 'trailers': expected a list");
+    if (!list.empty() && (!env_.empty() || !world_file_.empty()))
+      return make_error(PLR_ERR_INVALID,
+                        "params 'trailers' and 'env'/'world_file': give one of them");
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const auto& e = list[i];
+      const auto where = fmt::format("param 'trailers[{}]'", i);
+      if (!e.is_object()) return make_error(PLR_ERR_INVALID, where + ": expected a map");
+      Trailer t;
+      for (const auto& [key, value] : e.items()) {
+        if (key == "env" && value.is_string()) {
+          t.env = value.get<std::string>();
+        } else if (key == "seed" && value.is_number_unsigned()) {
+          t.seed = value.get<std::uint64_t>();
+        } else if (key == "world_file" && value.is_string()) {
+          t.world_file = value.get<std::string>();
+        } else {
+          return make_error(PLR_ERR_INVALID, fmt::format("{}: bad key '{}'", where, key));
+        }
+      }
+      if (t.env.empty() == t.world_file.empty())
+        return make_error(PLR_ERR_INVALID, where + ": give 'env' (and 'seed') or 'world_file'");
+      trailers_.push_back(std::move(t));
+    }
+    return {};
+  }
+
   actions::Perceived observe() {
     auto w = backend_->observe();
     if (!w) fail(w.error());
@@ -293,17 +339,97 @@ class ExecutorNode : public plr::Node, private episode::Observer {
   }
 
   void job() {
-    // A simulator may hold no world before its first reset: reset first when
-    // asked to (waiting for it to come up), observe only otherwise.
-    if (!env_.empty() || !world_file_.empty()) {
-      flatbuffers::FlatBufferBuilder fbb;
-      fbb.Finish(msg::CreateResetRequestDirect(fbb, env_.c_str(), seed_, world_file_.c_str()));
-      auto r = backend_->call_retry<msg::ResetRequest, msg::WorldState>("sim/reset", fbb, 120.0);
-      if (!r) {
-        if (r.error().code == PLR_ERR_CANCELLED) throw Stopped{};
-        throw std::runtime_error("sim/reset: " + r.error().message);
+    if (trailers_.empty()) {
+      // A simulator may hold no world before its first reset: reset first when
+      // asked to (waiting for it to come up), observe only otherwise.
+      if (!env_.empty() || !world_file_.empty()) reset({env_, seed_, world_file_});
+      unload();
+      return;
+    }
+    std::uint32_t unloaded = 0, total = 0;
+    for (std::uint64_t cycle = 0; cycles_ == 0 || cycle < cycles_; ++cycle) {
+      for (const Trailer& t : trailers_) {
+        const auto t0 = Clock::now();
+        reset_and_checkpoint(t);
+        unload();
+        finish_trailer(t, seconds_since(t0));
+        unloaded += stats_.trailers.back().boxes_unloaded;
+        total += stats_.trailers.back().boxes_total;
       }
     }
+    stats_.stop_reason = fmt::format("{} trailers done: {}/{} boxes unloaded",
+                                     stats_.trailers.size(), unloaded, total);
+  }
+
+  // `sim/reset` to trailer `t`; returns the world it made.
+  sim::World reset(const Trailer& t) {
+    flatbuffers::FlatBufferBuilder fbb;
+    fbb.Finish(msg::CreateResetRequestDirect(fbb, t.env.c_str(), t.seed, t.world_file.c_str()));
+    auto r = backend_->call_retry<msg::ResetRequest, msg::WorldState>("sim/reset", fbb, 120.0);
+    if (!r) {
+      if (r.error().code == PLR_ERR_CANCELLED) throw Stopped{};
+      throw std::runtime_error("sim/reset: " + r.error().message);
+    }
+    backend_->forget_clock();  // a reset starts the simulator's clock again
+    return sim::world_from_message(*r.value());
+  }
+
+  // The next trailer, checkpointed at once: a simulator that restarts
+  // resumes its last checkpoint, which until then is the trailer before
+  // (unloaded). What it shows after the checkpoint is compared with what the
+  // reset made; when they differ, it restarted in between and the reset is
+  // made again (a first trailer's simulator restarts with no world at all).
+  void reset_and_checkpoint(const Trailer& t) {
+    constexpr int kAttempts = 10;  // restarts are bounded by the run's max_restarts anyway
+    for (int attempt = 1;; ++attempt) {
+      const sim::World made = reset(t);
+      if (auto ok = backend_->checkpoint(); !ok && !backend_->lost(ok.error())) fail(ok.error());
+      auto w = backend_->wait_for_simulator();
+      if (w && w->unloaded == 0 && box_ids(w->world) == box_ids(made)) return;
+      if (!w && w.error().code == PLR_ERR_CANCELLED) throw Stopped{};
+      const std::string shows =
+          w ? fmt::format("{} boxes, {} unloaded", w->world.boxes.size(), w->unloaded)
+            : w.error().message;
+      if (attempt == kAttempts)
+        throw std::runtime_error(
+            fmt::format("trailer {}: the simulator does not keep its reset "
+                        "after {} attempts ({})",
+                        t.name(), kAttempts, shows));
+      log().warn("trailer {}: the simulator restarted after its reset ({}): resetting again",
+                 t.name(), shows);
+    }
+  }
+
+  static std::vector<std::uint32_t> box_ids(const sim::World& w) {
+    std::vector<std::uint32_t> ids;
+    for (const auto& b : w.boxes) ids.push_back(b.id);
+    std::sort(ids.begin(), ids.end());
+    return ids;
+  }
+
+  // The trailer's figures, with what the simulator holds at its end: a box
+  // the executor counted that the simulator did not (or the reverse) shows.
+  void finish_trailer(const Trailer& t, double wall_time_s) {
+    auto w = backend_->wait_for_simulator();
+    if (!w) fail(w.error());
+    TrailerRecord r;
+    r.name = t.name();
+    r.boxes_total = stats_.boxes_total;
+    r.boxes_unloaded = stats_.boxes_unloaded;
+    r.sim_boxes_unloaded = w->unloaded;
+    r.sim_boxes_left = static_cast<std::uint32_t>(w->world.boxes.size());
+    r.recoveries = stats_.recoveries;
+    r.plan_calls_unanswered = stats_.planner.unanswered;
+    r.wall_time_s = wall_time_s;
+    r.stop_reason = stats_.stop_reason;
+    log().info("trailer {} ({}): {}/{} boxes, {}", stats_.trailers.size() + 1, r.name,
+               r.boxes_unloaded, r.boxes_total, r.stop_reason);
+    stats_.trailers.push_back(std::move(r));
+    save_report();
+  }
+
+  // One trailer, from what the simulator shows now.
+  void unload() {
     auto w = backend_->wait_for_simulator();
     if (!w) fail(w.error());
     stats_.boxes_total = static_cast<std::uint32_t>(w->world.boxes.size()) + w->unloaded;
@@ -423,9 +549,13 @@ class ExecutorNode : public plr::Node, private episode::Observer {
     }
     publish_status();
     flatbuffers::FlatBufferBuilder fbb;
-    const std::string reason =
-        fmt::format("{}: {}/{} boxes unloaded{}", stats_.stop_reason, stats_.boxes_unloaded,
-                    stats_.boxes_total, report_error.empty() ? "" : "; report: " + report_error);
+    // Several trailers: the stop reason counts their boxes.
+    const std::string reason = fmt::format(
+        "{}{}{}", stats_.stop_reason,
+        stats_.trailers.empty()
+            ? fmt::format(": {}/{} boxes unloaded", stats_.boxes_unloaded, stats_.boxes_total)
+            : "",
+        report_error.empty() ? "" : "; report: " + report_error);
     fbb.Finish(msg::CreatePipelineDoneDirect(fbb, ok && report_error.empty(), reason.c_str()));
     (void)done_.publish(fbb);
   }
@@ -557,6 +687,8 @@ class ExecutorNode : public plr::Node, private episode::Observer {
   std::optional<sim::Strategy> first_strategy_;
   bool first_used_ = false;
   std::uint64_t seed_ = 1;
+  std::vector<Trailer> trailers_;
+  std::uint64_t cycles_ = 1;
   actions::ActionOptions options_;
   BusOptions bus_;
   std::uint64_t max_idle_ = 24, max_actions_ = 0;

@@ -34,6 +34,20 @@ struct StepRecord {
   double robot_time_s = 0;
 };
 
+// One trailer of a run that unloads several (the executor's `trailers`):
+// what the executor counted, and what the simulator holds at its end.
+struct TrailerRecord {
+  std::string name;  // "A1 seed 3", or the world file
+  std::uint32_t boxes_total = 0;
+  std::uint32_t boxes_unloaded = 0;      // as the executor counted them
+  std::uint32_t sim_boxes_unloaded = 0;  // as the simulator counted them
+  std::uint32_t sim_boxes_left = 0;      // still in the simulator's trailer
+  std::uint64_t recoveries = 0;
+  std::uint64_t plan_calls_unanswered = 0;
+  double wall_time_s = 0;
+  std::string stop_reason;
+};
+
 struct RunStats {
   actions::PlannerStats planner;  // the paper's Table I
   ActionStats pick, sweep;
@@ -59,6 +73,8 @@ struct RunStats {
     std::string reason, detail;
   };
   std::vector<LeftBox> boxes_left;
+  // The trailers finished so far, when the run unloads several.
+  std::vector<TrailerRecord> trailers;
 };
 
 nlohmann::json to_json(const RunStats& stats);

@@ -39,6 +39,7 @@ class FakeSim {
   explicit FakeSim(sim::World w) {
     s_.world = std::move(w);
     s_.q << 1.0, 0, -1.0, 2.0, 0.0, 0.5, 0, 0;
+    q0_ = s_.q;
   }
 
   void serve(FakeKernel& k) {
@@ -54,6 +55,22 @@ class FakeSim {
     k.fake_service<msg::ExecuteRequest, msg::ExecuteOutcome>(
         "sim/execute", [this](const msg::ExecuteRequest& r, flatbuffers::FlatBufferBuilder& fbb) {
           return execute(r, fbb);
+        });
+    k.fake_service<msg::ResetRequest, msg::WorldState>(
+        "sim/reset",
+        [this](const msg::ResetRequest& r, flatbuffers::FlatBufferBuilder& fbb) -> Status {
+          if (down_) return make_error(PLR_ERR_UNAVAILABLE, "no provider");
+          const auto it = worlds.find(r.world_file() ? r.world_file()->str() : "");
+          if (it == worlds.end()) return make_error(PLR_ERR_INVALID, "no such world");
+          s_.world = it->second;
+          s_.q = q0_;
+          s_.held.clear();
+          s_.unloaded = 0;
+          s_.t = 0;
+          fbb.Finish(sim::testing::pack_world(fbb, s_.world, joints(), s_.held, s_.unloaded, s_.t));
+          // The host dies after its reply and restarts unseen, from its checkpoint.
+          if (++resets_ == restart_after_reset) s_ = snapshots_.at("checkpoint");
+          return {};
         });
     k.fake_service<msg::SnapshotRequest, msg::SnapshotReply>(
         "sim/snapshot",
@@ -88,6 +105,8 @@ class FakeSim {
   // calls: it resumes from its checkpoint on disk, clock and all.
   int restart_after_execute = -1;
   int observes_while_down = 3;
+  std::map<std::string, sim::World> worlds;  // what sim/reset makes, by world_file
+  int restart_after_reset = -1;              // the n-th reset's host restarts after replying
 
   const SimState& state() const { return s_; }
   int drops() const { return drops_; }
@@ -198,6 +217,8 @@ class FakeSim {
   static constexpr double kGravity = 9.81;
   sim::RobotModel robot_ = sim::load_robot().value();
   SimState s_;
+  sim::JointVector q0_;
+  int resets_ = 0;
   std::map<std::uint32_t, double> capacity_;  // N the cups of a held box hold
   std::map<std::uint32_t, Eigen::Isometry3d> gripped_at_;
   int drops_ = 0;
@@ -500,6 +521,39 @@ TEST_F(Executor, NoticesASimulatorThatRestartedBetweenCalls) {
   EXPECT_EQ(sim.state().unloaded + sim.state().world.boxes.size(), 6u);
 }
 
+// Trailer after trailer (a shift's worth; bench_soak): each is reset,
+// checkpointed, unloaded and reported, with what the simulator holds at its
+// end. A simulator that restarts just after a reset resumes the trailer
+// before from its checkpoint: the executor sees it and resets again.
+TEST_F(Executor, UnloadsTrailerAfterTrailerAndResetsAgainASimulatorThatRestarted) {
+  FakeSim sim(small_wall());
+  sim.worlds["six"] = small_wall();
+  sim::World four;
+  sim::testing::add_wall(four, 5.0, 2, 2);
+  sim.worlds["four"] = four;
+  sim.restart_after_reset = 3;  // the first trailer of the second cycle
+  FakePlanner planner;
+  sim.serve(kernel_);
+  planner.serve(kernel_);
+  const auto report =
+      run(R"(, "trailers": [{"world_file": "six"}, {"world_file": "four"}], "cycles": 2)");
+  EXPECT_TRUE(done_ok_) << done_reason_;
+  EXPECT_EQ(done_reason_, "4 trailers done: 20/20 boxes unloaded");
+  EXPECT_EQ(kernel_.requests("sim/reset").size(), 5u);
+  ASSERT_TRUE(report.contains("trailers")) << report.dump(1);
+  ASSERT_EQ(report["trailers"].size(), 4u);
+  for (std::size_t i = 0; i < 4; ++i) {
+    const auto& t = report["trailers"][i];
+    const int total = i % 2 == 0 ? 6 : 4;
+    EXPECT_EQ(t["name"], i % 2 == 0 ? "six" : "four");
+    EXPECT_EQ(t["boxes_total"], total) << t.dump();
+    EXPECT_EQ(t["boxes_unloaded"], total) << t.dump();
+    EXPECT_EQ(t["sim_boxes_unloaded"], total) << t.dump();
+    EXPECT_EQ(t["sim_boxes_left"], 0) << t.dump();
+    EXPECT_EQ(t["stop_reason"], "trailer empty") << t.dump();
+  }
+}
+
 TEST_F(Executor, FailedGraspsEndInNoProgress) {
   FakeSim sim(small_wall());
   sim.suction_works = false;
@@ -613,6 +667,14 @@ TEST_F(Executor, RefusesBadParams) {
   s = m->configure();
   ASSERT_FALSE(s);
   EXPECT_EQ(s.error().message.rfind("param 'urdf': /no/such.urdf", 0), 0u) << s.error().message;
+  auto both = kernel_.load_node(
+      STRATEGY_EXECUTOR_SO,
+      NodeOptions().with_name("e3").with_params(
+          R"({"trailers": [{"world_file": "a.yaml"}, {"env": "A1", "world_file": "b.yaml"}]})"));
+  ASSERT_TRUE(both);
+  s = both->configure();
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().message, "param 'trailers[1]': give 'env' (and 'seed') or 'world_file'");
 }
 
 #ifdef PLANNER_ARASTAR_SO

@@ -127,13 +127,17 @@ struct ShmBridge::Server {
   std::thread thread;
 };
 
-struct ShmBridge::Client {
+// Replies are read in place: each message built on one keeps its client,
+// and so the segment's mapping, alive (a caller may hold a reply long after
+// the server died and the bridge let go of the client).
+struct ShmBridge::Client : std::enable_shared_from_this<ShmBridge::Client> {
   std::string service;
   std::string host;
   std::mutex m;
   std::optional<shm::ServiceClient> client;
   std::map<std::uint64_t, std::uint64_t> calls;  // correlation id -> bus call id
   std::atomic<bool> dead{false};
+  std::atomic<bool> finished{false};  // its thread is past its last use of the bridge
   std::thread thread;
 };
 
@@ -267,7 +271,9 @@ void ShmBridge::import_topic(const std::string& topic, std::uint64_t type_id) {
 }
 
 void ShmBridge::read_remote_topic(Incoming* in) {
-  std::optional<shm::Subscriber> sub;
+  // Shared with the messages read from it: a reader may hold one after the
+  // publisher died and this thread moved on to its successor's segment.
+  std::shared_ptr<shm::Subscriber> sub;
   while (!stop_) {
     if (!sub) {
       auto s =
@@ -276,7 +282,7 @@ void ShmBridge::read_remote_topic(Incoming* in) {
         std::this_thread::sleep_for(20ms);  // its publisher is not up (yet, or again)
         continue;
       }
-      sub.emplace(std::move(*s));
+      sub = std::make_shared<shm::Subscriber>(std::move(*s));
     }
     auto sample = sub->take(100ms);
     if (!sample) {
@@ -297,8 +303,9 @@ void ShmBridge::read_remote_topic(Incoming* in) {
       in->publisher = *p;
     }
     received_.fetch_add(1, std::memory_order_relaxed);
-    const auto& ref = *sample;
-    plr_msg* m = wrap_sample(std::move(*sample), ref, this);
+    auto held = std::make_pair(sub, std::move(*sample));
+    const shm::Sample& ref = held.second;
+    plr_msg* m = wrap_sample(std::move(held), ref, this);
     (void)bus_.publish(in->publisher, m);
   }
 }
@@ -398,10 +405,25 @@ void ShmBridge::serve_loop(Server* server) {
   }
 }
 
+void ShmBridge::reap_retired() {
+  std::vector<std::shared_ptr<Client>> done;
+  {
+    std::lock_guard lock(m_);
+    const auto finished = std::partition(retired_.begin(), retired_.end(),
+                                         [](const auto& c) { return !c->finished.load(); });
+    done.assign(std::make_move_iterator(finished), std::make_move_iterator(retired_.end()));
+    retired_.erase(finished, retired_.end());
+  }
+  // Outside the lock: a thread may still be on its way out of bus calls.
+  for (auto& c : done)
+    if (c->thread.joinable()) c->thread.join();
+}
+
 std::shared_ptr<ShmBridge::Client> ShmBridge::client_for(const std::string& service) {
   // How long a host not serving a service is left alone: opening a segment
   // that is not there costs a system call per call otherwise.
   constexpr auto kLookAgain = 100ms;
+  reap_retired();
   const auto now = std::chrono::steady_clock::now();
   std::lock_guard lock(m_);
   auto& by_host = clients_[service];
@@ -477,6 +499,11 @@ bool ShmBridge::forward_call(const std::string& service, const MsgRef& request, 
 }
 
 void ShmBridge::reply_loop(Client* client) {
+  reply_loop_body(client);
+  client->finished = true;
+}
+
+void ShmBridge::reply_loop_body(Client* client) {
   while (!stop_ && !client->dead) {
     auto reply = client->client->take_reply(50ms);
     if (!reply) {
@@ -516,8 +543,9 @@ void ShmBridge::reply_loop(Client* client) {
       (void)bus_.respond(id, status == PLR_OK ? PLR_ERR_INTERNAL : status, nullptr, why);
       continue;
     }
-    const auto& ref = *reply;
-    (void)bus_.respond(id, PLR_OK, wrap_sample(std::move(*reply), ref, this), "");
+    auto held = std::make_pair(client->shared_from_this(), std::move(*reply));
+    const shm::Sample& ref = held.second;
+    (void)bus_.respond(id, PLR_OK, wrap_sample(std::move(held), ref, this), "");
   }
 }
 

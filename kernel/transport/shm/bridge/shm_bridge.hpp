@@ -67,6 +67,11 @@ class ShmBridge final : public Endpoint, public Link {
   void read_remote_topic(Incoming* in);
   void serve_loop(Server* server);
   void reply_loop(Client* client);
+  void reply_loop_body(Client* client);
+  // Drops the clients whose server died once their thread is done: each
+  // keeps the dead server's segment mapped, and its pages stay taken in
+  // /dev/shm until then (a host restarted every few minutes filled it).
+  void reap_retired();
   // The host to call `service` on: of the hosts serving it, the one with
   // the fewest of our calls waiting; nullptr when none does.
   std::shared_ptr<Client> client_for(const std::string& service);
@@ -87,7 +92,7 @@ class ShmBridge final : public Endpoint, public Link {
   // at again after a while (it may start to, or be restarted).
   std::map<std::string, std::map<std::string, std::shared_ptr<Client>>> clients_;
   std::map<std::pair<std::string, std::string>, std::chrono::steady_clock::time_point> absent_;
-  std::vector<std::shared_ptr<Client>> retired_;  // clients whose server died, joined at exit
+  std::vector<std::shared_ptr<Client>> retired_;  // clients whose server died, not yet joined
   std::atomic<bool> stop_{false};
 
   std::atomic<std::uint64_t> sent_{0};

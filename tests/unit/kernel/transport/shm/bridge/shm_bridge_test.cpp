@@ -30,6 +30,7 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <fstream>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -285,6 +286,88 @@ TEST(BridgeServices, CallsGoToTheHostWithTheFewestWaitingOfSeveralServingIt) {
   bus_main.detach(&main_bridge);
   bus_b.detach(&b_bridge);
   bus_c.detach(&c_bridge);
+}
+
+// Mappings of this process of a run's segments that are gone from /dev/shm:
+// their pages stay taken there until unmapped.
+int deleted_segments_mapped(const std::string& run) {
+  std::ifstream maps("/proc/self/maps");
+  int n = 0;
+  for (std::string line; std::getline(maps, line);)
+    n += line.find(run) != std::string::npos && line.find("(deleted)") != std::string::npos;
+  return n;
+}
+
+// A host that restarts serves from new segments; the caller's clients of
+// the dead server's are dropped, so that their pages leave /dev/shm however
+// often it restarts (issue 50: a soak's simulator restarts filled it).
+TEST(BridgeServices, AServerThatRestartsLeavesNoOldSegmentMapped) {
+  auto c = config_with("  blob: {slot_size: 1024}\n");
+  ASSERT_TRUE(c.has_value()) << c.error().message;
+  const std::string run = shm::test::unique_run_id();
+  const auto type = MessageTraits<msg::NextStrategyRequest>::type_id();
+  Bus bus_main([&](const std::string& t) { return c->topic(t); });
+  ShmBridge main_bridge(bus_main, *c, "main", {"main", "b"}, run);
+  bus_main.attach(&main_bridge);
+  TestEndpoint caller("caller");
+  // A reply kept past its server's death and the client's end (a world
+  // the executor observed): read in place, its segment stays mapped for it.
+  struct Keeper {
+    const plr_msg* kept = nullptr;
+    static void on(void* user, plr_status status, const plr_msg* m, const char*) {
+      auto* self = static_cast<Keeper*>(user);
+      if (status == PLR_OK && m != nullptr && self->kept == nullptr) {
+        msg_retain(m);
+        self->kept = m;
+      }
+    }
+  } keeper;
+  for (int life = 0; life < 3; ++life) {
+    Bus bus_b([&](const std::string& t) { return c->topic(t); });
+    auto b_bridge =
+        std::make_unique<ShmBridge>(bus_b, *c, "b", std::vector<std::string>{"main", "b"}, run);
+    bus_b.attach(b_bridge.get());
+    TestEndpoint provider("provider");
+    BlobServer server{&bus_b, 100};
+    ASSERT_TRUE(bus_b.provide(&provider, "blob", type, type, &BlobServer::on, &server));
+    bus_b.set_live(&provider, true);
+    // The first calls may still find the server before: they fail, unavailable.
+    bool answered = false;
+    for (int i = 0; i < 100 && !answered; ++i) {
+      Answer a;
+      ASSERT_NE(call_blob(bus_main, caller, 16, a), nullptr);
+      answered = a.status == PLR_OK;
+      if (!answered) std::this_thread::sleep_for(10ms);
+    }
+    EXPECT_TRUE(answered) << "life " << life;
+    if (life == 0) {
+      ASSERT_TRUE(
+          bus_main.call(&caller, "blob", type, blob(16, 2), 5s, &Keeper::on, &keeper, nullptr));
+      for (int i = 0; i < 500 && keeper.kept == nullptr; ++i) std::this_thread::sleep_for(10ms);
+      ASSERT_NE(keeper.kept, nullptr);
+    }
+    bus_b.remove_endpoint(&provider);
+    bus_b.detach(b_bridge.get());
+    b_bridge.reset();
+  }
+  // Calls that find no server let go of the dead ones.
+  for (int i = 0; i < 200 && deleted_segments_mapped(run) > 0; ++i) {
+    Answer a;
+    (void)bus_main.call(&caller, "blob", type, blob(16, 2), 1s, &Answer::on, &a, nullptr);
+    std::this_thread::sleep_for(10ms);
+  }
+  // Only the kept reply's segment is still mapped, and the reply reads as sent.
+  EXPECT_EQ(deleted_segments_mapped(run), 1);
+  const auto view = msg_view(keeper.kept);
+  auto verifier = flatbuffers::Verifier(view.data, view.size);
+  ASSERT_TRUE(verifier.VerifyBuffer<msg::NextStrategyRequest>(nullptr));
+  const auto* reply = flatbuffers::GetRoot<msg::NextStrategyRequest>(view.data);
+  ASSERT_NE(reply->world(), nullptr);
+  EXPECT_EQ(reply->world()->size(), 100u);
+  EXPECT_EQ(reply->world()->Get(99), 1);
+  msg_release(keeper.kept);
+  EXPECT_EQ(deleted_segments_mapped(run), 0);
+  bus_main.detach(&main_bridge);
 }
 
 TEST(BridgeConfig, SpinBudgetOutOfRangeIsRefusedWithOneLine) {
