@@ -1,6 +1,6 @@
-// A small blocking HTTP and WebSocket client for the monitor's tests
-// (Boost.Beast; reads time out through SO_RCVTIMEO, so a test fails rather
-// than hangs).
+// A small blocking HTTP and WebSocket client for the tests and benches that
+// talk to the monitor (Boost.Beast; reads time out through SO_RCVTIMEO, so a
+// test fails rather than hangs).
 #pragma once
 
 #include <boost/asio/connect.hpp>
