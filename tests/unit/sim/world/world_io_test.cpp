@@ -43,7 +43,7 @@ class WorldIo : public ::testing::Test {
   fs::path dir_;
 };
 
-const char* kHeader =
+const std::string kHeader =
     "format: plr-world\nversion: 1\ntrailer: {width: 2.5, height: 2.7, depth: 16}\n";
 
 TEST_F(WorldIo, RoundTripIsExact) {
@@ -67,8 +67,7 @@ TEST_F(WorldIo, RoundTripIsExact) {
 
 TEST_F(WorldIo, OrientationIsOptionalAndMassMayBeZero) {
   const fs::path p =
-      write("w.yaml",
-            std::string(kHeader) + "boxes:\n  - {id: 3, size: [1, 2, 3], position: [4, 0, 1.5]}\n");
+      write("w.yaml", kHeader + "boxes:\n  - {id: 3, size: [1, 2, 3], position: [4, 0, 1.5]}\n");
   const auto loaded = load_world(p);
   ASSERT_TRUE(loaded) << loaded.error().message;
   const World& w = *loaded;
@@ -83,35 +82,28 @@ TEST_F(WorldIo, SizesArePhysicallyBounded) {
   EXPECT_EQ(error_of("format: plr-world\nversion: 1\ntrailer: {width: 2.5, height: 2.7, depth: "
                      "1e4}\nboxes: []\n"),
             "3:43: trailer.depth: must be between 0.5 and 20, got 1e4");
-  EXPECT_EQ(error_of(std::string(kHeader) +
-                     "boxes:\n  - {id: 1, size: [1e6, 1, 1], position: [1, 0, 0.5]}\n"),
+  EXPECT_EQ(error_of(kHeader + "boxes:\n  - {id: 1, size: [1e6, 1, 1], position: [1, 0, 0.5]}\n"),
             "5:20: boxes[0].size[0]: must be between 0.01 and 4, got 1e6");
-  EXPECT_EQ(error_of(std::string(kHeader) +
-                     "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1e300, 0, 0.5]}\n"),
+  EXPECT_EQ(error_of(kHeader + "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1e300, 0, 0.5]}\n"),
             "5:41: boxes[0].position[0]: must be between -100 and 100, got 1e300");
-  EXPECT_EQ(error_of(std::string(kHeader) +
+  EXPECT_EQ(error_of(kHeader +
                      "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5], mass: 1e9}\n"),
             "5:59: boxes[0].mass: must be between 0 and 1000, got 1e9");
 }
 
 TEST_F(WorldIo, ErrorsNameLineAndKey) {
-  EXPECT_EQ(error_of(std::string(kHeader) +
-                     "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5]}\n"
-                     "  - {id: 2, position: [3, 0, 0.5]}\n"),
+  EXPECT_EQ(error_of(kHeader + "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5]}\n"
+                               "  - {id: 2, position: [3, 0, 0.5]}\n"),
             "6:5: boxes[1]: missing required key 'size'");
-  EXPECT_EQ(
-      error_of(std::string(kHeader) + "boxes:\n  - {id: 1, size: [1, 1], position: [1, 0, 0.5]}\n"),
-      "5:19: boxes[0].size: must have exactly 3 items, got 2");
-  EXPECT_EQ(error_of(std::string(kHeader) +
-                     "boxes:\n  - id: 1\n    size: [1, 1, 1]\n    position: [1, 0, 0.5]\n"
-                     "    mass: heavy\n"),
+  EXPECT_EQ(error_of(kHeader + "boxes:\n  - {id: 1, size: [1, 1], position: [1, 0, 0.5]}\n"),
+            "5:19: boxes[0].size: must have exactly 3 items, got 2");
+  EXPECT_EQ(error_of(kHeader + "boxes:\n  - id: 1\n    size: [1, 1, 1]\n    position: [1, 0, 0.5]\n"
+                               "    mass: heavy\n"),
             "8:11: boxes[0].mass: expected a number, got 'heavy'");
-  EXPECT_EQ(error_of(std::string(kHeader) +
-                     "boxes:\n  - {id: 1, size: [1, -1, 1], position: [1, 0, 0.5]}\n"),
+  EXPECT_EQ(error_of(kHeader + "boxes:\n  - {id: 1, size: [1, -1, 1], position: [1, 0, 0.5]}\n"),
             "5:23: boxes[0].size[1]: must be between 0.01 and 4, got -1");
-  EXPECT_EQ(error_of(std::string(kHeader) +
-                     "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5]}\n"
-                     "  - {id: 1, size: [1, 1, 1], position: [3, 0, 0.5]}\n"),
+  EXPECT_EQ(error_of(kHeader + "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5]}\n"
+                               "  - {id: 1, size: [1, 1, 1], position: [3, 0, 0.5]}\n"),
             "6:10: boxes[1].id: duplicate id 1 (also boxes[0].id)");
   EXPECT_EQ(error_of("format: plr-world\nversion: 1\ntrailer: {width: 2.5, height: 0, depth: 16}\n"
                      "boxes: []\n"),
@@ -120,35 +112,31 @@ TEST_F(WorldIo, ErrorsNameLineAndKey) {
             "2:10: version: unsupported version 2 (this reader knows 1)");
   EXPECT_EQ(error_of("format: something\nversion: 1\n"),
             "1:9: format: expected 'plr-world', got 'something'");
-  EXPECT_EQ(error_of(std::string(kHeader) + "boxes: [\n"),
-            "5:1: syntax error: end of sequence flow not found");
+  EXPECT_EQ(error_of(kHeader + "boxes: [\n"), "5:1: syntax error: end of sequence flow not found");
 }
 
 TEST_F(WorldIo, BadTypesUnknownKeysAndRangesAreLocated) {
   // A value of the wrong type.
-  EXPECT_EQ(
-      error_of(std::string(kHeader) + "boxes:\n  - {id: 1, size: 1, position: [1, 0, 0.5]}\n"),
-      "5:19: boxes[0].size: expected 3 sizes, got '1'");
-  EXPECT_EQ(error_of(std::string(kHeader) + "boxes: {id: 1}\n"),
+  EXPECT_EQ(error_of(kHeader + "boxes:\n  - {id: 1, size: 1, position: [1, 0, 0.5]}\n"),
+            "5:19: boxes[0].size: expected 3 sizes, got '1'");
+  EXPECT_EQ(error_of(kHeader + "boxes: {id: 1}\n"),
             "4:8: boxes: expected a list of boxes, got a map");
   // A key the reader does not know, with the one it probably meant.
-  EXPECT_EQ(error_of(std::string(kHeader) +
-                     "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5], mas: 2}\n"),
-            "5:53: boxes[0].mas: unknown key 'mas' (did you mean 'mass'?)");
+  EXPECT_EQ(
+      error_of(kHeader + "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5], mas: 2}\n"),
+      "5:53: boxes[0].mas: unknown key 'mas' (did you mean 'mass'?)");
   EXPECT_EQ(error_of("format: plr-world\nversion: 1\n"
                      "trailer: {width: 2.5, height: 2.7, depth: 16, length: 3}\nboxes: []\n"),
             "3:47: trailer.length: unknown key 'length' (known keys: width, height, depth)");
   // Out of range.
-  EXPECT_EQ(error_of(std::string(kHeader) +
-                     "boxes:\n  - {id: -1, size: [1, 1, 1], position: [1, 0, 0.5]}\n"),
+  EXPECT_EQ(error_of(kHeader + "boxes:\n  - {id: -1, size: [1, 1, 1], position: [1, 0, 0.5]}\n"),
             "5:10: boxes[0].id: must not be negative, got -1");
-  EXPECT_EQ(error_of(std::string(kHeader) +
-                     "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5], mass: -2}\n"),
-            "5:59: boxes[0].mass: must be between 0 and 1000, got -2");
   EXPECT_EQ(
-      error_of(std::string(kHeader) + "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5],"
-                                      " orientation: [0, 0, 0, 0]}\n"),
-      "5:66: boxes[0].orientation: must be a rotation, got a zero quaternion");
+      error_of(kHeader + "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5], mass: -2}\n"),
+      "5:59: boxes[0].mass: must be between 0 and 1000, got -2");
+  EXPECT_EQ(error_of(kHeader + "boxes:\n  - {id: 1, size: [1, 1, 1], position: [1, 0, 0.5],"
+                               " orientation: [0, 0, 0, 0]}\n"),
+            "5:66: boxes[0].orientation: must be a rotation, got a zero quaternion");
 }
 
 TEST_F(WorldIo, MissingFileIsReported) {

@@ -7,7 +7,7 @@
 namespace plr::planning {
 namespace {
 
-const char* kMinimal = R"(
+const std::string kMinimal = R"(
 M1: {resolution: [0.02, 0.02, 0.02, 0.02], steps: [1, 5]}
 M2: {resolution: [0.02, 0.02, 0.02, 0.02, 0.02], steps: [1]}
 M3: {resolution: [0.01, 0.01, 0.01], steps: [1], snap_time: 3.0}
@@ -91,14 +91,13 @@ TEST(LatticeConfig, ExperienceIsOffUnlessTheFileTurnsItOn) {
   ASSERT_TRUE(off) << off.error().message;
   EXPECT_FALSE(off->experience.enabled);
   const auto on = LatticeConfig::from_string(
-      std::string(kMinimal) + "experience: true\nexperience_weight: 3\nexperience_paths: 8\n");
+      kMinimal + "experience: true\nexperience_weight: 3\nexperience_paths: 8\n");
   ASSERT_TRUE(on) << on.error().message;
   EXPECT_TRUE(on->experience.enabled);
   EXPECT_EQ(on->experience.weight, 3.0);
   EXPECT_EQ(on->experience.max_paths, 8u);
-  EXPECT_NE(error_of(std::string(kMinimal) + "experience: maybe\n").find("experience"),
-            std::string::npos);
-  EXPECT_NE(error_of(std::string(kMinimal) + "experience_weight: 0.5\n").find("experience_weight"),
+  EXPECT_NE(error_of(kMinimal + "experience: maybe\n").find("experience"), std::string::npos);
+  EXPECT_NE(error_of(kMinimal + "experience_weight: 0.5\n").find("experience_weight"),
             std::string::npos);
 }
 
@@ -112,7 +111,7 @@ TEST(LatticeConfig, BadTypesUnknownKeysAndRangesAreLocated) {
   // A key the reader does not know.
   EXPECT_EQ(error_of(with("snap_time: 3.0", "snap_tme: 3.0")),
             "test.yaml:4:50: M3.snap_tme: unknown key 'snap_tme' (did you mean 'snap_time'?)");
-  EXPECT_EQ(error_of(std::string(kMinimal) + "M7: {resolution: [1]}\n"),
+  EXPECT_EQ(error_of(kMinimal + "M7: {resolution: [1]}\n"),
             "test.yaml:7:1: M7: unknown key 'M7' (did you mean 'M1'?)");
   // Out of range.
   EXPECT_EQ(error_of(with("steps: [1, 5]", "steps: [0]")),
