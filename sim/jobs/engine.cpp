@@ -4,6 +4,8 @@
 
 #include <set>
 
+#include "pause_for_tests.hpp"
+
 namespace plr::jobs {
 
 plr::Expected<Outcome> run(const std::vector<Job>& jobs, Runner& runner, const Store* store,
@@ -43,6 +45,7 @@ plr::Expected<Outcome> run(const std::vector<Job>& jobs, Runner& runner, const S
         out.results[i] = std::move(result);
         reported[i] = true;
         ++out.ran;
+        if (store) pause_for_tests();
       },
       [&] { return failure.has_value() || (options.stop && options.stop()); });
   if (failure) return *failure;

@@ -95,6 +95,9 @@ class WsClient {
 
   const websocket::response_type& handshake_response() const { return response_; }
 
+  // Replaces the read timeout (10 s from the constructor).
+  void set_read_timeout(std::chrono::milliseconds t) { set_timeout(ws_.next_layer(), t); }
+
   void send_text(const std::string& text) {
     ws_.text(true);
     ws_.write(net::buffer(text));

@@ -2,6 +2,7 @@
 // the library it ends with is the one an undisturbed run writes.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -9,11 +10,12 @@
 
 #include <fmt/format.h>
 
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <thread>
+#include <iterator>
+#include <string>
+#include <vector>
 
 #include "plr/sim/library.hpp"
 #include "plr/sim/testing/library_fingerprint.hpp"
@@ -37,13 +39,27 @@ class TempDir {
   fs::path path_;
 };
 
-pid_t start(const fs::path& config, const fs::path& report) {
-  const std::string cfg = config.string(), rep = report.string();
+// `plr run` of `config` with `env` added to the environment, its output in
+// `log` when one is given.
+pid_t start(const fs::path& config, const fs::path& report,
+            const std::vector<std::string>& env = {}, const fs::path& log = {}) {
+  const std::string cfg = config.string(), rep = report.string(), out = log.string();
   char* argv[] = {const_cast<char*>(PLR_BIN),     const_cast<char*>("run"),
                   const_cast<char*>(cfg.c_str()), const_cast<char*>("--report"),
                   const_cast<char*>(rep.c_str()), nullptr};
+  std::vector<char*> envp;
+  for (char** e = environ; *e != nullptr; ++e) envp.push_back(*e);
+  for (const std::string& e : env) envp.push_back(const_cast<char*>(e.c_str()));
+  envp.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  if (!out.empty()) {
+    posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  }
   pid_t pid = -1;
-  EXPECT_EQ(::posix_spawn(&pid, PLR_BIN, nullptr, nullptr, argv, environ), 0);
+  EXPECT_EQ(::posix_spawn(&pid, PLR_BIN, &actions, nullptr, argv, envp.data()), 0);
+  posix_spawn_file_actions_destroy(&actions);
   return pid;
 }
 
@@ -69,7 +85,10 @@ struct Sizes {
 };
 void write_config(const fs::path& file, Sizes n, const std::string& extra = "") {
   std::ofstream cfg(file);
-  cfg << "pipeline: generate_test\n"
+  // Named after this process: a pipeline's name is its control socket's, and
+  // tests run in parallel.
+  cfg << "pipeline: generate_test_" << ::getpid()
+      << "\n"
          "nodes:\n"
          "  generator:\n"
          "    plugin: strategy_generator\n"
@@ -92,25 +111,45 @@ TEST(GeneratorNode, KilledWithSigkillAndRunAgainGivesTheSameLibrary) {
   ASSERT_EQ(wait_exit(start(dir / "generate.yaml", dir / "whole")), 0);
   const std::string whole = plr::sim::testing::library_fingerprint(dir / "whole/library.plrl");
   ASSERT_EQ(whole.rfind("block\n", 0), 0u) << whole;
+  const auto made = plr::sim::load_library(dir / "whole/library.plrl");
+  ASSERT_TRUE(made) << made.error().message;
+  const std::size_t simulations = made->entries.front().provenance.simulations;
 
-  // Killed once its result store holds some results, before the strategy is done.
-  const pid_t pid = start(dir / "generate.yaml", dir / "killed");
-  const fs::path results = dir / "killed/checkpoint/block/results";
-  const auto stored = [&] {
-    std::error_code ec;
-    std::size_t n = 0;
-    for (fs::directory_iterator it(results, ec), end; !ec && it != end; it.increment(ec)) ++n;
-    return n;
-  };
-  const auto t0 = std::chrono::steady_clock::now();
-  while (stored() < 10 && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120)) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
+  // Killed with 10 results stored, mid-strategy: the job engine stops there
+  // and says so on a pipe (PLR_JOBS_TEST_PAUSE) until the kill.
+  constexpr std::size_t kStoredAtKill = 10;
+  ASSERT_GT(simulations, kStoredAtKill);
+  int paused[2];
+  ASSERT_EQ(::pipe(paused), 0);
+  ::fcntl(paused[0], F_SETFD, FD_CLOEXEC);
+  const pid_t pid = start(dir / "generate.yaml", dir / "killed",
+                          {fmt::format("PLR_JOBS_TEST_PAUSE={}:{}", kStoredAtKill, paused[1])});
+  ::close(paused[1]);
+  std::string said;
+  char buf[64];
+  for (ssize_t n;
+       said.find('\n') == std::string::npos && (n = ::read(paused[0], buf, sizeof buf)) > 0;)
+    said.append(buf, static_cast<std::size_t>(n));
+  ::close(paused[0]);
   ASSERT_EQ(::kill(pid, SIGKILL), 0);
   EXPECT_EQ(wait_exit(pid), -SIGKILL);
+  ASSERT_EQ(said, "paused\n");
+  std::size_t stored = 0;
+  for (const auto& f : fs::directory_iterator(dir / "killed/checkpoint/block/results")) {
+    EXPECT_EQ(f.path().extension(), ".result") << f.path();
+    ++stored;
+  }
+  EXPECT_EQ(stored, kStoredAtKill);
   EXPECT_FALSE(fs::exists(dir / "killed/library.plrl"));
-  ASSERT_EQ(wait_exit(start(dir / "generate.yaml", dir / "killed")), 0);
+  ASSERT_EQ(wait_exit(start(dir / "generate.yaml", dir / "killed", {}, dir / "resumed.log")), 0);
   EXPECT_EQ(plr::sim::testing::library_fingerprint(dir / "killed/library.plrl"), whole);
+  // The stored results were read, not simulated again.
+  std::ifstream log(dir / "resumed.log");
+  const std::string resumed((std::istreambuf_iterator<char>(log)), {});
+  EXPECT_NE(resumed.find(fmt::format("{} simulations ({} run now)", simulations,
+                                     simulations - kStoredAtKill)),
+            std::string::npos)
+      << resumed;
   EXPECT_TRUE(fs::exists(dir / "killed/block.svg"));
   EXPECT_TRUE(fs::exists(dir / "killed/block-anytime.svg"));
 
