@@ -27,6 +27,11 @@ struct RunOptions {
   std::string replay_file;
   double replay_speed = 1.0;
   double replay_linger_s = 2.0;
+  // The run's stdout and stderr (its hosts' too) to this file, rotated
+  // (log_file.hpp); empty: they stay where they are.
+  std::string log_file;
+  std::uint64_t log_max_bytes = std::uint64_t{16} << 20;
+  int log_keep = 3;
 };
 
 struct PluginsOptions {
