@@ -22,6 +22,9 @@ struct RunOptions {
   // Recording: the main host writes these topics ('*' wildcard; none: all) to an MCAP file.
   std::string record_file;
   std::vector<std::string> record_topics;
+  // In parts of at most this many bytes, `record_keep` earlier ones kept (recorder.hpp).
+  std::uint64_t record_max_bytes = std::uint64_t{256} << 20;
+  int record_keep = 3;
   // Replay: the main host publishes this MCAP file's messages on its bus
   // (speed 0: as fast as possible), then the run ends `replay_linger_s` later.
   std::string replay_file;

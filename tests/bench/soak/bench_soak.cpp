@@ -228,6 +228,18 @@ std::uint64_t log_bytes(const fs::path& f) {
   return n;
 }
 
+// `plr run --record FILE`'s parts: FILE (or FILE.part while it is written)
+// and the earlier STEM.1.EXT, STEM.2.EXT, ...
+std::uint64_t record_bytes(const fs::path& f) {
+  std::uint64_t n = file_bytes(f) + file_bytes(f.string() + ".part");
+  for (int k = 1;; ++k) {
+    const fs::path part =
+        f.parent_path() / (f.stem().string() + "." + std::to_string(k) + f.extension().string());
+    if (!fs::exists(part)) return n;
+    n += file_bytes(part);
+  }
+}
+
 // ---- DDS entities, as a participant on the domain sees them ------------------
 
 class DdsCount {
@@ -657,7 +669,7 @@ int main(int argc, char** argv) {
     x.shm_mib = folder_bytes("/dev/shm", "plr_soak_filler") / 1048576.0;
     x.dds = dds.count();
     x.checkpoint_kib = folder_bytes(s.report / "checkpoint") / 1024.0;
-    x.log_kib = (log_bytes(s.log) + file_bytes(s.record) + folder_bytes(s.report)) / 1024.0;
+    x.log_kib = (log_bytes(s.log) + record_bytes(s.record) + folder_bytes(s.report)) / 1024.0;
     const json r = read_report(s.report);
     for (const auto& t : r.value("trailers", json::array())) {
       ++x.trailers;
