@@ -2,6 +2,7 @@
 
 #include "control.hpp"
 #include "kernel.hpp"
+#include "log_file.hpp"
 #include "plugin_loader.hpp"
 #include "run.hpp"
 #include "shm_need.hpp"
@@ -115,6 +116,14 @@ int run_pipeline(const RunOptions& options) {
   for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&signals, s);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
+  // Before anything is said, after the mask (its thread inherits it); the
+  // hosts inherit its pipe. Destroyed last: the run's last lines are in it.
+  std::unique_ptr<LogFile> log;
+  if (!options.log_file.empty() && options.host == "main") {
+    auto opened = LogFile::open({options.log_file, options.log_max_bytes, options.log_keep});
+    if (!opened) return fail(opened.error());
+    log = std::move(*opened);
+  }
   Run run(options);
   if (auto s = run.prepare(); !s) return run.not_started(s.error());
   if (auto s = run.start(); !s) return run.not_started(s.error());

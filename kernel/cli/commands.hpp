@@ -22,11 +22,19 @@ struct RunOptions {
   // Recording: the main host writes these topics ('*' wildcard; none: all) to an MCAP file.
   std::string record_file;
   std::vector<std::string> record_topics;
+  // In parts of at most this many bytes, `record_keep` earlier ones kept (recorder.hpp).
+  std::uint64_t record_max_bytes = std::uint64_t{256} << 20;
+  int record_keep = 3;
   // Replay: the main host publishes this MCAP file's messages on its bus
   // (speed 0: as fast as possible), then the run ends `replay_linger_s` later.
   std::string replay_file;
   double replay_speed = 1.0;
   double replay_linger_s = 2.0;
+  // The run's stdout and stderr (its hosts' too) to this file, rotated
+  // (log_file.hpp); empty: they stay where they are.
+  std::string log_file;
+  std::uint64_t log_max_bytes = std::uint64_t{16} << 20;
+  int log_keep = 3;
 };
 
 struct PluginsOptions {

@@ -60,6 +60,20 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--run-id", run.run_id, "Shared-memory run id (used by the supervisor)");
   run_cmd->add_flag("-v,--verbose", run.verbose, "Debug logging");
   run_cmd->add_option("--record", run.record_file, "Record the run's topics to this MCAP file");
+  run_cmd
+      ->add_option("--record-max", run.record_max_bytes,
+                   "--record: bytes of a part before the next starts (the last is FILE)")
+      ->capture_default_str();
+  run_cmd->add_option("--record-keep", run.record_keep, "--record: earlier parts kept")
+      ->capture_default_str();
+  run_cmd->add_option("--log", run.log_file,
+                      "Write the run's output (its hosts' too) to this file, rotated");
+  run_cmd
+      ->add_option("--log-max", run.log_max_bytes,
+                   "--log: bytes a file reaches before it becomes FILE.1")
+      ->capture_default_str();
+  run_cmd->add_option("--log-keep", run.log_keep, "--log: rotated files kept (FILE.1 ...)")
+      ->capture_default_str();
   run_cmd->add_option("--record-topics", run.record_topics, "Topics to record ('*' wildcard)")
       ->delimiter(',')
       ->allow_extra_args(false);

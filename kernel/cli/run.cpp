@@ -131,7 +131,8 @@ Status Run::prepare() {
   p.kernel = std::make_unique<Kernel>(*p.config, options_.host, run_id_);
   // Attached before the nodes start, so it hears of every topic they advertise.
   if (main_host_ && !options_.record_file.empty()) {
-    auto r = Recorder::create(p.kernel->bus(), options_.record_file, options_.record_topics);
+    auto r = Recorder::create(p.kernel->bus(), options_.record_file, options_.record_topics,
+                              {options_.record_max_bytes, options_.record_keep});
     if (!r) return r.error();
     p.recorder = std::move(*r);
   }

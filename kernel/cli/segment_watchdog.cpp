@@ -20,6 +20,9 @@ SegmentWatchdog::SegmentWatchdog(const std::string& run_id) {
     // sees its end when main ends.
     if (const int null = ::open("/dev/null", O_RDWR); null >= 0)
       for (int fd : {0, 1, 2}) ::dup2(null, fd);
+    // Nothing else of main's stays open in it (the --log pipe and file).
+    if (fds[0] > 3) ::close_range(3, static_cast<unsigned>(fds[0]) - 1, 0);
+    ::close_range(static_cast<unsigned>(fds[0]) + 1, ~0U, 0);
     ::setsid();  // Ctrl-C of the terminal is for main, not for this
     for (int s : {SIGINT, SIGTERM, SIGHUP, SIGPIPE}) std::signal(s, SIG_IGN);
     char c = 0;

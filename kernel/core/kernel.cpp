@@ -1,6 +1,7 @@
 #include "kernel.hpp"
 
 #include "dds_bridge.hpp"
+#include "heap_policy.hpp"
 #include "shm_bridge.hpp"
 #include "supervisor.hpp"
 #include "telemetry_publisher.hpp"
@@ -45,6 +46,7 @@ Kernel::Kernel(PipelineConfig config, std::string host, std::string run_id)
       clock_(config_.clock == "sim"),
       bus_([this](const std::string& topic) { return config_.topic(topic); }),
       internal_(std::make_unique<Internal>()) {
+  bound_heap_retention();
   for (const auto& n : config_.nodes) {
     if (n.host != host_) continue;
     auto s = std::make_unique<Slot>();
@@ -257,6 +259,8 @@ Status Kernel::swap(const std::string& node, const std::string& plugin) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   if (auto r = old->deactivate(); !r) spdlog::warn("swap: {}", r.error().message);
   old.reset();
+  // Its thread's arena may keep free pages between live blocks: back to the system.
+  release_free_heap();
   spdlog::info("node '{}' swapped to {} {}", node, plugin,
                s->instance->library().descriptor().version);
   return {};

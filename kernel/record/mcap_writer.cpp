@@ -145,6 +145,12 @@ Status Writer::write(std::uint16_t channel, std::uint64_t log_time, std::uint64_
   return {};
 }
 
+std::uint64_t Writer::bytes() const {
+  std::uint64_t index = 0;
+  for (const auto& [channel, entries] : chunk_index_) index += 16 * entries.size() + 16;
+  return offset_ + chunk_.size() + index + (chunk_.empty() ? 0 : 64);
+}
+
 Status Writer::flush_chunk() {
   if (chunk_.empty()) return {};
   std::string compressed;

@@ -40,6 +40,9 @@ class Writer {
   Status finish();
 
   std::uint64_t messages() const { return message_count_; }
+  // The file's bytes so far, the open chunk counted uncompressed with its
+  // message index: what the file is at most once that chunk is written.
+  std::uint64_t bytes() const;
 
  private:
   Writer(std::string path, std::FILE* file, WriterOptions options);

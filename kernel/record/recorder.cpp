@@ -6,7 +6,10 @@
 #include <plr/messages.hpp>
 #include <plr/schemas.hpp>
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
+
+#include <filesystem>
 
 namespace plr::kernel {
 
@@ -20,24 +23,61 @@ bool topic_matches(std::string_view pattern, std::string_view name) {
   return false;
 }
 
+std::string record_part(const std::string& path, int k) {
+  if (k == 0) return path;
+  const std::filesystem::path p(path);
+  return (p.parent_path() / (p.stem().string() + "." + std::to_string(k) + p.extension().string()))
+      .string();
+}
+
 Expected<std::unique_ptr<Recorder>> Recorder::create(Bus& bus, const std::string& path,
-                                                     std::vector<std::string> patterns) {
+                                                     std::vector<std::string> patterns,
+                                                     RecordLimits limits) {
+  if (limits.max_bytes < (std::uint64_t{1} << 20))
+    return make_error(
+        PLR_ERR_INVALID,
+        fmt::format("--record-max: {} B is below the least, 1 MiB (a chunk)", limits.max_bytes));
+  if (limits.keep < 0 || limits.keep > 1000)
+    return make_error(PLR_ERR_INVALID,
+                      fmt::format("--record-keep: {} is not 0 to 1000", limits.keep));
   auto writer = mcap::Writer::create(path);
   if (!writer) return writer.error();
   if (patterns.empty()) patterns.push_back("*");
-  auto r =
-      std::unique_ptr<Recorder>(new Recorder(bus, path, std::move(patterns), std::move(*writer)));
+  auto r = std::unique_ptr<Recorder>(
+      new Recorder(bus, path, std::move(patterns), limits, std::move(*writer)));
   bus.set_live(r.get(), true);
   bus.attach(r.get());
   return r;
 }
 
 Recorder::Recorder(Bus& bus, std::string path, std::vector<std::string> patterns,
-                   std::unique_ptr<mcap::Writer> writer)
+                   RecordLimits limits, std::unique_ptr<mcap::Writer> writer)
     : bus_(bus),
       path_(std::move(path)),
       patterns_(std::move(patterns)),
+      limits_(limits),
       writer_(std::move(writer)) {}
+
+Status Recorder::next_part() {
+  if (auto s = writer_->finish(); !s) return s;
+  earlier_messages_ += writer_->messages();
+  if (limits_.keep == 0) {
+    std::filesystem::remove(path_);
+  } else {
+    std::error_code ec;  // parts not there yet are fine
+    for (int k = limits_.keep - 1; k >= 1; --k)
+      std::filesystem::rename(record_part(path_, k), record_part(path_, k + 1), ec);
+    std::filesystem::rename(path_, record_part(path_, 1), ec);
+    if (ec) return make_error(PLR_ERR_INTERNAL, fmt::format("record: {}: {}", path_, ec.message()));
+  }
+  auto writer = mcap::Writer::create(path_);
+  if (!writer) return writer.error();
+  writer_ = std::move(*writer);
+  // The same ids in the same order: the topics keep their channels.
+  for (const auto& c : channel_defs_)
+    writer_->add_channel(c.topic, writer_->add_schema(c.schema_name, c.bfbs));
+  return {};
+}
 
 Recorder::~Recorder() {
   bus_.detach(this);
@@ -65,8 +105,10 @@ void Recorder::subscribe(const std::string& topic, std::uint64_t type_id) {
     wanted = false;
   }
   auto t = std::make_unique<Topic>(Topic{this, 0, discovery});
-  if (wanted)
+  if (wanted) {
     t->channel = writer_->add_channel(topic, writer_->add_schema(schema->name, schema->bfbs));
+    channel_defs_.push_back({topic, schema->name, std::string(schema->bfbs)});
+  }
   auto sub = bus_.subscribe(this, topic, type_id, &Recorder::on_message, t.get());
   if (!sub) {
     spdlog::warn("record: topic '{}': {}", topic, sub.error().message);
@@ -84,6 +126,12 @@ void Recorder::on_message(void* user, const plr_msg* msg) {
     std::lock_guard lock(r.m_);
     if (!r.error_) return;
     const auto now = static_cast<std::uint64_t>(wall_now_ns());
+    if (r.writer_->messages() > 0 && r.writer_->bytes() + v.size + 64 > r.limits_.max_bytes)
+      if (auto s = r.next_part(); !s) {
+        spdlog::error("record: {}", s.error().message);
+        r.error_ = s;
+        return;
+      }
     if (auto s = r.writer_->write(t.channel, now, static_cast<std::uint64_t>(v.stamp_ns),
                                   {reinterpret_cast<const char*>(v.data), v.size});
         !s) {
@@ -103,7 +151,7 @@ void Recorder::on_message(void* user, const plr_msg* msg) {
 
 std::uint64_t Recorder::messages() const {
   std::lock_guard lock(m_);
-  return writer_->messages();
+  return earlier_messages_ + writer_->messages();
 }
 
 Status Recorder::finish() {

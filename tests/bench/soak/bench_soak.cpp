@@ -220,6 +220,26 @@ std::uint64_t file_bytes(const fs::path& f) {
   return ec ? 0 : n;
 }
 
+// `plr run --log FILE`'s files: FILE and its rotated FILE.1, FILE.2, ...
+std::uint64_t log_bytes(const fs::path& f) {
+  std::uint64_t n = file_bytes(f);
+  for (int k = 1; fs::exists(f.string() + "." + std::to_string(k)); ++k)
+    n += file_bytes(f.string() + "." + std::to_string(k));
+  return n;
+}
+
+// `plr run --record FILE`'s parts: FILE (or FILE.part while it is written)
+// and the earlier STEM.1.EXT, STEM.2.EXT, ...
+std::uint64_t record_bytes(const fs::path& f) {
+  std::uint64_t n = file_bytes(f) + file_bytes(f.string() + ".part");
+  for (int k = 1;; ++k) {
+    const fs::path part =
+        f.parent_path() / (f.stem().string() + "." + std::to_string(k) + f.extension().string());
+    if (!fs::exists(part)) return n;
+    n += file_bytes(part);
+  }
+}
+
 // ---- DDS entities, as a participant on the domain sees them ------------------
 
 class DdsCount {
@@ -332,11 +352,13 @@ pid_t start_run(const Setup& s, const fs::path& config, const fs::path& log, boo
   const pid_t pid = ::fork();
   if (pid == 0) {
     ::prctl(PR_SET_PDEATHSIG, SIGTERM);  // a bench that dies stops its run
-    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    // What plr says before its --log is open (a refused option) lands here.
+    const fs::path early = log.string() + ".early";
+    const int fd = ::open(early.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
     ::dup2(fd, 2);
     ::dup2(fd, 1);
-    std::vector<std::string> argv = {PLR_BIN, "run", config.string(), "--report",
-                                     s.report.string()};
+    std::vector<std::string> argv = {PLR_BIN,           "run",   config.string(), "--report",
+                                     s.report.string(), "--log", log.string()};
     if (record) {
       argv.insert(argv.end(), {"--record", s.record.string(), "--record-topics",
                                "executor/status,progress,pipeline/*"});
@@ -647,7 +669,7 @@ int main(int argc, char** argv) {
     x.shm_mib = folder_bytes("/dev/shm", "plr_soak_filler") / 1048576.0;
     x.dds = dds.count();
     x.checkpoint_kib = folder_bytes(s.report / "checkpoint") / 1024.0;
-    x.log_kib = (file_bytes(s.log) + file_bytes(s.record) + folder_bytes(s.report)) / 1024.0;
+    x.log_kib = (log_bytes(s.log) + record_bytes(s.record) + folder_bytes(s.report)) / 1024.0;
     const json r = read_report(s.report);
     for (const auto& t : r.value("trailers", json::array())) {
       ++x.trailers;
