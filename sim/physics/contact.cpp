@@ -9,6 +9,9 @@ namespace {
 
 constexpr std::uint8_t kBoxBox = 0, kBoxLink = 1, kBoxPlane = 2;
 constexpr double kWakeMargin = 0.01;  // m around a moving box within which sleepers wake
+// A box lies on a belt when its contact normal is within 45 degrees of the
+// belt surface's (the shape's local +z).
+constexpr double kOnSurface = 0.7;
 
 // Two oriented boxes (poses, half extents) apart by more than `margin` along
 // one of their face normals: a cheap test before FCL's, which finds no
@@ -323,8 +326,7 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
       if (separated(b.box.pose, 0.5 * b.box.size, link.pose, link_half_[l], 1e-3)) continue;
       if (!collide(box_shapes_[bj], b.box.pose, *link_shapes_[l], link.pose)) continue;
       if (b.mode == Mode::kAsleep) {
-        if (!fast_ || link.belt_dir.squaredNorm() > 0.0 || deepest() > options_.wake_depth)
-          wake.push_back(j);
+        if (!fast_ || on_belt(link) || deepest() > options_.wake_depth) wake.push_back(j);
         continue;
       }
       const Other other{0.0, link.pose.translation(), link.v, link.w, link.belt, link.belt_dir};
@@ -351,6 +353,14 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
   wake.erase(std::unique(wake.begin(), wake.end()), wake.end());
 }
 
+bool Contacts::on_belt(const Mover& link) const {
+  if (link.belt_dir.squaredNorm() == 0.0) return false;
+  const Eigen::Vector3d up = link.pose.linear().col(2);
+  for (const Point& pt : points_)
+    if (pt.n.dot(up) > kOnSurface) return true;
+  return false;
+}
+
 void Contacts::pressed(const State& state, const std::vector<Mover>& links,
                        const std::vector<int>& held,
                        const std::vector<Eigen::Isometry3d>& held_poses, std::vector<int>& wake) {
@@ -369,7 +379,7 @@ void Contacts::pressed(const State& state, const std::vector<Mover>& links,
       if (!collide(box_shapes_[bj], b.box.pose, *link_shapes_[l], link.pose)) continue;
       double depth = 0.0;
       for (const Point& pt : points_) depth = std::max(depth, pt.depth);
-      if (belt || depth > options_.wake_depth) wake.push_back(j);
+      if (on_belt(link) || depth > options_.wake_depth) wake.push_back(j);
     }
   }
   for (std::size_t k = 0; k < held.size(); ++k) {

@@ -50,8 +50,8 @@ class Contacts {
   }
   const BroadPhase& broad_phase() const { return broad_; }
   // Into `wake`: the sleeping boxes that a robot shape at its pose in
-  // `links` presses into deeper than wake_depth while it moves, or touches
-  // while its belt runs (the belt carries them), and those a held box at
+  // `links` presses into deeper than wake_depth while it moves, or that lie
+  // on its running belt (the belt carries them), and those a held box at
   // `held_poses[k]` (body `held[k]`) presses into deeper than wake_depth.
   // A lighter touch leaves a box where it is: it is not pushed.
   void pressed(const State& state, const std::vector<Mover>& links, const std::vector<int>& held,
@@ -98,6 +98,9 @@ class Contacts {
   bool collide(const fcl::CollisionGeometryd& ga, const Eigen::Isometry3d& pa,
                const fcl::CollisionGeometryd& gb, const Eigen::Isometry3d& pb);
   bool take(const Patch& patch);  // into points_; false if empty
+  // Whether the last collide()'s box lies on the shape's running belt, which
+  // carries it: fast fidelity wakes it for that.
+  bool on_belt(const Mover& link) const;
 
   PhysicsOptions options_;
   Trailer trailer_;
