@@ -734,6 +734,61 @@ struct Simulation::Impl {
     }
     return true;
   }
+  // Fast fidelity, before a step() call: an awake box that is slow (under
+  // sleep_speed), touches no robot shape or held box, and rests in balance
+  // on the floor and sleeping boxes (the support rule) is at rest: it sleeps
+  // at once, without the fixed steps that would find it so. Lowest first,
+  // so that a stack at rest sleeps from the floor up in one call.
+  void sleep_supported() {
+    if (by_id.size() != state.bodies.size()) {
+      by_id.clear();
+      for (std::size_t i = 0; i < state.bodies.size(); ++i)
+        by_id.emplace_back(state.bodies[i].box.id, static_cast<int>(i));
+      std::sort(by_id.begin(), by_id.end());
+    }
+    touches.assign(state.bodies.size(), 0);
+    for (const detail::PairState& p : state.pairs) {
+      const int a = index_of(p.key.a);
+      if (a < 0) continue;
+      if (p.key.kind == 1) touches[static_cast<std::size_t>(a)] = 1;
+      if (p.key.kind != 0) continue;
+      const int b = index_of(p.key.b);
+      if (b < 0) continue;
+      const auto ka = static_cast<std::size_t>(a), kb = static_cast<std::size_t>(b);
+      if (state.bodies[kb].mode == Mode::kHeld) touches[ka] = 1;
+      if (state.bodies[ka].mode == Mode::kHeld) touches[kb] = 1;
+    }
+    calm.clear();
+    for (const int i : moving_bodies()) {
+      const auto k = static_cast<std::size_t>(i);
+      const Body& b = state.bodies[k];
+      if (b.mode == Mode::kAwake && touches[k] == 0 &&
+          b.v.norm() + b.w.norm() * b.radius < options.sleep_speed)
+        calm.push_back(i);
+    }
+    std::sort(calm.begin(), calm.end(), [&](int x, int y) {
+      const double zx = state.bodies[static_cast<std::size_t>(x)].box.pose.translation().z();
+      const double zy = state.bodies[static_cast<std::size_t>(y)].box.pose.translation().z();
+      return zx < zy || (zx == zy && x < y);
+    });
+    for (bool slept = !calm.empty(); slept;) {
+      slept = false;
+      contacts.update_broad_phase(state.bodies, moving_bodies());
+      for (const int i : calm) {
+        Body& b = state.bodies[static_cast<std::size_t>(i)];
+        if (b.mode != Mode::kAwake || !detail::supported(state.bodies, contacts.broad_phase(), i))
+          continue;
+        b.mode = Mode::kAsleep;
+        b.v.setZero();
+        b.w.setZero();
+        b.still = 0.0;
+        rebuild = true;
+        moving_stale = true;
+        slept = true;
+      }
+    }
+  }
+  std::vector<int> calm;                  // sleep_supported()'s scratch
   std::vector<int> held_now, dependents;  // advance_kinematically()'s scratch
   std::vector<Eigen::Isometry3d> held_end;
 
@@ -820,6 +875,7 @@ void Simulation::step(double duration) {
   m.prepare_loads();
   m.set_belt_ends();
   m.contacts.set_fast(m.fidelity == Fidelity::kFast);
+  if (m.fidelity == Fidelity::kFast) m.sleep_supported();
   // With no box awake, a restored Simbody system integrates nothing.
   if (m.fidelity == Fidelity::kFast && m.pending &&
       std::none_of(s.bodies.begin(), s.bodies.end(),
