@@ -414,7 +414,8 @@ struct Simulation::Impl {
       const Eigen::Vector3d olo = o.box.pose.translation() - oe;
       const Eigen::Vector3d ohi = o.box.pose.translation() + oe;
       if ((olo.array() <= hi.array()).all() && (lo.array() <= ohi.array()).all() &&
-          (!fast || !detail::supported(state.bodies, contacts.broad_phase(), static_cast<int>(j)))) {
+          (!fast ||
+           !detail::supported(state.bodies, contacts.broad_phase(), static_cast<int>(j)))) {
         wake_body(static_cast<int>(j));
       }
     }
@@ -666,8 +667,8 @@ struct Simulation::Impl {
       m.pose = state.links[l].pose;
       m.v = link_paths.empty() ? Eigen::Vector3d::Zero() : link_paths[l].v;
       m.w = link_paths.empty() ? Eigen::Vector3d::Zero() : link_paths[l].w;
-      m.belt_dir = link_drive[l] >= 0 ? Eigen::Vector3d(-m.pose.linear().col(0))
-                                      : Eigen::Vector3d::Zero();
+      m.belt_dir =
+          link_drive[l] >= 0 ? Eigen::Vector3d(-m.pose.linear().col(0)) : Eigen::Vector3d::Zero();
       m.speed = m.v.norm() + m.w.norm() * bounding_radius(state.links[l]);
     }
     Eigen::Vector3d plate_w = Eigen::Vector3d::Zero();
@@ -702,8 +703,8 @@ struct Simulation::Impl {
     for (std::size_t k = 0; k < state.belts.size(); ++k) {
       BeltLoad& d = state.belts[k];
       if (drive_speed[k] <= 0.0 || d.speed_fraction >= 1.0) continue;
-      d.speed_fraction =
-          std::min(1.0, d.speed_fraction + d.max_force / options.belt_inertia * total / drive_speed[k]);
+      d.speed_fraction = std::min(
+          1.0, d.speed_fraction + d.max_force / options.belt_inertia * total / drive_speed[k]);
     }
     // The cups' load follows the weight and the plate's acceleration, through
     // the same filter over the call's n fixed steps (nothing else pushes).

@@ -108,7 +108,7 @@ struct Run {
   std::string observation;  // the semantic observation afterwards ("none": empty)
   double wall_s = 0.0;
   double plan_wall_s = 0.0;  // of wall_s, in the planner
-  std::int64_t frozen = 0;  // boxes the adaptive rule froze
+  std::int64_t frozen = 0;   // boxes the adaptive rule froze
   // Work whatever the machine's load: box-steps Simbody integrated, and
   // Simbody systems built.
   std::int64_t body_steps = 0, rebuilds = 0;
@@ -160,8 +160,8 @@ void run_state(Context& c, const plr::bench::HState& st, std::size_t index, cons
       const double wall = seconds_since(t0);
       if (!out) die(name + " " + plr::sim::to_string(t.action) + ": " + out.error().message);
       const plr::sim::PhysicsStats s1 = simulation.physics().stats();
-      t.runs.push_back(Run{*out, observe(simulation.perceived(), c.model), wall,
-                           out->plan_wall_s, s1.frozen - s0.frozen, s1.body_steps - s0.body_steps,
+      t.runs.push_back(Run{*out, observe(simulation.perceived(), c.model), wall, out->plan_wall_s,
+                           s1.frozen - s0.frozen, s1.body_steps - s0.body_steps,
                            s1.rebuilds - s0.rebuilds});
       progress.step(name + " " + plr::sim::to_string(t.action) + " " + v.name);
     }
@@ -357,9 +357,9 @@ int main(int argc, char** argv) {
 
   std::printf("bench_fidelity: %d state(s) per family, 12 actions, seed %llu%s\n", o.states,
               static_cast<unsigned long long>(o.seed), quick ? " (quick)" : "");
-  std::printf("\n  %-12s %-9s %5s %9s %9s %8s %8s %9s %8s %8s %7s %6s %6s %5s\n",
-              "family/kind", "level", "runs", "RTF pick", "RTF sweep", "same obs", "boxes+-1",
-              "t rel err", "x pick", "x sweep", "frozen", "steps", "builds", "plan");
+  std::printf("\n  %-12s %-9s %5s %9s %9s %8s %8s %9s %8s %8s %7s %6s %6s %5s\n", "family/kind",
+              "level", "runs", "RTF pick", "RTF sweep", "same obs", "boxes+-1", "t rel err",
+              "x pick", "x sweep", "frozen", "steps", "builds", "plan");
   const auto rows = [&](const std::string& name, const std::vector<const Trial*>& list) {
     for (std::size_t l = 0; l < kVariants.size(); ++l)
       print_row(name, kVariants[l].name, figures(list, l));

@@ -441,7 +441,8 @@ Options parse(int argc, char** argv) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   std::string fidelity = "full";
-  app.add_option("--fidelity", fidelity, "How accurately the boxes are simulated: full, adaptive, fast")
+  app.add_option("--fidelity", fidelity,
+                 "How accurately the boxes are simulated: full, adaptive, fast")
       ->capture_default_str();
   app.add_option("--experience", o.experience,
                  "The planner reuses earlier paths within a trailer: on, off (default: as the "
