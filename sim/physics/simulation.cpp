@@ -380,14 +380,15 @@ struct Simulation::Impl {
 
   // Fast fidelity: a box let go over a running belt leaves on it (the belt
   // carries what falls on it to the robot's body conveyor): its centre over
-  // the belt's surface and at most `reach` above it (the largest sides of
-  // the boxes let go together: they fall onto the belt and each other).
-  bool over_running_belt(const Body& b, double reach) const {
+  // the belt's surface, at most its largest side above it (as a box lying
+  // on the belt is seen by the unloader). A box let go higher (on top of
+  // another the plate held) is left to the physics: it may fall aside.
+  bool over_running_belt(const Body& b) const {
     for (const LinkGeometry& l : state.link_targets) {
       if (!(l.belt_speed > 0.0)) continue;
       const Eigen::Vector3d local = l.pose.inverse() * b.box.pose.translation();
       if (std::abs(local.x()) < 0.5 * l.size.x() && std::abs(local.y()) < 0.5 * l.size.y() &&
-          local.z() > 0.0 && local.z() < 0.5 * l.size.z() + reach)
+          local.z() > 0.0 && local.z() < 0.5 * l.size.z() + b.box.size.maxCoeff())
         return true;
     }
     return false;
@@ -1045,9 +1046,6 @@ std::vector<std::uint32_t> Simulation::suction_on(const std::vector<bool>& open)
 
 void Simulation::suction_off() {
   Impl& m = *impl_;
-  double reach = 0.0;
-  for (const Body& b : m.state.bodies)
-    if (b.mode == Mode::kHeld) reach += b.box.size.maxCoeff();
   for (std::size_t i = 0; i < m.state.bodies.size(); ++i) {
     Body& b = m.state.bodies[i];
     if (b.mode != Mode::kHeld) continue;
@@ -1057,7 +1055,7 @@ void Simulation::suction_off() {
     m.moving_stale = true;
     m.state.suction_events.push_back(
         {b.box.id, m.state.time, SuctionEvent::Kind::kReleased, b.load, b.capacity});
-    if (m.fidelity == Fidelity::kFast && m.over_running_belt(b, reach)) {
+    if (m.fidelity == Fidelity::kFast && m.over_running_belt(b)) {
       m.state.unloaded.push_back({b.box.id, m.state.time});
       m.remove(static_cast<int>(i));
     }
