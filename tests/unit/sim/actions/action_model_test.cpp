@@ -388,11 +388,16 @@ TEST(Outcome, CountsTheBoxesThatMovedOrTurnedButStayed) {
 }
 
 // Fast fidelity behind the same interface: a pick of a box with nothing on
-// it (a wall one box high) unloads the same box, takes the same robot time
-// and leaves the same semantic observation as full fidelity, and the boxes
-// left where they were.
+// it (a flat box on the floor, a column of boxes beside it) unloads the
+// same box, takes the same robot time and leaves the same semantic
+// observation as full fidelity, and the boxes left stay where full leaves
+// them.
 TEST(Fidelity, AFastPickOfATopBoxGivesWhatFullDoes) {
-  const sim::World w = wall(5.0, 3, 1);
+  sim::World w = wall(5.6, 1, 2);
+  for (sim::Box& b : w.boxes) b.pose.translation().y() = 0.8;
+  w.boxes.push_back(box(9, 5.0, 0.0, 0.0, 4.0));
+  w.boxes.back().size = {0.4, 0.5, 0.1};
+  w.boxes.back().pose.translation().z() = 0.05;
   Fixture full(w), fast(w);
   fast.simulation.set_fidelity(sim::Fidelity::kFast);
   const ActionModel model(robot(), options());
@@ -404,6 +409,7 @@ TEST(Fidelity, AFastPickOfATopBoxGivesWhatFullDoes) {
   EXPECT_EQ(b->boxes, a->boxes);
   EXPECT_NEAR(b->robot_time_s, a->robot_time_s, 1e-6);
   const sim::World left_full = full.simulation.truth(), left_fast = fast.simulation.truth();
+  ASSERT_EQ(left_full.boxes.size(), 2u);  // the flat box left
   ASSERT_EQ(left_fast.boxes.size(), left_full.boxes.size());
   for (std::size_t i = 0; i < left_full.boxes.size(); ++i) {
     EXPECT_EQ(left_fast.boxes[i].id, left_full.boxes[i].id);
@@ -415,6 +421,7 @@ TEST(Fidelity, AFastPickOfATopBoxGivesWhatFullDoes) {
     const auto scene = sim::analyse(f.simulation.perceived(), options().observation);
     return scene.observation ? sim::to_string(*scene.observation) : std::string("none");
   };
+  EXPECT_NE(seen(full), "none");
   EXPECT_EQ(seen(fast), seen(full));
 }
 
