@@ -381,8 +381,8 @@ struct Simulation::Impl {
   // Fast fidelity: a box let go over a running belt leaves on it (the belt
   // carries what falls on it to the robot's body conveyor): its centre over
   // the belt's surface, at most its largest side above it (as a box lying
-  // on the belt is seen by the unloader). A box let go higher (on top of
-  // another the plate held) is left to the physics: it may fall aside.
+  // on the belt is seen by the unloader). A box let go higher is left to
+  // the physics: it may fall aside.
   bool over_running_belt(const Body& b) const {
     for (const LinkGeometry& l : state.link_targets) {
       if (!(l.belt_speed > 0.0)) continue;
@@ -1046,6 +1046,7 @@ std::vector<std::uint32_t> Simulation::suction_on(const std::vector<bool>& open)
 
 void Simulation::suction_off() {
   Impl& m = *impl_;
+  std::vector<std::size_t> released;
   for (std::size_t i = 0; i < m.state.bodies.size(); ++i) {
     Body& b = m.state.bodies[i];
     if (b.mode != Mode::kHeld) continue;
@@ -1055,10 +1056,26 @@ void Simulation::suction_off() {
     m.moving_stale = true;
     m.state.suction_events.push_back(
         {b.box.id, m.state.time, SuctionEvent::Kind::kReleased, b.load, b.capacity});
-    if (m.fidelity == Fidelity::kFast && m.over_running_belt(b)) {
-      m.state.unloaded.push_back({b.box.id, m.state.time});
-      m.remove(static_cast<int>(i));
-    }
+    released.push_back(i);
+  }
+  if (m.fidelity != Fidelity::kFast) return;
+  // Boxes let go one above the other are left to the physics: the upper
+  // one rides on the lower or falls aside, which the belt rule cannot say.
+  const auto footprint = [&](std::size_t i) {
+    const Box& b = m.state.bodies[i].box;
+    const Eigen::Vector2d e = (b.pose.linear().cwiseAbs() * (0.5 * b.size)).head<2>();
+    return std::pair{Eigen::Vector2d(b.pose.translation().head<2>() - e),
+                     Eigen::Vector2d(b.pose.translation().head<2>() + e)};
+  };
+  for (const std::size_t i : released) {
+    const auto [lo, hi] = footprint(i);
+    const bool stacked = std::any_of(released.begin(), released.end(), [&](std::size_t j) {
+      const auto [jlo, jhi] = footprint(j);
+      return j != i && (lo.array() < jhi.array()).all() && (jlo.array() < hi.array()).all();
+    });
+    if (stacked || !m.over_running_belt(m.state.bodies[i])) continue;
+    m.state.unloaded.push_back({m.state.bodies[i].box.id, m.state.time});
+    m.remove(static_cast<int>(i));
   }
 }
 
