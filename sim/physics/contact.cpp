@@ -9,6 +9,9 @@ namespace {
 
 constexpr std::uint8_t kBoxBox = 0, kBoxLink = 1, kBoxPlane = 2;
 constexpr double kWakeMargin = 0.01;  // m around a moving box within which sleepers wake
+// A box lies on a belt when its contact normal is within 45 degrees of the
+// belt surface's (the shape's local +z).
+constexpr double kOnSurface = 0.7;
 
 // Two oriented boxes (poses, half extents) apart by more than `margin` along
 // one of their face normals: a cheap test before FCL's, which finds no
@@ -323,7 +326,7 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
       if (separated(b.box.pose, 0.5 * b.box.size, link.pose, link_half_[l], 1e-3)) continue;
       if (!collide(box_shapes_[bj], b.box.pose, *link_shapes_[l], link.pose)) continue;
       if (b.mode == Mode::kAsleep) {
-        wake.push_back(j);
+        if (!fast_ || on_belt(link) || deepest() > options_.wake_depth) wake.push_back(j);
         continue;
       }
       const Other other{0.0, link.pose.translation(), link.v, link.w, link.belt, link.belt_dir};
@@ -336,7 +339,7 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
   for (const int i : moving) {
     const std::size_t k = static_cast<std::size_t>(i);
     const Body& h = bodies[k];
-    if (h.mode != Mode::kHeld || corner_speed(h) <= 1e-6) continue;
+    if (fast_ || h.mode != Mode::kHeld || corner_speed(h) <= 1e-6) continue;
     broad_.query(broad_.lo(k) - margin, broad_.hi(k) + margin, BroadPhase::kSleeping, near_);
     for (const int j : near_) {
       const Body& b = bodies[static_cast<std::size_t>(j)];
@@ -346,6 +349,52 @@ void Contacts::compute(State& state, const std::vector<int>& moving,
   }
   std::sort(state.pairs.begin(), state.pairs.end(),
             [](const PairState& x, const PairState& y) { return x.key < y.key; });
+  std::sort(wake.begin(), wake.end());
+  wake.erase(std::unique(wake.begin(), wake.end()), wake.end());
+}
+
+bool Contacts::on_belt(const Mover& link) const {
+  if (link.belt_dir.squaredNorm() == 0.0) return false;
+  const Eigen::Vector3d up = link.pose.linear().col(2);
+  for (const Point& pt : points_)
+    if (pt.n.dot(up) > kOnSurface) return true;
+  return false;
+}
+
+void Contacts::pressed(const State& state, const std::vector<Mover>& links,
+                       const std::vector<int>& held,
+                       const std::vector<Eigen::Isometry3d>& held_poses, std::vector<int>& wake) {
+  const std::vector<Body>& bodies = state.bodies;
+  for (std::size_t l = 0; l < links.size() && l < link_shapes_.size(); ++l) {
+    const Mover& link = links[l];
+    const bool belt = link.belt_dir.squaredNorm() > 0.0;
+    if (link.speed <= 1e-6 && !belt) continue;
+    const Eigen::Vector3d e = link.pose.linear().cwiseAbs() * link_half_[l];
+    broad_.query(link.pose.translation() - e, link.pose.translation() + e, BroadPhase::kSleeping,
+                 near_);
+    for (const int j : near_) {
+      const auto bj = static_cast<std::size_t>(j);
+      const Body& b = bodies[bj];
+      if (separated(b.box.pose, 0.5 * b.box.size, link.pose, link_half_[l], 1e-3)) continue;
+      if (!collide(box_shapes_[bj], b.box.pose, *link_shapes_[l], link.pose)) continue;
+      double depth = 0.0;
+      for (const Point& pt : points_) depth = std::max(depth, pt.depth);
+      if (on_belt(link) || depth > options_.wake_depth) wake.push_back(j);
+    }
+  }
+  for (std::size_t k = 0; k < held.size(); ++k) {
+    const Body& h = bodies[static_cast<std::size_t>(held[k])];
+    const Eigen::Isometry3d& pose = held_poses[k];
+    const Eigen::Vector3d e = pose.linear().cwiseAbs() * (0.5 * h.box.size);
+    broad_.query(pose.translation() - e, pose.translation() + e, BroadPhase::kSleeping, near_);
+    for (const int j : near_) {
+      const Body& b = bodies[static_cast<std::size_t>(j)];
+      box_box_patch(h.box.size, pose, b.box.size, b.box.pose, patch_);
+      double depth = 0.0;
+      for (const PatchPoint& pt : patch_.points) depth = std::max(depth, pt.depth);
+      if (depth > options_.wake_depth) wake.push_back(j);
+    }
+  }
   std::sort(wake.begin(), wake.end());
   wake.erase(std::unique(wake.begin(), wake.end()), wake.end());
 }

@@ -43,6 +43,23 @@ class Contacts {
   void compute(State& state, const std::vector<int>& moving, const std::vector<Mover>& links,
                double dt, std::vector<Wrench>& wrenches, std::vector<int>& wake,
                const std::vector<std::uint8_t>* active = nullptr);
+  // Fast fidelity. The broad phase brought up to date with the bodies
+  // (`moving`: as for compute()), to query before compute() runs.
+  void update_broad_phase(const std::vector<Body>& bodies, const std::vector<int>& moving) {
+    broad_.update(bodies, moving);
+  }
+  const BroadPhase& broad_phase() const { return broad_; }
+  // Into `wake`: the sleeping boxes that a robot shape at its pose in
+  // `links` presses into deeper than wake_depth while it moves, or that lie
+  // on its running belt (the belt carries them), and those a held box at
+  // `held_poses[k]` (body `held[k]`) presses into deeper than wake_depth.
+  // A lighter touch leaves a box where it is: it is not pushed.
+  void pressed(const State& state, const std::vector<Mover>& links, const std::vector<int>& held,
+               const std::vector<Eigen::Isometry3d>& held_poses, std::vector<int>& wake);
+  // Compute() at fast fidelity: a moving robot shape wakes a sleeping box
+  // only as pressed() does, and a held box wakes none by coming near.
+  void set_fast(bool fast) { fast_ = fast; }
+
   // From the last compute(), per robot shape: the force the boxes exert on
   // it (world frame), and the force its belt exerts on them along belt_dir.
   const std::vector<Eigen::Vector3d>& link_forces() const { return link_force_; }
@@ -81,6 +98,9 @@ class Contacts {
   bool collide(const fcl::CollisionGeometryd& ga, const Eigen::Isometry3d& pa,
                const fcl::CollisionGeometryd& gb, const Eigen::Isometry3d& pb);
   bool take(const Patch& patch);  // into points_; false if empty
+  // Whether the last collide()'s box lies on the shape's running belt, which
+  // carries it: fast fidelity wakes it for that.
+  bool on_belt(const Mover& link) const;
 
   PhysicsOptions options_;
   Trailer trailer_;
@@ -101,6 +121,7 @@ class Contacts {
   std::vector<Eigen::Vector3d> link_force_;
   std::vector<double> belt_force_;
   fcl::CollisionRequestd request_;
+  bool fast_ = false;
 };
 
 }  // namespace plr::sim::detail

@@ -10,6 +10,7 @@
 #include "multibody.hpp"
 #include "plr/sim/physics.hpp"
 #include "state.hpp"
+#include "support.hpp"
 
 namespace plr::sim {
 
@@ -377,6 +378,22 @@ struct Simulation::Impl {
     return false;
   }
 
+  // Fast fidelity: a box let go over a running belt leaves on it (the belt
+  // carries what falls on it to the robot's body conveyor): its centre over
+  // the belt's surface, at most its largest side above it (as a box lying
+  // on the belt is seen by the unloader). A box let go higher is left to
+  // the physics: it may fall aside.
+  bool over_running_belt(const Body& b) const {
+    for (const LinkGeometry& l : state.link_targets) {
+      if (!(l.belt_speed > 0.0)) continue;
+      const Eigen::Vector3d local = l.pose.inverse() * b.box.pose.translation();
+      if (std::abs(local.x()) < 0.5 * l.size.x() && std::abs(local.y()) < 0.5 * l.size.y() &&
+          local.z() > 0.0 && local.z() < 0.5 * l.size.z() + b.box.size.maxCoeff())
+        return true;
+    }
+    return false;
+  }
+
   void remove(int i) {
     Body& b = state.bodies[static_cast<std::size_t>(i)];
     const bool was_awake = b.mode == Mode::kAwake;
@@ -384,7 +401,10 @@ struct Simulation::Impl {
     if (was_awake) rebuild = true;
     moving_stale = true;
     contacts.box_removed();
-    // What rested on or leaned against it must notice that it is gone.
+    // What rested on or leaned against it must notice that it is gone. At
+    // fast fidelity only what it held up does (the support rule).
+    const bool fast = fidelity == Fidelity::kFast;
+    if (fast) contacts.update_broad_phase(state.bodies, moving_bodies());
     const Eigen::Vector3d e =
         b.box.pose.linear().cwiseAbs() * (0.5 * b.box.size) + Eigen::Vector3d::Constant(0.02);
     const Eigen::Vector3d lo = b.box.pose.translation() - e, hi = b.box.pose.translation() + e;
@@ -394,7 +414,9 @@ struct Simulation::Impl {
       const Eigen::Vector3d oe = o.box.pose.linear().cwiseAbs() * (0.5 * o.box.size);
       const Eigen::Vector3d olo = o.box.pose.translation() - oe;
       const Eigen::Vector3d ohi = o.box.pose.translation() + oe;
-      if ((olo.array() <= hi.array()).all() && (lo.array() <= ohi.array()).all()) {
+      if ((olo.array() <= hi.array()).all() && (lo.array() <= ohi.array()).all() &&
+          (!fast ||
+           !detail::supported(state.bodies, contacts.broad_phase(), static_cast<int>(j)))) {
         wake_body(static_cast<int>(j));
       }
     }
@@ -528,8 +550,9 @@ struct Simulation::Impl {
       build_multibody(pending->slots, &pending->q, &pending->u);
       pending.reset();
     }
+    // Fast fidelity freezes far groups as adaptive does.
     const bool adaptive = fidelity == Fidelity::kAdaptive;
-    if (adaptive) freeze_far();
+    if (fidelity != Fidelity::kFull) freeze_far();
     if (rebuild) rebuild_awake();
     anything_moves = anything_moves || !slots.empty();
 
@@ -630,6 +653,147 @@ struct Simulation::Impl {
     }
   }
 
+  // Fast fidelity, before a step() call's fixed steps. The boxes the robot
+  // shapes and held boxes press into at the call's end (Contacts::pressed)
+  // wake, and so do those a held box that moves held up and that nothing
+  // else holds up (the support rule). If then no box is awake, the robot
+  // and what it holds move kinematically: the call's fixed steps would
+  // integrate nothing, so none is taken (true). Otherwise (false) the
+  // fixed steps run, the woken boxes in them.
+  bool advance_kinematically(long n, double total, const Eigen::Vector3d& plate_v,
+                             const Eigen::Vector3d& plate_a) {
+    movers.resize(state.links.size());
+    for (std::size_t l = 0; l < state.links.size(); ++l) {
+      Mover& m = movers[l];
+      m.pose = state.links[l].pose;
+      m.v = link_paths.empty() ? Eigen::Vector3d::Zero() : link_paths[l].v;
+      m.w = link_paths.empty() ? Eigen::Vector3d::Zero() : link_paths[l].w;
+      m.belt_dir =
+          link_drive[l] >= 0 ? Eigen::Vector3d(-m.pose.linear().col(0)) : Eigen::Vector3d::Zero();
+      m.speed = m.v.norm() + m.w.norm() * bounding_radius(state.links[l]);
+    }
+    Eigen::Vector3d plate_w = Eigen::Vector3d::Zero();
+    if (plate_path) plate_w = plate_path->w;
+    const bool plate_moves = plate_v.squaredNorm() + plate_w.squaredNorm() > 0.0;
+    held_now.clear();
+    held_end.clear();
+    for (const int i : moving_bodies()) {
+      const Body& b = state.bodies[static_cast<std::size_t>(i)];
+      if (b.mode != Mode::kHeld || !state.plate) continue;
+      held_now.push_back(i);
+      held_end.push_back(state.plate->pose * b.grip);
+    }
+    contacts.update_broad_phase(state.bodies, moving_bodies());
+    wake.clear();
+    contacts.pressed(state, movers, plate_moves ? held_now : std::vector<int>{}, held_end, wake);
+    if (plate_moves) {
+      for (const int h : held_now) {
+        detail::resting_on(state.bodies, contacts.broad_phase(), h,
+                           state.bodies[static_cast<std::size_t>(h)].box.pose, dependents);
+        for (const int d : dependents)
+          if (!detail::supported(state.bodies, contacts.broad_phase(), d)) wake.push_back(d);
+      }
+    }
+    for (const int i : wake) wake_body(i);
+    for (const int i : moving_bodies())
+      if (state.bodies[static_cast<std::size_t>(i)].mode == Mode::kAwake) return false;
+    if (state.plate) place_held(state.plate->pose, plate_v, plate_w);
+    state.time += total;
+    stats.steps += n;
+    // The belts run up as over fixed steps without a load.
+    for (std::size_t k = 0; k < state.belts.size(); ++k) {
+      BeltLoad& d = state.belts[k];
+      if (drive_speed[k] <= 0.0 || d.speed_fraction >= 1.0) continue;
+      d.speed_fraction = std::min(
+          1.0, d.speed_fraction + d.max_force / options.belt_inertia * total / drive_speed[k]);
+    }
+    // The cups' load follows the weight and the plate's acceleration, through
+    // the same filter over the call's n fixed steps (nothing else pushes).
+    const Eigen::Vector3d gravity(0.0, 0.0, -options.gravity);
+    const double keep =
+        std::pow(1.0 - std::min(1.0, options.step / kLoadFilter), static_cast<double>(n));
+    const double share = pump_share();
+    int overloaded = -1;
+    double worst = 1.0;
+    for (const int h : held_now) {
+      Body& b = state.bodies[static_cast<std::size_t>(h)];
+      const double need = (b.box.mass * (plate_a - gravity)).norm();
+      b.load = need + (b.load - need) * keep;
+      const double ratio = b.load / (share * b.capacity);
+      if (ratio > worst) {
+        worst = ratio;
+        overloaded = h;
+      }
+    }
+    if (overloaded >= 0) {
+      Body& b = state.bodies[static_cast<std::size_t>(overloaded)];
+      b.mode = Mode::kAwake;
+      b.still = 0.0;
+      rebuild = true;
+      moving_stale = true;
+      state.suction_events.push_back(
+          {b.box.id, state.time, SuctionEvent::Kind::kDropped, b.load, share * b.capacity});
+    }
+    return true;
+  }
+  // Fast fidelity, before a step() call: an awake box that is slow (under
+  // sleep_speed), touches no robot shape or held box, and rests in balance
+  // on the floor and sleeping boxes (the support rule) is at rest: it sleeps
+  // at once, without the fixed steps that would find it so. Lowest first,
+  // so that a stack at rest sleeps from the floor up in one call.
+  void sleep_supported() {
+    if (by_id.size() != state.bodies.size()) {
+      by_id.clear();
+      for (std::size_t i = 0; i < state.bodies.size(); ++i)
+        by_id.emplace_back(state.bodies[i].box.id, static_cast<int>(i));
+      std::sort(by_id.begin(), by_id.end());
+    }
+    touches.assign(state.bodies.size(), 0);
+    for (const detail::PairState& p : state.pairs) {
+      const int a = index_of(p.key.a);
+      if (a < 0) continue;
+      if (p.key.kind == 1) touches[static_cast<std::size_t>(a)] = 1;
+      if (p.key.kind != 0) continue;
+      const int b = index_of(p.key.b);
+      if (b < 0) continue;
+      const auto ka = static_cast<std::size_t>(a), kb = static_cast<std::size_t>(b);
+      if (state.bodies[kb].mode == Mode::kHeld) touches[ka] = 1;
+      if (state.bodies[ka].mode == Mode::kHeld) touches[kb] = 1;
+    }
+    calm.clear();
+    for (const int i : moving_bodies()) {
+      const auto k = static_cast<std::size_t>(i);
+      const Body& b = state.bodies[k];
+      if (b.mode == Mode::kAwake && touches[k] == 0 &&
+          b.v.norm() + b.w.norm() * b.radius < options.sleep_speed)
+        calm.push_back(i);
+    }
+    std::sort(calm.begin(), calm.end(), [&](int x, int y) {
+      const double zx = state.bodies[static_cast<std::size_t>(x)].box.pose.translation().z();
+      const double zy = state.bodies[static_cast<std::size_t>(y)].box.pose.translation().z();
+      return zx < zy || (zx == zy && x < y);
+    });
+    for (bool slept = !calm.empty(); slept;) {
+      slept = false;
+      contacts.update_broad_phase(state.bodies, moving_bodies());
+      for (const int i : calm) {
+        Body& b = state.bodies[static_cast<std::size_t>(i)];
+        if (b.mode != Mode::kAwake || !detail::supported(state.bodies, contacts.broad_phase(), i))
+          continue;
+        b.mode = Mode::kAsleep;
+        b.v.setZero();
+        b.w.setZero();
+        b.still = 0.0;
+        rebuild = true;
+        moving_stale = true;
+        slept = true;
+      }
+    }
+  }
+  std::vector<int> calm;                  // sleep_supported()'s scratch
+  std::vector<int> held_now, dependents;  // advance_kinematically()'s scratch
+  std::vector<Eigen::Isometry3d> held_end;
+
   // After a fixed step: body i unloaded if it left the trailer or reached
   // the end of a belt (true: it was removed), else put to sleep once it has
   // been slow long enough.
@@ -712,6 +876,22 @@ void Simulation::step(double duration) {
   const Eigen::Vector3d plate_a = (plate_v - s.plate_velocity) / total;
   m.prepare_loads();
   m.set_belt_ends();
+  m.contacts.set_fast(m.fidelity == Fidelity::kFast);
+  if (m.fidelity == Fidelity::kFast) m.sleep_supported();
+  // With no box awake, a restored Simbody system integrates nothing.
+  if (m.fidelity == Fidelity::kFast && m.pending &&
+      std::none_of(s.bodies.begin(), s.bodies.end(),
+                   [](const Body& b) { return b.mode == Mode::kAwake; })) {
+    m.slots.clear();
+    m.pending.reset();
+  }
+  if (m.fidelity == Fidelity::kFast && !m.pending &&
+      m.advance_kinematically(n, total, plate_v, plate_a)) {
+    s.plate_velocity = plate_v;
+    m.stats.wall_seconds +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return;
+  }
   std::vector<Eigen::Vector3d> from, to;
   for (std::size_t l = 0; l < s.links.size(); ++l) {
     const bool moves = !m.link_paths.empty();
@@ -866,7 +1046,9 @@ std::vector<std::uint32_t> Simulation::suction_on(const std::vector<bool>& open)
 
 void Simulation::suction_off() {
   Impl& m = *impl_;
-  for (Body& b : m.state.bodies) {
+  std::vector<std::size_t> released;
+  for (std::size_t i = 0; i < m.state.bodies.size(); ++i) {
+    Body& b = m.state.bodies[i];
     if (b.mode != Mode::kHeld) continue;
     b.mode = Mode::kAwake;
     b.still = 0.0;
@@ -874,6 +1056,26 @@ void Simulation::suction_off() {
     m.moving_stale = true;
     m.state.suction_events.push_back(
         {b.box.id, m.state.time, SuctionEvent::Kind::kReleased, b.load, b.capacity});
+    released.push_back(i);
+  }
+  if (m.fidelity != Fidelity::kFast) return;
+  // Boxes let go one above the other are left to the physics: the upper
+  // one rides on the lower or falls aside, which the belt rule cannot say.
+  const auto footprint = [&](std::size_t i) {
+    const Box& b = m.state.bodies[i].box;
+    const Eigen::Vector2d e = (b.pose.linear().cwiseAbs() * (0.5 * b.size)).head<2>();
+    return std::pair{Eigen::Vector2d(b.pose.translation().head<2>() - e),
+                     Eigen::Vector2d(b.pose.translation().head<2>() + e)};
+  };
+  for (const std::size_t i : released) {
+    const auto [lo, hi] = footprint(i);
+    const bool stacked = std::any_of(released.begin(), released.end(), [&](std::size_t j) {
+      const auto [jlo, jhi] = footprint(j);
+      return j != i && (lo.array() < jhi.array()).all() && (jlo.array() < hi.array()).all();
+    });
+    if (stacked || !m.over_running_belt(m.state.bodies[i])) continue;
+    m.state.unloaded.push_back({m.state.bodies[i].box.id, m.state.time});
+    m.remove(static_cast<int>(i));
   }
 }
 

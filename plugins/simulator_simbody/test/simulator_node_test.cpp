@@ -246,14 +246,12 @@ TEST(SimulatorParams, RatesAndResolutionsAreBounded) {
   }
 }
 
-// The fidelity is a word: the built levels configure, others name the value.
-TEST(SimulatorParams, FidelityIsFullOrAdaptive) {
+// The fidelity is a word: the three levels configure, others name the value.
+TEST(SimulatorParams, FidelityIsFullAdaptiveOrFast) {
   for (const auto& [params, message] :
-       {std::pair{R"({"fidelity": "adaptive"})", ""},
-        std::pair{R"({"fidelity": "fast"})",
-                  "param fidelity: 'fast' is not built (full or adaptive)"},
+       {std::pair{R"({"fidelity": "adaptive"})", ""}, std::pair{R"({"fidelity": "fast"})", ""},
         std::pair{R"({"fidelity": "exact"})",
-                  "param fidelity: 'exact' is not one of full, adaptive"}}) {
+                  "param fidelity: 'exact' is not one of full, adaptive, fast"}}) {
     FakeKernel kernel;
     auto node = kernel.load_node(SIMULATOR_SO, NodeOptions().with_params(params));
     ASSERT_TRUE(node) << node.error().message;

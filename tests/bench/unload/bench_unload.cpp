@@ -8,7 +8,7 @@
 // every run >= 98 % unloaded.
 //
 //   bench_unload [--quick] [--json] [--seeds N] [--first S] [--families A1,C]
-//                [--workers W] [--out DIR] [--timeout S] [--fidelity full|adaptive]
+//                [--workers W] [--out DIR] [--timeout S] [--fidelity full|adaptive|fast]
 //                [--experience on|off] [--record-queries]
 // Defaults: seeds 1-20 of every family, one worker per core, results in
 // ./bench_unload. --quick: seeds 1-5. Each run is a job (plr/jobs); its
@@ -441,7 +441,8 @@ Options parse(int argc, char** argv) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   std::string fidelity = "full";
-  app.add_option("--fidelity", fidelity, "How accurately the boxes are simulated: full, adaptive")
+  app.add_option("--fidelity", fidelity,
+                 "How accurately the boxes are simulated: full, adaptive, fast")
       ->capture_default_str();
   app.add_option("--experience", o.experience,
                  "The planner reuses earlier paths within a trailer: on, off (default: as the "

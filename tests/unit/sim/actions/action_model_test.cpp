@@ -387,5 +387,61 @@ TEST(Outcome, CountsTheBoxesThatMovedOrTurnedButStayed) {
   EXPECT_EQ(boxes_shifted(before, after), 2u);
 }
 
+// Fast fidelity behind the same interface: a pick of a box with nothing on
+// it (a flat box on the floor, a column of boxes beside it) unloads the
+// same box, takes the same robot time and leaves the same semantic
+// observation as full fidelity, and the boxes left stay where full leaves
+// them.
+TEST(Fidelity, AFastPickOfATopBoxGivesWhatFullDoes) {
+  sim::World w = wall(5.6, 1, 2);
+  for (sim::Box& b : w.boxes) b.pose.translation().y() = 0.8;
+  w.boxes.push_back(box(9, 5.0, 0.0, 0.0, 4.0));
+  w.boxes.back().size = {0.4, 0.5, 0.1};
+  w.boxes.back().pose.translation().z() = 0.05;
+  Fixture full(w), fast(w);
+  fast.simulation.set_fidelity(sim::Fidelity::kFast);
+  const ActionModel model(robot(), options());
+  const auto a = model.run(sim::make_pick(Height::kLow, Side::kCenter), full.backend, full.memory);
+  const auto b = model.run(sim::make_pick(Height::kLow, Side::kCenter), fast.backend, fast.memory);
+  ASSERT_TRUE(a) << a.error().message;
+  ASSERT_TRUE(b) << b.error().message;
+  ASSERT_EQ(a->boxes, 1u);
+  EXPECT_EQ(b->boxes, a->boxes);
+  EXPECT_NEAR(b->robot_time_s, a->robot_time_s, 1e-6);
+  const sim::World left_full = full.simulation.truth(), left_fast = fast.simulation.truth();
+  ASSERT_EQ(left_full.boxes.size(), 2u);  // the flat box left
+  ASSERT_EQ(left_fast.boxes.size(), left_full.boxes.size());
+  for (std::size_t i = 0; i < left_full.boxes.size(); ++i) {
+    EXPECT_EQ(left_fast.boxes[i].id, left_full.boxes[i].id);
+    EXPECT_LT(
+        (left_fast.boxes[i].pose.translation() - left_full.boxes[i].pose.translation()).norm(),
+        0.01);
+  }
+  const auto seen = [&](const Fixture& f) {
+    const auto scene = sim::analyse(f.simulation.perceived(), options().observation);
+    return scene.observation ? sim::to_string(*scene.observation) : std::string("none");
+  };
+  EXPECT_NE(seen(full), "none");
+  EXPECT_EQ(seen(fast), seen(full));
+}
+
+// Fast fidelity is deterministic: the same action from the same state twice
+// ends in the same state, to the bit.
+TEST(Fidelity, AFastActionRepeatsExactly) {
+  const sim::World w = wall(5.0, 3, 2);
+  Fixture one(w), two(w);
+  one.simulation.set_fidelity(sim::Fidelity::kFast);
+  two.simulation.set_fidelity(sim::Fidelity::kFast);
+  const ActionModel model(robot(), options());
+  const auto a = model.run(sim::make_pick(Height::kLow, Side::kCenter), one.backend, one.memory);
+  const auto b = model.run(sim::make_pick(Height::kLow, Side::kCenter), two.backend, two.memory);
+  ASSERT_TRUE(a) << a.error().message;
+  ASSERT_TRUE(b) << b.error().message;
+  EXPECT_EQ(a->boxes, b->boxes);
+  EXPECT_EQ(a->robot_time_s, b->robot_time_s);
+  EXPECT_EQ(one.simulation.physics().snapshot().to_bytes(),
+            two.simulation.physics().snapshot().to_bytes());
+}
+
 }  // namespace
 }  // namespace plr::actions

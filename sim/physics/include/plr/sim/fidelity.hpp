@@ -11,7 +11,14 @@
 //             sleep_time, balanced or not; a frozen box wakes when a box on
 //             such a path comes within the wake margin while closing on it
 //             at sleep_speed or more (see docs/fidelity.md).
-//   fast      not built: parse_fidelity refuses it.
+//   fast      the robot and what it holds move kinematically while no box
+//             moves: no fixed steps are integrated. A box is handed to the
+//             physics (woken) only when a robot shape or a held box presses
+//             into it (wake_depth), or when a box it rests on leaves and its
+//             centre of mass is no longer over what remains below it (the
+//             support rule); a released box over a running belt leaves on
+//             it. The woken boxes run as at adaptive fidelity (see
+//             docs/fidelity.md).
 #pragma once
 
 #include <plr/expected.hpp>
@@ -21,9 +28,9 @@
 
 namespace plr::sim {
 
-enum class Fidelity { kFull, kAdaptive };
+enum class Fidelity { kFull, kAdaptive, kFast };
 
-// "full" or "adaptive"; anything else is an error naming the value.
+// "full", "adaptive" or "fast"; anything else is an error naming the value.
 plr::Expected<Fidelity> parse_fidelity(std::string_view name);
 std::string to_string(Fidelity fidelity);
 
