@@ -37,16 +37,7 @@ function(plr_pch_host name type)
   target_precompile_headers(${name} PRIVATE ${headers})
 endfunction()
 
-# Every target defined in `dir` and below.
-function(plr_targets_below dir out)
-  get_property(targets DIRECTORY ${dir} PROPERTY BUILDSYSTEM_TARGETS)
-  get_property(subdirs DIRECTORY ${dir} PROPERTY SUBDIRECTORIES)
-  foreach(sub IN LISTS subdirs)
-    plr_targets_below(${sub} below)
-    list(APPEND targets ${below})
-  endforeach()
-  set(${out} ${targets} PARENT_SCOPE)
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/PlrCollectTargets.cmake)
 
 # Call once, after every target is defined.
 function(plr_use_precompiled_headers)
@@ -55,7 +46,7 @@ function(plr_use_precompiled_headers)
   if(TARGET GTest::gtest)
     plr_pch_host(plr_pch_test EXECUTABLE LINK GTest::gtest HEADERS <gtest/gtest.h>)
   endif()
-  plr_targets_below(${PROJECT_SOURCE_DIR} targets)
+  plr_collect_targets(${PROJECT_SOURCE_DIR} targets)
   # The sanitizers' flags are every target's, the hosts' included.
   get_property(everyones DIRECTORY ${PROJECT_SOURCE_DIR} PROPERTY COMPILE_OPTIONS)
   foreach(t IN LISTS targets)

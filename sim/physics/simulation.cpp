@@ -178,6 +178,18 @@ struct Simulation::Impl {
     moving_stale = true;
   }
 
+  // The cups let go of held box i, more than their `share` could hold: it
+  // falls under physics from here.
+  void drop(int i, double share) {
+    Body& b = state.bodies[static_cast<std::size_t>(i)];
+    b.mode = Mode::kAwake;
+    b.still = 0.0;
+    rebuild = true;
+    moving_stale = true;
+    state.suction_events.push_back(
+        {b.box.id, state.time, SuctionEvent::Kind::kDropped, b.load, share * b.capacity});
+  }
+
   const std::vector<int>& moving_bodies() {
     if (moving_stale) {
       moving.clear();
@@ -622,15 +634,7 @@ struct Simulation::Impl {
         overloaded = static_cast<int>(i);
       }
     }
-    if (overloaded >= 0) {
-      Body& b = state.bodies[static_cast<std::size_t>(overloaded)];
-      b.mode = Mode::kAwake;
-      b.still = 0.0;
-      rebuild = true;
-      moving_stale = true;
-      state.suction_events.push_back(
-          {b.box.id, state.time, SuctionEvent::Kind::kDropped, b.load, share * b.capacity});
-    }
+    if (overloaded >= 0) drop(overloaded, share);
     // A sleeping box has not moved, and the belts stand still within a
     // step() call: after the call's first fixed step (fraction 0) it stays
     // where it was found not to be unloaded, and only the moving bodies
@@ -725,15 +729,7 @@ struct Simulation::Impl {
         overloaded = h;
       }
     }
-    if (overloaded >= 0) {
-      Body& b = state.bodies[static_cast<std::size_t>(overloaded)];
-      b.mode = Mode::kAwake;
-      b.still = 0.0;
-      rebuild = true;
-      moving_stale = true;
-      state.suction_events.push_back(
-          {b.box.id, state.time, SuctionEvent::Kind::kDropped, b.load, share * b.capacity});
-    }
+    if (overloaded >= 0) drop(overloaded, share);
     return true;
   }
   // Fast fidelity, before a step() call: an awake box that is slow (under

@@ -5,15 +5,7 @@
 #   link <name> <linked target>
 #   include <name> <folder of the tree on its own include path>
 #   export <name> <folder of the tree it puts on its users' include path>
-function(plr_collect_targets dir out)
-  get_property(targets DIRECTORY ${dir} PROPERTY BUILDSYSTEM_TARGETS)
-  get_property(subdirs DIRECTORY ${dir} PROPERTY SUBDIRECTORIES)
-  foreach(sub IN LISTS subdirs)
-    plr_collect_targets(${sub} more)
-    list(APPEND targets ${more})
-  endforeach()
-  set(${out} ${targets} PARENT_SCOPE)
-endfunction()
+include(${PROJECT_SOURCE_DIR}/sdk/cmake/PlrCollectTargets.cmake)
 
 # The folders of the source tree among include directories (relative to it;
 # $<BUILD_INTERFACE:x> read as x, other generator expressions and the build
