@@ -113,6 +113,20 @@ plr::Status BusBackend::checkpoint() {
   return {};
 }
 
+plr::Status BusBackend::checkpoint_until_written(const std::string& what) {
+  using namespace std::chrono_literals;
+  for (bool warned = false;;) {
+    const auto why = snapshot_or_restore("sim/snapshot");
+    if (!why) return why.error();
+    if (why->empty()) return {};
+    if (!warned)
+      ctx_.log().warn("{}: sim/snapshot 'checkpoint' failed: {}; asking again until it is written",
+                      what, *why);
+    warned = true;
+    if (!pause_(200ms)) return plr::make_error(PLR_ERR_CANCELLED, "stopping");
+  }
+}
+
 bool BusBackend::lost(const plr::Error& error) const {
   return error.code == PLR_ERR_UNAVAILABLE || error.code == PLR_ERR_TIMEOUT;
 }

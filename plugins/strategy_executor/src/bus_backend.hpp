@@ -44,6 +44,10 @@ class BusBackend final : public actions::Backend, public episode::Recovery {
   // A checkpoint not taken (refused) is logged: it only costs a longer
   // repeat after a crash.
   plr::Status checkpoint() override;
+  // The same, but a refused checkpoint is asked for again until it is
+  // written (a disk full or read-only for a while); `what` names it in the
+  // log. Errors: the simulator lost, the run stopping (PLR_ERR_CANCELLED).
+  plr::Status checkpoint_until_written(const std::string& what);
   bool lost(const plr::Error& error) const override;
   plr::Status restore() override;
 

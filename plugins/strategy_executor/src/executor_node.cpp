@@ -383,7 +383,7 @@ class ExecutorNode : public plr::Node, private episode::Observer {
     constexpr int kAttempts = 10;  // restarts are bounded by the run's max_restarts anyway
     for (int attempt = 1;; ++attempt) {
       const sim::World made = reset(t);
-      if (auto ok = backend_->checkpoint(); !ok && !backend_->lost(ok.error())) fail(ok.error());
+      checkpoint_trailer(t);
       auto w = backend_->wait_for_simulator();
       if (w && w->unloaded == 0 && box_ids(w->world) == box_ids(made)) return;
       if (!w && w.error().code == PLR_ERR_CANCELLED) throw Stopped{};
@@ -398,6 +398,16 @@ class ExecutorNode : public plr::Node, private episode::Observer {
       log().warn("trailer {}: the simulator restarted after its reset ({}): resetting again",
                  t.name(), shows);
     }
+  }
+
+  // A trailer starts only from its own checkpoint: a simulator restarted
+  // later would resume the trailer before, which the executor would take
+  // for this one (bench_soak: a read-only disk refused it, then a kill).
+  void checkpoint_trailer(const Trailer& t) {
+    auto ok = backend_->checkpoint_until_written("trailer " + t.name());
+    if (ok || backend_->lost(ok.error())) return;  // a restart is seen next
+    if (ok.error().code == PLR_ERR_CANCELLED) throw Stopped{};
+    fail(ok.error());
   }
 
   static std::vector<std::uint32_t> box_ids(const sim::World& w) {

@@ -70,12 +70,23 @@ class FakeSim {
           fbb.Finish(sim::testing::pack_world(fbb, s_.world, joints(), s_.held, s_.unloaded, s_.t));
           // The host dies after its reply and restarts unseen, from its checkpoint.
           if (++resets_ == restart_after_reset) s_ = snapshots_.at("checkpoint");
+          if (resets_ == refuse_after_reset) {
+            refusing_ = snapshots_refused;
+            executes_since_reset_ = 0;
+          }
           return {};
         });
     k.fake_service<msg::SnapshotRequest, msg::SnapshotReply>(
         "sim/snapshot",
         [this](const msg::SnapshotRequest& r, flatbuffers::FlatBufferBuilder& fbb) -> Status {
           if (down_) return make_error(PLR_ERR_UNAVAILABLE, "no provider");
+          if (refusing_ > 0) {
+            --refusing_;
+            fbb.Finish(msg::CreateSnapshotReplyDirect(
+                fbb, false, "cannot create a temporary file: Read-only file system",
+                r.name()->c_str()));
+            return {};
+          }
           snapshots_[r.name()->str()] = s_;
           fbb.Finish(msg::CreateSnapshotReplyDirect(fbb, true, "", r.name()->c_str()));
           return {};
@@ -107,6 +118,11 @@ class FakeSim {
   int observes_while_down = 3;
   std::map<std::string, sim::World> worlds;  // what sim/reset makes, by world_file
   int restart_after_reset = -1;              // the n-th reset's host restarts after replying
+  // After the n-th reset the disk refuses `snapshots_refused` snapshots, and
+  // the host restarts unseen after `restart_after_reset_execute` executes.
+  int refuse_after_reset = -1;
+  int snapshots_refused = 0;
+  int restart_after_reset_execute = -1;
 
   const SimState& state() const { return s_; }
   int drops() const { return drops_; }
@@ -149,7 +165,9 @@ class FakeSim {
     std::vector<std::uint32_t> none;
     fbb.Finish(msg::CreateExecuteOutcomeDirect(fbb, true, "", s_.t, &none, &none, &s_.held, 0,
                                                static_cast<std::uint32_t>(s_.world.boxes.size())));
-    if (executes_ == restart_after_execute) s_ = snapshots_.at("checkpoint");
+    if (executes_ == restart_after_execute ||
+        (executes_since_reset_ >= 0 && ++executes_since_reset_ == restart_after_reset_execute))
+      s_ = snapshots_.at("checkpoint");
     return {};
   }
 
@@ -226,6 +244,8 @@ class FakeSim {
   bool down_ = false;
   int restores_ = 0;
   int executes_ = 0;
+  int refusing_ = 0;
+  int executes_since_reset_ = -1;
 };
 
 // Straight lines to the goal; pose goals through the arm's IK.
@@ -552,6 +572,34 @@ TEST_F(Executor, UnloadsTrailerAfterTrailerAndResetsAgainASimulatorThatRestarted
     EXPECT_EQ(t["sim_boxes_left"], 0) << t.dump();
     EXPECT_EQ(t["stop_reason"], "trailer empty") << t.dump();
   }
+}
+
+// bench_soak, 120 min: the disk refused the next trailer's checkpoint, the
+// executor went on, and a kill made the simulator resume the trailer before,
+// which the executor unloaded as this one. A trailer now starts only once
+// its checkpoint is written.
+TEST_F(Executor, ATrailerStartsOnlyOnceItsCheckpointIsWritten) {
+  FakeSim sim(small_wall());
+  sim.worlds["six"] = small_wall();
+  sim::World four;
+  sim::testing::add_wall(four, 5.0, 2, 2);
+  sim.worlds["four"] = four;
+  sim.refuse_after_reset = 2;  // "four"
+  sim.snapshots_refused = 3;
+  sim.restart_after_reset_execute = 1;
+  FakePlanner planner;
+  sim.serve(kernel_);
+  planner.serve(kernel_);
+  const auto report = run(R"(, "trailers": [{"world_file": "six"}, {"world_file": "four"}])");
+  EXPECT_TRUE(done_ok_) << done_reason_;
+  EXPECT_EQ(done_reason_, "2 trailers done: 10/10 boxes unloaded");
+  ASSERT_EQ(report["trailers"].size(), 2u) << report.dump(1);
+  const auto& t = report["trailers"][1];
+  EXPECT_EQ(t["name"], "four");
+  EXPECT_EQ(t["boxes_unloaded"], 4) << t.dump();
+  EXPECT_EQ(t["sim_boxes_unloaded"], 4) << t.dump();
+  EXPECT_EQ(t["sim_boxes_left"], 0) << t.dump();
+  EXPECT_EQ(sim.restores(), 1);
 }
 
 TEST_F(Executor, FailedGraspsEndInNoProgress) {
