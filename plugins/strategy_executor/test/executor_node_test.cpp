@@ -332,6 +332,14 @@ class Executor : public ::testing::Test {
     return w;
   }
 
+  // The trailers "six" (the small wall) and "four" (a wall of 2 x 2).
+  static void add_two_trailers(FakeSim& sim) {
+    sim.worlds["six"] = small_wall();
+    sim::World four;
+    sim::testing::add_wall(four, 5.0, 2, 2);
+    sim.worlds["four"] = four;
+  }
+
   // Runs the executor to pipeline/done; returns the report.
   nlohmann::json run(const std::string& extra_params = "", bool with_h = true,
                      int spin_limit = 60000) {
@@ -547,10 +555,7 @@ TEST_F(Executor, NoticesASimulatorThatRestartedBetweenCalls) {
 // before from its checkpoint: the executor sees it and resets again.
 TEST_F(Executor, UnloadsTrailerAfterTrailerAndResetsAgainASimulatorThatRestarted) {
   FakeSim sim(small_wall());
-  sim.worlds["six"] = small_wall();
-  sim::World four;
-  sim::testing::add_wall(four, 5.0, 2, 2);
-  sim.worlds["four"] = four;
+  add_two_trailers(sim);
   sim.restart_after_reset = 3;  // the first trailer of the second cycle
   FakePlanner planner;
   sim.serve(kernel_);
@@ -580,10 +585,7 @@ TEST_F(Executor, UnloadsTrailerAfterTrailerAndResetsAgainASimulatorThatRestarted
 // its checkpoint is written.
 TEST_F(Executor, ATrailerStartsOnlyOnceItsCheckpointIsWritten) {
   FakeSim sim(small_wall());
-  sim.worlds["six"] = small_wall();
-  sim::World four;
-  sim::testing::add_wall(four, 5.0, 2, 2);
-  sim.worlds["four"] = four;
+  add_two_trailers(sim);
   sim.refuse_after_reset = 2;  // "four"
   sim.snapshots_refused = 3;
   sim.restart_after_reset_execute = 1;
