@@ -14,6 +14,14 @@
 namespace plr::kernel {
 namespace {
 
+// Every topic reliable: a burst waits for the recorder instead of dropping.
+TopicSettings reliable(const std::string& topic) {
+  TopicSettings s;
+  s.name = topic;
+  s.policy = TopicPolicy::Reliable;
+  return s;
+}
+
 TEST(Recorder, TopicPatterns) {
   EXPECT_TRUE(topic_matches("*", "world"));
   EXPECT_TRUE(topic_matches("executor/*", "executor/state"));
@@ -29,12 +37,7 @@ TEST(Recorder, RecordsEveryMessageOfTheTopicsAskedFor) {
       std::filesystem::temp_directory_path() / ("recorder_" + std::to_string(::getpid()) + ".mcap");
   // Reliable: the burst below waits for the recorder instead of dropping
   // (a subscriber like any other, it gets what the topic's policy lets through).
-  Bus bus([](const std::string& topic) {
-    TopicSettings s;
-    s.name = topic;
-    s.policy = TopicPolicy::Reliable;
-    return s;
-  });
+  Bus bus(reliable);
   testing::TestEndpoint node("node");
   bus.set_live(&node, true);
   auto recorder = Recorder::create(bus, path.string(), {"count", "other/*"});
@@ -82,12 +85,7 @@ TEST(Recorder, ARecordingPastItsBoundIsSplitInPartsWithinIt) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   const fs::path path = dir / "run.mcap";
-  Bus bus([](const std::string& topic) {
-    TopicSettings s;
-    s.name = topic;
-    s.policy = TopicPolicy::Reliable;
-    return s;
-  });
+  Bus bus(reliable);
   testing::TestEndpoint node("node");
   bus.set_live(&node, true);
   constexpr std::uint64_t kMax = 1 << 20;
