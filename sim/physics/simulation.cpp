@@ -1064,10 +1064,12 @@ void Simulation::suction_off() {
                      Eigen::Vector2d(b.pose.translation().head<2>() + e)};
   };
   for (const std::size_t i : released) {
-    const auto [lo, hi] = footprint(i);
+    // A plain pair, not a structured binding: clang 14 cannot capture those.
+    const auto box = footprint(i);
     const bool stacked = std::any_of(released.begin(), released.end(), [&](std::size_t j) {
-      const auto [jlo, jhi] = footprint(j);
-      return j != i && (lo.array() < jhi.array()).all() && (jlo.array() < hi.array()).all();
+      const auto other = footprint(j);
+      return j != i && (box.first.array() < other.second.array()).all() &&
+             (other.first.array() < box.second.array()).all();
     });
     if (stacked || !m.over_running_belt(m.state.bodies[i])) continue;
     m.state.unloaded.push_back({m.state.bodies[i].box.id, m.state.time});
