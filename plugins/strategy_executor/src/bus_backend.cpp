@@ -139,7 +139,34 @@ plr::Status BusBackend::restore() {
   if (!why) return why.error();
   if (!why->empty()) return plr::make_error(PLR_ERR_INTERNAL, "sim/restore 'checkpoint': " + *why);
   forget_clock();  // and so did the restore
-  return {};
+  return check_trailer();
+}
+
+void BusBackend::expect_trailer(const sim::World& made) {
+  trailer_boxes_.clear();
+  for (const auto& b : made.boxes) trailer_boxes_[b.id] = b.size;
+  another_world_ = false;
+}
+
+// A checkpoint of another trailer (a file from an earlier run, a disk that
+// lost the last one) would be unloaded as this one.
+plr::Status BusBackend::check_trailer() {
+  if (trailer_boxes_.empty()) return {};
+  auto w = observe();
+  if (!w) return w.error();
+  const std::size_t shows = w->world.boxes.size() + w->unloaded;
+  bool same = shows == trailer_boxes_.size();
+  for (const auto& b : w->world.boxes) {
+    const auto it = trailer_boxes_.find(b.id);
+    same = same && it != trailer_boxes_.end() && (it->second - b.size).cwiseAbs().maxCoeff() < 1e-6;
+  }
+  if (same) return {};
+  another_world_ = true;
+  return plr::make_error(
+      PLR_ERR_STATE,
+      fmt::format("the simulator came back with another trailer's world ({} boxes, {} unloaded; "
+                  "the trailer has {})",
+                  w->world.boxes.size(), w->unloaded, trailer_boxes_.size()));
 }
 
 }  // namespace plr::executor

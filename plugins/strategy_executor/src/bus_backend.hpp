@@ -13,6 +13,7 @@
 #include <atomic>
 #include <chrono>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 
@@ -51,6 +52,13 @@ class BusBackend final : public actions::Backend, public episode::Recovery {
   bool lost(const plr::Error& error) const override;
   plr::Status restore() override;
 
+  // The trailer being unloaded, as its reset made it: a restored simulator
+  // whose boxes are not this trailer's (their count, ids and sizes) is
+  // refused with PLR_ERR_STATE, and another_world() says so until the next
+  // expect_trailer().
+  void expect_trailer(const sim::World& made);
+  bool another_world() const { return another_world_; }
+
   // The last world observed, as the simulator sent it (strategy/next takes it).
   const std::optional<Message<msg::WorldState>>& last_world() const { return last_world_; }
   // Calls `service`, retrying while its provider is unavailable (not started
@@ -73,12 +81,15 @@ class BusBackend final : public actions::Backend, public episode::Recovery {
   // Empty when the simulator took or restored the checkpoint, else why not;
   // an error when the simulator is gone or the node stopping.
   plr::Expected<std::string> snapshot_or_restore(const char* service);
+  plr::Status check_trailer();
 
   Context& ctx_;
   BusOptions options_;
   std::function<bool(std::chrono::nanoseconds)> pause_;
   std::optional<Message<msg::WorldState>> last_world_;
   double sim_clock_s_ = -1.0;  // the simulator's clock when last heard, s
+  std::map<std::uint32_t, Eigen::Vector3d> trailer_boxes_;  // id -> size, as reset
+  bool another_world_ = false;
 };
 
 template <class Req, class Rep>

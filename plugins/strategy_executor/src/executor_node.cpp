@@ -343,15 +343,14 @@ class ExecutorNode : public plr::Node, private episode::Observer {
       // A simulator may hold no world before its first reset: reset first when
       // asked to (waiting for it to come up), observe only otherwise.
       if (!env_.empty() || !world_file_.empty()) reset({env_, seed_, world_file_});
-      unload();
+      if (auto ran = unload(); !ran) fail(ran.error());
       return;
     }
     std::uint32_t unloaded = 0, total = 0;
     for (std::uint64_t cycle = 0; cycles_ == 0 || cycle < cycles_; ++cycle) {
       for (const Trailer& t : trailers_) {
         const auto t0 = Clock::now();
-        reset_and_checkpoint(t);
-        unload();
+        unload_from_its_start(t);
         finish_trailer(t, seconds_since(t0));
         unloaded += stats_.trailers.back().boxes_unloaded;
         total += stats_.trailers.back().boxes_total;
@@ -383,6 +382,7 @@ class ExecutorNode : public plr::Node, private episode::Observer {
     constexpr int kAttempts = 10;  // restarts are bounded by the run's max_restarts anyway
     for (int attempt = 1;; ++attempt) {
       const sim::World made = reset(t);
+      backend_->expect_trailer(made);
       checkpoint_trailer(t);
       auto w = backend_->wait_for_simulator();
       if (w && w->unloaded == 0 && box_ids(w->world) == box_ids(made)) return;
@@ -438,8 +438,23 @@ class ExecutorNode : public plr::Node, private episode::Observer {
     save_report();
   }
 
-  // One trailer, from what the simulator shows now.
-  void unload() {
+  // Trailer `t` from its reset; started again when the simulator comes back
+  // from a restart with another trailer's world (its checkpoint lost).
+  void unload_from_its_start(const Trailer& t) {
+    constexpr int kAttempts = 10;  // restarts are bounded by the run's max_restarts anyway
+    for (int attempt = 1;; ++attempt) {
+      reset_and_checkpoint(t);
+      const auto ran = unload();
+      if (ran) return;
+      if (!backend_->another_world() || attempt == kAttempts) fail(ran.error());
+      log().warn("trailer {}: {}: unloading it again from its start", t.name(),
+                 ran.error().message);
+    }
+  }
+
+  // One trailer, from what the simulator shows now. Fails (with the engine's
+  // error) only when the simulator came back with another trailer's world.
+  plr::Status unload() {
     auto w = backend_->wait_for_simulator();
     if (!w) fail(w.error());
     stats_.boxes_total = static_cast<std::uint32_t>(w->world.boxes.size()) + w->unloaded;
@@ -451,8 +466,9 @@ class ExecutorNode : public plr::Node, private episode::Observer {
     engine_.emplace(*model_, *backend_, strategy_source(), std::move(settings));
     const auto ran = engine_->run();
     sync(engine_->episode());
-    if (!ran) fail(ran.error());
+    if (!ran && !backend_->another_world()) fail(ran.error());
     stats_.stop_reason = engine_->episode().stop_reason;
+    return ran ? plr::Status{} : plr::Status{ran.error()};
   }
 
   // ---- The run as the engine goes (episode::Observer) ----------------------

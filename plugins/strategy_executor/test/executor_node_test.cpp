@@ -88,6 +88,7 @@ class FakeSim {
             return {};
           }
           snapshots_[r.name()->str()] = s_;
+          trailer_starts_.try_emplace(resets_, s_);
           fbb.Finish(msg::CreateSnapshotReplyDirect(fbb, true, "", r.name()->c_str()));
           return {};
         });
@@ -123,6 +124,9 @@ class FakeSim {
   int refuse_after_reset = -1;
   int snapshots_refused = 0;
   int restart_after_reset_execute = -1;
+  // After the n-th reset the host restarts unseen after its first execute,
+  // from the first trailer's start (a checkpoint file of another trailer).
+  int restart_into_first_trailer_after_reset = -1;
 
   const SimState& state() const { return s_; }
   int drops() const { return drops_; }
@@ -168,6 +172,10 @@ class FakeSim {
     if (executes_ == restart_after_execute ||
         (executes_since_reset_ >= 0 && ++executes_since_reset_ == restart_after_reset_execute))
       s_ = snapshots_.at("checkpoint");
+    if (resets_ == restart_into_first_trailer_after_reset && !restarted_into_first_trailer_) {
+      restarted_into_first_trailer_ = true;
+      s_ = snapshots_["checkpoint"] = trailer_starts_.at(1);
+    }
     return {};
   }
 
@@ -246,6 +254,8 @@ class FakeSim {
   int executes_ = 0;
   int refusing_ = 0;
   int executes_since_reset_ = -1;
+  std::map<int, SimState> trailer_starts_;  // the first checkpoint after each reset
+  bool restarted_into_first_trailer_ = false;
 };
 
 // Straight lines to the goal; pose goals through the arm's IK.
@@ -604,6 +614,34 @@ TEST_F(Executor, ATrailerStartsOnlyOnceItsCheckpointIsWritten) {
   EXPECT_EQ(sim.restores(), 1);
 }
 
+bool logged(const FakeKernel& k, const std::string& text) {
+  for (const auto& l : k.logs())
+    if (l.node == "executor" && l.text.find(text) != std::string::npos) return true;
+  return false;
+}
+
+// A simulator that comes back with another trailer's world (its checkpoint
+// lost) is reset to the trailer being unloaded, which starts again, rather
+// than resumed: its boxes would be counted as this trailer's.
+TEST_F(Executor, ASimulatorBackWithAnotherTrailersWorldIsResetNotResumed) {
+  FakeSim sim(small_wall());
+  add_two_trailers(sim);
+  sim.restart_into_first_trailer_after_reset = 2;  // "four" restarts into "six"
+  FakePlanner planner;
+  sim.serve(kernel_);
+  planner.serve(kernel_);
+  const auto report = run(R"(, "trailers": [{"world_file": "six"}, {"world_file": "four"}])");
+  EXPECT_TRUE(done_ok_) << done_reason_;
+  EXPECT_EQ(done_reason_, "2 trailers done: 10/10 boxes unloaded");
+  ASSERT_EQ(report["trailers"].size(), 2u) << report.dump(1);
+  const auto& t = report["trailers"][1];
+  EXPECT_EQ(t["name"], "four");
+  EXPECT_EQ(t["boxes_unloaded"], 4) << t.dump();
+  EXPECT_EQ(t["sim_boxes_unloaded"], 4) << t.dump();
+  EXPECT_EQ(t["sim_boxes_left"], 0) << t.dump();
+  EXPECT_TRUE(logged(kernel_, "another trailer's world (6 boxes, 0 unloaded; the trailer has 4)"));
+}
+
 TEST_F(Executor, FailedGraspsEndInNoProgress) {
   FakeSim sim(small_wall());
   sim.suction_works = false;
@@ -630,12 +668,6 @@ sim::World wall_with_heavy_box(double mass) {
   heavy = sim::testing::make_box(heavy.id, 5.2, 0.0, 0.0, {0.4, 0.29, 0.29});
   heavy.mass = mass;
   return w;
-}
-
-bool logged(const FakeKernel& k, const std::string& text) {
-  for (const auto& l : k.logs())
-    if (l.node == "executor" && l.text.find(text) != std::string::npos) return true;
-  return false;
 }
 
 TEST_F(Executor, GripsADroppedBoxWithMoreCupsAndASlowerCarry) {
