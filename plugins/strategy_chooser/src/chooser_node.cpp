@@ -49,6 +49,10 @@ class StrategyChooser : public plr::Node {
           PLR_ERR_INVALID,
           fmt::format("param 'model': trained with another library (CRC {:08x}, this one {:08x})",
                       model->library_crc(), chooser::fingerprint(*library)));
+    if (const auto& made_by = model->made_by();
+        made_by.find(chooser::kBelowMinimum) != std::string::npos)
+      log().warn("param 'model': trained on too little data: {}",
+                 made_by.substr(made_by.rfind(": ") + 2));
     index_.emplace(*library, model->scaling(), obs_);
     library_ = std::move(*library);
     model_.emplace(std::move(*model));

@@ -74,6 +74,9 @@ int main(int argc, char** argv) {
         summary->iterations, summary->training_samples, summary->validation_samples,
         summary->validation_accuracy, summary->majority_accuracy,
         (settings->out / "model.plrm").c_str());
+    if (!summary->below_minimum.empty())
+      std::printf("warning: the model is trained on too little data: %s\n",
+                  summary->below_minimum.c_str());
     return 0;
   }
   auto model = plr::chooser::Model::load(model_file);

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <thread>
 
+#include "plr/chooser/model.hpp"
 #include "plr/chooser/testing/library.hpp"
 #include "plr/chooser/training/data_set.hpp"
 #include "plr/chooser/training/settings.hpp"
@@ -151,6 +152,25 @@ TEST_F(TrainingTest, ADataSetOfOtherSettingsIsNotResumed) {
     return wait_for(pid);
   }();
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1);
+}
+
+// A model trained on fewer labelled states than min_samples says so; one
+// trained on enough does not.
+TEST_F(TrainingTest, ADataSetBelowItsMinimumIsReportedNotTrainedOnSilently) {
+  const int small = wait_for(start("small", "min_samples=1000"));
+  ASSERT_TRUE(WIFEXITED(small) && WEXITSTATUS(small) == 0);
+  const auto d = load_data_set(dir_ / "small" / "data.plrd").value();
+  ASSERT_FALSE(d.training.empty());
+  const auto marked = Model::load(dir_ / "small" / "model.plrm").value();
+  EXPECT_NE(marked.made_by().find(std::to_string(d.training.size()) +
+                                  " labelled states, below the minimum of 1000 (min_samples)"),
+            std::string::npos)
+      << marked.made_by();
+
+  const int enough = wait_for(start("enough", "min_samples=1"));
+  ASSERT_TRUE(WIFEXITED(enough) && WEXITSTATUS(enough) == 0);
+  const auto unmarked = Model::load(dir_ / "enough" / "model.plrm").value();
+  EXPECT_EQ(unmarked.made_by().find(kBelowMinimum), std::string::npos) << unmarked.made_by();
 }
 
 TEST_F(TrainingTest, RolloutsThatDifferByFewerThanTieBoxesAreNotSamples) {

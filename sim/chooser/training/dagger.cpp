@@ -155,13 +155,18 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
     runner = std::move(*local);
   }
 
+  const auto below_minimum = [&]() -> std::string {
+    if (d.training.size() >= settings.min_samples) return {};
+    return fmt::format("{} labelled states, {} {} (min_samples)", d.training.size(),
+                       kBelowMinimum, settings.min_samples);
+  };
   std::optional<Model> model;
   const auto retrain = [&]() -> plr::Status {
     auto m = Model::train(features_of(d.training), labels_of(d.training), d.scaling, library_crc,
                           settings.svm);
     if (!m) return m.error();
     model = std::move(*m);
-    model->set_made_by(made_by);
+    model->set_made_by(made_by + (below_minimum().empty() ? "" : " | data: " + below_minimum()));
     return {};
   };
   if (!d.training.empty())
@@ -339,6 +344,7 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
   summary.iterations = d.iterations.size();
   summary.validation_accuracy = model->accuracy(features_of(d.validation), labels_of(d.validation));
   summary.majority_accuracy = majority_share(d.validation);
+  summary.below_minimum = below_minimum();
   return summary;
 }
 

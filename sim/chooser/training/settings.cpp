@@ -94,13 +94,13 @@ plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::pa
   if (!doc) return doc.error();
   TrainingSettings s;
   const yaml::Map top = doc->root().map("chooser training settings",
-                                        {"format",          "library",      "out",
-                                         "train",           "validation",   "states_per_world",
-                                         "rollout_actions", "tie_margin",   "tie_boxes",
-                                         "particles",       "mass_prior",   "workers",
-                                         "observation",     "h_min",        "d_min",
-                                         "folds",           "log2_c",       "log2_gamma",
-                                         jobs::kRunnerKey,  jobs::kSlurmKey});
+                                        {"format",          "library",        "out",
+                                         "train",           "validation",     "states_per_world",
+                                         "rollout_actions", "tie_margin",     "tie_boxes",
+                                         "particles",       "mass_prior",     "workers",
+                                         "observation",     "h_min",          "d_min",
+                                         "folds",           "log2_c",         "log2_gamma",
+                                         "min_samples",     jobs::kRunnerKey, jobs::kSlurmKey});
   (void)top.required("format").one_of({"plr-chooser-training"});
   if (auto l = top.required("library").string()) s.library = *l;
   if (auto o = top.required("out").string()) s.out = *o;
@@ -119,6 +119,8 @@ plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::pa
   }
   if (auto n = top.find("workers").integer(1, 64)) s.workers = static_cast<int>(*n);
   if (auto n = top.find("folds").integer(2, 100)) s.svm.folds = static_cast<int>(*n);
+  if (auto n = top.find("min_samples").integer(1, 1000000))
+    s.min_samples = static_cast<std::uint32_t>(*n);
   for (auto [key, grid] : {std::pair{"log2_c", &s.svm.log2_c}, {"log2_gamma", &s.svm.log2_gamma}}) {
     const yaml::Node n = top.find(key);
     if (!n.present()) continue;

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "plr/chooser/features.hpp"
@@ -27,6 +28,8 @@ inline constexpr std::size_t kMaxModelBytes = std::size_t{1} << 28;
 // Labels: which strategy unloaded faster from a state.
 inline constexpr int kNearestLabel = 1;
 inline constexpr int kHardcodedLabel = -1;
+// In made_by() when the training's data set was below its min_samples.
+inline constexpr std::string_view kBelowMinimum = "below the minimum of";
 
 struct TrainOptions {
   int folds = 5;
@@ -66,6 +69,8 @@ class Model {
   double cv_accuracy() const;
   std::size_t support_vectors() const;
   // The command and settings that made it (recorded in the file).
+  // How it was made (the training's settings); holds kBelowMinimum when its
+  // data set was smaller than the training's min_samples.
   const std::string& made_by() const;
   void set_made_by(std::string made_by);
 

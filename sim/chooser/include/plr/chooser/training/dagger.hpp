@@ -28,6 +28,10 @@ namespace plr::chooser {
 struct TrainingSummary {
   std::size_t validation_samples = 0, training_samples = 0, iterations = 0;
   double validation_accuracy = 0.0, majority_accuracy = 0.0;
+  // Empty, or what the model records when its data set is below
+  // settings.min_samples ("17 labelled states, below the minimum of 500
+  // (min_samples)").
+  std::string below_minimum;
 };
 
 // `slurm_task`: with settings.runner on Slurm, the command an array task

@@ -57,6 +57,11 @@ struct TrainingSettings {
   sim::ObservationParams observation;
   sim::HardcodedParams h;
   TrainOptions svm;
+  // Fewer labelled (non-tie) training states than this still make a model,
+  // but one that says so (its made_by, the training's last line, the
+  // chooser's log when it loads it): a few dozen states are not "large
+  // amounts of data". Not part of hash(): it shapes neither data nor model.
+  std::uint32_t min_samples = 500;
 
   // Of what shapes the data and the model (not of `workers`, `runner` or
   // `out`): a
