@@ -46,13 +46,20 @@ class TrainingTest : public ::testing::Test {
   void TearDown() override { fs::remove_all(dir_); }
 
   pid_t start(const std::string& out, const std::string& also = "folds=2") {
+    return start(out, std::vector<std::string>{also});
+  }
+  // `plr chooser train` on the settings, with out= and each override.
+  pid_t start(const std::string& out, const std::vector<std::string>& overrides) {
+    std::vector<std::string> args = {PLR_CHOOSER_TOOL, "train", (dir_ / "train.yaml").string(),
+                                     "--set", "out=" + (dir_ / out).string()};
+    for (const auto& o : overrides) args.insert(args.end(), {"--set", o});
     const pid_t pid = fork();
     if (pid == 0) {
-      const std::string settings = (dir_ / "train.yaml").string(),
-                        set = "out=" + (dir_ / out).string();
+      std::vector<char*> argv;
+      for (auto& a : args) argv.push_back(a.data());
+      argv.push_back(nullptr);
       freopen("/dev/null", "w", stdout);
-      execl(PLR_CHOOSER_TOOL, PLR_CHOOSER_TOOL, "train", settings.c_str(), "--set", set.c_str(),
-            "--set", also.c_str(), static_cast<char*>(nullptr));
+      execv(PLR_CHOOSER_TOOL, argv.data());
       _exit(127);
     }
     return pid;
@@ -171,6 +178,36 @@ TEST_F(TrainingTest, ADataSetBelowItsMinimumIsReportedNotTrainedOnSilently) {
   ASSERT_TRUE(WIFEXITED(enough) && WEXITSTATUS(enough) == 0);
   const auto unmarked = Model::load(dir_ / "enough" / "model.plrm").value();
   EXPECT_EQ(unmarked.made_by().find(kBelowMinimum), std::string::npos) << unmarked.made_by();
+}
+
+// DAgger ends once the held-out accuracy stops rising, and not before the
+// data set holds min_samples. Four training worlds: the held-out accuracy
+// reaches 1 at the second, so the third cannot raise it, and with patience
+// 1 the fourth is not labelled.
+TEST_F(TrainingTest, TrainingEndsWhenTheHeldOutAccuracyStopsRising) {
+  const std::string floor_row = (kData / "floor_row.yaml").string(),
+                    two_columns = (kData / "two_columns.yaml").string();
+  const std::string four_worlds =
+      "train=[" + floor_row + ", " + two_columns + ", " + floor_row + ", " + two_columns + "]";
+  std::ofstream(dir_ / "train.yaml", std::ios::app) << "min_samples: 1\n";
+  const int all = wait_for(start("all", four_worlds));
+  ASSERT_TRUE(WIFEXITED(all) && WEXITSTATUS(all) == 0);
+  const auto whole = load_data_set(dir_ / "all" / "data.plrd").value();
+  ASSERT_EQ(whole.iterations.size(), 4u);
+  ASSERT_EQ(whole.iterations[1].validation_accuracy, 1.0)
+      << "the test needs a held-out accuracy that cannot rise after the second iteration";
+
+  std::ofstream(dir_ / "train.yaml", std::ios::app) << "patience: 1\n";
+  const int early = wait_for(start("early", four_worlds));
+  ASSERT_TRUE(WIFEXITED(early) && WEXITSTATUS(early) == 0);
+  const auto ended = load_data_set(dir_ / "early" / "data.plrd").value();
+  EXPECT_EQ(ended.iterations.size(), 3u);
+  EXPECT_LT(ended.training.size(), whole.training.size());
+
+  // Below its minimum the data set keeps growing, however flat the curve.
+  const int small = wait_for(start("small", {four_worlds, "min_samples=1000"}));
+  ASSERT_TRUE(WIFEXITED(small) && WEXITSTATUS(small) == 0);
+  EXPECT_EQ(load_data_set(dir_ / "small" / "data.plrd").value().iterations.size(), 4u);
 }
 
 TEST_F(TrainingTest, RolloutsThatDifferByFewerThanTieBoxesAreNotSamples) {

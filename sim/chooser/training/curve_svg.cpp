@@ -8,9 +8,10 @@ namespace plr::chooser {
 
 std::string curve_svg(const std::vector<IterationRecord>& iterations) {
   Chart chart;
-  chart.title = "chooser training: accuracy after each iteration";
+  // The learning curve: what more data bought (each point an iteration).
+  chart.title = "chooser training: accuracy against labelled states";
   chart.height = 360;
-  chart.x.label = "iteration";
+  chart.x.label = "labelled training states";
   chart.x.min = 0;
   chart.x.integer = true;
   chart.y.label = "accuracy";
@@ -29,7 +30,7 @@ std::string curve_svg(const std::vector<IterationRecord>& iterations) {
     s.color = line.color;
     s.marker_radius = 3;
     for (const IterationRecord& r : iterations)
-      s.points.push_back({static_cast<double>(r.iteration), r.*line.field});
+      s.points.push_back({static_cast<double>(r.samples), r.*line.field});
     chart.series.push_back(std::move(s));
   }
   return render_svg(chart);

@@ -1,6 +1,7 @@
-// The training curve: held-out validation accuracy after each DAgger
-// iteration, beside the cross-validated accuracy and the majority class's
-// share (what a model must beat), as an SVG line chart.
+// The learning curve: held-out validation accuracy against the labelled
+// training states after each DAgger iteration, beside the cross-validated
+// accuracy and the majority class's share (what a model must beat), as an
+// SVG line chart.
 #pragma once
 
 #include <string>

@@ -81,6 +81,17 @@ plr::Expected<std::unique_ptr<actions::Rig>> make_rig(const TrainingSettings& se
   return actions::Rig::create(std::move(options));
 }
 
+// DAgger's end: enough data, and no new best held-out accuracy for the
+// last `patience` iterations.
+bool stopped_rising(const DataSet& d, const TrainingSettings& settings) {
+  if (settings.patience == 0 || d.training.size() < settings.min_samples) return false;
+  if (d.iterations.size() < settings.patience) return false;
+  const auto best = std::max_element(
+      d.iterations.begin(), d.iterations.end(),
+      [](const auto& a, const auto& b) { return a.validation_accuracy < b.validation_accuracy; });
+  return static_cast<std::size_t>(d.iterations.end() - best) > settings.patience;
+}
+
 }  // namespace
 
 plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
@@ -157,8 +168,8 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
 
   const auto below_minimum = [&]() -> std::string {
     if (d.training.size() >= settings.min_samples) return {};
-    return fmt::format("{} labelled states, {} {} (min_samples)", d.training.size(),
-                       kBelowMinimum, settings.min_samples);
+    return fmt::format("{} labelled states, {} {} (min_samples)", d.training.size(), kBelowMinimum,
+                       settings.min_samples);
   };
   std::optional<Model> model;
   const auto retrain = [&]() -> plr::Status {
@@ -182,6 +193,13 @@ plr::Expected<TrainingSummary> train_chooser(const TrainingSettings& settings,
       d.state.clear();
       if (auto ok = save_data_set(d, data_file); !ok) return ok.error();
       continue;
+    }
+    if (!d.validating && d.state.empty() && stopped_rising(d, settings)) {
+      log(
+          fmt::format("the held-out accuracy has not risen for {} iterations, with {} labelled "
+                      "states: the training ends",
+                      settings.patience, d.training.size()));
+      break;
     }
     const WorldSource& source = worlds[d.world];
     const auto t0 = Clock::now();

@@ -81,6 +81,9 @@ std::string TrainingSettings::describe(std::uint32_t library_fingerprint) const 
       observation.wall_high, observation.side_band, h.h_min, h.d_min, svm.folds);
   for (int c : svm.log2_c) text += fmt::format("c{} ", c);
   for (int g : svm.log2_gamma) text += fmt::format("g{} ", g);
+  // Where it ends shapes the model; 0 (the default) keeps older data sets'
+  // hashes.
+  if (patience > 0) text += fmt::format("min {} patience {} ", min_samples, patience);
   for (const auto* list : {&train, &validation}) {
     text += "| ";
     for (const WorldSource& w : *list) text += w.name + " ";
@@ -94,13 +97,14 @@ plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::pa
   if (!doc) return doc.error();
   TrainingSettings s;
   const yaml::Map top = doc->root().map("chooser training settings",
-                                        {"format",          "library",        "out",
-                                         "train",           "validation",     "states_per_world",
-                                         "rollout_actions", "tie_margin",     "tie_boxes",
-                                         "particles",       "mass_prior",     "workers",
-                                         "observation",     "h_min",          "d_min",
-                                         "folds",           "log2_c",         "log2_gamma",
-                                         "min_samples",     jobs::kRunnerKey, jobs::kSlurmKey});
+                                        {"format",          "library",    "out",
+                                         "train",           "validation", "states_per_world",
+                                         "rollout_actions", "tie_margin", "tie_boxes",
+                                         "particles",       "mass_prior", "workers",
+                                         "observation",     "h_min",      "d_min",
+                                         "folds",           "log2_c",     "log2_gamma",
+                                         "min_samples",     "patience",   jobs::kRunnerKey,
+                                         jobs::kSlurmKey});
   (void)top.required("format").one_of({"plr-chooser-training"});
   if (auto l = top.required("library").string()) s.library = *l;
   if (auto o = top.required("out").string()) s.out = *o;
@@ -121,6 +125,7 @@ plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::pa
   if (auto n = top.find("folds").integer(2, 100)) s.svm.folds = static_cast<int>(*n);
   if (auto n = top.find("min_samples").integer(1, 1000000))
     s.min_samples = static_cast<std::uint32_t>(*n);
+  if (auto n = top.find("patience").integer(0, 100000)) s.patience = static_cast<std::uint32_t>(*n);
   for (auto [key, grid] : {std::pair{"log2_c", &s.svm.log2_c}, {"log2_gamma", &s.svm.log2_gamma}}) {
     const yaml::Node n = top.find(key);
     if (!n.present()) continue;

@@ -62,6 +62,10 @@ struct TrainingSettings {
   // chooser's log when it loads it): a few dozen states are not "large
   // amounts of data". Not part of hash(): it shapes neither data nor model.
   std::uint32_t min_samples = 500;
+  // DAgger goes on until the held-out accuracy stops rising: once the data
+  // set holds min_samples, the training ends after `patience` iterations
+  // (training worlds) in a row without a new best. 0: every training world.
+  std::uint32_t patience = 0;
 
   // Of what shapes the data and the model (not of `workers`, `runner` or
   // `out`): a
