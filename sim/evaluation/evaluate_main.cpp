@@ -125,19 +125,12 @@ int main(int argc, char** argv) {
   check_conditions(store->dir() / "conditions.json", ev::run_conditions(*settings, *resources));
 
   const std::uint64_t seeds = args.quick ? settings->quick_seeds : settings->seeds;
-  std::vector<ev::RunSpec> specs;
+  const std::vector<ev::RunSpec> specs = ev::plan_runs(*settings, seeds);
   std::vector<jobs::Job> all;
-  for (std::size_t e = 0; e < settings->environments.size(); ++e)
-    for (const ev::Method m : settings->methods)
-      for (std::uint64_t s = settings->first_seed; s < settings->first_seed + seeds; ++s) {
-        const ev::RunSpec spec{e, m, s};
-        if (!ev::applies(*settings, spec)) continue;
-        // The input is the run's index; the settings and the rig are the
-        // process's own, inherited by each job's child.
-        all.push_back(
-            {kRunKind, ev::run_key(*settings, spec), jobs::to_bytes(std::to_string(specs.size()))});
-        specs.push_back(spec);
-      }
+  // The input is the run's index; the settings and the rig are the
+  // process's own, inherited by each job's child.
+  for (std::size_t i = 0; i < specs.size(); ++i)
+    all.push_back({kRunKind, ev::run_key(*settings, specs[i]), jobs::to_bytes(std::to_string(i))});
   std::unique_ptr<plr::actions::Rig> rig;
   jobs::Kinds kinds;
   kinds.add(kRunKind, [&](const jobs::Bytes& input) -> plr::Expected<jobs::Bytes> {
@@ -190,6 +183,7 @@ int main(int argc, char** argv) {
                          {"seed", s.seed},
                          {"error", r.error},
                          {"wall_s", r.wall_s}});
+      if (s.full_check) results.back()["fidelity_check"] = true;
       continue;
     }
     auto j = nlohmann::json::parse(jobs::to_text(r.output), nullptr, false);

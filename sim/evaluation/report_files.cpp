@@ -170,18 +170,50 @@ std::string report_html(const nlohmann::json& r) {
           pm(d["boxes_at"]["300"], "mean", "se", 1), pm(d["boxes_at"]["600"], "mean", "se", 1),
           pm(d["boxes_at"]["1200"], "mean", "se", 1));
     }
-  h += "</table>\n<h2>Runs</h2>\n<table id=\"runs\">\n<tr><th>environment</th><th>method</th>"
+  h += "</table>\n";
+  if (r.contains("fidelity_check") && !r["fidelity_check"]["pairs"].empty()) {
+    const auto& check = r["fidelity_check"];
+    h += fmt::format(
+        "<h2>Fidelity check</h2>\n<p>The runs are simulated at the {} level; these seeds ran "
+        "again at full fidelity. Boxes by the horizon differ by {:.1f} at the median, {:.0f} at "
+        "most; {} of {} runs ended the same way.</p>\n<table id=\"fidelity\">\n<tr><th>"
+        "environment</th><th>method</th><th>seed</th><th>boxes ({})</th><th>boxes (full)</th>"
+        "<th>difference</th><th>robot time [s] ({})</th><th>robot time [s] (full)</th><th>end "
+        "({})</th><th>end (full)</th><th>wall [s] ({})</th><th>wall [s] (full)</th></tr>\n",
+        xml_escape(check["level"].get<std::string>()),
+        check["median_abs_boxes_difference"].get<double>(),
+        check["max_abs_boxes_difference"].get<double>(), check["same_ending"].get<std::size_t>(),
+        check["pairs"].size(), xml_escape(check["level"].get<std::string>()),
+        xml_escape(check["level"].get<std::string>()),
+        xml_escape(check["level"].get<std::string>()),
+        xml_escape(check["level"].get<std::string>()));
+    for (const auto& p : check["pairs"])
+      h += fmt::format(
+          "<tr data-row=\"{0}/{1}/{2}\"><td>{0}</td><td>{1}</td><td>{2}</td><td>{3:.0f}</td>"
+          "<td>{4:.0f}</td><td>{5:+.0f}</td><td>{6:.0f}</td><td>{7:.0f}</td><td>{8}</td>"
+          "<td>{9}</td><td>{10:.0f}</td><td>{11:.0f}</td></tr>\n",
+          xml_escape(p["environment"].get<std::string>()),
+          xml_escape(p["method"].get<std::string>()), p["seed"].get<std::uint64_t>(),
+          p["boxes_at_horizon"].get<double>(), p["boxes_at_horizon_full"].get<double>(),
+          p["boxes_difference"].get<double>(), p["robot_time_s"].get<double>(),
+          p["robot_time_s_full"].get<double>(), xml_escape(p["ended"].get<std::string>()),
+          xml_escape(p["ended_full"].get<std::string>()), p["wall_s"].get<double>(),
+          p["wall_s_full"].get<double>());
+    h += "</table>\n";
+  }
+  h += "<h2>Runs</h2>\n<table id=\"runs\">\n<tr><th>environment</th><th>method</th>"
        "<th>seed</th><th>world</th><th>boxes</th><th>robot time [s]</th><th>actions</th>"
-       "<th>wall [s]</th><th>end</th></tr>\n";
+       "<th>wall [s]</th><th>fidelity</th><th>end</th></tr>\n";
   for (const auto& x : r["runs"])
     h += fmt::format(
         "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}/{}</td><td>{:.0f}</td><td>{}</td>"
-        "<td>{:.0f}</td><td style=\"text-align:left\">{}</td></tr>\n",
+        "<td>{:.0f}</td><td>{}</td><td style=\"text-align:left\">{}</td></tr>\n",
         xml_escape(x["environment"].get<std::string>()), xml_escape(x["method"].get<std::string>()),
         x["seed"].get<std::uint64_t>(), xml_escape(x["world"].get<std::string>()),
         x["boxes_unloaded"].get<std::uint64_t>(), x["boxes_total"].get<std::uint64_t>(),
         x["robot_time_s"].get<double>(), x["actions"].get<std::uint64_t>(),
-        x["wall_s"].get<double>(), xml_escape(x["stop_reason"].get<std::string>()));
+        x["wall_s"].get<double>(), xml_escape(x.value("fidelity", std::string("full"))),
+        xml_escape(x["stop_reason"].get<std::string>()));
   h += "</table>\n</body></html>\n";
   return h;
 }

@@ -208,12 +208,26 @@ plr::Expected<Resources> load_resources(const EvaluationSettings& settings) {
 }
 
 std::string run_key(const EvaluationSettings& settings, const RunSpec& run) {
-  return fmt::format("{}_{}_seed{}", settings.environments[run.environment].name,
-                     to_string(run.method), run.seed);
+  return fmt::format("{}_{}_seed{}{}", settings.environments[run.environment].name,
+                     to_string(run.method), run.seed, run.full_check ? "_full" : "");
 }
 
 bool applies(const EvaluationSettings& settings, const RunSpec& run) {
   return !needs_training_world(run.method) || settings.environments[run.environment].training;
+}
+
+std::vector<RunSpec> plan_runs(const EvaluationSettings& settings, std::uint64_t seeds) {
+  std::vector<RunSpec> out;
+  const bool checks = settings.fidelity != sim::Fidelity::kFull;
+  for (const bool check : {false, true}) {
+    if (check && !checks) break;
+    const std::uint64_t n = check ? std::min(seeds, settings.fidelity_check_seeds) : seeds;
+    for (std::size_t e = 0; e < settings.environments.size(); ++e)
+      for (const Method m : settings.methods)
+        for (std::uint64_t s = settings.first_seed; s < settings.first_seed + n; ++s)
+          if (const RunSpec spec{e, m, s, check}; applies(settings, spec)) out.push_back(spec);
+  }
+  return out;
 }
 
 plr::Expected<StartWorld> start_world(const EvaluationSettings& settings,
@@ -260,6 +274,10 @@ nlohmann::json run_conditions(const EvaluationSettings& settings, const Resource
         o.side_band}},
       {"h", {settings.h.h_min, settings.h.d_min}},
       {"library", fmt::format("{:08x}", chooser::fingerprint(resources.library))}};
+  // Only below full, so folders of full-fidelity runs made before the
+  // setting existed keep their conditions.
+  if (settings.fidelity != sim::Fidelity::kFull)
+    out["fidelity"] = sim::to_string(settings.fidelity);
   if (resources.model) {
     std::ifstream in(settings.model, std::ios::binary);
     const std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in), {}};
@@ -280,6 +298,10 @@ nlohmann::json run_one(actions::Rig& rig, const EvaluationSettings& settings,
     return out;
   }
   out["world"] = start->name;
+  const sim::Fidelity level = run.full_check ? sim::Fidelity::kFull : settings.fidelity;
+  out["fidelity"] = sim::to_string(level);
+  if (run.full_check) out["fidelity_check"] = true;
+  rig.set_fidelity(level);
   rig.reset(start->truth);
   episode::EngineSettings engine_settings;
   engine_settings.limits = {settings.max_actions, 24, settings.max_robot_time_s};

@@ -46,10 +46,12 @@ plr::Expected<EvaluationSettings> EvaluationSettings::load(
   if (!doc) return doc.error();
   EvaluationSettings s;
   const yaml::Map top = doc->root().map(
-      "evaluation settings", {"format", "library", "model", "environments", "methods", "first_seed",
-                              "seeds", "quick_seeds", "max_robot_time_s", "quick_max_robot_time_s",
-                              "max_actions", "workers", "timeout_s", "max_distance", "observation",
-                              "h_min", "d_min", jobs::kRunnerKey, jobs::kSlurmKey});
+      "evaluation settings",
+      {"format",       "library", "model",       "environments",         "methods",
+       "first_seed",   "seeds",   "quick_seeds", "max_robot_time_s",     "quick_max_robot_time_s",
+       "max_actions",  "workers", "timeout_s",   "max_distance",         "observation",
+       "h_min",        "d_min",   "fidelity",    "fidelity_check_seeds", jobs::kRunnerKey,
+       jobs::kSlurmKey});
   (void)top.required("format").one_of({"plr-evaluation"});
   if (auto l = top.required("library").string()) s.library = *l;
   if (auto m = top.required("model").string()) s.model = *m;
@@ -88,6 +90,9 @@ plr::Expected<EvaluationSettings> EvaluationSettings::load(
   if (auto n = top.find("workers").integer(1, 256)) s.workers = static_cast<unsigned>(*n);
   if (auto v = top.find("timeout_s").number(1, 1e7)) s.timeout_s = *v;
   if (auto v = top.find("max_distance").number(0, 1e9)) s.max_distance = *v;
+  if (auto f = top.find("fidelity").one_of({"full", "adaptive", "fast"}))
+    s.fidelity = *sim::parse_fidelity(*f);
+  if (auto n = top.find("fidelity_check_seeds").integer(0, kMaxSeeds)) s.fidelity_check_seeds = *n;
   sim::read_strategy_settings(top, s.h, s.observation);
   jobs::read_runner_settings(top, s.runner);
   if (!doc->ok()) return doc->error();

@@ -62,6 +62,10 @@ bool ok(const nlohmann::json& run) {
   return !run.contains("error") && run.contains("curve") && run["curve"].is_array();
 }
 
+bool fidelity_check(const nlohmann::json& run) {
+  return run.value("fidelity_check", false);
+}
+
 // Standard errors between two means: the difference over its standard error.
 double z_score(const nlohmann::json& a, const nlohmann::json& b) {
   const double se = std::hypot(a["se"].get<double>(), b["se"].get<double>());
@@ -244,6 +248,49 @@ double median(std::vector<double> v) {
   return v.size() % 2 ? v[h] : (v[h - 1] + v[h]) / 2;
 }
 
+namespace {
+
+// Each full-fidelity check beside the same run at the evaluation's level:
+// boxes by the horizon, robot time, how it ended, and their differences.
+nlohmann::json fidelity_checks(const EvaluationSettings& s, const std::vector<nlohmann::json>& runs,
+                               double horizon) {
+  nlohmann::json pairs = nlohmann::json::array();
+  std::vector<double> box_diffs;
+  std::size_t same_ending = 0;
+  for (const auto& full : runs) {
+    if (!fidelity_check(full) || !ok(full)) continue;
+    const auto level = std::find_if(runs.begin(), runs.end(), [&](const nlohmann::json& r) {
+      return !fidelity_check(r) && ok(r) && r.value("environment", "") == full["environment"] &&
+             r.value("method", "") == full["method"] && r.value("seed", 0) == full["seed"];
+    });
+    if (level == runs.end()) continue;
+    const double at_level = boxes_at((*level)["curve"], horizon);
+    const double at_full = boxes_at(full["curve"], horizon);
+    box_diffs.push_back(std::abs(at_level - at_full));
+    same_ending += level->value("ended", "") == full.value("ended", "");
+    pairs.push_back({{"environment", full["environment"]},
+                     {"method", full["method"]},
+                     {"seed", full["seed"]},
+                     {"boxes_at_horizon", at_level},
+                     {"boxes_at_horizon_full", at_full},
+                     {"boxes_difference", at_level - at_full},
+                     {"robot_time_s", level->value("robot_time_s", 0.0)},
+                     {"robot_time_s_full", full.value("robot_time_s", 0.0)},
+                     {"ended", level->value("ended", "")},
+                     {"ended_full", full.value("ended", "")},
+                     {"wall_s", level->value("wall_s", 0.0)},
+                     {"wall_s_full", full.value("wall_s", 0.0)}});
+  }
+  return {{"level", sim::to_string(s.fidelity)},
+          {"pairs", pairs},
+          {"median_abs_boxes_difference", median(box_diffs)},
+          {"max_abs_boxes_difference",
+           box_diffs.empty() ? 0.0 : *std::max_element(box_diffs.begin(), box_diffs.end())},
+          {"same_ending", same_ending}};
+}
+
+}  // namespace
+
 nlohmann::json summarize(const EvaluationSettings& s, const std::vector<nlohmann::json>& runs,
                          bool quick) {
   const double horizon = s.max_robot_time_s;
@@ -261,7 +308,8 @@ nlohmann::json summarize(const EvaluationSettings& s, const std::vector<nlohmann
       std::size_t failed = 0;
       std::map<std::string, int> stops;
       for (const auto& r : runs) {
-        if (r.value("environment", "") != env.name || r.value("method", "") != to_string(m))
+        if (r.value("environment", "") != env.name || r.value("method", "") != to_string(m) ||
+            fidelity_check(r))
           continue;
         if (!ok(r)) {
           ++failed;
@@ -428,7 +476,8 @@ nlohmann::json summarize(const EvaluationSettings& s, const std::vector<nlohmann
   const Method tm = table_method(s);
   std::vector<const nlohmann::json*> table_runs;
   for (const auto& r : runs)
-    if (ok(r) && r.value("method", "") == to_string(tm)) table_runs.push_back(&r);
+    if (ok(r) && !fidelity_check(r) && r.value("method", "") == to_string(tm))
+      table_runs.push_back(&r);
   const nlohmann::json t2 = table2(table_runs);
   {
     const double pick = t2["pick"]["boxes_per_s_pooled"].get<double>();
@@ -458,6 +507,8 @@ nlohmann::json summarize(const EvaluationSettings& s, const std::vector<nlohmann
                      {"robot_time_s", r.value("robot_time_s", 0.0)},
                      {"actions", r.value("actions", 0)},
                      {"stop_reason", r.value("error", r.value("stop_reason", ""))},
+                     {"fidelity", r.value("fidelity", "full")},
+                     {"fidelity_check", fidelity_check(r)},
                      {"wall_s", r.value("wall_s", 0.0)}});
   }
   nlohmann::json env_names = nlohmann::json::array(), method_names = nlohmann::json::array();
@@ -472,7 +523,9 @@ nlohmann::json summarize(const EvaluationSettings& s, const std::vector<nlohmann
             {"seeds", quick ? s.quick_seeds : s.seeds},
             {"quick", quick},
             {"max_robot_time_s", horizon},
-            {"max_actions", s.max_actions}}},
+            {"max_actions", s.max_actions},
+            {"fidelity", sim::to_string(s.fidelity)}}},
+          {"fidelity_check", fidelity_checks(s, runs, horizon)},
           {"grid_s", grid},
           {"environments", envs},
           {"table1",

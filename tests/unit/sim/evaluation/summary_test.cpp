@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "plr/evaluation/run.hpp"
 #include "runs.hpp"
 
 namespace plr::evaluation {
@@ -203,6 +204,55 @@ TEST(Summary, NnAgainstHComparesTheHalvesOfTheirUnloading) {
   for (const auto& c : out["claims"])
     if (c["claim"] == "NN degrades late on A1") degrades = c["holds"].get<bool>();
   EXPECT_TRUE(degrades);  // 0 % of NN's boxes late, 75 % of H's
+}
+
+// Below full fidelity, a seed's full-fidelity check stands beside its run
+// and stays out of the method's figures.
+TEST(Summary, AFullFidelityCheckIsReportedBesideItsRunNotAveragedIn) {
+  EvaluationSettings s = testing::settings();
+  s.fidelity = sim::Fidelity::kAdaptive;
+  std::vector<nlohmann::json> runs = testing::runs();
+  nlohmann::json check = testing::run("A1", "H", 1, {{0, 0}, {70, 9}});
+  check["fidelity_check"] = true;
+  check["ended"] = "cap";
+  runs.push_back(check);
+  const auto out = summarize(s, runs, false);
+  // H on A1: the same three runs as without the check (10, 6 and 10 boxes).
+  const auto& h = out["environments"]["A1"]["methods"]["H"];
+  EXPECT_EQ(h["runs"], 3);
+  EXPECT_NEAR(h["boxes_at_horizon"]["mean"].get<double>(), 26.0 / 3, 1e-12);
+  const auto& c = out["fidelity_check"];
+  EXPECT_EQ(c["level"], "adaptive");
+  ASSERT_EQ(c["pairs"].size(), 1u) << c.dump(1);
+  const auto& p = c["pairs"][0];
+  EXPECT_EQ(p["seed"], 1);
+  EXPECT_EQ(p["boxes_at_horizon"], 10.0);
+  EXPECT_EQ(p["boxes_at_horizon_full"], 9.0);
+  EXPECT_EQ(p["boxes_difference"], 1.0);
+  EXPECT_EQ(p["robot_time_s_full"], 70.0);
+  EXPECT_EQ(c["median_abs_boxes_difference"], 1.0);
+  EXPECT_EQ(c["same_ending"], 0);
+}
+
+// The runs of an evaluation below full fidelity: every seed at its level,
+// then the first fidelity_check_seeds seeds of each method again at full.
+TEST(PlanRuns, BelowFullTheFirstSeedsRunAgainAtFull) {
+  EvaluationSettings s = testing::settings();
+  s.methods = {Method::kHardcoded, Method::kOpenLoop};  // open-loop: A1 (training) only
+  const auto full = plan_runs(s, 3);
+  EXPECT_EQ(full.size(), 9u);  // H on A1 and B1, open-loop on A1
+  for (const auto& r : full) EXPECT_FALSE(r.full_check);
+
+  s.fidelity = sim::Fidelity::kFast;
+  s.fidelity_check_seeds = 2;
+  const auto fast = plan_runs(s, 3);
+  ASSERT_EQ(fast.size(), 9u + 6u);
+  std::vector<std::string> checks;
+  for (const auto& r : fast)
+    if (r.full_check) checks.push_back(run_key(s, r));
+  EXPECT_EQ(checks, (std::vector<std::string>{"A1_H_seed1_full", "A1_H_seed2_full",
+                                              "A1_open-loop_seed1_full", "A1_open-loop_seed2_full",
+                                              "B1_H_seed1_full", "B1_H_seed2_full"}));
 }
 
 }  // namespace

@@ -40,13 +40,21 @@ struct RunSpec {
   std::size_t environment = 0;  // index into settings.environments
   Method method = Method::kHardcoded;
   std::uint64_t seed = 1;
+  // The same run at full fidelity, beside one at the settings' lower level.
+  bool full_check = false;
 };
 
-// "A1_PLR_seed3": the run's key in the result store.
+// "A1_PLR_seed3" ("A1_PLR_seed3_full" for a full-fidelity check): the
+// run's key in the result store.
 std::string run_key(const EvaluationSettings& settings, const RunSpec& run);
 // Whether the method runs on the environment (open-loop and
 // expected-offline on training environments only).
 bool applies(const EvaluationSettings& settings, const RunSpec& run);
+
+// Every run of the evaluation of `seeds` seeds, in order: each applicable
+// environment, method and seed, then the full-fidelity checks of the first
+// fidelity_check_seeds seeds when the settings' fidelity is below full.
+std::vector<RunSpec> plan_runs(const EvaluationSettings& settings, std::uint64_t seeds);
 
 // The world the run starts from (with masses), and its name
 // ("A1-2, masses of seed 3", "A2:3").
@@ -63,8 +71,10 @@ plr::Expected<StartWorld> start_world(const EvaluationSettings& settings,
 // not the same runs, however they are named.
 nlohmann::json run_conditions(const EvaluationSettings& settings, const Resources& resources);
 
-// Runs it on `rig` (its simulation is replaced). Errors of the run itself
-// (a backend's) come back in the result's "error".
+// Runs it on `rig` (its simulation is replaced), at the settings' fidelity
+// or, for a check, at full. Errors of the run itself (a backend's) come back
+// in the result's "error"; the result says its "fidelity" and, for a check,
+// "fidelity_check": true.
 nlohmann::json run_one(actions::Rig& rig, const EvaluationSettings& settings,
                        const Resources& resources, const RunSpec& run);
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "plr/jobs/runner_settings.hpp"
+#include "plr/sim/fidelity.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/hardcoded_strategy.hpp"
 #include "plr/sim/observation.hpp"
@@ -52,6 +53,12 @@ struct EvaluationSettings {
   unsigned workers = 2;
   double timeout_s = 3600;  // wall seconds per run, a safety net
   double max_distance = 0;  // PLR: NN beyond it goes to H; 0: no limit
+  // How accurately the runs simulate (docs/fidelity.md). Below full, the
+  // first `fidelity_check_seeds` seeds of every environment and method also
+  // run at full fidelity, and the report gives the difference beside the
+  // results: what the cheaper simulation changed.
+  sim::Fidelity fidelity = sim::Fidelity::kFull;
+  std::uint64_t fidelity_check_seeds = 1;
   sim::ObservationParams observation;
   sim::HardcodedParams h;
   jobs::RunnerSettings runner;  // where the runs run: local processes or Slurm
