@@ -40,8 +40,8 @@ flatbuffers::Offset<msg::WorldState> build_world(flatbuffers::FlatBufferBuilder&
 
 // Each box's rotation matrix, row by row: the quaternion alone does not give
 // it back bit for bit.
-flatbuffers::Offset<flatbuffers::Vector<double>> build_rotations(flatbuffers::FlatBufferBuilder& fbb,
-                                                                 const World& w) {
+flatbuffers::Offset<flatbuffers::Vector<double>> build_rotations(
+    flatbuffers::FlatBufferBuilder& fbb, const World& w) {
   std::vector<double> r;
   r.reserve(9 * w.boxes.size());
   for (const Box& b : w.boxes)

@@ -99,13 +99,32 @@ class GeneratorNode : public Node {
 
  protected:
   Status on_configure() override {
-    params().allow_only({"library",           "checkpoint_dir", "worlds",          "particles",
-                         "horizon",           "epsilon1",       "epsilon2",        "trials",
-                         "target_gap",        "seed",           "seconds_per_box", "action_s",
-                         "workers",           "worker_program", "remote_workers",  "remote_service",
-                         "remote_timeout_s",  "observation",    "progress",        "max_wall_s",
-                         "complete_tree",     "runner",         "slurm",           "continuations",
-                         "continuation_share", "fidelity"});
+    params().allow_only({"library",
+                         "checkpoint_dir",
+                         "worlds",
+                         "particles",
+                         "horizon",
+                         "epsilon1",
+                         "epsilon2",
+                         "trials",
+                         "target_gap",
+                         "seed",
+                         "seconds_per_box",
+                         "action_s",
+                         "workers",
+                         "worker_program",
+                         "remote_workers",
+                         "remote_service",
+                         "remote_timeout_s",
+                         "observation",
+                         "progress",
+                         "max_wall_s",
+                         "complete_tree",
+                         "runner",
+                         "slurm",
+                         "continuations",
+                         "continuation_share",
+                         "fidelity"});
     library_ = params().require<std::string>("library");
     checkpoint_dir_ = params().get<std::string>("checkpoint_dir", library_ + ".checkpoint");
     particles_ = params().get<int>("particles", 5);
@@ -347,11 +366,12 @@ class GeneratorNode : public Node {
           e.name, e.strategy.nodes.size(), e.lower, e.upper, e.provenance.trials,
           e.provenance.simulations, result->simulated, e.provenance.wall_s, describe(leaves));
       if (e.check)
-        log().info("{}: made at {} fidelity: value {:.1f} ({:.1f} boxes) on its {} particles; at "
-                   "full fidelity {:.1f} ({:.1f} boxes) on {} fresh particles, {:.0f} s",
-                   e.name, e.fidelity, e.check->value, e.check->boxes, e.provenance.particles,
-                   e.check->full_value, e.check->full_boxes, e.check->full_particles,
-                   result->check_wall_s);
+        log().info(
+            "{}: made at {} fidelity: value {:.1f} ({:.1f} boxes) on its {} particles; at "
+            "full fidelity {:.1f} ({:.1f} boxes) on {} fresh particles, {:.0f} s",
+            e.name, e.fidelity, e.check->value, e.check->boxes, e.provenance.particles,
+            e.check->full_value, e.check->full_boxes, e.check->full_particles,
+            result->check_wall_s);
       ++made;
     }
     if (link >= continuations_) return true;

@@ -43,9 +43,8 @@ TreeValue tree_value(const TruckModel& model, const sim::Strategy& strategy,
 
 namespace {
 
-plr::Expected<std::vector<SimOutcome>> fresh_particles(const Problem& problem,
-                                                       std::uint64_t seed, std::uint32_t n,
-                                                       actions::Rig& rig) {
+plr::Expected<std::vector<SimOutcome>> fresh_particles(const Problem& problem, std::uint64_t seed,
+                                                       std::uint32_t n, actions::Rig& rig) {
   const auto family = sim::parse_env_family(problem.family);
   if (!family)
     return plr::make_error(PLR_ERR_INVALID,
@@ -63,7 +62,8 @@ plr::Expected<std::vector<SimOutcome>> fresh_particles(const Problem& problem,
     // same state with other masses is a fresh particle of it.
     const SimOutcome& base = problem.starts[j % problem.starts.size()];
     auto memory = rig.restore(*base.state);
-    if (!memory) return plr::make_error(memory.error().code, problem.name + ": " + memory.error().message);
+    if (!memory)
+      return plr::make_error(memory.error().code, problem.name + ": " + memory.error().message);
     const sim::World drawn = sim::sample_masses(rig.simulation().perceived(), *family, masses);
     std::vector<std::pair<std::uint32_t, double>> list;
     for (const sim::Box& b : drawn.boxes) list.emplace_back(b.id, b.mass);

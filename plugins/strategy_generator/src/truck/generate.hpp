@@ -99,13 +99,13 @@ struct GenerateResult {
   std::uint64_t simulated = 0;  // by this run (the rest came from the store)
   double simulated_robot_s = 0.0;
   double simulated_wall_s = 0.0;  // inside the workers
-  double check_wall_s = 0.0;  // below full fidelity: the re-evaluation at full fidelity
+  double check_wall_s = 0.0;      // below full fidelity: the re-evaluation at full fidelity
 };
 
 // `rig` makes the particles' starting states; `simulator` runs the
-// actions (both set to options.fidelity), its results kept in `store` (checkpoint_dir/<name>) if given. `on_progress` is called
-// after every trial; returning false stops the generation (PLR_ERR_CANCELLED). An error says which
-// simulation failed.
+// actions (both set to options.fidelity), its results kept in `store` (checkpoint_dir/<name>) if
+// given. `on_progress` is called after every trial; returning false stops the generation
+// (PLR_ERR_CANCELLED). An error says which simulation failed.
 plr::Expected<GenerateResult> generate(
     const Problem& problem, const GenerateOptions& options, actions::Rig& rig, Simulator& simulator,
     const plr::jobs::Store* store,

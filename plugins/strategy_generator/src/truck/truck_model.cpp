@@ -60,7 +60,8 @@ void TruckModel::fill(const std::vector<SimRequest>& requests) const {
   std::vector<SimRequest> todo;
   std::vector<std::uint64_t> keys;
   for (const SimRequest& r : requests) {
-    const std::uint64_t key = actions::work_key(actions::state_hash(*r.state), r.action, simulator_.fidelity());
+    const std::uint64_t key =
+        actions::work_key(actions::state_hash(*r.state), r.action, simulator_.fidelity());
     if (results_.count(key) || std::find(keys.begin(), keys.end(), key) != keys.end()) continue;
     keys.push_back(key);
     todo.push_back(r);
