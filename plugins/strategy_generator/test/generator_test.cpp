@@ -358,9 +358,6 @@ TEST(Continuation, EveryLeafReachedByTheShareGetsOneAndTheMostReachedAlways) {
   EXPECT_TRUE(continued_leaves({leaf({}, 5, true)}, 0.2).empty());
 }
 
-}  // namespace
-}  // namespace plr::generator
-
 // A job's fidelity reaches the worker process: the state it restores there
 // runs at that level (the same bytes as the same job at that level here),
 // not at the level of the worker's rig.
@@ -447,10 +444,8 @@ TEST(Fidelity, AStrategyMadeAtFastIsValuedAtFullFidelityOnFreshParticles) {
   // At its level: the tree on the generator's particles, simulated at fast.
   rig().set_fidelity(sim::Fidelity::kFast);
   double at_level = 0.0;
-  std::vector<SimOutcome> generator_roots;
   for (const sim::World& w : p.particles) {
-    generator_roots.push_back(actions::start_state(rig(), w).value());
-    at_level += value_by_hand(e.strategy, generator_roots.back(), o.truck) / 2.0;
+    at_level += value_by_hand(e.strategy, actions::start_state(rig(), w).value(), o.truck) / 2.0;
   }
   EXPECT_DOUBLE_EQ(e.check->value, at_level);
 
@@ -487,3 +482,6 @@ TEST(Fidelity, AStrategyMadeAtFastIsValuedAtFullFidelityOnFreshParticles) {
   EXPECT_EQ(back->entries[0].fidelity, "fast");
   EXPECT_EQ(back->entries[0].check, e.check);
 }
+
+}  // namespace
+}  // namespace plr::generator
