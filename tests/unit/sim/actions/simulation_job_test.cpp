@@ -86,8 +86,9 @@ TEST(SimulationJob, TheFidelityTravelsWithTheJobAndNamesItsResult) {
 
   job.fidelity = sim::Fidelity::kFull;
   flatbuffers::FlatBufferBuilder fbb;
-  fbb.Finish(msg::CreateSimJob(fbb, fbb.CreateVector(*job.request.state), job.request.action,
-                               fbb.CreateString(job.observation_json)));
+  const auto state = fbb.CreateVector(*job.request.state);
+  const auto json = fbb.CreateString(job.observation_json);
+  fbb.Finish(msg::CreateSimJob(fbb, state, job.request.action, json));
   EXPECT_EQ(encode_sim_job(job),
             jobs::Bytes(fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()));
 
