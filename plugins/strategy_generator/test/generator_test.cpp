@@ -21,6 +21,7 @@
 #include "plr/sim/testing/worlds.hpp"
 #include "truck/fidelity_check.hpp"
 #include "truck/generate.hpp"
+#include "truck/strategy_job.hpp"
 #include "truck/svg.hpp"
 #include "truck/worker_runner.hpp"
 
@@ -481,6 +482,20 @@ TEST(Fidelity, AStrategyMadeAtFastIsValuedAtFullFidelityOnFreshParticles) {
   ASSERT_TRUE(back) << back.error().message;
   EXPECT_EQ(back->entries[0].fidelity, "fast");
   EXPECT_EQ(back->entries[0].check, e.check);
+}
+
+// A strategy handed to a Slurm task carries the level; at full its input is
+// what it was before the setting.
+TEST(Fidelity, AStrategyJobCarriesItsLevel) {
+  StrategyJob job;
+  job.options.fidelity = sim::Fidelity::kFast;
+  const auto back = decode_strategy_job(encode(job));
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_EQ(back->options.fidelity, sim::Fidelity::kFast);
+  job.options.fidelity = sim::Fidelity::kFull;
+  const jobs::Bytes full = encode(job);
+  EXPECT_EQ(std::string(full.begin(), full.end()).find("fidelity"), std::string::npos);
+  EXPECT_EQ(decode_strategy_job(full)->options.fidelity, sim::Fidelity::kFull);
 }
 
 }  // namespace
