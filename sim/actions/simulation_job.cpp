@@ -60,7 +60,8 @@ plr::jobs::Bytes encode_sim_job(const SimJob& job) {
   flatbuffers::FlatBufferBuilder fbb(job.request.state->size() + 1024);
   const auto state = fbb.CreateVector(*job.request.state);
   const auto json = fbb.CreateString(job.observation_json);
-  fbb.Finish(msg::CreateSimJob(fbb, state, job.request.action, json));
+  fbb.Finish(msg::CreateSimJob(fbb, state, job.request.action, json,
+                               static_cast<std::uint8_t>(job.fidelity)));
   return finished(fbb);
 }
 
@@ -72,8 +73,11 @@ plr::Expected<SimJob> decode_sim_job(const plr::jobs::Bytes& bytes, const std::s
   if (!state) return state.error();
   if (static_cast<int>(j->action()) >= sim::kNumActions)
     return bad(origin, fmt::format("job: action {} out of range", static_cast<int>(j->action())));
+  if (j->fidelity() > static_cast<std::uint8_t>(sim::Fidelity::kFast))
+    return bad(origin, fmt::format("job: fidelity {} out of range", j->fidelity()));
   SimJob out;
   out.request = {*state, j->action()};
+  out.fidelity = static_cast<sim::Fidelity>(j->fidelity());
   if (const auto* json = j->observation_json()) {
     if (json->size() > kMaxObservationJson) return bad(origin, "observation_json too long");
     out.observation_json = json->str();
@@ -164,6 +168,7 @@ void add_sim_action(plr::jobs::Kinds& kinds) {
                 loaded->rig = std::move(*rig);
                 loaded->observation_json = job->observation_json;
               }
+              loaded->rig->set_fidelity(job->fidelity);
               auto outcome = simulate(*loaded->rig, job->request);
               if (!outcome) return outcome.error();
               return encode_sim_outcome(*outcome);
@@ -179,8 +184,9 @@ std::uint64_t state_hash(const std::vector<std::uint8_t>& state) {
   return h;
 }
 
-std::uint64_t work_key(std::uint64_t state_hash, sim::Action action) {
-  std::uint64_t z = state_hash ^ (static_cast<std::uint64_t>(action) + 1) * 0x9e3779b97f4a7c15ull;
+std::uint64_t work_key(std::uint64_t state_hash, sim::Action action, sim::Fidelity fidelity) {
+  std::uint64_t z = state_hash ^ (static_cast<std::uint64_t>(action) + 1) * 0x9e3779b97f4a7c15ull ^
+                    static_cast<std::uint64_t>(fidelity) * 0xd1b54a32d192ed03ull;
   z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
   z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
   return z ^ (z >> 31);

@@ -22,6 +22,8 @@ constexpr std::size_t kMaxText = 1 << 16;
 constexpr std::size_t kMaxPath = 10000;
 constexpr std::size_t kMaxStart = 100000;
 
+constexpr double kUnit = 1e-6;  // a stored rotation is orthonormal within this
+
 flatbuffers::Offset<msg::WorldState> build_world(flatbuffers::FlatBufferBuilder& fbb,
                                                  const World& w) {
   const msg::Vec3 size(w.trailer.width, w.trailer.height, w.trailer.depth);
@@ -34,6 +36,22 @@ flatbuffers::Offset<msg::WorldState> build_world(flatbuffers::FlatBufferBuilder&
         msg::Pose(msg::Vec3(p.x(), p.y(), p.z()), msg::Quat(q.x(), q.y(), q.z(), q.w())), 0.0);
   }
   return msg::CreateWorldStateDirect(fbb, 0, &size, nullptr, 0.0, &boxes);
+}
+
+// Each box's rotation matrix, row by row: the quaternion alone does not give
+// it back bit for bit.
+flatbuffers::Offset<flatbuffers::Vector<double>> build_rotations(
+    flatbuffers::FlatBufferBuilder& fbb, const World& w) {
+  std::vector<double> r;
+  r.reserve(9 * w.boxes.size());
+  for (const Box& b : w.boxes)
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) r.push_back(b.pose.linear()(i, j));
+  return fbb.CreateVector(r);
+}
+
+bool is_fidelity(const std::string& name) {
+  return name == "full" || name == "adaptive" || name == "fast";
 }
 
 std::string text(const flatbuffers::String* s) {
@@ -60,6 +78,20 @@ plr::Expected<LibraryEntry> read_entry(const msg::LibraryEntry& m, const std::st
   if (m.world()->boxes() && m.world()->boxes()->size() > kMaxBoxes)
     return error(where, fmt::format("world: more than {} boxes", kMaxBoxes));
   e.world = world_from_message(*m.world());
+  if (const auto* r = m.world_rotations()) {
+    if (r->size() != 9 * e.world.boxes.size())
+      return error(where, fmt::format("world_rotations: {} numbers for {} boxes (9 each)",
+                                      r->size(), e.world.boxes.size()));
+    for (std::size_t i = 0; i < e.world.boxes.size(); ++i) {
+      Eigen::Matrix3d m3;
+      for (int k = 0; k < 9; ++k)
+        m3(k / 3, k % 3) = r->Get(static_cast<flatbuffers::uoffset_t>(9 * i + k));
+      if (!m3.allFinite() || !(m3.transpose() * m3).isIdentity(kUnit) ||
+          !(std::abs(m3.determinant() - 1.0) < kUnit))
+        return error(where, fmt::format("world_rotations: box {}: not a rotation", i));
+      e.world.boxes[i].pose.linear() = m3;
+    }
+  }
   for (std::size_t i = 0; i < e.world.boxes.size(); ++i) {
     const Box& b = e.world.boxes[i];
     if (!b.pose.matrix().allFinite() || !b.size.allFinite() || (b.size.array() <= 0).any())
@@ -105,6 +137,17 @@ plr::Expected<LibraryEntry> read_entry(const msg::LibraryEntry& m, const std::st
       const msg::StartParticle p = element(*m.start(), i);
       e.start.push_back({p.particle(), p.state_hash(), p.boxes_left()});
     }
+  }
+  if (m.fidelity()) {
+    e.fidelity = m.fidelity()->str().substr(0, 64);
+    if (!is_fidelity(e.fidelity))
+      return error(where, "fidelity: '" + e.fidelity + "' is not full, adaptive or fast");
+  }
+  if (const msg::FidelityCheck* c = m.check()) {
+    e.check = FidelityCheck{c->value(),      c->boxes(),          c->full_value(),
+                            c->full_boxes(), c->full_particles(), c->first_particle()};
+    for (const double v : {c->value(), c->boxes(), c->full_value(), c->full_boxes()})
+      if (!std::isfinite(v)) return error(where, "check: values must be finite");
   }
   if (e.is_continuation() && (e.leaf.empty() || e.start.empty()))
     return error(where, "a continuation (parent '" + e.parent.substr(0, 64) +
@@ -154,9 +197,19 @@ std::vector<std::uint8_t> serialize(const Library& library) {
         particles.emplace_back(p.particle, p.state_hash, p.boxes_left);
       start = fbb.CreateVectorOfStructs(particles);
     }
+    const auto rotations = build_rotations(fbb, e.world);
+    // Absent at full fidelity, as in a library made before the setting.
+    flatbuffers::Offset<flatbuffers::String> fidelity;
+    if (e.fidelity != kFullFidelity) fidelity = fbb.CreateString(e.fidelity);
+    flatbuffers::Offset<msg::FidelityCheck> check;
+    if (e.check) {
+      const FidelityCheck& c = *e.check;
+      check = msg::CreateFidelityCheck(fbb, c.value, c.full_value, c.full_particles,
+                                       c.first_particle, c.full_boxes, c.boxes);
+    }
     entries.push_back(msg::CreateLibraryEntry(fbb, name, family, e.world_seed, world, obs, strategy,
                                               e.lower, e.upper, prov, curve_offset, parent, leaf,
-                                              start));
+                                              start, rotations, fidelity, check));
   }
   const auto list = fbb.CreateVector(entries);
   msg::FinishStrategyLibraryBuffer(

@@ -148,6 +148,23 @@ TEST_F(TrainingTest, ParticlesOfAWorldFileNeedAMassPrior) {
       << without.error().message;
 }
 
+TEST_F(TrainingTest, TheFidelityIsASettingFullByDefaultAndNamedWhenWrong) {
+  const auto full = TrainingSettings::load(dir_ / "train.yaml");
+  ASSERT_TRUE(full) << full.error().message;
+  EXPECT_EQ(full->fidelity, plr::sim::Fidelity::kFull);
+  const auto fast = TrainingSettings::load(dir_ / "train.yaml", {"fidelity=fast"});
+  ASSERT_TRUE(fast) << fast.error().message;
+  EXPECT_EQ(fast->fidelity, plr::sim::Fidelity::kFast);
+  // Data labelled at another level is not resumed; full's settings read as before it existed.
+  EXPECT_NE(fast->hash(1), full->hash(1));
+  EXPECT_EQ(full->describe(1).find("fidelity"), std::string::npos);
+  const auto bad = TrainingSettings::load(dir_ / "train.yaml", {"fidelity=quick"});
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("train.yaml"), std::string::npos) << bad.error().message;
+  EXPECT_NE(bad.error().message.find("fidelity"), std::string::npos) << bad.error().message;
+  EXPECT_EQ(bad.error().message.find('\n'), std::string::npos) << bad.error().message;
+}
+
 TEST_F(TrainingTest, ADataSetOfOtherSettingsIsNotResumed) {
   DataSet d;
   d.settings_hash = 1;

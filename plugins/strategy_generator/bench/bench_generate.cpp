@@ -11,7 +11,7 @@
 //
 //   bench_generate [--quick] [--json] [--worlds A1:1,B1:1] [--workers 1,2,2+2]
 //                  [--trials N] [--particles N] [--horizon N] [--eval N]
-//                  [--partial-tree]
+//                  [--partial-tree] [--fidelity full|adaptive|fast] [--compare-fidelity]
 //   bench_generate --library FILE [--eval N] [--json]   (evaluation only)
 // --workers: a list of L (local worker processes) or L+R (and R remote
 // workers: one worker kernel with R threads in a network namespace; on
@@ -20,6 +20,13 @@
 // simulations to unroll it; with --trials 1 that measures the root's batch).
 // --quick: one full-size strategy (5 particles, horizon 6) for A1 seed 1
 // with 2 local workers, no evaluation.
+// --fidelity: the level the generations simulate at (docs/fidelity.md); below
+// full each strategy is then re-evaluated at full fidelity on fresh
+// particles (its two values printed). --compare-fidelity: every generation
+// at full fidelity and at --fidelity's level, side by side: the wall time
+// of a POMHDP trial (median over the trials, from the anytime curve) at
+// each, and their ratio. With --quick: B1 seed 1 with the shipped library's
+// settings (3 particles, horizon 4, 4 trials, 2 local workers).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -33,6 +40,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench_cli.hpp"
+#include "bench_util.hpp"
 #include "plr/actions/in_process.hpp"
 #include "plr/episode/open_loop.hpp"
 #include "plr/jobs/in_process_runner.hpp"
@@ -70,6 +78,7 @@ struct Workers {
 struct Generated {
   sim::LibraryEntry entry;
   double wall_s = 0;
+  double check_wall_s = 0;  // its re-evaluation at full fidelity (made below full)
   std::uint64_t simulated = 0;
   double simulated_robot_s = NAN, simulated_wall_s = NAN;  // unknown over DDS
   std::string note;
@@ -117,11 +126,11 @@ plr::Expected<Generated> generate_over_dds(const std::string& bin_dir, const Wor
                   "      worlds: [{{family: {}, seed: {}}}]\n      particles: {}\n"
                   "      horizon: {}\n      trials: {}\n      epsilon1: {}\n      epsilon2: {}\n"
                   "      seed: {}\n      complete_tree: {}\n      workers: {}\n"
-                  "      remote_workers: {}\n      progress: false\n"
+                  "      remote_workers: {}\n      progress: false\n      fidelity: {}\n"
                   "remote:\n  dds: {{domain: {}, interfaces: [{}], import: [\"sim/simulate\"]}}\n",
                   sim::to_string(world.family), world.seed, particles, o.truck.horizon, o.trials,
-                  o.epsilon1, o.epsilon2, o.seed, o.complete_tree, w.local, w.remote, domain,
-                  net.here));
+                  o.epsilon1, o.epsilon2, o.seed, o.complete_tree, w.local, w.remote,
+                  sim::to_string(o.fidelity), domain, net.here));
   rt::Proc generator(
       "", std::vector<std::string>{plr, "run", config, "--report", (dir / "gen").string()},
       (dir / "generate.log").string());
@@ -145,6 +154,15 @@ plr::Expected<Generated> generate_over_dds(const std::string& bin_dir, const Wor
 
 nlohmann::json nullable(double v) {
   return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
+}
+
+// The wall time of each POMHDP trial: the anytime curve has a point after
+// each (the first at time 0, before the root's batch).
+std::vector<double> trial_walls(const sim::LibraryEntry& e) {
+  std::vector<double> out;
+  for (std::size_t i = 1; i < e.curve.size(); ++i)
+    out.push_back(e.curve[i].wall_s - e.curve[i - 1].wall_s);
+  return out;
 }
 
 struct Eval {
@@ -264,12 +282,33 @@ int main(int argc, char** argv) {
       "--partial-tree", [&] { o.complete_tree = false; },
       "The strategy stops at beliefs no trial expanded");
   app.add_option("--library", library, "Only evaluate every strategy of this library file");
+  std::string fidelity = "full";
+  bool compare = false;
+  app.add_option("--fidelity", fidelity, "Simulation fidelity of the generations")
+      ->check(CLI::IsMember({"full", "adaptive", "fast"}))
+      ->capture_default_str();
+  app.add_flag("--compare-fidelity", compare,
+               "Each generation at full fidelity and at --fidelity's level, side by side");
   plr::bench::parse_or_exit(app, argc, argv);
-  if (quick) {
+  const sim::Fidelity level = sim::parse_fidelity(fidelity).value();
+  if (compare && level == sim::Fidelity::kFull) {
+    std::fprintf(stderr, "bench_generate: --compare-fidelity needs --fidelity adaptive or fast\n");
+    return 2;
+  }
+  if (quick && compare) {
+    worlds = {{sim::EnvFamily::kB1, 1}};
+    worker_counts = {{2, 0}};
+    eval_particles = 0;
+    particles = 3;
+    o.truck.horizon = 4;
+    o.trials = 4;
+  } else if (quick) {
     worlds = {{sim::EnvFamily::kA1, 1}};
     worker_counts = {{2, 0}};
     eval_particles = 0;
   }
+  std::vector<sim::Fidelity> levels{level};
+  if (compare) levels = {sim::Fidelity::kFull, level};
   if (!library.empty()) {
     // Only the evaluation, of every strategy of a library.
     auto lib = sim::load_library(library);
@@ -301,102 +340,143 @@ int main(int argc, char** argv) {
                         {"trials", o.trials},
                         {"epsilon1", o.epsilon1},
                         {"epsilon2", o.epsilon2},
+                        {"fidelity", fidelity},
                         {"runs", nlohmann::json::array()},
                         {"evaluation", nlohmann::json::array()}};
+  if (compare) out["fidelity_comparison"] = nlohmann::json::array();
   for (const WorldSpec& w : worlds) {
     const generator::Problem problem = generator::make_problem(w.family, w.seed, particles, o.seed);
     std::string first_strategy;
     std::optional<sim::Strategy> strategy;
     for (const Workers& workers : worker_counts) {
-      plr::Expected<Generated> r = Generated{};
-      if (workers.remote > 0) {
-        std::fprintf(stderr, "%s, %s workers: plr run over DDS\n", problem.name.c_str(),
-                     workers.name().c_str());
-        r = generate_over_dds(std::filesystem::path(program).parent_path().string(), w, o,
-                              particles, workers);
-      } else {
-        jobs::Kinds kinds;
-        std::unique_ptr<jobs::Runner> runner;
-        if (workers.local <= 0) {
-          actions::add_sim_action(kinds);
-          runner = std::make_unique<jobs::InProcessRunner>(kinds);
+      std::vector<double> median_trial;  // per level, for the comparison
+      for (const sim::Fidelity at : levels) {
+        o.fidelity = at;
+        plr::Expected<Generated> r = Generated{};
+        if (workers.remote > 0) {
+          std::fprintf(stderr, "%s, %s workers: plr run over DDS\n", problem.name.c_str(),
+                       workers.name().c_str());
+          r = generate_over_dds(std::filesystem::path(program).parent_path().string(), w, o,
+                                particles, workers);
         } else {
-          generator::WorkerOptions worker_options;
-          worker_options.local.command = {program};
-          worker_options.local.workers = static_cast<unsigned>(workers.local);
-          auto pool = generator::WorkerRunner::create(std::move(worker_options));
-          if (!pool) {
-            std::fprintf(stderr, "bench_generate: %s\n", pool.error().message.c_str());
-            return 1;
+          jobs::Kinds kinds;
+          std::unique_ptr<jobs::Runner> runner;
+          if (workers.local <= 0) {
+            actions::add_sim_action(kinds);
+            runner = std::make_unique<jobs::InProcessRunner>(kinds);
+          } else {
+            generator::WorkerOptions worker_options;
+            worker_options.local.command = {program};
+            worker_options.local.workers = static_cast<unsigned>(workers.local);
+            auto pool = generator::WorkerRunner::create(std::move(worker_options));
+            if (!pool) {
+              std::fprintf(stderr, "bench_generate: %s\n", pool.error().message.c_str());
+              return 1;
+            }
+            runner = std::move(*pool);
           }
-          runner = std::move(*pool);
+          generator::Simulator simulator(*runner, std::max(workers.local, 1), "{}");
+          const auto t0 = Clock::now();
+          auto made = generator::generate(
+              problem, o, **rig, simulator, nullptr, [&](const generator::GenerateProgress& p) {
+                std::fprintf(stderr,
+                             "\r\033[K%s, %s workers, %s: trial %llu/%llu, %zu "
+                             "nodes, %llu sims, root [%.1f, %.1f], %.0f s",
+                             problem.name.c_str(), workers.name().c_str(),
+                             sim::to_string(at).c_str(), (unsigned long long)p.trials,
+                             (unsigned long long)p.trial_budget, p.nodes,
+                             (unsigned long long)p.simulated, p.lower, p.upper, p.wall_s);
+                return true;
+              });
+          std::fprintf(stderr, "\n");
+          if (made) {
+            Generated& g = *r;
+            g.entry = std::move(made->entry);
+            g.wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
+            g.simulated = made->simulated;
+            g.simulated_robot_s = made->simulated_robot_s;
+            g.simulated_wall_s = made->simulated_wall_s;
+            g.check_wall_s = made->check_wall_s;
+          } else {
+            r = made.error();
+          }
         }
-        generator::Simulator simulator(*runner, std::max(workers.local, 1), "{}");
-        const auto t0 = Clock::now();
-        auto made = generator::generate(
-            problem, o, **rig, simulator, nullptr, [&](const generator::GenerateProgress& p) {
-              std::fprintf(stderr,
-                           "\r\033[K%s, %s workers: trial %llu/%llu, %zu "
-                           "nodes, %llu sims, root [%.1f, %.1f], %.0f s",
-                           problem.name.c_str(), workers.name().c_str(),
-                           (unsigned long long)p.trials, (unsigned long long)p.trial_budget,
-                           p.nodes, (unsigned long long)p.simulated, p.lower, p.upper, p.wall_s);
-              return true;
-            });
-        std::fprintf(stderr, "\n");
-        if (made) {
-          Generated& g = *r;
-          g.entry = std::move(made->entry);
-          g.wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
-          g.simulated = made->simulated;
-          g.simulated_robot_s = made->simulated_robot_s;
-          g.simulated_wall_s = made->simulated_wall_s;
-        } else {
-          r = made.error();
+        if (!r) {
+          std::fprintf(stderr, "bench_generate: %s\n", r.error().message.c_str());
+          return 1;
+        }
+        const sim::LibraryEntry& e = r->entry;
+        // The search's own time: the re-evaluation at full fidelity is apart.
+        const double wall = r->wall_s - r->check_wall_s;
+        const std::vector<double> trials = trial_walls(e);
+        median_trial.push_back(plr::bench::median(trials));
+        const std::string yaml = sim::format_yaml(e.strategy);
+        if (first_strategy.empty()) first_strategy = yaml;
+        strategy = e.strategy;
+        out["runs"].push_back(
+            {{"world", problem.name},
+             {"boxes", problem.world.boxes.size()},
+             {"workers", workers.local + workers.remote},
+             {"local_workers", workers.local},
+             {"remote_workers", workers.remote},
+             {"transport", workers.remote > 0 ? r->note : "pipes to local processes"},
+             {"particles", particles},
+             {"horizon", o.truck.horizon},
+             {"wall_s", wall},
+             {"trials", e.provenance.trials},
+             {"belief_nodes", e.provenance.nodes},
+             {"nodes", e.strategy.nodes.size()},
+             {"depth", e.strategy.depth()},
+             {"simulations", r->simulated},
+             {"actions_per_s", double(r->simulated) / wall},
+             {"simulated_robot_s", r->simulated_robot_s},
+             {"real_time_factor", nullable(r->simulated_robot_s / wall)},
+             {"worker_s_per_action",
+              nullable(r->simulated_wall_s / std::max<double>(1, double(r->simulated)))},
+             {"lower", e.lower},
+             {"upper", e.upper},
+             {"fidelity", e.fidelity},
+             {"trial_wall_s", trials},
+             {"trial_wall_s_median", median_trial.back()},
+             {"check", e.check ? nlohmann::json{{"value", e.check->value},
+                                                {"boxes", e.check->boxes},
+                                                {"full_value", e.check->full_value},
+                                                {"full_boxes", e.check->full_boxes},
+                                                {"full_particles", e.check->full_particles},
+                                                {"first_particle", e.check->first_particle},
+                                                {"wall_s", r->check_wall_s}}
+                               : nlohmann::json()},
+             {"same_strategy_as_first", yaml == first_strategy}});
+        if (!json) {
+          std::printf(
+              "%-6s %-3s workers, %-8s: %6.1f s, %llu trials (median %.1f s each), %zu tree nodes "
+              "(depth %zu), %llu simulated actions (%.2f/s), root [%.1f, %.1f]%s%s\n",
+              problem.name.c_str(), workers.name().c_str(), e.fidelity.c_str(), wall,
+              (unsigned long long)e.provenance.trials, median_trial.back(), e.strategy.nodes.size(),
+              e.strategy.depth(), (unsigned long long)r->simulated, double(r->simulated) / wall,
+              e.lower, e.upper, yaml == first_strategy ? "" : "  DIFFERENT STRATEGY",
+              workers.remote > 0 ? ("  (" + r->note + ")").c_str() : "");
+          if (e.check)
+            std::printf(
+                "       value at %s %.1f (%.1f boxes) on its %u particles; at full fidelity %.1f "
+                "(%.1f boxes) on %u fresh particles (%.1f s)\n",
+                e.fidelity.c_str(), e.check->value, e.check->boxes, e.provenance.particles,
+                e.check->full_value, e.check->full_boxes, e.check->full_particles, r->check_wall_s);
+          std::fflush(stdout);
         }
       }
-      if (!r) {
-        std::fprintf(stderr, "bench_generate: %s\n", r.error().message.c_str());
-        return 1;
-      }
-      const double wall = r->wall_s;
-      const sim::LibraryEntry& e = r->entry;
-      const std::string yaml = sim::format_yaml(e.strategy);
-      if (first_strategy.empty()) first_strategy = yaml;
-      strategy = e.strategy;
-      out["runs"].push_back(
-          {{"world", problem.name},
-           {"boxes", problem.world.boxes.size()},
-           {"workers", workers.local + workers.remote},
-           {"local_workers", workers.local},
-           {"remote_workers", workers.remote},
-           {"transport", workers.remote > 0 ? r->note : "pipes to local processes"},
-           {"particles", particles},
-           {"horizon", o.truck.horizon},
-           {"wall_s", wall},
-           {"trials", e.provenance.trials},
-           {"belief_nodes", e.provenance.nodes},
-           {"nodes", e.strategy.nodes.size()},
-           {"depth", e.strategy.depth()},
-           {"simulations", r->simulated},
-           {"actions_per_s", double(r->simulated) / wall},
-           {"simulated_robot_s", r->simulated_robot_s},
-           {"real_time_factor", nullable(r->simulated_robot_s / wall)},
-           {"worker_s_per_action",
-            nullable(r->simulated_wall_s / std::max<double>(1, double(r->simulated)))},
-           {"lower", e.lower},
-           {"upper", e.upper},
-           {"same_strategy_as_first", yaml == first_strategy}});
-      if (!json) {
-        std::printf(
-            "%-6s %-3s workers: %6.1f s, %llu trials, %zu tree nodes (depth %zu), %llu simulated "
-            "actions (%.2f/s), root [%.1f, %.1f]%s%s\n",
-            problem.name.c_str(), workers.name().c_str(), wall,
-            (unsigned long long)e.provenance.trials, e.strategy.nodes.size(), e.strategy.depth(),
-            (unsigned long long)r->simulated, double(r->simulated) / wall, e.lower, e.upper,
-            yaml == first_strategy ? "" : "  DIFFERENT STRATEGY",
-            workers.remote > 0 ? ("  (" + r->note + ")").c_str() : "");
-        std::fflush(stdout);
+      if (compare) {
+        const double ratio = median_trial[1] > 0 ? median_trial[0] / median_trial[1] : NAN;
+        out["fidelity_comparison"].push_back({{"world", problem.name},
+                                              {"workers", workers.name()},
+                                              {"full_trial_wall_s_median", median_trial[0]},
+                                              {"level", fidelity},
+                                              {"level_trial_wall_s_median", median_trial[1]},
+                                              {"full_over_level", nullable(ratio)}});
+        if (!json)
+          std::printf("%-6s %-3s workers: a trial takes %.2f s at full, %.2f s at %s: %.2fx\n",
+                      problem.name.c_str(), workers.name().c_str(), median_trial[0],
+                      median_trial[1], fidelity.c_str(), ratio);
       }
     }
     if (eval_particles <= 0 || !strategy) continue;

@@ -99,13 +99,32 @@ class GeneratorNode : public Node {
 
  protected:
   Status on_configure() override {
-    params().allow_only({"library",           "checkpoint_dir", "worlds",          "particles",
-                         "horizon",           "epsilon1",       "epsilon2",        "trials",
-                         "target_gap",        "seed",           "seconds_per_box", "action_s",
-                         "workers",           "worker_program", "remote_workers",  "remote_service",
-                         "remote_timeout_s",  "observation",    "progress",        "max_wall_s",
-                         "complete_tree",     "runner",         "slurm",           "continuations",
-                         "continuation_share"});
+    params().allow_only({"library",
+                         "checkpoint_dir",
+                         "worlds",
+                         "particles",
+                         "horizon",
+                         "epsilon1",
+                         "epsilon2",
+                         "trials",
+                         "target_gap",
+                         "seed",
+                         "seconds_per_box",
+                         "action_s",
+                         "workers",
+                         "worker_program",
+                         "remote_workers",
+                         "remote_service",
+                         "remote_timeout_s",
+                         "observation",
+                         "progress",
+                         "max_wall_s",
+                         "complete_tree",
+                         "runner",
+                         "slurm",
+                         "continuations",
+                         "continuation_share",
+                         "fidelity"});
     library_ = params().require<std::string>("library");
     checkpoint_dir_ = params().get<std::string>("checkpoint_dir", library_ + ".checkpoint");
     particles_ = params().get<int>("particles", 5);
@@ -127,6 +146,13 @@ class GeneratorNode : public Node {
     o.max_wall_s = params().get<double>("max_wall_s", o.max_wall_s);
     o.complete_tree = params().get<bool>("complete_tree", o.complete_tree);
     o.seed = seed_;
+    const auto fidelity = params().get<std::string>("fidelity", "full");
+    if (const auto level = sim::parse_fidelity(fidelity))
+      o.fidelity = *level;
+    else
+      return make_error(PLR_ERR_INVALID, fmt::format("param 'fidelity': '{}' is not one of full, "
+                                                     "adaptive, fast",
+                                                     fidelity));
     continuations_ = params().get<int>("continuations", 0);
     continuation_share_ = params().get<double>("continuation_share", 1.0);
     if (continuations_ < 0 || continuations_ > 1000)
@@ -339,6 +365,13 @@ class GeneratorNode : public Node {
           "{:.0f} s; {}",
           e.name, e.strategy.nodes.size(), e.lower, e.upper, e.provenance.trials,
           e.provenance.simulations, result->simulated, e.provenance.wall_s, describe(leaves));
+      if (e.check)
+        log().info(
+            "{}: made at {} fidelity: value {:.1f} ({:.1f} boxes) on its {} particles; at "
+            "full fidelity {:.1f} ({:.1f} boxes) on {} fresh particles, {:.0f} s",
+            e.name, e.fidelity, e.check->value, e.check->boxes, e.provenance.particles,
+            e.check->full_value, e.check->full_boxes, e.check->full_particles,
+            result->check_wall_s);
       ++made;
     }
     if (link >= continuations_) return true;

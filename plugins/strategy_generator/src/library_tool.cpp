@@ -111,6 +111,18 @@ void show(const plr::sim::Library& lib, const LibraryEntry& e) {
   std::printf("observation: %s\n", e.observation_json.c_str());
   std::printf("root_bounds: [%.3f, %.3f]  # value = -(robot s + terminal estimate)\n", e.lower,
               e.upper);
+  std::printf("fidelity: %s\n", e.fidelity.c_str());
+  if (e.check) {
+    const plr::sim::FidelityCheck& c = *e.check;
+    std::printf(
+        "value_at_%s: {value: %.3f, boxes: %.2f, particles: %u}  # the tree on the search's "
+        "particles\n",
+        e.fidelity.c_str(), c.value, c.boxes, p.particles);
+    std::printf(
+        "value_at_full: {value: %.3f, boxes: %.2f, particles: %u, first_particle: %u}  # on "
+        "fresh particles\n",
+        c.full_value, c.full_boxes, c.full_particles, c.first_particle);
+  }
   std::printf(
       "provenance: {seed: %llu, particles: %u, horizon: %u, trial_budget: %llu, trials: %llu, "
       "simulations: %llu, nodes: %llu, wall_s: %.1f, workers: %u, epsilon1: %g, epsilon2: %g, "

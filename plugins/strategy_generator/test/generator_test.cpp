@@ -7,6 +7,7 @@
 
 #include <signal.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -18,7 +19,9 @@
 #include "plr/jobs/messages.hpp"
 #include "plr/sim/testing/library_fingerprint.hpp"
 #include "plr/sim/testing/worlds.hpp"
+#include "truck/fidelity_check.hpp"
 #include "truck/generate.hpp"
+#include "truck/strategy_job.hpp"
 #include "truck/svg.hpp"
 #include "truck/worker_runner.hpp"
 
@@ -354,6 +357,145 @@ TEST(Continuation, EveryLeafReachedByTheShareGetsOneAndTheMostReachedAlways) {
   EXPECT_EQ(continued_leaves(leaves, 0.4), (std::vector<std::size_t>{1, 2}));
   EXPECT_EQ(continued_leaves(leaves, 0.2), (std::vector<std::size_t>{0, 1, 2}));
   EXPECT_TRUE(continued_leaves({leaf({}, 5, true)}, 0.2).empty());
+}
+
+// A job's fidelity reaches the worker process: the state it restores there
+// runs at that level (the same bytes as the same job at that level here),
+// not at the level of the worker's rig.
+TEST(Fidelity, AWorkerProcessSimulatesAtTheLevelOfTheJob) {
+  const Problem p = block_problem("block", {4.0});
+  rig().set_fidelity(sim::Fidelity::kFull);
+  const SimOutcome root = actions::start_state(rig(), p.particles[0]).value();
+  std::vector<SimRequest> batch;
+  for (int a = 0; a < sim::kNumActions; ++a) batch.push_back({root.state, sim::Action(a)});
+  WorkerOptions options;
+  options.local.command = {PLR_SIM_WORKER};
+  options.local.workers = 1;
+  auto pool = WorkerRunner::create(options);
+  ASSERT_TRUE(pool) << pool.error().message;
+  Simulator simulator(**pool, 1, p.observation_json);
+  std::map<sim::Fidelity, std::vector<std::vector<std::uint8_t>>> here;
+  for (const sim::Fidelity level : {sim::Fidelity::kFull, sim::Fidelity::kFast}) {
+    simulator.set_fidelity(level);
+    const auto there = simulator.run(batch);
+    rig().set_fidelity(level);
+    for (std::size_t i = 0; i < batch.size(); ++i) {
+      ASSERT_TRUE(there[i].outcome) << there[i].outcome.error().message;
+      const auto local = actions::simulate(rig(), batch[i]);
+      ASSERT_TRUE(local) << local.error().message;
+      EXPECT_EQ(*there[i].outcome->state, *local->state)
+          << sim::to_string(batch[i].action) << " at " << sim::to_string(level);
+      here[level].push_back(*local->state);
+    }
+  }
+  rig().set_fidelity(sim::Fidelity::kFull);
+  // The levels differ on this world, so a worker at the wrong one is seen.
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < batch.size(); ++i)
+    differ += here[sim::Fidelity::kFull][i] != here[sim::Fidelity::kFast][i];
+  EXPECT_GT(differ, 0u);
+}
+
+// The value of `strategy` from `start`, run by hand on the rig (at its
+// fidelity), as the search counts a return: each action's robot time, the
+// terminal estimate of the boxes left at the horizon; where the tree has no
+// edge, the lower heuristic for the rest of the horizon.
+double value_by_hand(const sim::Strategy& strategy, SimOutcome state, const TruckOptions& t) {
+  double value = 0.0;
+  std::uint32_t node = strategy.root;
+  for (int depth = 1; depth <= t.horizon; ++depth) {
+    auto next = actions::simulate(rig(), {state.state, strategy.nodes[node].action});
+    EXPECT_TRUE(next) << next.error().message;
+    if (!next) return NAN;
+    state = *next;
+    value -= state.robot_time_s;
+    if (state.observation == kEmptyObservation) return value;
+    if (depth == t.horizon) return value - t.seconds_per_box * state.boxes_left;
+    const auto child = strategy.next(node, static_cast<sim::Observation>(state.observation));
+    if (!child)
+      return value - ((t.horizon - depth) * t.min_action_s + t.seconds_per_box * state.boxes_left);
+    node = *child;
+  }
+  return value;
+}
+
+// Issue 45: a strategy that enters the library from a lower level is
+// re-evaluated at full fidelity on fresh particles, and the library records
+// both values.
+TEST(Fidelity, AStrategyMadeAtFastIsValuedAtFullFidelityOnFreshParticles) {
+  TempDir dir;
+  GenerateOptions o;
+  o.truck.horizon = 2;
+  o.trials = 3;
+  o.seed = 7;
+  o.fidelity = sim::Fidelity::kFast;
+  Problem p = make_problem(block(), sim::EnvFamily::kB1, "block", 2, o.seed);
+  p.observation_json = kObservation;
+  InProcess local;
+  auto store = jobs::Store::open(dir / "store");
+  ASSERT_TRUE(store);
+  const auto made = generate(p, o, rig(), local.simulator, &*store);
+  ASSERT_TRUE(made) << made.error().message;
+  const sim::LibraryEntry& e = made->entry;
+  EXPECT_EQ(e.fidelity, "fast");
+  ASSERT_TRUE(e.check);
+  EXPECT_EQ(e.check->full_particles, 2u);
+  EXPECT_EQ(e.check->first_particle, kFreshParticle);
+
+  // At its level: the tree on the generator's particles, simulated at fast.
+  rig().set_fidelity(sim::Fidelity::kFast);
+  double at_level = 0.0;
+  for (const sim::World& w : p.particles) {
+    at_level += value_by_hand(e.strategy, actions::start_state(rig(), w).value(), o.truck) / 2.0;
+  }
+  EXPECT_DOUBLE_EQ(e.check->value, at_level);
+
+  // At full fidelity: the fresh particles, other masses than the generator's.
+  rig().set_fidelity(sim::Fidelity::kFull);
+  double at_full = 0.0;
+  for (std::uint32_t j = 0; j < 2; ++j) {
+    const sim::World fresh =
+        sim::sample_masses(p.world, sim::EnvFamily::kB1,
+                           sim::particle_seed(o.seed, static_cast<int>(kFreshParticle + j)));
+    for (const sim::World& used : p.particles)
+      for (std::size_t b = 0; b < fresh.boxes.size(); ++b)
+        EXPECT_NE(fresh.boxes[b].mass, used.boxes[b].mass);
+    const SimOutcome root = actions::start_state(rig(), fresh).value();
+    at_full += value_by_hand(e.strategy, root, o.truck) / 2.0;
+    // Simulated at full fidelity, kept under full fidelity's key.
+    EXPECT_TRUE(fs::exists(store->result_file(Simulator::key(
+        {root.state, e.strategy.nodes[e.strategy.root].action}, sim::Fidelity::kFull))));
+  }
+  EXPECT_DOUBLE_EQ(e.check->full_value, at_full);
+  // The generator's own particles were never simulated at full fidelity.
+  for (const sim::World& w : p.particles) {
+    const SimOutcome root = actions::start_state(rig(), w).value();
+    EXPECT_FALSE(fs::exists(store->result_file(Simulator::key(
+        {root.state, e.strategy.nodes[e.strategy.root].action}, sim::Fidelity::kFull))));
+  }
+
+  // The library keeps both, and the tool shows them.
+  sim::Library lib;
+  lib.entries = {e};
+  const auto bytes = sim::serialize(lib);
+  const auto back = sim::deserialize_library(bytes.data(), bytes.size(), "l.plrl");
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_EQ(back->entries[0].fidelity, "fast");
+  EXPECT_EQ(back->entries[0].check, e.check);
+}
+
+// A strategy handed to a Slurm task carries the level; at full its input is
+// what it was before the setting.
+TEST(Fidelity, AStrategyJobCarriesItsLevel) {
+  StrategyJob job;
+  job.options.fidelity = sim::Fidelity::kFast;
+  const auto back = decode_strategy_job(encode(job));
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_EQ(back->options.fidelity, sim::Fidelity::kFast);
+  job.options.fidelity = sim::Fidelity::kFull;
+  const jobs::Bytes full = encode(job);
+  EXPECT_EQ(std::string(full.begin(), full.end()).find("fidelity"), std::string::npos);
+  EXPECT_EQ(decode_strategy_job(full)->options.fidelity, sim::Fidelity::kFull);
 }
 
 }  // namespace

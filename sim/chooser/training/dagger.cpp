@@ -78,7 +78,11 @@ plr::Expected<std::unique_ptr<actions::Rig>> make_rig(const TrainingSettings& se
   actions::ActionOptions options;
   options.observation = settings.observation;
   options.plan_timeout_s = actions::kOfflinePlanTimeoutS;
-  return actions::Rig::create(std::move(options));
+  auto rig = actions::Rig::create(std::move(options));
+  // Every simulation the rollouts make: the forked children inherit it, a
+  // Slurm task makes its rig here.
+  if (rig) (*rig)->set_fidelity(settings.fidelity);
+  return rig;
 }
 
 // DAgger's end: enough data, and no new best held-out accuracy for the

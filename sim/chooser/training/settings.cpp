@@ -84,6 +84,8 @@ std::string TrainingSettings::describe(std::uint32_t library_fingerprint) const 
   // Where it ends shapes the model; 0 (the default) keeps older data sets'
   // hashes.
   if (patience > 0) text += fmt::format("min {} patience {} ", min_samples, patience);
+  // Only below full: a full-fidelity data set resumes as it was made.
+  if (fidelity != sim::Fidelity::kFull) text += "fidelity " + sim::to_string(fidelity) + " ";
   for (const auto* list : {&train, &validation}) {
     text += "| ";
     for (const WorldSource& w : *list) text += w.name + " ";
@@ -97,14 +99,14 @@ plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::pa
   if (!doc) return doc.error();
   TrainingSettings s;
   const yaml::Map top = doc->root().map("chooser training settings",
-                                        {"format",          "library",    "out",
-                                         "train",           "validation", "states_per_world",
-                                         "rollout_actions", "tie_margin", "tie_boxes",
-                                         "particles",       "mass_prior", "workers",
-                                         "observation",     "h_min",      "d_min",
-                                         "folds",           "log2_c",     "log2_gamma",
-                                         "min_samples",     "patience",   jobs::kRunnerKey,
-                                         jobs::kSlurmKey});
+                                        {"format",          "library",      "out",
+                                         "train",           "validation",   "states_per_world",
+                                         "rollout_actions", "tie_margin",   "tie_boxes",
+                                         "particles",       "mass_prior",   "workers",
+                                         "observation",     "h_min",        "d_min",
+                                         "folds",           "log2_c",       "log2_gamma",
+                                         "min_samples",     "patience",     "fidelity",
+                                         jobs::kRunnerKey,  jobs::kSlurmKey});
   (void)top.required("format").one_of({"plr-chooser-training"});
   if (auto l = top.required("library").string()) s.library = *l;
   if (auto o = top.required("out").string()) s.out = *o;
@@ -122,6 +124,8 @@ plr::Expected<TrainingSettings> TrainingSettings::load(const std::filesystem::pa
     }
   }
   if (auto n = top.find("workers").integer(1, 64)) s.workers = static_cast<int>(*n);
+  if (auto f = top.find("fidelity").one_of({"full", "adaptive", "fast"}))
+    s.fidelity = *sim::parse_fidelity(*f);
   if (auto n = top.find("folds").integer(2, 100)) s.svm.folds = static_cast<int>(*n);
   if (auto n = top.find("min_samples").integer(1, 1000000))
     s.min_samples = static_cast<std::uint32_t>(*n);

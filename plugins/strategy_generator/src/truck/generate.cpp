@@ -11,6 +11,7 @@
 
 #include "plr/pomdp/pomhdp.hpp"
 #include "plr/sim/physics.hpp"
+#include "truck/fidelity_check.hpp"
 #include "truck/truck_heuristics.hpp"
 
 namespace plr::generator {
@@ -151,6 +152,8 @@ plr::Expected<GenerateResult> generate(
   if (options.truck.horizon < 1 || options.truck.horizon > 50)
     return plr::make_error(PLR_ERR_INVALID,
                            fmt::format("horizon: {} is not in 1..50", options.truck.horizon));
+  rig.set_fidelity(options.fidelity);
+  simulator.set_fidelity(options.fidelity);
   auto started = starting_states(problem, rig);
   if (!started) return started.error();
   const std::vector<SimOutcome>& roots = *started;
@@ -232,14 +235,26 @@ plr::Expected<GenerateResult> generate(
     for (std::size_t i = 0; i < roots.size(); ++i)
       e.start.push_back({ids[i], actions::state_hash(*roots[i].state), roots[i].boxes_left});
   }
+  TreeValue at_level;
   try {
     out.leaves = find_leaves(model, e.strategy, ids);
+    if (options.fidelity != sim::Fidelity::kFull)
+      at_level = tree_value(model, e.strategy, roots.size());
   } catch (const SimulationError& err) {
     return plr::make_error(PLR_ERR_INTERNAL, problem.name + ": simulation failed: " + err.what());
   }
   out.simulated = model.simulated();
   out.simulated_robot_s = model.simulated_robot_s();
   out.simulated_wall_s = model.simulated_wall_s();
+  if (options.fidelity != sim::Fidelity::kFull) {
+    const auto c0 = Clock::now();
+    e.fidelity = sim::to_string(options.fidelity);
+    auto check = check_at_full(problem, e.strategy, options, at_level,
+                               static_cast<std::uint32_t>(roots.size()), rig, simulator, store);
+    if (!check) return check.error();
+    e.check = *check;
+    out.check_wall_s = std::chrono::duration<double>(Clock::now() - c0).count();
+  }
   return out;
 }
 
@@ -248,6 +263,10 @@ plr::Expected<std::vector<Leaf>> replay_leaves(const Problem& problem,
                                                const GenerateOptions& options, actions::Rig& rig,
                                                Simulator& simulator,
                                                const plr::jobs::Store* store) {
+  auto level = sim::parse_fidelity(entry.fidelity);
+  if (!level) return plr::make_error(PLR_ERR_INVALID, entry.name + ": " + level.error().message);
+  rig.set_fidelity(*level);
+  simulator.set_fidelity(*level);
   auto roots = starting_states(problem, rig);
   if (!roots) return roots.error();
   TruckOptions truck = options.truck;

@@ -77,6 +77,10 @@ struct GenerateOptions {
   bool complete_tree = true;
   // A safety net only: a run that hits it depends on the machine's speed.
   double max_wall_s = std::numeric_limits<double>::infinity();
+  // The simulation fidelity the search simulates at (docs/fidelity.md). Below
+  // full, the strategy is then re-evaluated at full fidelity on as many
+  // fresh particles as it was made with, and the entry records both values.
+  sim::Fidelity fidelity = sim::Fidelity::kFull;
 };
 
 struct GenerateProgress {
@@ -95,12 +99,13 @@ struct GenerateResult {
   std::uint64_t simulated = 0;  // by this run (the rest came from the store)
   double simulated_robot_s = 0.0;
   double simulated_wall_s = 0.0;  // inside the workers
+  double check_wall_s = 0.0;      // below full fidelity: the re-evaluation at full fidelity
 };
 
 // `rig` makes the particles' starting states; `simulator` runs the
-// actions, its results kept in `store` (checkpoint_dir/<name>) if given. `on_progress` is called
-// after every trial; returning false stops the generation (PLR_ERR_CANCELLED). An error says which
-// simulation failed.
+// actions (both set to options.fidelity), its results kept in `store` (checkpoint_dir/<name>) if
+// given. `on_progress` is called after every trial; returning false stops the generation
+// (PLR_ERR_CANCELLED). An error says which simulation failed.
 plr::Expected<GenerateResult> generate(
     const Problem& problem, const GenerateOptions& options, actions::Rig& rig, Simulator& simulator,
     const plr::jobs::Store* store,
@@ -109,7 +114,8 @@ plr::Expected<GenerateResult> generate(
 // The leaves of `entry`'s strategy run on `problem`'s particles (the
 // problem it was made for), replayed with the truck model: a resumed
 // generation's way to its continuations' beliefs. The simulations come from
-// `store` (the entry's result store) when it has them.
+// `store` (the entry's result store) when it has them, at the fidelity the
+// entry was made at.
 plr::Expected<std::vector<Leaf>> replay_leaves(const Problem& problem,
                                                const sim::LibraryEntry& entry,
                                                const GenerateOptions& options, actions::Rig& rig,

@@ -9,9 +9,9 @@
 
 namespace plr::generator {
 
-std::string Simulator::key(const SimRequest& request) {
-  return fmt::format("{:016x}",
-                     actions::work_key(actions::state_hash(*request.state), request.action));
+std::string Simulator::key(const SimRequest& request, sim::Fidelity fidelity) {
+  return fmt::format(
+      "{:016x}", actions::work_key(actions::state_hash(*request.state), request.action, fidelity));
 }
 
 int Simulator::busy() const {
@@ -23,8 +23,8 @@ std::vector<Simulated> Simulator::run(const std::vector<SimRequest>& batch,
   std::vector<plr::jobs::Job> jobs;
   jobs.reserve(batch.size());
   for (const SimRequest& r : batch)
-    jobs.push_back(
-        {actions::kSimActionKind, key(r), actions::encode_sim_job({r, observation_json_})});
+    jobs.push_back({actions::kSimActionKind, key(r, fidelity_),
+                    actions::encode_sim_job({r, observation_json_, fidelity_})});
   plr::jobs::RunOptions options;
   options.on_start = [&](std::size_t, std::size_t to_run) {
     running_.store(static_cast<int>(to_run), std::memory_order_relaxed);

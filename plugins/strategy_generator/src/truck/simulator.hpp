@@ -36,6 +36,11 @@ class Simulator {
   Simulator(plr::jobs::Runner& runner, int workers, std::string observation_json)
       : runner_(runner), workers_(workers), observation_json_(std::move(observation_json)) {}
 
+  // The fidelity the jobs ask the workers for (a setting of the run; the
+  // results of each level are kept under their own keys).
+  void set_fidelity(sim::Fidelity fidelity) { fidelity_ = fidelity; }
+  sim::Fidelity fidelity() const { return fidelity_; }
+
   // The store, if any, is read before and written as each result comes.
   std::vector<Simulated> run(const std::vector<SimRequest>& batch,
                              const plr::jobs::Store* store = nullptr);
@@ -44,12 +49,13 @@ class Simulator {
   int busy() const;
 
   // The key of a request's result in a store: work_key() in hex.
-  static std::string key(const SimRequest& request);
+  static std::string key(const SimRequest& request, sim::Fidelity fidelity);
 
  private:
   plr::jobs::Runner& runner_;
   int workers_;
   std::string observation_json_;
+  sim::Fidelity fidelity_ = sim::Fidelity::kFull;
   std::atomic<int> running_{0};
 };
 

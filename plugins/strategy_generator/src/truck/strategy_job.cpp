@@ -39,7 +39,7 @@ plr::Expected<Problem> make_problem(const StrategyJob& job) {
 jobs::Bytes encode(const StrategyJob& job) {
   const GenerateOptions& o = job.options;
   const TruckOptions& t = o.truck;
-  const nlohmann::json j = {
+  nlohmann::json j = {
       {"family", sim::to_string(job.world.family)},
       {"seed", job.world.seed},
       {"file", job.world.file},
@@ -57,6 +57,8 @@ jobs::Bytes encode(const StrategyJob& job) {
       {"complete_tree", o.complete_tree},
       // JSON has no infinity: no limit is null.
       {"max_wall_s", std::isfinite(o.max_wall_s) ? nlohmann::json(o.max_wall_s) : nullptr}};
+  // Absent at full fidelity: a full job's input is what it was before the setting.
+  if (o.fidelity != sim::Fidelity::kFull) j["fidelity"] = sim::to_string(o.fidelity);
   return jobs::to_bytes(j.dump());
 }
 
@@ -94,6 +96,11 @@ plr::Expected<StrategyJob> decode_strategy_job(const jobs::Bytes& bytes) {
     job.options.target_gap = j.at("target_gap").get<double>();
     job.options.complete_tree = j.at("complete_tree").get<bool>();
     if (!j.at("max_wall_s").is_null()) job.options.max_wall_s = j.at("max_wall_s").get<double>();
+    if (j.contains("fidelity")) {
+      const auto level = sim::parse_fidelity(j.at("fidelity").get<std::string>());
+      if (!level) return invalid(level.error().message);
+      job.options.fidelity = *level;
+    }
     return job;
   } catch (const nlohmann::json::exception& e) {
     return invalid(e.what());

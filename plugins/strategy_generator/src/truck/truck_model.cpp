@@ -60,7 +60,8 @@ void TruckModel::fill(const std::vector<SimRequest>& requests) const {
   std::vector<SimRequest> todo;
   std::vector<std::uint64_t> keys;
   for (const SimRequest& r : requests) {
-    const std::uint64_t key = actions::work_key(actions::state_hash(*r.state), r.action);
+    const std::uint64_t key =
+        actions::work_key(actions::state_hash(*r.state), r.action, simulator_.fidelity());
     if (results_.count(key) || std::find(keys.begin(), keys.end(), key) != keys.end()) continue;
     keys.push_back(key);
     todo.push_back(r);
@@ -103,7 +104,7 @@ bool TruckModel::dominated(const pomdp::Belief& belief, pomdp::ActionId action) 
 pomdp::Step TruckModel::step(pomdp::StateId id, pomdp::ActionId action, pomdp::Rng&) const {
   if (const auto it = steps_.find({id, action}); it != steps_.end()) return it->second;
   const auto a = static_cast<sim::Action>(action);
-  const std::uint64_t key = actions::work_key(state(id).hash, a);
+  const std::uint64_t key = actions::work_key(state(id).hash, a, simulator_.fidelity());
   if (!results_.count(key)) fill({{state(id).bytes, a}});
   const SimOutcome& o = results_.at(key);
   const int depth = state(id).depth + 1;

@@ -75,5 +75,46 @@ TEST(SimulationJob, TheWorkKeyNamesStateAndAction) {
   EXPECT_NE(state_hash(*truck_state(2)), h);
 }
 
+// The fidelity travels with the job; a full job's bytes and key are what
+// they were before the levels (stored results stay valid), the others'
+// results are kept apart.
+TEST(SimulationJob, TheFidelityTravelsWithTheJobAndNamesItsResult) {
+  SimJob job{{truck_state(3), sim::Action::PickLowLeft}, "{}", sim::Fidelity::kFast};
+  const auto back = decode_sim_job(encode_sim_job(job), "test");
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_EQ(back->fidelity, sim::Fidelity::kFast);
+
+  job.fidelity = sim::Fidelity::kFull;
+  flatbuffers::FlatBufferBuilder fbb;
+  const auto state = fbb.CreateVector(*job.request.state);
+  const auto json = fbb.CreateString(job.observation_json);
+  fbb.Finish(msg::CreateSimJob(fbb, state, job.request.action, json));
+  EXPECT_EQ(encode_sim_job(job),
+            jobs::Bytes(fbb.GetBufferPointer(), fbb.GetBufferPointer() + fbb.GetSize()));
+
+  const std::uint64_t h = state_hash(*job.request.state);
+  const std::uint64_t before = [&] {  // the key as it was computed before fidelity levels
+    std::uint64_t z =
+        h ^ (static_cast<std::uint64_t>(sim::Action::SweepMid) + 1) * 0x9e3779b97f4a7c15ull;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+  }();
+  EXPECT_EQ(work_key(h, sim::Action::SweepMid), before);
+  EXPECT_EQ(work_key(h, sim::Action::SweepMid, sim::Fidelity::kFull), before);
+  EXPECT_NE(work_key(h, sim::Action::SweepMid, sim::Fidelity::kFast), before);
+  EXPECT_NE(work_key(h, sim::Action::SweepMid, sim::Fidelity::kAdaptive),
+            work_key(h, sim::Action::SweepMid, sim::Fidelity::kFast));
+
+  flatbuffers::FlatBufferBuilder bad;
+  bad.Finish(
+      msg::CreateSimJob(bad, bad.CreateVector(*job.request.state), job.request.action, 0, 7));
+  EXPECT_EQ(decode_sim_job(
+                jobs::Bytes(bad.GetBufferPointer(), bad.GetBufferPointer() + bad.GetSize()), "in")
+                .error()
+                .message,
+            "in: job: fidelity 7 out of range");
+}
+
 }  // namespace
 }  // namespace plr::actions

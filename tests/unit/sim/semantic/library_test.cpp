@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -131,24 +132,121 @@ TEST(Library, AContinuationKeepsItsParentItsLeafAndTheBeliefItStartsFrom) {
       << refused.error().message;
 }
 
-// The shipped library was written before entries could be continuations:
-// it still reads, and a strategy for a fresh trailer is written without
-// the continuation's fields, as then. (Shipped.* checks the bytes: the
-// chooser model's CRC of the library as this code writes it.)
-TEST(Library, AFileMadeBeforeContinuationsReadsAndIsWrittenWithoutTheirFields) {
-  const fs::path shipped = fs::path(PLR_SOURCE_DIR) / "configs/learned/library.plrl";
-  const auto lib = load_library(shipped);
+// A library written before worlds were kept exactly (and before entries
+// could be continuations: the shipped library of 2026-12-07, copied) still
+// reads, its rotations from the quaternions; a strategy for a fresh trailer
+// is written without the continuation's fields, as then.
+TEST(Library, AFileMadeBeforeExactWorldsReadsFromItsQuaternions) {
+  const fs::path old = fs::path(PLR_SOURCE_DIR) / "tests/unit/sim/semantic/data" /
+                       "library_before_exact_worlds.plrl";
+  const std::vector<std::uint8_t> bytes = read(old);
+  const auto* file = plr::msg::GetStrategyLibrary(bytes.data() + 4);
+  for (const auto* e : *file->entries()) EXPECT_EQ(e->world_rotations(), nullptr);
+  const auto lib = load_library(old);
   ASSERT_TRUE(lib) << lib.error().message;
   ASSERT_FALSE(lib->entries.empty());
-  for (const LibraryEntry& e : lib->entries) EXPECT_FALSE(e.is_continuation()) << e.name;
+  for (const LibraryEntry& e : lib->entries) {
+    EXPECT_FALSE(e.is_continuation()) << e.name;
+    EXPECT_EQ(e.fidelity, "full");
+    EXPECT_FALSE(e.check);
+    for (const Box& b : e.world.boxes)
+      EXPECT_TRUE((b.pose.linear().transpose() * b.pose.linear()).isIdentity(1e-12)) << e.name;
+  }
   const std::vector<std::uint8_t> image = serialize(*lib);
-  EXPECT_EQ(image.size(), fs::file_size(shipped));
   const auto* m = plr::msg::GetStrategyLibrary(image.data() + 4);
   for (const auto* e : *m->entries()) {
     EXPECT_EQ(e->parent(), nullptr);
     EXPECT_EQ(e->leaf(), nullptr);
     EXPECT_EQ(e->start(), nullptr);
+    EXPECT_EQ(e->fidelity(), nullptr);
+    EXPECT_EQ(e->check(), nullptr);
+    ASSERT_NE(e->world_rotations(), nullptr);
   }
+  // Written again, it is in this format: read back, the same bytes.
+  const auto again = deserialize_library(image.data(), image.size(), "image");
+  ASSERT_TRUE(again) << again.error().message;
+  EXPECT_EQ(serialize(*again), image);
+}
+
+// The shipped library must be in the format this code writes: the chooser
+// model's CRC of it is of the bytes serialize() gives (Shipped.* in
+// tests/unit/sim/chooser). It fails when the format changed and the shipped
+// files were not made again.
+TEST(Library, TheShippedLibraryIsWrittenBackAsItIs) {
+  const fs::path shipped = fs::path(PLR_SOURCE_DIR) / "configs/learned/library.plrl";
+  const auto lib = load_library(shipped);
+  ASSERT_TRUE(lib) << lib.error().message;
+  EXPECT_TRUE(serialize(*lib) == read(shipped))
+      << "configs/learned/library.plrl is not in this build's format; remake it and the chooser "
+         "model from the repository's root: build/bin/plr run configs/learned/generate.yaml "
+         "--report build/learned_generation, then rm -f configs/learned/data.plrd && "
+         "build/bin/plr chooser train configs/learned/train_chooser.yaml";
+}
+
+// A world goes through the file bit for bit: positions and sizes are
+// doubles in the file, and each rotation is stored as its matrix beside the
+// quaternion (which alone gives it back only to the last bits: a pile's
+// simulation turns on them, docs/generator.md).
+TEST(Library, AWorldWithRotatedBoxesComesBackBitForBit) {
+  LibraryEntry e = entry("A1-1");
+  e.world.trailer = {2.4871, 2.6993, 15.8127};
+  e.world.boxes.clear();
+  std::uint32_t lost = 0;  // boxes whose quaternion alone would not give their rotation back
+  for (std::uint32_t i = 0; i < 40; ++i) {
+    Box b;
+    b.id = 100 + i;
+    b.size = {0.3 + 0.0137 * i, 0.41 + 0.0071 * i, 0.27 + 0.0093 * i};
+    const Eigen::Vector3d axis = Eigen::Vector3d(0.3 + 0.1 * i, -0.7, 1.1 - 0.05 * i).normalized();
+    b.pose = Eigen::Translation3d(0.5 + 0.31 * i, -0.9 + 0.043 * i, 0.2 + 0.017 * i) *
+             Eigen::AngleAxisd(0.013 + 0.157 * i, axis);
+    const Eigen::Matrix3d via_quaternion = Eigen::Quaterniond(b.pose.linear()).toRotationMatrix();
+    lost += std::memcmp(via_quaternion.data(), b.pose.linear().data(), 9 * sizeof(double)) != 0;
+    e.world.boxes.push_back(b);
+  }
+  ASSERT_GT(lost, 0u) << "no rotation here would lose bits through a quaternion: the test could "
+                         "not fail";
+  Library lib;
+  lib.entries = {e};
+  const std::vector<std::uint8_t> bytes = serialize(lib);
+  const auto back = deserialize_library(bytes.data(), bytes.size(), "l.plrl");
+  ASSERT_TRUE(back) << back.error().message;
+  const World& w = back->entries.at(0).world;
+  EXPECT_EQ(std::memcmp(&w.trailer, &e.world.trailer, sizeof(Trailer)), 0);
+  ASSERT_EQ(w.boxes.size(), e.world.boxes.size());
+  for (std::size_t i = 0; i < w.boxes.size(); ++i) {
+    const Box &a = w.boxes[i], &b = e.world.boxes[i];
+    EXPECT_EQ(a.id, b.id);
+    EXPECT_EQ(std::memcmp(a.size.data(), b.size.data(), 3 * sizeof(double)), 0) << i;
+    EXPECT_EQ(std::memcmp(a.pose.matrix().data(), b.pose.matrix().data(), 16 * sizeof(double)), 0)
+        << "box " << i;
+    EXPECT_EQ(a.mass, 0.0);
+  }
+  // And the bytes: read and written again, the same.
+  EXPECT_EQ(serialize(*back), bytes);
+}
+
+TEST(Library, AStrategyMadeBelowFullFidelityKeepsItsLevelAndBothValues) {
+  Library lib;
+  lib.entries = {entry("A1-1"), entry("B1-1")};
+  LibraryEntry& fast = lib.entries[1];
+  fast.fidelity = "fast";
+  fast.check = FidelityCheck{-310.5, 12.25, -402.75, 9.5, 5, 1000};
+  const std::vector<std::uint8_t> bytes = serialize(lib);
+  const auto back = deserialize_library(bytes.data(), bytes.size(), "l.plrl");
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_EQ(back->entries[0].fidelity, "full");
+  EXPECT_FALSE(back->entries[0].check);
+  EXPECT_EQ(back->entries[1].fidelity, "fast");
+  ASSERT_TRUE(back->entries[1].check);
+  EXPECT_EQ(*back->entries[1].check, *fast.check);
+  EXPECT_EQ(serialize(*back), bytes);
+
+  fast.fidelity = "quick";
+  const std::vector<std::uint8_t> bad = serialize(lib);
+  const auto refused = deserialize_library(bad.data(), bad.size(), "l.plrl");
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error().message,
+            "l.plrl: entries[1] 'B1-1': fidelity: 'quick' is not full, adaptive or fast");
 }
 
 TEST(Library, TruncatedFileIsRefusedWithWhereItEnds) {

@@ -17,6 +17,7 @@
 
 #include "plr/actions/rig.hpp"
 #include "plr/jobs/kinds.hpp"
+#include "plr/sim/fidelity.hpp"
 #include "plr/sim/strategy.hpp"
 #include "plr/sim/world.hpp"
 
@@ -49,6 +50,8 @@ inline constexpr std::size_t kMaxObservationJson = 64 * 1024;
 struct SimJob {
   SimRequest request;
   std::string observation_json = "{}";  // the fields of sim::ObservationParams
+  // The level the worker simulates at: the state restored there runs at it.
+  sim::Fidelity fidelity = sim::Fidelity::kFull;
 };
 
 // The job's input and output bytes; decoding takes untrusted bytes (verified,
@@ -70,15 +73,18 @@ plr::Expected<SimOutcome> simulate(Rig& rig, const SimRequest& request);
 plr::Expected<SimOutcome> start_state(Rig& rig, const sim::World& truth);
 
 // Registers the sim.action kind: its handler keeps one rig, made again when
-// a job names other observation parameters.
+// a job names other observation parameters, set to each job's fidelity.
 void add_sim_action(plr::jobs::Kinds& kinds);
 
 // Whether `bytes` hold a verifiable TruckState buffer.
 bool is_truck_state(const std::uint8_t* data, std::size_t size);
 
-// A 64-bit name of (state, action): FNV-1a over the state's bytes, mixed
-// with the action. The generator's cache and result store are keyed by it.
+// A 64-bit name of (state, action, fidelity): FNV-1a over the state's bytes,
+// mixed with the action and, below full fidelity, the level (a full
+// simulation's key is the one it had before fidelity levels). The
+// generator's cache and result store are keyed by it.
 std::uint64_t state_hash(const std::vector<std::uint8_t>& state);
-std::uint64_t work_key(std::uint64_t state_hash, sim::Action action);
+std::uint64_t work_key(std::uint64_t state_hash, sim::Action action,
+                       sim::Fidelity fidelity = sim::Fidelity::kFull);
 
 }  // namespace plr::actions

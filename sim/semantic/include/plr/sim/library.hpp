@@ -2,6 +2,10 @@
 // generator plug-in), each with the world it was generated on (what the
 // chooser computes its features from) and how it was made.
 //
+// A world written and read back is the same bit for bit (each box's rotation
+// matrix is stored beside its quaternion), and a library read and written
+// again gives the same bytes.
+//
 // File (extension .plrl): a 4-byte little-endian size N, N bytes of
 // plr.msg.StrategyLibrary (sdk/schemas/library.fbs, identifier "PLRL"), a
 // 4-byte CRC-32 of those N bytes. Written atomically; a file that is cut
@@ -15,6 +19,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -61,6 +66,27 @@ struct StartParticle {
   bool operator==(const StartParticle&) const = default;
 };
 
+// A strategy made below full fidelity, re-evaluated at full fidelity: the
+// mean value of its tree (negated robot seconds, the terminal estimate at
+// the horizon, as the search counts them) and the boxes it unloads, over
+// the generator's particles at the level it was made at, and at full
+// fidelity over `full_particles` fresh particles: the generator's mass
+// particles numbered first_particle, first_particle + 1, ...
+// (sim::particle_seed(provenance.seed, n)), never used by the search.
+struct FidelityCheck {
+  double value = 0.0;
+  double boxes = 0.0;
+  double full_value = 0.0;
+  double full_boxes = 0.0;
+  std::uint32_t full_particles = 0;
+  std::uint32_t first_particle = 0;
+  bool operator==(const FidelityCheck&) const = default;
+};
+
+// The names of the fidelity levels (plr/sim/fidelity.hpp, which this layer
+// does not see).
+inline constexpr const char* kFullFidelity = "full";
+
 struct LibraryEntry {
   std::string name;
   std::string family;
@@ -77,6 +103,10 @@ struct LibraryEntry {
   std::string parent;
   std::vector<Observation> leaf;
   std::vector<StartParticle> start;
+  // The fidelity the strategy was made at ("full", "adaptive", "fast"); below
+  // full, its values at that level and at full fidelity.
+  std::string fidelity = kFullFidelity;
+  std::optional<FidelityCheck> check;
 
   bool is_continuation() const { return !parent.empty(); }
 };

@@ -14,6 +14,7 @@
 
 #include "plr/chooser/model.hpp"
 #include "plr/jobs/runner_settings.hpp"
+#include "plr/sim/fidelity.hpp"
 #include "plr/sim/generators.hpp"
 #include "plr/sim/hardcoded_strategy.hpp"
 #include "plr/sim/observation.hpp"
@@ -66,6 +67,9 @@ struct TrainingSettings {
   // set holds min_samples, the training ends after `patience` iterations
   // (training worlds) in a row without a new best. 0: every training world.
   std::uint32_t patience = 0;
+  // The simulation fidelity the rollouts that label the states run at
+  // (docs/fidelity.md): `fidelity: full | adaptive | fast`, full by default.
+  sim::Fidelity fidelity = sim::Fidelity::kFull;
 
   // Of what shapes the data and the model (not of `workers`, `runner` or
   // `out`): a
