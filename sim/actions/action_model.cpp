@@ -416,6 +416,7 @@ class Run {
         const double hidden = std::min(made.model_s, a.overlap_s);
         out_.plan_hidden_s += hidden;
         made.model_s -= hidden;
+        for (auto& q : made.queries) q.planned_ahead = true;
         return apply(std::move(made));
       }
     }

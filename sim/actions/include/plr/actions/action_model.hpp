@@ -132,6 +132,7 @@ struct QueryRecord {
   double planning_ms = 0.0;  // as the planner measured it
   bool escaped = false;      // it ran the M6 escape first
   double escape_ms = 0.0;
+  bool planned_ahead = false;  // made while the motion before it ran, and used
 };
 
 struct Outcome {
