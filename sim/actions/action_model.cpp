@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <future>
 #include <optional>
 #include <unordered_map>
 #include <unordered_set>
@@ -36,6 +37,25 @@ std::uint32_t boxes_shifted(const sim::World& before, const sim::World& after) {
       ++n;
   }
   return n;
+}
+
+bool PlanAhead::same_state(const Perceived& predicted, const Perceived& observed) {
+  if ((predicted.q - observed.q).cwiseAbs().maxCoeff() > kJoints) return false;
+  auto held_p = predicted.held, held_o = observed.held;
+  std::sort(held_p.begin(), held_p.end());
+  std::sort(held_o.begin(), held_o.end());
+  if (held_p != held_o || predicted.world.boxes.size() != observed.world.boxes.size()) return false;
+  std::unordered_map<std::uint32_t, const sim::Box*> was;
+  for (const auto& b : predicted.world.boxes) was.emplace(b.id, &b);
+  for (const auto& b : observed.world.boxes) {
+    const auto it = was.find(b.id);
+    if (it == was.end()) return false;
+    const Eigen::AngleAxisd turn(it->second->pose.linear().transpose() * b.pose.linear());
+    if ((b.pose.translation() - it->second->pose.translation()).norm() > kBoxShift ||
+        std::abs(turn.angle()) > kBoxTurn)
+      return false;
+  }
+  return true;
 }
 
 plr::Status ActionOptions::check() const {
@@ -84,6 +104,188 @@ struct Planned {
   std::vector<planning::TimedPoint> points;
 };
 
+bool same_goal(const Goal& a, const Goal& b) {
+  auto same = [](const sim::PlateTarget& x, const sim::PlateTarget& y) {
+    return x.position == y.position && x.yaw == y.yaw;
+  };
+  return a.joints == b.joints && a.pose.has_value() == b.pose.has_value() &&
+         (!a.pose || same(*a.pose, *b.pose)) && a.then.size() == b.then.size() &&
+         std::equal(a.then.begin(), a.then.end(), b.then.begin(), same);
+}
+
+// One step of an action: a motion planned to a goal, the suction before and
+// after it, the boxes its planning leaves out, the cups it opens.
+struct Step {
+  Step(std::string what, PlanMode mode, Goal goal, Suction before = Suction::kKeep,
+       Suction after = Suction::kKeep, std::vector<std::uint32_t> leave_out = {},
+       std::vector<bool> cups_open = {})
+      : what(std::move(what)),
+        mode(mode),
+        goal(std::move(goal)),
+        before(before),
+        after(after),
+        leave_out(std::move(leave_out)),
+        cups_open(std::move(cups_open)) {}
+  std::string what;
+  PlanMode mode;
+  Goal goal;
+  Suction before, after;
+  std::vector<std::uint32_t> leave_out;
+  std::vector<bool> cups_open;
+};
+
+// Whether two steps ask the same of the planner.
+bool same_query(const Step& a, const Step& b) {
+  return a.what == b.what && a.mode == b.mode && same_goal(a.goal, b.goal) &&
+         a.leave_out == b.leave_out;
+}
+
+// What planning a step took: its answer, the queries asked, the modelled
+// seconds the robot would wait for them, and an error that ends the action.
+struct Attempt {
+  Planned plan;
+  std::vector<QueryRecord> queries;
+  double model_s = 0.0;
+  double wall_s = 0.0;
+  std::optional<plr::Error> abort;
+};
+
+// Turns a step's goal into planning queries and asks the backend. It
+// touches nothing but the backend: a plan made while moving runs it on
+// another thread, concurrently with the backend's execute().
+class Asker {
+ public:
+  Asker(const sim::RobotModel& robot, const ActionOptions& o, Backend& backend)
+      : robot_(&robot), o_(&o), backend_(&backend) {}
+
+  Attempt once(PlanMode mode, const Perceived& w, const Goal& goal,
+               const std::vector<std::uint32_t>& leave_out) const {
+    Attempt a;
+    ask(a, mode, w, goal, leave_out);
+    return a;
+  }
+
+  // Free-space arm moves (M1, M2) go to joint goals from the arm's
+  // closed-form IK, nearest solution first: the lattice reaches a joint
+  // goal far sooner than it snaps onto a pose. A goal in collision tries
+  // the next solution.
+  Attempt goal(PlanMode mode, const Perceived& w, const Goal& goal,
+               const std::vector<std::uint32_t>& leave_out) const {
+    if (!goal.pose || (mode != PlanMode::kArm && mode != PlanMode::kArmBase))
+      return once(mode, w, goal, leave_out);
+    auto solutions = robot_->arm_ik(*goal.pose, w.q);
+    std::erase_if(solutions,
+                  [&](const JointVector& q) { return !follows_lines(*robot_, q, goal.then); });
+    Attempt a;
+    a.plan.message = goal.then.empty() ? "no arm IK solution for the goal pose"
+                                       : "no arm IK solution for the goal pose from which the "
+                                         "straight moves after it stay on one IK branch";
+    a.plan.status = PlanStatus::kGoalInvalid;
+    for (std::size_t i = 0; i < solutions.size() && i < 3; ++i) {
+      Goal g;
+      for (int j : {sim::kArm1, sim::kArm2, sim::kArm3, sim::kArm4})
+        g.joints.emplace_back(j, solutions[i][j]);
+      ask(a, mode, w, g, leave_out);
+      if (a.abort || a.plan.ok || a.plan.status != PlanStatus::kGoalInvalid) break;
+    }
+    return a;
+  }
+
+ private:
+  void ask(Attempt& a, PlanMode mode, const Perceived& w, const Goal& goal,
+           const std::vector<std::uint32_t>& leave_out) const {
+    const ActionOptions& o = *o_;
+    planning::PlanQuery q;
+    q.mode = mode;
+    q.start = w.q;
+    if (goal.pose) {
+      q.goal = planning::PoseGoal{*goal.pose};
+    } else if (mode != PlanMode::kEscape) {
+      JointVector g = w.q;
+      for (auto [j, v] : goal.joints) g[j] = v;
+      q.goal = planning::JointGoal{g};
+    }
+    q.time_limit_s = o.plan_timeout_s;
+    q.max_expansions = o.plan_expansions;
+    q.eps_initial = o.plan_epsilons.front();
+    q.eps_final = o.plan_epsilons.back();
+    q.eps_decrement = o.plan_epsilons.size() > 1
+                          ? std::max(1e-3, (q.eps_initial - q.eps_final) /
+                                               static_cast<double>(o.plan_epsilons.size() - 1))
+                          : 1.0;
+    q.ignored_boxes = leave_out;
+    for (const sim::Box& b : w.world.boxes)
+      if (std::find(w.held.begin(), w.held.end(), b.id) != w.held.end()) q.held_boxes.push_back(b);
+    const auto t0 = Clock::now();
+    auto r = backend_->plan(q, w.world);
+    a.wall_s += std::chrono::duration<double>(Clock::now() - t0).count();
+    QueryRecord rec;
+    rec.mode = mode;
+    Planned& p = a.plan;
+    p = Planned{};
+    if (!r) {
+      if (r.error().code == PLR_ERR_CANCELLED) {
+        a.abort = r.error();
+        return;
+      }
+      a.queries.push_back(rec);
+      p.message = "plan: " + r.error().message;
+      p.status = PlanStatus::kTimeout;
+      return;
+    }
+    if (r->stats.time_limit_hit) {
+      // Fewer expansions on a busier machine: the outcome and its modelled
+      // planning time would depend on the load. Not PLR_ERR_TIMEOUT: the
+      // executor takes that for a lost simulator and repeats the action.
+      a.abort = plr::make_error(
+          PLR_ERR_INVALID,
+          fmt::format("plan: {} ended by the {} s safety net before its budget of {} expansions "
+                      "({} done); raise plan_timeout_s",
+                      planning::to_string(mode), o.plan_timeout_s, o.plan_expansions,
+                      r->stats.expansions));
+      return;
+    }
+    rec.answered = true;
+    rec.status = r->status;
+    rec.planner = r->planner;
+    rec.expansions = r->stats.expansions;
+    rec.planning_ms = 1e3 * r->stats.planning_time_s;
+    rec.escaped = r->stats.escaped;
+    rec.escape_ms = 1e3 * r->stats.escape_time_s;
+    a.queries.push_back(rec);
+    a.model_s += o.plan_time.seconds(mode, r->stats.expansions);
+    p.status = r->status;
+    if (r->status != PlanStatus::kSolved || r->points.empty()) {
+      p.message = std::string(planning::to_string(r->status)) +
+                  (r->message.empty() ? "" : ": " + r->message);
+      return;
+    }
+    p.ok = true;
+    p.points = std::move(r->points);
+  }
+
+  const sim::RobotModel* robot_;
+  const ActionOptions* o_;
+  Backend* backend_;
+};
+
+// A plan made while a motion runs, for the step after it, from the state
+// the motion is predicted to end in.
+struct Ahead {
+  Step step;
+  std::vector<std::uint32_t> ignored;  // sorted
+  Perceived predicted;
+  std::future<Attempt> attempt;
+  bool moved = false;      // the motion it was made during has run
+  double overlap_s = 0.0;  // that motion's duration
+};
+
+std::vector<std::uint32_t> sorted(std::vector<std::uint32_t> v) {
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+  return v;
+}
+
 // Sets a value for a scope, then puts the old one back (the trajectories'
 // time scale while a box is carried).
 class Slowed {
@@ -126,7 +328,8 @@ class Run {
         backend_(backend),
         memory_(memory),
         reporter_(reporter),
-        action_(action) {}
+        action_(action),
+        asker_(robot, o, backend) {}
 
   Outcome go() {
     Perceived w0 = observe();
@@ -147,6 +350,7 @@ class Run {
       pick(w0);
     else
       sweep(w0);
+    drop_ahead();
     const Perceived end = observe();
     out_.boxes = end.unloaded - unloaded_at_start_;
     out_.shifted = boxes_shifted(start, end.world);
@@ -179,97 +383,85 @@ class Run {
 
   // ---- Planning and execution ---------------------------------------------
 
+  // What an attempt cost goes into the outcome; an error that ends the
+  // action ends it here.
+  Planned apply(Attempt a) {
+    if (a.abort) throw Aborted{*a.abort};
+    out_.queries.insert(out_.queries.end(), a.queries.begin(), a.queries.end());
+    out_.plan_model_s += a.model_s;
+    out_.plan_wall_s += a.wall_s;
+    return std::move(a.plan);
+  }
+
+  // Any planning but the plan made ahead waits for it: the backend plans
+  // one query at a time.
   Planned plan_once(PlanMode mode, const Perceived& w, const Goal& goal,
                     const std::vector<std::uint32_t>& leave_out) {
-    planning::PlanQuery q;
-    q.mode = mode;
-    q.start = w.q;
-    if (goal.pose) {
-      q.goal = planning::PoseGoal{*goal.pose};
-    } else if (mode != PlanMode::kEscape) {
-      JointVector g = w.q;
-      for (auto [j, v] : goal.joints) g[j] = v;
-      q.goal = planning::JointGoal{g};
+    drop_ahead();
+    return apply(asker_.once(mode, w, goal, leave_out));
+  }
+
+  // A step's plan: the one made while the last motion ran when it was made
+  // for this step, its query is the one this step asks, and the state
+  // observed is the predicted one (the robot waits only for the modelled
+  // planning that motion did not cover); otherwise planned from `w`.
+  Planned plan_step(const Step& s, const Perceived& w, const std::vector<std::uint32_t>& ignored) {
+    if (ahead_) {
+      Ahead a = std::move(*ahead_);
+      ahead_.reset();
+      Attempt made = a.attempt.get();
+      if (!made.abort && a.moved && same_query(a.step, s) && a.ignored == sorted(ignored) &&
+          PlanAhead::same_state(a.predicted, w)) {
+        ++out_.plans_ahead_used;
+        const double hidden = std::min(made.model_s, a.overlap_s);
+        out_.plan_hidden_s += hidden;
+        made.model_s -= hidden;
+        for (auto& q : made.queries) q.planned_ahead = true;
+        return apply(std::move(made));
+      }
     }
-    q.time_limit_s = o_.plan_timeout_s;
-    q.max_expansions = o_.plan_expansions;
-    q.eps_initial = o_.plan_epsilons.front();
-    q.eps_final = o_.plan_epsilons.back();
-    q.eps_decrement = o_.plan_epsilons.size() > 1
-                          ? std::max(1e-3, (q.eps_initial - q.eps_final) /
-                                               static_cast<double>(o_.plan_epsilons.size() - 1))
-                          : 1.0;
-    q.ignored_boxes = leave_out;
-    for (const sim::Box& b : w.world.boxes)
-      if (std::find(w.held.begin(), w.held.end(), b.id) != w.held.end()) q.held_boxes.push_back(b);
-    const auto t0 = Clock::now();
-    auto r = backend_.plan(q, w.world);
-    out_.plan_wall_s += std::chrono::duration<double>(Clock::now() - t0).count();
-    QueryRecord rec;
-    rec.mode = mode;
-    Planned p;
-    if (!r) {
-      if (ends_the_action(r.error()) && r.error().code == PLR_ERR_CANCELLED)
-        throw Aborted{r.error()};
-      out_.queries.push_back(rec);
-      p.message = "plan: " + r.error().message;
-      p.status = PlanStatus::kTimeout;
-      return p;
-    }
-    if (r->stats.time_limit_hit) {
-      // Fewer expansions on a busier machine: the outcome and its modelled
-      // planning time would depend on the load. Not PLR_ERR_TIMEOUT: the
-      // executor takes that for a lost simulator and repeats the action.
-      throw Aborted{plr::make_error(
-          PLR_ERR_INVALID,
-          fmt::format("plan: {} ended by the {} s safety net before its budget of {} expansions "
-                      "({} done); raise plan_timeout_s",
-                      planning::to_string(mode), o_.plan_timeout_s, o_.plan_expansions,
-                      r->stats.expansions))};
-    }
-    rec.answered = true;
-    rec.status = r->status;
-    rec.planner = r->planner;
-    rec.expansions = r->stats.expansions;
-    rec.planning_ms = 1e3 * r->stats.planning_time_s;
-    rec.escaped = r->stats.escaped;
-    rec.escape_ms = 1e3 * r->stats.escape_time_s;
-    out_.queries.push_back(rec);
-    out_.plan_model_s += o_.plan_time.seconds(mode, r->stats.expansions);
-    p.status = r->status;
-    if (r->status != PlanStatus::kSolved || r->points.empty()) {
-      p.message = std::string(planning::to_string(r->status)) +
-                  (r->message.empty() ? "" : ": " + r->message);
-      return p;
-    }
-    p.ok = true;
-    p.points = std::move(r->points);
+    return apply(asker_.goal(s.mode, w, s.goal, ignored));
+  }
+
+  // The state a motion from `w` to `q` is predicted to end in: the world as
+  // it was, the boxes held carried by the plate.
+  Perceived predict(const Perceived& w, const JointVector& q) const {
+    Perceived p = w;
+    p.q = q;
+    const Eigen::Isometry3d carry = robot_.plate_pose(q) * robot_.plate_pose(w.q).inverse();
+    for (auto& b : p.world.boxes)
+      if (std::find(w.held.begin(), w.held.end(), b.id) != w.held.end()) b.pose = carry * b.pose;
     return p;
   }
 
-  // Free-space arm moves (M1, M2) go to joint goals from the arm's closed-form
-  // IK, nearest solution first: the lattice reaches a joint goal far sooner
-  // than it snaps onto a pose. A goal in collision tries the next solution.
-  Planned plan_goal(PlanMode mode, const Perceived& w, const Goal& goal,
-                    const std::vector<std::uint32_t>& leave_out) {
-    if (!goal.pose || (mode != PlanMode::kArm && mode != PlanMode::kArmBase))
-      return plan_once(mode, w, goal, leave_out);
-    auto solutions = robot_.arm_ik(*goal.pose, w.q);
-    std::erase_if(solutions,
-                  [&](const JointVector& q) { return !follows_lines(robot_, q, goal.then); });
-    Planned p;
-    p.message = goal.then.empty() ? "no arm IK solution for the goal pose"
-                                  : "no arm IK solution for the goal pose from which the "
-                                    "straight moves after it stay on one IK branch";
-    p.status = PlanStatus::kGoalInvalid;
-    for (std::size_t i = 0; i < solutions.size() && i < 3; ++i) {
-      Goal g;
-      for (int j : {sim::kArm1, sim::kArm2, sim::kArm3, sim::kArm4})
-        g.joints.emplace_back(j, solutions[i][j]);
-      p = plan_once(mode, w, g, leave_out);
-      if (p.ok || p.status != PlanStatus::kGoalInvalid) break;
+  // Starts planning, on another thread, the first of `next` that has to
+  // move from the state the motion `s` (from `w` along `points`) is
+  // predicted to end in. Not after a release: what falls cannot be predicted.
+  void plan_ahead(std::initializer_list<const Step*> next, const Step& s, const Perceived& w,
+                  const std::vector<planning::TimedPoint>& points) {
+    drop_ahead();
+    if (!o_.plan_while_moving || points.empty() || s.before == Suction::kOff ||
+        s.after == Suction::kOff)
+      return;
+    const Perceived predicted = predict(w, points.back().position);
+    for (const Step* n : next) {
+      if (already_there(*n, predicted)) continue;
+      auto ignored = ignored_for(*n, predicted);
+      auto attempt = std::async(std::launch::async, [asker = asker_, n = *n, predicted, ignored] {
+        return asker.goal(n.mode, predicted, n.goal, ignored);
+      });
+      ahead_.emplace(Ahead{*n, sorted(std::move(ignored)), predicted, std::move(attempt)});
+      ++out_.plans_ahead;
+      return;
     }
-    return p;
+  }
+
+  // A plan made ahead that no step took: waited for (the backend plans one
+  // query at a time), then dropped.
+  void drop_ahead() {
+    if (!ahead_) return;
+    ahead_->attempt.wait();
+    ahead_.reset();
   }
 
   // Runs a trajectory; the outcome, or nullopt when the robot refused it.
@@ -284,6 +476,9 @@ class Run {
       p.time_s *= time_scale_;
       p.velocity /= time_scale_;
     }
+    // A motion other than the one a plan was made ahead during: that plan's
+    // predicted state will not be seen.
+    if (ahead_ && ahead_->moved) drop_ahead();
     m.points = std::move(points);
     m.before = before;
     m.after = after;
@@ -314,28 +509,35 @@ class Run {
     return std::move(*r);
   }
 
-  // One step: observe, plan (asking for M6 when the planner reports a start
-  // in collision it did not leave), execute. False when it could not be done.
   bool step(const std::string& what, PlanMode mode, const Goal& goal, Suction before, Suction after,
             const std::vector<std::uint32_t>& leave_out = {},
             const std::vector<bool>& cups_open = {}) {
-    if (reporter_.progress) reporter_.progress(what);
-    Perceived w = observe();
-    if (!goal.pose && !goal.joints.empty()) {
-      bool there = true;
-      for (auto [j, v] : goal.joints) there = there && std::abs(w.q[j] - v) < 0.01;
-      if (there && before == Suction::kKeep && after == Suction::kKeep) return true;
-    }
+    return step(Step{what, mode, goal, before, after, leave_out, cups_open});
+  }
+
+  // Whether `s` has nothing to do from `w`: its joints are there, and it
+  // neither grips nor releases.
+  static bool already_there(const Step& s, const Perceived& w) {
+    if (s.goal.pose || s.goal.joints.empty() || s.before != Suction::kKeep ||
+        s.after != Suction::kKeep)
+      return false;
+    for (auto [j, v] : s.goal.joints)
+      if (!(std::abs(w.q[j] - v) < 0.01)) return false;
+    return true;
+  }
+
+  // The boxes a step's planning leaves out in state `w`.
+  std::vector<std::uint32_t> ignored_for(const Step& s, const Perceived& w) const {
     // Boxes lying on the robot or on its load ride along with it (or fall
     // off it): they are not obstacles to its moves, nor, to nose and base
     // moves, are those the nose pushes.
     // The planner only tests membership: a box named twice does no harm.
-    std::vector<std::uint32_t> ignored = leave_out;
+    std::vector<std::uint32_t> ignored = s.leave_out;
     const auto riding = on_robot(w);
     ignored.insert(ignored.end(), riding.begin(), riding.end());
     const auto on_load = boxes_on_load(w.world, w.held);
     ignored.insert(ignored.end(), on_load.begin(), on_load.end());
-    if (mode == PlanMode::kNose || mode == PlanMode::kBaseLine) {
+    if (s.mode == PlanMode::kNose || s.mode == PlanMode::kBaseLine) {
       const auto pushed = boxes_on_nose(w);
       ignored.insert(ignored.end(), pushed.begin(), pushed.end());
     }
@@ -343,7 +545,7 @@ class Run {
     // keep the base from backing up: its rear pushes it towards the door, as
     // hard as the drive can (B2 s2, s4: a box beside the base's rear end
     // refused every move back).
-    if (mode == PlanMode::kBaseLine) {
+    if (s.mode == PlanMode::kBaseLine) {
       for (const auto& box : w.world.boxes)
         if (behind_robot(box, w.q)) ignored.push_back(box.id);
     }
@@ -353,7 +555,7 @@ class Run {
     // it lies behind the front edge (nothing else goes there). A2 s9: a box
     // the belt dropped beside the base refused every move ("start in
     // collision: base_link - box 18").
-    const bool base_moves = mode == PlanMode::kBaseLine || mode == PlanMode::kArmBase;
+    const bool base_moves = s.mode == PlanMode::kBaseLine || s.mode == PlanMode::kArmBase;
     const auto against_base = boxes_touching(w.world, robot_, w.q, {"base_link"});
     for (const auto& box : w.world.boxes) {
       if (std::find(against_base.begin(), against_base.end(), box.id) == against_base.end())
@@ -363,33 +565,52 @@ class Run {
           b.y0 > g_.base_half_width - kFlankOverlap || b.y1 < -g_.base_half_width + kFlankOverlap;
       if (base_moves ? flank : behind_robot(box, w.q)) ignored.push_back(box.id);
     }
-    Planned p = plan_goal(mode, w, goal, ignored);
+    return ignored;
+  }
+
+  // One step: observe, plan (asking for M6 when the planner reports a start
+  // in collision it did not leave), execute. False when it could not be done.
+  // `next`: the steps that may follow it, in order; while it moves, the
+  // first of them that has to move is planned (plan_ahead).
+  bool step(const Step& s, std::initializer_list<const Step*> next = {}) {
+    if (reporter_.progress) reporter_.progress(s.what);
+    Perceived w = observe();
+    if (already_there(s, w)) return true;
+    const auto ignored = ignored_for(s, w);
+    Planned p = plan_step(s, w, ignored);
     if (!p.ok && p.status == PlanStatus::kStartInvalid) {
       Planned escape = plan_once(PlanMode::kEscape, w, {}, {});
       if (escape.ok && execute(std::move(escape.points), Suction::kKeep, Suction::kKeep)) {
         w = observe();
-        p = plan_goal(mode, w, goal, ignored);
+        p = plan_step(s, w, ignored);
       }
     }
     if (!p.ok) {
-      note(fmt::format("{} not planned: {}", what, p.message));
-      step_failure_ = what + " not planned: " + p.message;
+      note(fmt::format("{} not planned: {}", s.what, p.message));
+      step_failure_ = s.what + " not planned: " + p.message;
       return false;
     }
-    auto done = execute(std::move(p.points), before, after, cups_open);
+    plan_ahead(next, s, w, p.points);
+    const double exec_before = out_.exec_s;
+    auto done = execute(std::move(p.points), s.before, s.after, s.cups_open);
+    if (ahead_) {
+      ahead_->moved = done.has_value();
+      ahead_->overlap_s = out_.exec_s - exec_before;
+    }
     if (!done) {
-      step_failure_ = what + " not executed";
+      step_failure_ = s.what + " not executed";
       return false;
     }
     last_held_ = done->held;
     // Backing away, the base is held only by what the nose pins to the
     // floor (a box wedged under it): lifted, the nose lets go, and the base
     // tries once more.
-    if (done->stalled && mode == PlanMode::kBaseLine && !freeing_ && backwards(goal, w)) {
+    if (done->stalled && s.mode == PlanMode::kBaseLine && !freeing_ && backwards(s.goal, w)) {
       freeing_ = true;
-      const bool freed = step("nose up to free the base", PlanMode::kNose,
-                              nose({g_.nose_lift_max, 0.0, 0.0}), Suction::kKeep, Suction::kKeep) &&
-                         step(what, mode, goal, Suction::kKeep, Suction::kKeep, leave_out);
+      const bool freed =
+          step("nose up to free the base", PlanMode::kNose, nose({g_.nose_lift_max, 0.0, 0.0}),
+               Suction::kKeep, Suction::kKeep) &&
+          step(Step{s.what, s.mode, s.goal, Suction::kKeep, Suction::kKeep, s.leave_out});
       freeing_ = false;
       return freed;
     }
@@ -487,33 +708,47 @@ class Run {
     bool delivered = false;
     for (const auto& c : candidates) {
       // Nose down before anything else in reach of the boxes moves; a pile in
-      // front may leave only a lifted nose possible.
-      if (!step("base to pick point", PlanMode::kBaseLine, joints({{sim::kBaseX, c.base_x}}),
-                Suction::kKeep, Suction::kKeep)) {
-        memory_.unreached[c.box] = step_failure_;
-        continue;
-      }
-      if (!step("nose down", PlanMode::kNose, nose(o_.nose_down), Suction::kKeep, Suction::kKeep) &&
-          !step("nose down (lifted)", PlanMode::kNose, nose(o_.nose_down, 0.15), Suction::kKeep,
-                Suction::kKeep)) {
-        memory_.unreached[c.box] = step_failure_;
-        continue;
-      }
+      // front may leave only a lifted nose possible. While each motion runs,
+      // the next one is planned: the pre-grasp (the long search) while the
+      // nose goes down, or while the base drives when the nose is down
+      // already.
+      const Step to_pick{"base to pick point", PlanMode::kBaseLine,
+                         joints({{sim::kBaseX, c.base_x}})};
+      const Step down{"nose down", PlanMode::kNose, nose(o_.nose_down)};
+      const Step down_lifted{"nose down (lifted)", PlanMode::kNose, nose(o_.nose_down, 0.15)};
       // From the arm left over the belt by the last delivery, a pre-grasp in
       // a far corner can be out of the search's budget; from the folded arm
       // it is a shorter search.
-      const Goal pregrasp = pose(c.pregrasp, {c.grasp, c.lift, c.retract});
-      if (!step("pre-grasp", PlanMode::kArmBase, pregrasp, Suction::kKeep, Suction::kOn, {},
-                c.cups_open) &&
-          !(step("arm clear", PlanMode::kArm, arm_clear(), Suction::kKeep, Suction::kKeep) &&
-            step("pre-grasp (arm folded)", PlanMode::kArmBase, pregrasp, Suction::kKeep,
-                 Suction::kOn, {}, c.cups_open))) {
+      const Goal to_pregrasp = pose(c.pregrasp, {c.grasp, c.lift, c.retract});
+      const Step pregrasp{"pre-grasp",    PlanMode::kArmBase, to_pregrasp,
+                          Suction::kKeep, Suction::kOn,       {},
+                          c.cups_open};
+      const Step fold{"arm clear", PlanMode::kArm, arm_clear()};
+      const Step pregrasp_folded{"pre-grasp (arm folded)",
+                                 PlanMode::kArmBase,
+                                 to_pregrasp,
+                                 Suction::kKeep,
+                                 Suction::kOn,
+                                 {},
+                                 c.cups_open};
+      // The plate ends touching the box (a settled box may lean a little).
+      const Step approach{
+          "approach", PlanMode::kArmCartesian, pose(c.grasp), Suction::kKeep, Suction::kOn, c.boxes,
+          c.cups_open};
+      if (!step(to_pick, {&down, &pregrasp})) {
         memory_.unreached[c.box] = step_failure_;
         continue;
       }
-      // The plate ends touching the box (a settled box may lean a little).
-      if (!step("approach", PlanMode::kArmCartesian, pose(c.grasp), Suction::kKeep, Suction::kOn,
-                c.boxes, c.cups_open)) {
+      if (!step(down, {&pregrasp}) && !step(down_lifted, {&pregrasp})) {
+        memory_.unreached[c.box] = step_failure_;
+        continue;
+      }
+      if (!step(pregrasp, {&approach}) &&
+          !(step(fold, {&pregrasp_folded}) && step(pregrasp_folded, {&approach}))) {
+        memory_.unreached[c.box] = step_failure_;
+        continue;
+      }
+      if (!step(approach)) {
         memory_.unreached[c.box] = step_failure_;
         continue;
       }
@@ -540,10 +775,12 @@ class Run {
       const Slowed slowed(time_scale_, scale);
       auto leaning = leaning_on(observe().world, chosen->boxes);
       leaning.insert(leaning.end(), chosen->riders.begin(), chosen->riders.end());
-      step("lift", PlanMode::kArmCartesian, pose(chosen->lift), Suction::kKeep, Suction::kKeep,
-           leaning);
-      const bool out = step("retract", PlanMode::kArmCartesian, pose(chosen->retract),
-                            Suction::kKeep, Suction::kKeep, leaning);
+      const Step retract{"retract",      PlanMode::kArmCartesian, pose(chosen->retract),
+                         Suction::kKeep, Suction::kKeep,          leaning};
+      step(Step{"lift", PlanMode::kArmCartesian, pose(chosen->lift), Suction::kKeep, Suction::kKeep,
+                leaning},
+           {&retract});
+      const bool out = step(retract);
       if (!out) {
         const std::string why = "not pulled out: " + step_failure_;
         // Still in the wall: no drop-off can be planned from here. Set the
@@ -669,8 +906,9 @@ class Run {
 
   // The folded arm leaves the belt free, and the nose room to rise.
   void stow() {
-    step("arm clear", PlanMode::kArm, arm_clear(), Suction::kKeep, Suction::kKeep);
-    step("nose home", PlanMode::kNose, nose(o_.nose_home), Suction::kKeep, Suction::kKeep);
+    const Step home{"nose home", PlanMode::kNose, nose(o_.nose_home)};
+    step(Step{"arm clear", PlanMode::kArm, arm_clear()}, {&home});
+    step(home);
   }
 
   // Releases what the plate holds over the nose's conveyor: kNoPlace when no
@@ -734,11 +972,11 @@ class Run {
     }
     // A pick may have left the arm over the belt: fold it before the scoop
     // brings boxes up.
-    step("arm clear", PlanMode::kArm, arm_clear(), Suction::kKeep, Suction::kKeep);
-    if (step("approach", PlanMode::kBaseLine, joints({{sim::kBaseX, plan->start_base_x}}),
-             Suction::kKeep, Suction::kKeep) &&
-        step("nose to sweep", PlanMode::kNose, nose(o_.nose_sweep, plan->lift), Suction::kKeep,
-             Suction::kKeep)) {
+    const Step approach{"approach", PlanMode::kBaseLine,
+                        joints({{sim::kBaseX, plan->start_base_x}})};
+    const Step to_sweep{"nose to sweep", PlanMode::kNose, nose(o_.nose_sweep, plan->lift)};
+    step(Step{"arm clear", PlanMode::kArm, arm_clear()}, {&approach, &to_sweep});
+    if (step(approach, {&to_sweep}) && step(to_sweep)) {
       // The scoop goes under (or into) what it sweeps: the planner must not
       // treat those boxes as obstacles. A drive the boxes stall stops there.
       step("sweep forward", PlanMode::kBaseLine, joints({{sim::kBaseX, plan->end_base_x}}),
@@ -788,6 +1026,9 @@ class Run {
   std::string step_failure_;  // why the last step that failed did
   bool freeing_ = false;      // lifting the nose to free a stalled base
   double time_scale_ = 1.0;   // of the trajectories executed: > 1 carries a dropped box slower
+  const Asker asker_;
+  // Last: destroyed first, its thread joined while what it uses still lives.
+  std::optional<Ahead> ahead_;
 };
 
 }  // namespace

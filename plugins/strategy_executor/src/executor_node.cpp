@@ -88,6 +88,7 @@ class ExecutorNode : public plr::Node, private episode::Observer {
                          "observation",
                          "plan_timeout_s",
                          "plan_expansions",
+                         "plan_while_moving",
                          "plan_epsilons",
                          "execute_timeout_s",
                          "service_wait_s",
@@ -147,6 +148,7 @@ class ExecutorNode : public plr::Node, private episode::Observer {
     o.observation = observation.value();
     o.plan_timeout_s = params().get<double>("plan_timeout_s", o.plan_timeout_s);
     o.plan_expansions = params().get<std::uint64_t>("plan_expansions", o.plan_expansions);
+    o.plan_while_moving = params().get<bool>("plan_while_moving", o.plan_while_moving);
     o.plan_epsilons = params().get<std::vector<double>>("plan_epsilons", o.plan_epsilons);
     o.pick_candidates = params().get<std::uint64_t>("pick_candidates", o.pick_candidates);
     o.grip_attempts = static_cast<int>(

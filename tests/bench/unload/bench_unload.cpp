@@ -9,7 +9,7 @@
 //
 //   bench_unload [--quick] [--json] [--seeds N] [--first S] [--families A1,C]
 //                [--workers W] [--out DIR] [--timeout S] [--fidelity full|adaptive|fast]
-//                [--experience on|off] [--record-queries]
+//                [--experience on|off] [--plan-while-moving on|off] [--record-queries]
 // Defaults: seeds 1-20 of every family, one worker per core, results in
 // ./bench_unload. --quick: seeds 1-5. Each run is a job (plr/jobs); its
 // result goes to the result store DIR as it finishes, with each action it
@@ -22,7 +22,9 @@
 // 3600) is killed and counted as such. --fidelity: how accurately the boxes
 // are simulated (plr/sim/fidelity.hpp; default full). --experience: the
 // lattice planner reuses earlier paths within a trailer, or not (default:
-// as the shipped lattice file says). --record-queries: every M1 and M2
+// as the shipped lattice file says). --plan-while-moving: the next step is
+// planned while a motion runs (ActionOptions::plan_while_moving; default
+// on). --record-queries: every M1 and M2
 // query of a run, in order, with its world (F_seedS.pick_queries.bin, one
 // trailer's recurring motions for bench_planner --recurring).
 #include <unistd.h>
@@ -74,6 +76,7 @@ struct Options {
   bool json = false;
   plr::sim::Fidelity fidelity = plr::sim::Fidelity::kFull;
   std::string experience;  // "on", "off", "" (the lattice file's)
+  std::string plan_while_moving = "on";
   bool record_queries = false;
 };
 
@@ -86,6 +89,7 @@ struct Job {
   plr::sim::Fidelity fidelity;
   std::string experience;
   bool record_queries = false;
+  bool plan_while_moving = true;
 };
 
 constexpr const char* kRunKind = "unload.run";
@@ -167,11 +171,21 @@ nlohmann::json run(const Job& job) {
   // budget's search takes minutes, and the run's own timeout is the net.
   plr::actions::ActionOptions options;
   options.plan_timeout_s = plr::actions::kOfflinePlanTimeoutS;
+  options.plan_while_moving = job.plan_while_moving;
   const plr::actions::ActionModel model(robot, options);
   const auto episode = value_or_die(plr::episode::run_episode(
       model, backend, plr::episode::hardcoded_source(plr::sim::HardcodedParams{})));
   // Each action, so that a run can be read step by step.
   nlohmann::json steps = nlohmann::json::array();
+  // Planning while moving: plans made during a motion, those used, and the
+  // modelled planning their motions covered.
+  std::uint64_t plans_ahead = 0, plans_ahead_used = 0;
+  double plan_hidden_s = 0.0;
+  for (const auto& s : episode.steps) {
+    plans_ahead += s.outcome.plans_ahead;
+    plans_ahead_used += s.outcome.plans_ahead_used;
+    plan_hidden_s += s.outcome.plan_hidden_s;
+  }
   for (const auto& s : episode.steps)
     steps.push_back({{"action", plr::sim::to_string(s.action)},
                      {"observation", plr::sim::to_string(s.observation)},
@@ -210,11 +224,15 @@ nlohmann::json run(const Job& job) {
   return {{"family", std::string(to_string(job.family))},
           {"seed", job.seed},
           {"experience", planner.experience()},
+          {"plan_while_moving", job.plan_while_moving},
           {"boxes_total", episode.boxes_total},
           {"boxes_unloaded", episode.boxes_unloaded},
           {"robot_time_s", episode.robot_time_s},
           {"wasted_s", episode.wasted_s},
           {"wasted_share", plr::episode::wasted_share(episode)},
+          {"plans_ahead", plans_ahead},
+          {"plans_ahead_used", plans_ahead_used},
+          {"plan_hidden_s", plan_hidden_s},
           {"actions", episode.actions},
           {"failed_grasps", episode.failed_grasps},
           {"robot_trailer_collisions", episode.robot_trailer_contacts},
@@ -448,6 +466,10 @@ Options parse(int argc, char** argv) {
                  "The planner reuses earlier paths within a trailer: on, off (default: as the "
                  "lattice file says)")
       ->check(CLI::IsMember({"on", "off"}));
+  app.add_option("--plan-while-moving", o.plan_while_moving,
+                 "The next step is planned while a motion runs: on, off")
+      ->check(CLI::IsMember({"on", "off"}))
+      ->capture_default_str();
   app.add_flag("--record-queries", o.record_queries,
                "Save every M1 and M2 query of a run (F_seedS.pick_queries.bin)");
   plr::bench::parse_or_exit(app, argc, argv);
@@ -471,7 +493,7 @@ int main(int argc, char** argv) {
   for (const EnvFamily f : o.families)
     for (std::uint64_t s = o.first; s < o.first + o.seeds; ++s)
       all.push_back({f, s, fs::path(o.out) / fmt::format("{}_seed{}", to_string(f), s), o.fidelity,
-                     o.experience, o.record_queries});
+                     o.experience, o.record_queries, o.plan_while_moving == "on"});
   const std::vector<nlohmann::json> runs = run_all(all, o);
   nlohmann::json families = nlohmann::json::object();
   for (const EnvFamily f : o.families) families[std::string(to_string(f))] = summarize(runs, f);

@@ -72,6 +72,12 @@ struct ActionOptions {
   double carry_height_m = 1.4;     // plate height a load is lowered to before the drop-off
   // What finding an action not applicable costs: looking and deciding.
   double not_applicable_s = 0.5;
+  // Planning while moving: while a step's motion runs, the step known to
+  // follow it is planned (on another thread) from the motion's predicted
+  // end state, and its plan is used only if the state observed afterwards
+  // is the predicted one (PlanAhead); the robot then waits only for the
+  // modelled planning the motion did not cover.
+  bool plan_while_moving = true;
 
   // Whether the values are consistent; the error names the parameter.
   plr::Status check() const;
@@ -103,6 +109,19 @@ struct Memory {
   std::set<std::uint32_t> shaken;
 };
 
+// When a state observed after a motion is the one predicted before it: the
+// joints within what the robot accepts as a trajectory's start (a plan
+// from the predicted state must start where the robot is), the same boxes
+// held, and every box within kBoxShift (m) and kBoxTurn (rad) of its
+// predicted pose (the simulator's own "moved", Executed::moved): a box that
+// fell or was pushed makes it another world, planned for afresh.
+struct PlanAhead {
+  static constexpr double kJoints = 1e-4;  // rad or m, any joint
+  static constexpr double kBoxShift = 0.01;
+  static constexpr double kBoxTurn = 0.02;
+  static bool same_state(const Perceived& predicted, const Perceived& observed);
+};
+
 // One planning query of an action, for the planner statistics.
 struct QueryRecord {
   planning::PlanMode mode = planning::PlanMode::kArm;
@@ -113,6 +132,7 @@ struct QueryRecord {
   double planning_ms = 0.0;  // as the planner measured it
   bool escaped = false;      // it ran the M6 escape first
   double escape_ms = 0.0;
+  bool planned_ahead = false;  // made while the motion before it ran, and used
 };
 
 struct Outcome {
@@ -132,6 +152,12 @@ struct Outcome {
   double exec_s = 0.0;        // trajectories and settling
   double plan_model_s = 0.0;  // planning the robot waited for (PlanTimeModel)
   double plan_wall_s = 0.0;   // what planning took on this machine
+  // Plans made while moving (ActionOptions::plan_while_moving): asked for,
+  // used (the observed state was the predicted one), and the modelled
+  // planning of the used ones that their motions covered (not charged).
+  std::uint32_t plans_ahead = 0;
+  std::uint32_t plans_ahead_used = 0;
+  double plan_hidden_s = 0.0;
   std::uint32_t robot_trailer_contacts = 0;
   bool failed_grasp = false;  // a grasp held nothing or its load dropped
   std::uint32_t drops = 0;    // loads lost while carried

@@ -12,7 +12,7 @@
 
 namespace plr::actions {
 
-inline constexpr std::uint32_t kActionModelVersion = 2;
+inline constexpr std::uint32_t kActionModelVersion = 3;
 
 // "v2-3f2a09c1": the version and a CRC-32 of the shipped robot files.
 plr::Expected<std::string> action_model_fingerprint();
