@@ -25,12 +25,15 @@
 // particles (its two values printed). --compare-fidelity: every generation
 // at full fidelity and at --fidelity's level, side by side: the wall time
 // of a POMHDP trial (median over the trials, from the anytime curve) at
-// each, and their ratio. With --quick: B1 seed 1 with the shipped library's
-// settings (3 particles, horizon 4, 4 trials, 2 local workers).
+// each, and their ratio; with the simulations in this process (--workers 0)
+// also a trial's CPU time, which the machine's load does not change. With
+// --quick: B1 seed 1 with the shipped library's settings (3 particles,
+// horizon 4, 4 trials), simulated in this process.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -50,6 +53,7 @@
 #include "plr/sim/physics.hpp"
 #include "plr/sim/shipped_files.hpp"
 #include "remote_fixture.hpp"
+#include "truck/fidelity_check.hpp"
 #include "truck/generate.hpp"
 #include "truck/worker_runner.hpp"
 
@@ -79,6 +83,12 @@ struct Generated {
   sim::LibraryEntry entry;
   double wall_s = 0;
   double check_wall_s = 0;  // its re-evaluation at full fidelity (made below full)
+  // This process's CPU seconds of each trial: all of a trial's work when
+  // the simulations run in this process (--workers 0), whatever the load.
+  std::vector<double> trial_cpu_s;
+  // Made at full fidelity in a comparison: the strategy valued at full on
+  // the fresh particles the lower level's strategy is checked on.
+  std::optional<sim::FidelityCheck> fresh;
   std::uint64_t simulated = 0;
   double simulated_robot_s = NAN, simulated_wall_s = NAN;  // unknown over DDS
   std::string note;
@@ -154,6 +164,12 @@ plr::Expected<Generated> generate_over_dds(const std::string& bin_dir, const Wor
 
 nlohmann::json nullable(double v) {
   return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
+}
+
+double cpu_s() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
 // The wall time of each POMHDP trial: the anytime curve has a point after
@@ -297,7 +313,7 @@ int main(int argc, char** argv) {
   }
   if (quick && compare) {
     worlds = {{sim::EnvFamily::kB1, 1}};
-    worker_counts = {{2, 0}};
+    worker_counts = {{0, 0}};
     eval_particles = 0;
     particles = 3;
     o.truck.horizon = 4;
@@ -349,7 +365,7 @@ int main(int argc, char** argv) {
     std::string first_strategy;
     std::optional<sim::Strategy> strategy;
     for (const Workers& workers : worker_counts) {
-      std::vector<double> median_trial;  // per level, for the comparison
+      std::vector<double> median_trial, median_cpu;  // per level, for the comparison
       for (const sim::Fidelity at : levels) {
         o.fidelity = at;
         plr::Expected<Generated> r = Generated{};
@@ -377,8 +393,10 @@ int main(int argc, char** argv) {
           }
           generator::Simulator simulator(*runner, std::max(workers.local, 1), "{}");
           const auto t0 = Clock::now();
+          std::vector<double> cpu_marks;  // after each trial (the first: before any)
           auto made = generator::generate(
               problem, o, **rig, simulator, nullptr, [&](const generator::GenerateProgress& p) {
+                if (!p.unrolling && p.trials == cpu_marks.size()) cpu_marks.push_back(cpu_s());
                 std::fprintf(stderr,
                              "\r\033[K%s, %s workers, %s: trial %llu/%llu, %zu "
                              "nodes, %llu sims, root [%.1f, %.1f], %.0f s",
@@ -397,6 +415,19 @@ int main(int argc, char** argv) {
             g.simulated_robot_s = made->simulated_robot_s;
             g.simulated_wall_s = made->simulated_wall_s;
             g.check_wall_s = made->check_wall_s;
+            for (std::size_t i = 1; i < cpu_marks.size(); ++i)
+              g.trial_cpu_s.push_back(cpu_marks[i] - cpu_marks[i - 1]);
+            if (compare && at == sim::Fidelity::kFull) {
+              // The same fresh particles as the lower level's check.
+              auto fresh = generator::check_at_full(problem, g.entry.strategy, o, {},
+                                                    static_cast<std::uint32_t>(particles), **rig,
+                                                    simulator, nullptr);
+              if (!fresh) {
+                std::fprintf(stderr, "bench_generate: %s\n", fresh.error().message.c_str());
+                return 1;
+              }
+              g.fresh = *fresh;
+            }
           } else {
             r = made.error();
           }
@@ -410,6 +441,7 @@ int main(int argc, char** argv) {
         const double wall = r->wall_s - r->check_wall_s;
         const std::vector<double> trials = trial_walls(e);
         median_trial.push_back(plr::bench::median(trials));
+        median_cpu.push_back(plr::bench::median(r->trial_cpu_s));
         const std::string yaml = sim::format_yaml(e.strategy);
         if (first_strategy.empty()) first_strategy = yaml;
         strategy = e.strategy;
@@ -438,6 +470,14 @@ int main(int argc, char** argv) {
              {"fidelity", e.fidelity},
              {"trial_wall_s", trials},
              {"trial_wall_s_median", median_trial.back()},
+             {"trial_cpu_s", r->trial_cpu_s},
+             {"trial_cpu_s_median", median_cpu.back()},
+             {"full_value_on_fresh_particles",
+              r->fresh ? nlohmann::json{{"value", r->fresh->full_value},
+                                        {"boxes", r->fresh->full_boxes},
+                                        {"particles", r->fresh->full_particles},
+                                        {"first_particle", r->fresh->first_particle}}
+                       : nlohmann::json()},
              {"check", e.check ? nlohmann::json{{"value", e.check->value},
                                                 {"boxes", e.check->boxes},
                                                 {"full_value", e.check->full_value},
@@ -456,6 +496,12 @@ int main(int argc, char** argv) {
               e.strategy.depth(), (unsigned long long)r->simulated, double(r->simulated) / wall,
               e.lower, e.upper, yaml == first_strategy ? "" : "  DIFFERENT STRATEGY",
               workers.remote > 0 ? ("  (" + r->note + ")").c_str() : "");
+          if (!r->trial_cpu_s.empty() && workers.local == 0)
+            std::printf("       a trial's CPU time in this process: median %.1f s\n",
+                        median_cpu.back());
+          if (r->fresh)
+            std::printf("       at full fidelity on %u fresh particles: %.1f (%.1f boxes)\n",
+                        r->fresh->full_particles, r->fresh->full_value, r->fresh->full_boxes);
           if (e.check)
             std::printf(
                 "       value at %s %.1f (%.1f boxes) on its %u particles; at full fidelity %.1f "
@@ -473,10 +519,23 @@ int main(int argc, char** argv) {
                                               {"level", fidelity},
                                               {"level_trial_wall_s_median", median_trial[1]},
                                               {"full_over_level", nullable(ratio)}});
-        if (!json)
+        if (workers.local == 0 && workers.remote == 0) {
+          const double cpu_ratio = median_cpu[1] > 0 ? median_cpu[0] / median_cpu[1] : NAN;
+          auto& c = out["fidelity_comparison"].back();
+          c["full_trial_cpu_s_median"] = median_cpu[0];
+          c["level_trial_cpu_s_median"] = median_cpu[1];
+          c["full_over_level_cpu"] = nullable(cpu_ratio);
+        }
+        if (!json) {
           std::printf("%-6s %-3s workers: a trial takes %.2f s at full, %.2f s at %s: %.2fx\n",
                       problem.name.c_str(), workers.name().c_str(), median_trial[0],
                       median_trial[1], fidelity.c_str(), ratio);
+          if (workers.local == 0 && workers.remote == 0)
+            std::printf(
+                "%-6s %-3s workers: a trial's CPU time %.2f s at full, %.2f s at %s: %.2fx\n",
+                problem.name.c_str(), workers.name().c_str(), median_cpu[0], median_cpu[1],
+                fidelity.c_str(), median_cpu[0] / median_cpu[1]);
+        }
       }
     }
     if (eval_particles <= 0 || !strategy) continue;

@@ -32,6 +32,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <map>
 #include <string>
 #include <vector>
@@ -67,11 +68,18 @@ double percentile(std::vector<double> v, double p) {
 
 using Masses = std::vector<std::pair<std::uint32_t, double>>;
 
+double cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
 // One state's label at the rig's fidelity: the rollouts of NN's strategy and
 // of H on each particle, pooled; their wall time; and where H's rollout on
 // the first particle ended (the next state of the trajectory).
 struct Label {
   double wall_s = 0.0;
+  double cpu_s = 0.0;  // this process's CPU time: what the machine's load does not change
   std::uint32_t nn_boxes = 0, h_boxes = 0;
   double nn_s = 0.0, h_s = 0.0;
   std::vector<std::uint8_t> h_end;
@@ -93,6 +101,7 @@ plr::Expected<Label> label(plr::actions::Rig& rig, const std::vector<std::uint8_
   for (std::size_t p = 0; p < particles.size(); ++p) {
     for (const bool by_nn : {true, false}) {
       const auto t0 = Clock::now();
+      const double c0 = cpu_seconds();
       auto memory = rig.restore(state);
       if (!memory) return memory.error();
       if (!particles[p].empty())
@@ -102,6 +111,7 @@ plr::Expected<Label> label(plr::actions::Rig& rig, const std::vector<std::uint8_
                                       by_nn ? std::optional(nearest) : std::nullopt, {}, actions);
       if (!run) return run.error();
       out.wall_s += std::chrono::duration<double>(Clock::now() - t0).count();
+      out.cpu_s += cpu_seconds() - c0;
       (by_nn ? out.nn_boxes : out.h_boxes) += run->boxes;
       (by_nn ? out.nn_s : out.h_s) += run->robot_time_s;
       if (!by_nn && p == 0) {
@@ -241,7 +251,7 @@ int main(int argc, char** argv) {
     std::vector<plr::sim::Fidelity> levels{level};
     if (compare) levels = {plr::sim::Fidelity::kFull, level};
     nlohmann::json rows = nlohmann::json::array();
-    std::vector<double> wall_full, wall_level, ratios;
+    std::vector<double> wall_full, wall_level, ratios, cpu_full, cpu_level, cpu_ratios;
     std::size_t same = 0;
     for (const std::string& name : label_worlds) {
       const auto colon = name.find(':');
@@ -278,13 +288,19 @@ int main(int argc, char** argv) {
         }
         nlohmann::json row = {{"world", name}, {"state", step}};
         for (std::size_t i = 0; i < levels.size(); ++i)
-          row[plr::sim::to_string(levels[i])] = {
-              {"wall_s", made[i].wall_s},   {"nn_boxes", made[i].nn_boxes},
-              {"nn_robot_s", made[i].nn_s}, {"h_boxes", made[i].h_boxes},
-              {"h_robot_s", made[i].h_s},   {"label", made[i].verdict(masses.size())}};
+          row[plr::sim::to_string(levels[i])] = {{"wall_s", made[i].wall_s},
+                                                 {"cpu_s", made[i].cpu_s},
+                                                 {"nn_boxes", made[i].nn_boxes},
+                                                 {"nn_robot_s", made[i].nn_s},
+                                                 {"h_boxes", made[i].h_boxes},
+                                                 {"h_robot_s", made[i].h_s},
+                                                 {"label", made[i].verdict(masses.size())}};
         (compare ? wall_level : wall_full).push_back(made.back().wall_s);
+        (compare ? cpu_level : cpu_full).push_back(made.back().cpu_s);
         if (compare) {
           wall_full.push_back(made.front().wall_s);
+          cpu_full.push_back(made.front().cpu_s);
+          cpu_ratios.push_back(made.front().cpu_s / std::max(1e-9, made.back().cpu_s));
           ratios.push_back(made.front().wall_s / std::max(1e-9, made.back().wall_s));
           row["full_over_level"] = ratios.back();
           row["same_label"] =
@@ -303,10 +319,13 @@ int main(int argc, char** argv) {
                      {"particles", particles},
                      {"rollout_actions", rollout_actions},
                      {"rows", rows},
-                     {"wall_s_median", plr::bench::median(compare ? wall_level : wall_full)}};
+                     {"wall_s_median", plr::bench::median(compare ? wall_level : wall_full)},
+                     {"cpu_s_median", plr::bench::median(compare ? cpu_level : cpu_full)}};
     if (compare) {
       out["labels"]["full_wall_s_median"] = plr::bench::median(wall_full);
       out["labels"]["full_over_level_median"] = plr::bench::median(ratios);
+      out["labels"]["full_cpu_s_median"] = plr::bench::median(cpu_full);
+      out["labels"]["full_over_level_cpu_median"] = plr::bench::median(cpu_ratios);
       out["labels"]["same_label"] = same;
     }
   }
@@ -356,26 +375,35 @@ int main(int argc, char** argv) {
     const auto& l = out["labels"];
     std::printf("\nchooser labels (NN and H, %d particles x %d actions each)\n", particles,
                 rollout_actions);
-    std::printf("%-8s %5s %10s %10s %8s %8s\n", "world", "state", compare ? "full [s]" : "",
-                (fidelity + " [s]").c_str(), compare ? "ratio" : "", "labels");
+    std::printf("%-8s %5s %10s %10s %8s %10s %8s\n", "world", "state", compare ? "full [s]" : "",
+                (fidelity + " [s]").c_str(), compare ? "ratio" : "", compare ? "CPU ratio" : "",
+                "labels");
     for (const auto& r : l["rows"]) {
       const auto& at = r[fidelity];
       std::string labels_text = at["label"].get<std::string>();
       if (compare) labels_text = r["full"]["label"].get<std::string>() + "/" + labels_text;
-      std::printf("%-8s %5d %10s %10.1f %8s %8s\n", r["world"].get<std::string>().c_str(),
+      const std::string cpu =
+          compare ? fmt::format("{:.2f}x", r["full"]["cpu_s"].get<double>() /
+                                               std::max(1e-9, at["cpu_s"].get<double>()))
+                  : "";
+      std::printf("%-8s %5d %10s %10.1f %8s %10s %8s\n", r["world"].get<std::string>().c_str(),
                   r["state"].get<int>(),
                   compare ? fmt::format("{:.1f}", r["full"]["wall_s"].get<double>()).c_str() : "",
                   at["wall_s"].get<double>(),
                   compare ? fmt::format("{:.2f}x", r["full_over_level"].get<double>()).c_str() : "",
-                  labels_text.c_str());
+                  cpu.c_str(), labels_text.c_str());
     }
-    if (compare)
+    if (compare) {
       std::printf("median: full %.1f s, %s %.1f s a label; full/%s %.2fx; same label %zu of %zu\n",
                   l["full_wall_s_median"].get<double>(), fidelity.c_str(),
                   l["wall_s_median"].get<double>(), fidelity.c_str(),
                   l["full_over_level_median"].get<double>(), l["same_label"].get<std::size_t>(),
                   l["rows"].size());
-    else
+      std::printf("CPU time: full %.1f s, %s %.1f s a label; full/%s %.2fx\n",
+                  l["full_cpu_s_median"].get<double>(), fidelity.c_str(),
+                  l["cpu_s_median"].get<double>(), fidelity.c_str(),
+                  l["full_over_level_cpu_median"].get<double>());
+    } else
       std::printf("median: %.1f s a label at %s\n", l["wall_s_median"].get<double>(),
                   fidelity.c_str());
   }
