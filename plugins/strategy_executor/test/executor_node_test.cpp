@@ -350,6 +350,20 @@ class Executor : public ::testing::Test {
     sim.worlds["four"] = four;
   }
 
+  // Runs the two trailers; each must be recorded with its own boxes, the
+  // second's counted by the executor and by the simulator alike.
+  void unloads_six_then_four() {
+    const auto report = run(R"(, "trailers": [{"world_file": "six"}, {"world_file": "four"}])");
+    EXPECT_TRUE(done_ok_) << done_reason_;
+    EXPECT_EQ(done_reason_, "2 trailers done: 10/10 boxes unloaded");
+    ASSERT_EQ(report["trailers"].size(), 2u) << report.dump(1);
+    const auto& t = report["trailers"][1];
+    EXPECT_EQ(t["name"], "four");
+    EXPECT_EQ(t["boxes_unloaded"], 4) << t.dump();
+    EXPECT_EQ(t["sim_boxes_unloaded"], 4) << t.dump();
+    EXPECT_EQ(t["sim_boxes_left"], 0) << t.dump();
+  }
+
   // Runs the executor to pipeline/done; returns the report.
   nlohmann::json run(const std::string& extra_params = "", bool with_h = true,
                      int spin_limit = 60000) {
@@ -602,15 +616,7 @@ TEST_F(Executor, ATrailerStartsOnlyOnceItsCheckpointIsWritten) {
   FakePlanner planner;
   sim.serve(kernel_);
   planner.serve(kernel_);
-  const auto report = run(R"(, "trailers": [{"world_file": "six"}, {"world_file": "four"}])");
-  EXPECT_TRUE(done_ok_) << done_reason_;
-  EXPECT_EQ(done_reason_, "2 trailers done: 10/10 boxes unloaded");
-  ASSERT_EQ(report["trailers"].size(), 2u) << report.dump(1);
-  const auto& t = report["trailers"][1];
-  EXPECT_EQ(t["name"], "four");
-  EXPECT_EQ(t["boxes_unloaded"], 4) << t.dump();
-  EXPECT_EQ(t["sim_boxes_unloaded"], 4) << t.dump();
-  EXPECT_EQ(t["sim_boxes_left"], 0) << t.dump();
+  unloads_six_then_four();
   EXPECT_EQ(sim.restores(), 1);
 }
 
@@ -630,15 +636,7 @@ TEST_F(Executor, ASimulatorBackWithAnotherTrailersWorldIsResetNotResumed) {
   FakePlanner planner;
   sim.serve(kernel_);
   planner.serve(kernel_);
-  const auto report = run(R"(, "trailers": [{"world_file": "six"}, {"world_file": "four"}])");
-  EXPECT_TRUE(done_ok_) << done_reason_;
-  EXPECT_EQ(done_reason_, "2 trailers done: 10/10 boxes unloaded");
-  ASSERT_EQ(report["trailers"].size(), 2u) << report.dump(1);
-  const auto& t = report["trailers"][1];
-  EXPECT_EQ(t["name"], "four");
-  EXPECT_EQ(t["boxes_unloaded"], 4) << t.dump();
-  EXPECT_EQ(t["sim_boxes_unloaded"], 4) << t.dump();
-  EXPECT_EQ(t["sim_boxes_left"], 0) << t.dump();
+  unloads_six_then_four();
   EXPECT_TRUE(logged(kernel_, "another trailer's world (6 boxes, 0 unloaded; the trailer has 4)"));
 }
 
