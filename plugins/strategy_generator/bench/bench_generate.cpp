@@ -86,6 +86,7 @@ struct Generated {
   // This process's CPU seconds of each trial: all of a trial's work when
   // the simulations run in this process (--workers 0), whatever the load.
   std::vector<double> trial_cpu_s;
+  double search_cpu_s = NAN;  // the whole search and unrolling, without the check
   // Made at full fidelity in a comparison: the strategy valued at full on
   // the fresh particles the lower level's strategy is checked on.
   std::optional<sim::FidelityCheck> fresh;
@@ -365,7 +366,7 @@ int main(int argc, char** argv) {
     std::string first_strategy;
     std::optional<sim::Strategy> strategy;
     for (const Workers& workers : worker_counts) {
-      std::vector<double> median_trial, median_cpu;  // per level, for the comparison
+      std::vector<double> median_trial, median_cpu, per_trial_cpu;  // per level, for the comparison
       for (const sim::Fidelity at : levels) {
         o.fidelity = at;
         plr::Expected<Generated> r = Generated{};
@@ -394,6 +395,7 @@ int main(int argc, char** argv) {
           generator::Simulator simulator(*runner, std::max(workers.local, 1), "{}");
           const auto t0 = Clock::now();
           std::vector<double> cpu_marks;  // after each trial (the first: before any)
+          const double cpu0 = cpu_s();
           auto made = generator::generate(
               problem, o, **rig, simulator, nullptr, [&](const generator::GenerateProgress& p) {
                 if (!p.unrolling && p.trials == cpu_marks.size()) cpu_marks.push_back(cpu_s());
@@ -415,6 +417,7 @@ int main(int argc, char** argv) {
             g.simulated_robot_s = made->simulated_robot_s;
             g.simulated_wall_s = made->simulated_wall_s;
             g.check_wall_s = made->check_wall_s;
+            g.search_cpu_s = cpu_s() - cpu0 - made->check_cpu_s;
             for (std::size_t i = 1; i < cpu_marks.size(); ++i)
               g.trial_cpu_s.push_back(cpu_marks[i] - cpu_marks[i - 1]);
             if (compare && at == sim::Fidelity::kFull) {
@@ -442,6 +445,7 @@ int main(int argc, char** argv) {
         const std::vector<double> trials = trial_walls(e);
         median_trial.push_back(plr::bench::median(trials));
         median_cpu.push_back(plr::bench::median(r->trial_cpu_s));
+        per_trial_cpu.push_back(r->search_cpu_s / std::max<double>(1, double(e.provenance.trials)));
         const std::string yaml = sim::format_yaml(e.strategy);
         if (first_strategy.empty()) first_strategy = yaml;
         strategy = e.strategy;
@@ -472,6 +476,10 @@ int main(int argc, char** argv) {
              {"trial_wall_s_median", median_trial.back()},
              {"trial_cpu_s", r->trial_cpu_s},
              {"trial_cpu_s_median", median_cpu.back()},
+             {"search_cpu_s", nullable(r->search_cpu_s)},
+             {"search_cpu_s_per_trial", nullable(per_trial_cpu.back())},
+             {"search_cpu_s_per_simulation",
+              nullable(r->search_cpu_s / std::max<double>(1, double(r->simulated)))},
              {"full_value_on_fresh_particles",
               r->fresh ? nlohmann::json{{"value", r->fresh->full_value},
                                         {"boxes", r->fresh->full_boxes},
@@ -525,6 +533,9 @@ int main(int argc, char** argv) {
           c["full_trial_cpu_s_median"] = median_cpu[0];
           c["level_trial_cpu_s_median"] = median_cpu[1];
           c["full_over_level_cpu"] = nullable(cpu_ratio);
+          c["full_search_cpu_s_per_trial"] = per_trial_cpu[0];
+          c["level_search_cpu_s_per_trial"] = per_trial_cpu[1];
+          c["full_over_level_search_cpu"] = nullable(per_trial_cpu[0] / per_trial_cpu[1]);
         }
         if (!json) {
           std::printf("%-6s %-3s workers: a trial takes %.2f s at full, %.2f s at %s: %.2fx\n",

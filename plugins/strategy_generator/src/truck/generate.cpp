@@ -248,12 +248,14 @@ plr::Expected<GenerateResult> generate(
   out.simulated_wall_s = model.simulated_wall_s();
   if (options.fidelity != sim::Fidelity::kFull) {
     const auto c0 = Clock::now();
+    const std::clock_t cpu0 = std::clock();
     e.fidelity = sim::to_string(options.fidelity);
     auto check = check_at_full(problem, e.strategy, options, at_level,
                                static_cast<std::uint32_t>(roots.size()), rig, simulator, store);
     if (!check) return check.error();
     e.check = *check;
     out.check_wall_s = std::chrono::duration<double>(Clock::now() - c0).count();
+    out.check_cpu_s = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
   }
   return out;
 }

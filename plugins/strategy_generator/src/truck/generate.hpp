@@ -99,7 +99,10 @@ struct GenerateResult {
   std::uint64_t simulated = 0;  // by this run (the rest came from the store)
   double simulated_robot_s = 0.0;
   double simulated_wall_s = 0.0;  // inside the workers
-  double check_wall_s = 0.0;      // below full fidelity: the re-evaluation at full fidelity
+  // Below full fidelity: the re-evaluation at full fidelity, its wall time
+  // and this process's CPU time (all of it when the simulations run here).
+  double check_wall_s = 0.0;
+  double check_cpu_s = 0.0;
 };
 
 // `rig` makes the particles' starting states; `simulator` runs the
