@@ -14,22 +14,6 @@ using sim::Side;
 
 using namespace testing;
 
-void expect_same(const Outcome& a, const Outcome& b) {
-  EXPECT_EQ(a.applicable, b.applicable);
-  EXPECT_EQ(a.boxes, b.boxes);
-  EXPECT_EQ(a.unloaded_at_s, b.unloaded_at_s);
-  EXPECT_EQ(a.robot_time_s, b.robot_time_s);
-  EXPECT_EQ(a.exec_s, b.exec_s);
-  EXPECT_EQ(a.plan_model_s, b.plan_model_s);
-  EXPECT_EQ(a.drops, b.drops);
-  ASSERT_EQ(a.queries.size(), b.queries.size());
-  for (std::size_t i = 0; i < a.queries.size(); ++i) {
-    EXPECT_EQ(a.queries[i].mode, b.queries[i].mode) << "query " << i;
-    EXPECT_EQ(a.queries[i].status, b.queries[i].status) << "query " << i;
-    EXPECT_EQ(a.queries[i].expansions, b.queries[i].expansions) << "query " << i;
-  }
-}
-
 // Several actions in a row, so the kept checker sees boxes leave and move
 // between its queries.
 TEST(InProcessBackend, AKeptCheckerPlansAsAFreshOnePerQuery) {
@@ -43,7 +27,7 @@ TEST(InProcessBackend, AKeptCheckerPlansAsAFreshOnePerQuery) {
     const auto a = model.run(action, kept.backend, kept.memory);
     const auto b = model.run(action, fresh.backend, fresh.memory);
     ASSERT_TRUE(a && b);
-    expect_same(*a, *b);
+    expect_same_outcome(*a, *b);
     EXPECT_EQ(kept.simulation.truth().boxes.size(), fresh.simulation.truth().boxes.size());
   }
   EXPECT_GT(kept.backend.stats().queries, 3u);
@@ -125,7 +109,7 @@ TEST(UnloaderSimulation, SetMassesChangesOnlyTheMasses) {
   Memory again;
   const auto repeat = model.run(pick, f.backend, again);
   ASSERT_TRUE(repeat);
-  expect_same(*light, *repeat);
+  expect_same_outcome(*light, *repeat);
 
   const auto unknown = f.simulation.set_masses({{w.boxes[0].id, 3.0}, {9999, 3.0}});
   ASSERT_FALSE(unknown.has_value());

@@ -150,20 +150,8 @@ TEST(PlanAhead, ARunRepeatsBitForBit) {
   std::uint32_t used = 0;
   for (std::size_t i = 0; i < idle.size(); ++i) {
     SCOPED_TRACE(i);
-    const Outcome &a = idle[i], &b = busy[i];
-    EXPECT_EQ(a.boxes, b.boxes);
-    EXPECT_EQ(a.robot_time_s, b.robot_time_s);
-    EXPECT_EQ(a.plan_model_s, b.plan_model_s);
-    EXPECT_EQ(a.plan_hidden_s, b.plan_hidden_s);
-    EXPECT_EQ(a.unloaded_at_s, b.unloaded_at_s);
-    EXPECT_EQ(a.plans_ahead, b.plans_ahead);
-    EXPECT_EQ(a.plans_ahead_used, b.plans_ahead_used);
-    ASSERT_EQ(a.queries.size(), b.queries.size());
-    for (std::size_t k = 0; k < a.queries.size(); ++k) {
-      EXPECT_EQ(a.queries[k].expansions, b.queries[k].expansions) << "query " << k;
-      EXPECT_EQ(a.queries[k].planned_ahead, b.queries[k].planned_ahead) << "query " << k;
-    }
-    used += a.plans_ahead_used;
+    expect_same_outcome(idle[i], busy[i]);
+    used += idle[i].plans_ahead_used;
   }
   EXPECT_GT(used, 0u);
 }

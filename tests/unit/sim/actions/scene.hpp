@@ -3,6 +3,8 @@
 // with its in-process backend.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <atomic>
 #include <thread>
@@ -88,5 +90,27 @@ class CpuLoad {
   std::atomic<bool> stop_{false};
   std::vector<std::thread> burners_;
 };
+
+// Two outcomes of the same action from the same state: equal to the bit,
+// the planning made while moving included.
+inline void expect_same_outcome(const Outcome& a, const Outcome& b) {
+  EXPECT_EQ(a.applicable, b.applicable);
+  EXPECT_EQ(a.boxes, b.boxes);
+  EXPECT_EQ(a.unloaded_at_s, b.unloaded_at_s);
+  EXPECT_EQ(a.robot_time_s, b.robot_time_s);
+  EXPECT_EQ(a.exec_s, b.exec_s);
+  EXPECT_EQ(a.plan_model_s, b.plan_model_s);
+  EXPECT_EQ(a.plan_hidden_s, b.plan_hidden_s);
+  EXPECT_EQ(a.plans_ahead, b.plans_ahead);
+  EXPECT_EQ(a.plans_ahead_used, b.plans_ahead_used);
+  EXPECT_EQ(a.drops, b.drops);
+  ASSERT_EQ(a.queries.size(), b.queries.size());
+  for (std::size_t i = 0; i < a.queries.size(); ++i) {
+    EXPECT_EQ(a.queries[i].mode, b.queries[i].mode) << "query " << i;
+    EXPECT_EQ(a.queries[i].status, b.queries[i].status) << "query " << i;
+    EXPECT_EQ(a.queries[i].expansions, b.queries[i].expansions) << "query " << i;
+    EXPECT_EQ(a.queries[i].planned_ahead, b.queries[i].planned_ahead) << "query " << i;
+  }
+}
 
 }  // namespace plr::actions::testing
