@@ -23,20 +23,34 @@ double PlanTimeModel::seconds(PlanMode mode, std::uint64_t expansions) const {
   return per_query_s[m] + per_expansion_s[m] * static_cast<double>(expansions);
 }
 
-std::uint32_t boxes_shifted(const sim::World& before, const sim::World& after) {
-  constexpr double kMoved = 0.05, kTurned = 0.2;  // m, rad
+namespace {
+
+// How many boxes of `after` moved more than `shift` (m) or turned more than
+// `turn` (rad) from their pose in `before`; those not in `before` are
+// counted in `unknown`.
+std::uint32_t boxes_moved(const sim::World& before, const sim::World& after, double shift,
+                          double turn, std::uint32_t* unknown = nullptr) {
   std::unordered_map<std::uint32_t, const sim::Box*> was;
   for (const auto& b : before.boxes) was.emplace(b.id, &b);
   std::uint32_t n = 0;
   for (const auto& b : after.boxes) {
     const auto it = was.find(b.id);
-    if (it == was.end()) continue;
-    const Eigen::AngleAxisd turn(it->second->pose.linear().transpose() * b.pose.linear());
-    if ((b.pose.translation() - it->second->pose.translation()).norm() > kMoved ||
-        std::abs(turn.angle()) > kTurned)
+    if (it == was.end()) {
+      if (unknown) ++*unknown;
+      continue;
+    }
+    const Eigen::AngleAxisd turned(it->second->pose.linear().transpose() * b.pose.linear());
+    if ((b.pose.translation() - it->second->pose.translation()).norm() > shift ||
+        std::abs(turned.angle()) > turn)
       ++n;
   }
   return n;
+}
+
+}  // namespace
+
+std::uint32_t boxes_shifted(const sim::World& before, const sim::World& after) {
+  return boxes_moved(before, after, 0.05, 0.2);  // m, rad
 }
 
 bool PlanAhead::same_state(const Perceived& predicted, const Perceived& observed) {
@@ -45,17 +59,9 @@ bool PlanAhead::same_state(const Perceived& predicted, const Perceived& observed
   std::sort(held_p.begin(), held_p.end());
   std::sort(held_o.begin(), held_o.end());
   if (held_p != held_o || predicted.world.boxes.size() != observed.world.boxes.size()) return false;
-  std::unordered_map<std::uint32_t, const sim::Box*> was;
-  for (const auto& b : predicted.world.boxes) was.emplace(b.id, &b);
-  for (const auto& b : observed.world.boxes) {
-    const auto it = was.find(b.id);
-    if (it == was.end()) return false;
-    const Eigen::AngleAxisd turn(it->second->pose.linear().transpose() * b.pose.linear());
-    if ((b.pose.translation() - it->second->pose.translation()).norm() > kBoxShift ||
-        std::abs(turn.angle()) > kBoxTurn)
-      return false;
-  }
-  return true;
+  std::uint32_t unknown = 0;
+  return boxes_moved(predicted.world, observed.world, kBoxShift, kBoxTurn, &unknown) == 0 &&
+         unknown == 0;
 }
 
 plr::Status ActionOptions::check() const {
