@@ -12,11 +12,27 @@ namespace plr::simulator {
 
 namespace fs = std::filesystem;
 
-Status save_checkpoint(const fs::path& dir, const Checkpoint& c) {
+namespace {
+
+// Every file under the folder: a temp file left behind would count too.
+std::uint64_t folder_bytes(const fs::path& dir) {
+  std::uint64_t bytes = 0;
+  std::error_code ec;
+  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::end(it);
+       it.increment(ec)) {
+    std::error_code size_ec;
+    if (it->is_regular_file(size_ec)) bytes += it->file_size(size_ec);
+  }
+  return bytes;
+}
+
+}  // namespace
+
+Expected<std::uint64_t> save_checkpoint(const fs::path& dir, const Checkpoint& c) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) return make_error(PLR_ERR_INTERNAL, dir.string() + ": " + ec.message());
-  if (Status saved = sim::save_world(c.world, dir / "world.yaml"); !saved) return saved;
+  if (Status saved = sim::save_world(c.world, dir / "world.yaml"); !saved) return saved.error();
   nlohmann::json j;
   j["q"] = std::vector<double>(c.robot.q.data(), c.robot.q.data() + c.robot.q.size());
   j["held"] = c.robot.held;
@@ -24,7 +40,9 @@ Status save_checkpoint(const fs::path& dir, const Checkpoint& c) {
   j["boxes_total"] = c.boxes_total;
   j["boxes_unloaded"] = c.boxes_unloaded;
   // Written last: its presence marks a complete checkpoint.
-  return write_file_atomically((dir / "state.json").string(), j.dump());
+  if (Status saved = write_file_atomically((dir / "state.json").string(), j.dump()); !saved)
+    return saved.error();
+  return folder_bytes(dir);
 }
 
 Expected<std::optional<Checkpoint>> load_checkpoint(const fs::path& dir) {

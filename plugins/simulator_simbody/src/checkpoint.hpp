@@ -22,7 +22,8 @@ struct Checkpoint {
   std::uint32_t boxes_unloaded = 0;
 };
 
-Status save_checkpoint(const std::filesystem::path& dir, const Checkpoint& c);
+// The folder's bytes once written.
+Expected<std::uint64_t> save_checkpoint(const std::filesystem::path& dir, const Checkpoint& c);
 // nullopt when the folder holds no checkpoint; an error for a damaged one.
 Expected<std::optional<Checkpoint>> load_checkpoint(const std::filesystem::path& dir);
 

@@ -236,14 +236,15 @@ class SimulatorNode : public Node {
   Status snapshot(const std::string& name, flatbuffers::FlatBufferBuilder& out) {
     if (!sim_) return make_error(PLR_ERR_STATE, "no world yet: call sim/reset first");
     saved_.insert_or_assign(name, sim_->save());
+    std::uint64_t on_disk = 0;
     if (name == "checkpoint" && !checkpoint_dir_.empty()) {
-      if (const Status saved = save_checkpoint(
-              checkpoint_dir_,
-              {sim_->truth(), robot_state(), sim_->time(), boxes_total_, boxes_unloaded()});
-          !saved)
-        return make_error(PLR_ERR_INTERNAL, saved.error().message);
+      const auto saved = save_checkpoint(
+          checkpoint_dir_,
+          {sim_->truth(), robot_state(), sim_->time(), boxes_total_, boxes_unloaded()});
+      if (!saved) return make_error(PLR_ERR_INTERNAL, saved.error().message);
+      on_disk = *saved;
     }
-    out.Finish(msg::CreateSnapshotReplyDirect(out, true, "", name.c_str()));
+    out.Finish(msg::CreateSnapshotReplyDirect(out, true, "", name.c_str(), on_disk));
     return {};
   }
 

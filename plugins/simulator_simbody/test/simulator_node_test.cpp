@@ -265,6 +265,50 @@ TEST(SimulatorParams, FidelityIsFullAdaptiveOrFast) {
   }
 }
 
+// A checkpoint on disk says how many bytes the folder holds once written: a
+// long run compares them at the same state (a trailer's start) to see the
+// checkpoint grow, or not.
+class SimulatorCheckpointOnDisk : public SimulatorService {
+ protected:
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string params() const override { return R"({"checkpoint_dir": ")" + dir_.string() + "\"}"; }
+  std::uintmax_t folder_bytes() const {
+    std::uintmax_t bytes = 0;
+    for (const auto& f : std::filesystem::recursive_directory_iterator(dir_))
+      if (f.is_regular_file()) bytes += f.file_size();
+    return bytes;
+  }
+
+  std::filesystem::path dir_ = std::filesystem::temp_directory_path() /
+                               ("plr_sim_checkpoint_bytes_" + std::to_string(::getpid()));
+};
+
+TEST_F(SimulatorCheckpointOnDisk, TheReplySaysTheFoldersBytesTheSameForTheSameState) {
+  ASSERT_TRUE(reset("", SMALL_WORLD));
+  const auto start = snapshot("sim/snapshot", "checkpoint");
+  ASSERT_TRUE(start) << start.error().message;
+  ASSERT_TRUE(start.value()->ok());
+  EXPECT_GT(start.value()->checkpoint_bytes(), 0u);
+  EXPECT_EQ(start.value()->checkpoint_bytes(), folder_bytes());
+
+  std::vector<double> forward = home();
+  forward[0] = 1.0;
+  ASSERT_TRUE(execute({home(), forward}, {0.0, 2.0}));
+  const auto moved = snapshot("sim/snapshot", "checkpoint");
+  ASSERT_TRUE(moved);
+  EXPECT_EQ(moved.value()->checkpoint_bytes(), folder_bytes());
+
+  ASSERT_TRUE(reset("", SMALL_WORLD));
+  const auto again = snapshot("sim/snapshot", "checkpoint");
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again.value()->checkpoint_bytes(), start.value()->checkpoint_bytes());
+
+  // What is not kept on disk says 0.
+  const auto in_memory = snapshot("sim/snapshot", "before");
+  ASSERT_TRUE(in_memory);
+  EXPECT_EQ(in_memory.value()->checkpoint_bytes(), 0u);
+}
+
 TEST(SimulatorCheckpoint, ADamagedOneFailsConfigureWithTheFilesError) {
   const auto dir =
       std::filesystem::temp_directory_path() / ("plr_sim_checkpoint_" + std::to_string(::getpid()));

@@ -93,35 +93,36 @@ plr::Expected<actions::Perceived> BusBackend::wait_for_simulator() {
   }
 }
 
-plr::Expected<std::string> BusBackend::snapshot_or_restore(const char* service) {
+plr::Expected<BusBackend::SnapshotAnswer> BusBackend::snapshot_or_restore(const char* service) {
   flatbuffers::FlatBufferBuilder fbb;
   fbb.Finish(msg::CreateSnapshotRequestDirect(fbb, "checkpoint"));
   auto r = call_retry<msg::SnapshotRequest, msg::SnapshotReply>(service, fbb, 60.0);
   if (!r) {
     if (r.error().code == PLR_ERR_CANCELLED || r.error().code == PLR_ERR_UNAVAILABLE)
       return plr::make_error(r.error().code, std::string(service) + ": " + r.error().message);
-    return r.error().message;
+    return SnapshotAnswer{r.error().message, 0};
   }
-  if (!r.value()->ok()) return r.value()->message() ? r.value()->message()->str() : "refused";
-  return std::string();
+  if (!r.value()->ok())
+    return SnapshotAnswer{r.value()->message() ? r.value()->message()->str() : "refused", 0};
+  return SnapshotAnswer{"", r.value()->checkpoint_bytes()};
 }
 
 plr::Status BusBackend::checkpoint() {
-  const auto why = snapshot_or_restore("sim/snapshot");
-  if (!why) return why.error();
-  if (!why->empty()) ctx_.log().warn("sim/snapshot 'checkpoint' failed: {}", *why);
+  const auto a = snapshot_or_restore("sim/snapshot");
+  if (!a) return a.error();
+  if (!a->refused.empty()) ctx_.log().warn("sim/snapshot 'checkpoint' failed: {}", a->refused);
   return {};
 }
 
-plr::Status BusBackend::checkpoint_until_written(const std::string& what) {
+plr::Expected<std::uint64_t> BusBackend::checkpoint_until_written(const std::string& what) {
   using namespace std::chrono_literals;
   for (bool warned = false;;) {
-    const auto why = snapshot_or_restore("sim/snapshot");
-    if (!why) return why.error();
-    if (why->empty()) return {};
+    const auto a = snapshot_or_restore("sim/snapshot");
+    if (!a) return a.error();
+    if (a->refused.empty()) return a->checkpoint_bytes;
     if (!warned)
       ctx_.log().warn("{}: sim/snapshot 'checkpoint' failed: {}; asking again until it is written",
-                      what, *why);
+                      what, a->refused);
     warned = true;
     if (!pause_(200ms)) return plr::make_error(PLR_ERR_CANCELLED, "stopping");
   }
@@ -135,9 +136,10 @@ plr::Status BusBackend::restore() {
   forget_clock();  // the restart set it back
   if (auto w = wait_for_simulator(); !w) return w.error();
   // Going on without it would unload a world that is not the trailer's.
-  const auto why = snapshot_or_restore("sim/restore");
-  if (!why) return why.error();
-  if (!why->empty()) return plr::make_error(PLR_ERR_INTERNAL, "sim/restore 'checkpoint': " + *why);
+  const auto a = snapshot_or_restore("sim/restore");
+  if (!a) return a.error();
+  if (!a->refused.empty())
+    return plr::make_error(PLR_ERR_INTERNAL, "sim/restore 'checkpoint': " + a->refused);
   forget_clock();  // and so did the restore
   return check_trailer();
 }

@@ -47,8 +47,9 @@ class BusBackend final : public actions::Backend, public episode::Recovery {
   plr::Status checkpoint() override;
   // The same, but a refused checkpoint is asked for again until it is
   // written (a disk full or read-only for a while); `what` names it in the
-  // log. Errors: the simulator lost, the run stopping (PLR_ERR_CANCELLED).
-  plr::Status checkpoint_until_written(const std::string& what);
+  // log. Returns the checkpoint folder's bytes as the simulator reports
+  // them. Errors: the simulator lost, the run stopping (PLR_ERR_CANCELLED).
+  plr::Expected<std::uint64_t> checkpoint_until_written(const std::string& what);
   bool lost(const plr::Error& error) const override;
   plr::Status restore() override;
 
@@ -78,9 +79,12 @@ class BusBackend final : public actions::Backend, public episode::Recovery {
                                         const flatbuffers::FlatBufferBuilder& fbb,
                                         double timeout_s);
   plr::Status check_clock(double sim_time_s, const char* service);
-  // Empty when the simulator took or restored the checkpoint, else why not;
-  // an error when the simulator is gone or the node stopping.
-  plr::Expected<std::string> snapshot_or_restore(const char* service);
+  struct SnapshotAnswer {
+    std::string refused;  // empty when the simulator took or restored the checkpoint
+    std::uint64_t checkpoint_bytes = 0;
+  };
+  // An error when the simulator is gone or the node stopping.
+  plr::Expected<SnapshotAnswer> snapshot_or_restore(const char* service);
   plr::Status check_trailer();
 
   Context& ctx_;

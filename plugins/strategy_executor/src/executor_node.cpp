@@ -382,6 +382,7 @@ class ExecutorNode : public plr::Node, private episode::Observer {
   // made again (a first trailer's simulator restarts with no world at all).
   void reset_and_checkpoint(const Trailer& t) {
     constexpr int kAttempts = 10;  // restarts are bounded by the run's max_restarts anyway
+    start_checkpoint_bytes_ = 0;
     for (int attempt = 1;; ++attempt) {
       const sim::World made = reset(t);
       backend_->expect_trailer(made);
@@ -407,6 +408,7 @@ class ExecutorNode : public plr::Node, private episode::Observer {
   // for this one (bench_soak: a read-only disk refused it, then a kill).
   void checkpoint_trailer(const Trailer& t) {
     auto ok = backend_->checkpoint_until_written("trailer " + t.name());
+    if (ok) start_checkpoint_bytes_ = *ok;
     if (ok || backend_->lost(ok.error())) return;  // a restart is seen next
     if (ok.error().code == PLR_ERR_CANCELLED) throw Stopped{};
     fail(ok.error());
@@ -434,6 +436,7 @@ class ExecutorNode : public plr::Node, private episode::Observer {
     r.plan_calls_unanswered = stats_.planner.unanswered;
     r.wall_time_s = wall_time_s;
     r.stop_reason = stats_.stop_reason;
+    r.start_checkpoint_bytes = start_checkpoint_bytes_;
     log().info("trailer {} ({}): {}/{} boxes, {}", stats_.trailers.size() + 1, r.name,
                r.boxes_unloaded, r.boxes_total, r.stop_reason);
     stats_.trailers.push_back(std::move(r));
@@ -739,6 +742,7 @@ class ExecutorNode : public plr::Node, private episode::Observer {
   std::optional<episode::Engine> engine_;
   Clock::time_point t0_;
   RunStats stats_;
+  std::uint64_t start_checkpoint_bytes_ = 0;  // the trailer being unloaded's
   std::string action_name_;
   std::optional<sim::Strategy> strategy_;  // the one being walked (a copy: trees are small)
   std::optional<std::uint32_t> node_;

@@ -41,7 +41,8 @@ nlohmann::json to_json(const RunStats& s) {
                         {"recoveries", t.recoveries},
                         {"plan_calls_unanswered", t.plan_calls_unanswered},
                         {"wall_time_s", t.wall_time_s},
-                        {"stop_reason", t.stop_reason}});
+                        {"stop_reason", t.stop_reason},
+                        {"start_checkpoint_bytes", t.start_checkpoint_bytes}});
   nlohmann::json out = {
       {"boxes_total", s.boxes_total},
       {"boxes_unloaded", s.boxes_unloaded},

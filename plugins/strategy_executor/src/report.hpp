@@ -46,6 +46,10 @@ struct TrailerRecord {
   std::uint64_t plan_calls_unanswered = 0;
   double wall_time_s = 0;
   std::string stop_reason;
+  // The simulator's checkpoint folder right after the trailer's start was
+  // written (0 without one on disk): the same trailer's start is the same
+  // state, so a long run compares these to see the checkpoint grow.
+  std::uint64_t start_checkpoint_bytes = 0;
 };
 
 struct RunStats {

@@ -89,7 +89,8 @@ class FakeSim {
           }
           snapshots_[r.name()->str()] = s_;
           trailer_starts_.try_emplace(resets_, s_);
-          fbb.Finish(msg::CreateSnapshotReplyDirect(fbb, true, "", r.name()->c_str()));
+          fbb.Finish(msg::CreateSnapshotReplyDirect(
+              fbb, true, "", r.name()->c_str(), kCheckpointBytesPerBox * s_.world.boxes.size()));
           return {};
         });
     k.fake_service<msg::SnapshotRequest, msg::SnapshotReply>(
@@ -104,6 +105,8 @@ class FakeSim {
         });
   }
 
+  // The checkpoint's size on disk, as the fake reports it.
+  static constexpr std::uint64_t kCheckpointBytesPerBox = 100;
   bool suction_works = true;
   // Suction as the simulator's (docs/notes-sim.md) when > 0: a cup holds
   // cup_force with its whole rim on the face; a box heavier than its cups
@@ -600,6 +603,8 @@ TEST_F(Executor, UnloadsTrailerAfterTrailerAndResetsAgainASimulatorThatRestarted
     EXPECT_EQ(t["sim_boxes_unloaded"], total) << t.dump();
     EXPECT_EQ(t["sim_boxes_left"], 0) << t.dump();
     EXPECT_EQ(t["stop_reason"], "trailer empty") << t.dump();
+    // The start that was unloaded, not the one the restart undid.
+    EXPECT_EQ(t["start_checkpoint_bytes"], FakeSim::kCheckpointBytesPerBox * total) << t.dump();
   }
 }
 

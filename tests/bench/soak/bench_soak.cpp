@@ -28,7 +28,8 @@
 // and readers alive on the domain, from Cyclone's built-in topics, without
 // the bench's own participant), checkpoint bytes, log bytes (stderr, the
 // recording, the report folder). Growth: the least-squares slope per hour of
-// the samples after the first trailer, over their mean.
+// the samples after the first trailer, over their mean; the checkpoint's
+// from each trailer's start checkpoint against the same world's first.
 //
 // Then the same trailers once more without faults, clients or DDS (a second
 // `plr run`, the trailers the soak finished, each once): boxes_without_faults.
@@ -513,6 +514,27 @@ json growth(const std::vector<Sample>& samples, double from_s, double (*value)(c
   return sxy / sxx / my;
 }
 
+// The checkpoint's growth, from same-state sizes: each trailer's start
+// checkpoint (as the simulator reported the folder's bytes once written)
+// over the same world's first start, fitted against the time the trailer
+// finished. A sampled folder size follows the boxes left at the moment and
+// says nothing about growth. Null with fewer than 3 trailers after the first.
+json checkpoint_growth(const json& trailers, const std::vector<double>& finished_s) {
+  std::map<std::string, double> first;
+  std::vector<Sample> points;
+  for (std::size_t i = 0; i < trailers.size() && i < finished_s.size(); ++i) {
+    const double bytes = trailers[i].value("start_checkpoint_bytes", 0.0);
+    if (bytes <= 0) continue;
+    const double same_start = first.emplace(trailers[i].value("name", ""), bytes).first->second;
+    if (i == 0) continue;
+    Sample p;
+    p.t_s = finished_s[i];
+    p.checkpoint_kib = bytes / same_start;
+    points.push_back(p);
+  }
+  return growth(points, 0, [](const Sample& x) { return x.checkpoint_kib; });
+}
+
 std::string procs_text(const std::vector<Proc>& procs) {
   std::map<std::string, std::pair<double, int>> by;
   for (const auto& p : procs) {
@@ -656,6 +678,7 @@ int main(int argc, char** argv) {
   double next_fault_s = std::uniform_real_distribution<double>(fault_min_s, fault_max_s)(rng);
   int events = 0;
   double first_trailer_s = -1;
+  std::vector<double> finished_s;  // when each trailer was first seen in the report
   double next_row_s = 0;
   int run_status = -1;
   std::string ended;
@@ -675,6 +698,7 @@ int main(int argc, char** argv) {
       ++x.trailers;
       x.boxes += t.value("boxes_unloaded", 0);
     }
+    while (finished_s.size() < static_cast<std::size_t>(x.trailers)) finished_s.push_back(x.t_s);
     for (const auto& f : faults) x.faults += f.injected, x.survived += f.survived.value_or(false);
     if (x.trailers > 0 && first_trailer_s < 0) first_trailer_s = x.t_s;
     samples.push_back(x);
@@ -910,7 +934,7 @@ int main(int argc, char** argv) {
       {"fds", growth(samples, from, [](const Sample& x) { return double(x.fds); })},
       {"shm", growth(samples, from, [](const Sample& x) { return x.shm_mib; })},
       {"dds_entities", growth(samples, from, [](const Sample& x) { return double(x.dds); })},
-      {"checkpoint", growth(samples, from, [](const Sample& x) { return x.checkpoint_kib; })},
+      {"checkpoint", checkpoint_growth(trailers, finished_s)},
       {"log", growth(samples, from, [](const Sample& x) { return x.log_kib; })}};
   // Logs grow with the run (the stderr log, the recording, the report):
   // their rate, KiB per hour, after the first trailer.
