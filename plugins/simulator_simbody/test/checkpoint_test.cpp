@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 
@@ -36,7 +37,12 @@ TEST_F(CheckpointTest, RoundTrip) {
   c.sim_time = 12.25;
   c.boxes_total = 30;
   c.boxes_unloaded = 4;
-  ASSERT_TRUE(save_checkpoint(dir_, c));
+  const auto saved = save_checkpoint(dir_, c);
+  ASSERT_TRUE(saved) << saved.error().message;
+  std::uint64_t on_disk = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(dir_))
+    if (entry.is_regular_file()) on_disk += entry.file_size();
+  EXPECT_EQ(*saved, on_disk);
   const auto loaded = load_checkpoint(dir_);
   ASSERT_TRUE(loaded) << loaded.error().message;
   const auto& back = *loaded;
@@ -75,7 +81,7 @@ TEST_F(CheckpointTest, ADamagedOneIsRefusedByName) {
 
 TEST_F(CheckpointTest, SavingWhereNoFolderCanBeMadeNamesIt) {
   std::ofstream(dir_.string()) << "a file, not a folder";
-  const Status saved = save_checkpoint(dir_ / "sub", Checkpoint{});
+  const auto saved = save_checkpoint(dir_ / "sub", Checkpoint{});
   ASSERT_FALSE(saved);
   EXPECT_EQ(saved.error().message, (dir_ / "sub").string() + ": Not a directory");
 }
