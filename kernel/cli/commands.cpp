@@ -20,8 +20,6 @@
 
 namespace plr::kernel {
 
-namespace {
-
 int fail(const std::string& message, int code) {
   // Messages quote config text, names from requests and file names: never
   // let their control bytes reach the terminal.
@@ -36,6 +34,8 @@ int fail(const std::string& message, int code) {
   std::cerr << "plr: " << shown << "\n";
   return code;
 }
+
+namespace {
 
 // A request the running pipeline refused: its reason, and the exit code of
 // its kind of error.

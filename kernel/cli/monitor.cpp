@@ -1,5 +1,6 @@
 #include "monitor.hpp"
 
+#include "commands.hpp"
 #include "dds_tool.hpp"
 
 #include <fmt/format.h>
@@ -24,11 +25,6 @@ using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 
 std::atomic<bool> g_interrupted{false};
-
-int fail(const std::string& message) {
-  std::cerr << "plr: " << message << "\n";
-  return 1;
-}
 
 nlohmann::json parse_payload(const plr_dds_Envelope& e) {
   if (e.payload._length > kMaxJsonPayload) return nlohmann::json::value_t::discarded;

@@ -3,6 +3,7 @@
 // "plr/topic/..."), reads them with the writers' reliability, and writes
 // each message with its SDK schema into an MCAP file. Nothing is sent to the
 // kernels: recording a robot cannot change what it does.
+#include "commands.hpp"
 #include "dds_tool.hpp"
 #include "mcap_writer.hpp"
 #include "recorder.hpp"
@@ -32,11 +33,6 @@ std::atomic<int> g_signal{0};
 constexpr std::uint32_t kMaxPayload = 64u << 20;
 // Samples a reader keeps until taken: a burst between two takes.
 constexpr std::int32_t kReaderDepth = 1024;
-
-int fail(const std::string& message) {
-  std::cerr << "plr: " << message << "\n";
-  return 1;
-}
 
 std::uint64_t wall_ns() {
   return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(

@@ -17,13 +17,13 @@
 namespace plr::pomdp {
 namespace {
 
-struct ParseFailure {
+struct PomdpxFailure {
   int line;
   std::string what;
 };
 
 [[noreturn]] void fail(int line, std::string what) {
-  throw ParseFailure{line, std::move(what)};
+  throw PomdpxFailure{line, std::move(what)};
 }
 
 // A small element tree built from expat's callbacks.
@@ -582,7 +582,7 @@ plr::Expected<TabularModel> parse_pomdpx(std::string_view text, const std::strin
     const auto root = parse_xml(text);
     Reader reader(limits);
     return reader.read(*root);
-  } catch (const ParseFailure& f) {
+  } catch (const PomdpxFailure& f) {
     return plr::make_error(PLR_ERR_INVALID, fmt::format("{}:{}: {}", origin, f.line, f.what));
   } catch (const std::bad_alloc&) {
     return plr::make_error(PLR_ERR_INVALID, fmt::format("{}:1: out of memory", origin));

@@ -11,13 +11,9 @@
 
 namespace plr::sim {
 
-namespace {
-
-plr::Error error(const std::string& where, const std::string& what) {
+plr::Error invalid_at(const std::string& where, const std::string& what) {
   return plr::make_error(PLR_ERR_INVALID, where + ": " + what);
 }
-
-}  // namespace
 
 FramedBody::FramedBody(const std::uint8_t* body, std::size_t n) : data(body), size(n) {
   if (n == 0 || reinterpret_cast<std::uintptr_t>(body) % alignof(std::uint64_t) == 0) return;
@@ -29,7 +25,7 @@ FramedBody::FramedBody(const std::uint8_t* body, std::size_t n) : data(body), si
 plr::Expected<FramedBody> unframe(const std::uint8_t* data, std::size_t size, std::size_t max_body,
                                   const std::string& what, const std::string& origin) {
   if (size < 8)
-    return error(origin, fmt::format("truncated: {} bytes, {} has at least 8", size, what));
+    return invalid_at(origin, fmt::format("truncated: {} bytes, {} has at least 8", size, what));
   auto payload = plr::unframe(data, size, max_body, origin);
   if (!payload) return payload.error();
   const std::uint8_t* fb = payload->data;
@@ -37,8 +33,8 @@ plr::Expected<FramedBody> unframe(const std::uint8_t* data, std::size_t size, st
   // Every framed body is a FlatBuffers buffer: the identifier test that
   // follows reads its bytes 4..8.
   if (body < 8)
-    return error(origin,
-                 fmt::format("bytes 4..{}: {} bytes, too short for {}", body + 4, body, what));
+    return invalid_at(origin,
+                      fmt::format("bytes 4..{}: {} bytes, too short for {}", body + 4, body, what));
   return FramedBody{fb, body};
 }
 
@@ -48,7 +44,8 @@ plr::Expected<std::vector<std::uint8_t>> read_bounded_file(const std::filesystem
   const auto size = std::filesystem::file_size(file, ec);
   if (ec) return plr::make_error(PLR_ERR_INVALID, file.string() + ": " + ec.message());
   if (size > max_bytes)
-    return error(file.string(), fmt::format("{} bytes, over the limit of {}", size, max_bytes));
+    return invalid_at(file.string(),
+                      fmt::format("{} bytes, over the limit of {}", size, max_bytes));
   std::ifstream in(file, std::ios::binary);
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
   if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size)))

@@ -58,81 +58,79 @@ std::string text(const flatbuffers::String* s) {
   return s ? s->str() : std::string();
 }
 
-plr::Error error(const std::string& where, const std::string& what) {
-  return plr::make_error(PLR_ERR_INVALID, where + ": " + what);
-}
-
 plr::Expected<LibraryEntry> read_entry(const msg::LibraryEntry& m, const std::string& where) {
   LibraryEntry e;
   for (const auto& [s, name] : {std::pair{m.name(), "name"},
                                 {m.family(), "family"},
                                 {m.observation_json(), "observation_json"}}) {
     if (s && s->size() > kMaxText)
-      return error(where, fmt::format("{}: longer than {} bytes", name, kMaxText));
+      return invalid_at(where, fmt::format("{}: longer than {} bytes", name, kMaxText));
   }
   e.name = text(m.name());
   e.family = text(m.family());
   e.world_seed = m.world_seed();
   e.observation_json = text(m.observation_json());
-  if (!m.world()) return error(where, "world: missing");
+  if (!m.world()) return invalid_at(where, "world: missing");
   if (m.world()->boxes() && m.world()->boxes()->size() > kMaxBoxes)
-    return error(where, fmt::format("world: more than {} boxes", kMaxBoxes));
+    return invalid_at(where, fmt::format("world: more than {} boxes", kMaxBoxes));
   e.world = world_from_message(*m.world());
   if (const auto* r = m.world_rotations()) {
     if (r->size() != 9 * e.world.boxes.size())
-      return error(where, fmt::format("world_rotations: {} numbers for {} boxes (9 each)",
-                                      r->size(), e.world.boxes.size()));
+      return invalid_at(where, fmt::format("world_rotations: {} numbers for {} boxes (9 each)",
+                                           r->size(), e.world.boxes.size()));
     for (std::size_t i = 0; i < e.world.boxes.size(); ++i) {
       Eigen::Matrix3d m3;
       for (int k = 0; k < 9; ++k)
         m3(k / 3, k % 3) = r->Get(static_cast<flatbuffers::uoffset_t>(9 * i + k));
       if (!m3.allFinite() || !(m3.transpose() * m3).isIdentity(kUnit) ||
           !(std::abs(m3.determinant() - 1.0) < kUnit))
-        return error(where, fmt::format("world_rotations: box {}: not a rotation", i));
+        return invalid_at(where, fmt::format("world_rotations: box {}: not a rotation", i));
       e.world.boxes[i].pose.linear() = m3;
     }
   }
   for (std::size_t i = 0; i < e.world.boxes.size(); ++i) {
     const Box& b = e.world.boxes[i];
     if (!b.pose.matrix().allFinite() || !b.size.allFinite() || (b.size.array() <= 0).any())
-      return error(where, fmt::format("world: boxes[{}]: size must be > 0 and pose finite", i));
+      return invalid_at(where,
+                        fmt::format("world: boxes[{}]: size must be > 0 and pose finite", i));
   }
-  if (!m.strategy()) return error(where, "strategy: missing");
+  if (!m.strategy()) return invalid_at(where, "strategy: missing");
   auto strategy = from_message(*m.strategy(), "strategy");
-  if (!strategy) return error(where, strategy.error().message);
+  if (!strategy) return invalid_at(where, strategy.error().message);
   e.strategy = std::move(*strategy);
   e.lower = m.lower();
   e.upper = m.upper();
   if (!std::isfinite(e.lower) || !std::isfinite(e.upper) || e.lower > e.upper + 1e-9)
-    return error(
+    return invalid_at(
         where, fmt::format("bounds [{}, {}]: must be finite and lower <= upper", e.lower, e.upper));
   if (const msg::LibraryProvenance* p = m.provenance()) {
     if (p->created() && p->created()->size() > kMaxText)
-      return error(where, "provenance.created: too long");
+      return invalid_at(where, "provenance.created: too long");
     e.provenance = {p->seed(),         p->particles(),   p->horizon(),  p->trial_budget(),
                     p->trials(),       p->simulations(), p->nodes(),    p->wall_s(),
                     p->workers(),      p->epsilon1(),    p->epsilon2(), p->seconds_per_box(),
                     text(p->created())};
   }
   if (m.curve()) {
-    if (m.curve()->size() > kMaxCurve) return error(where, "curve: too many points");
+    if (m.curve()->size() > kMaxCurve) return invalid_at(where, "curve: too many points");
     for (flatbuffers::uoffset_t i = 0; i < m.curve()->size(); ++i) {
       const msg::BoundPoint b = element(*m.curve(), i);
       e.curve.push_back({b.wall_s(), b.lower(), b.upper(), b.trials()});
     }
   }
-  if (m.parent() && m.parent()->size() > kMaxText) return error(where, "parent: too long");
+  if (m.parent() && m.parent()->size() > kMaxText) return invalid_at(where, "parent: too long");
   e.parent = text(m.parent());
   if (m.leaf()) {
-    if (m.leaf()->size() > kMaxPath) return error(where, "leaf: too many observations");
+    if (m.leaf()->size() > kMaxPath) return invalid_at(where, "leaf: too many observations");
     for (const auto o : *m.leaf()) {
       if (static_cast<int>(o) >= kNumObservations)
-        return error(where, fmt::format("leaf: observation {} out of range", static_cast<int>(o)));
+        return invalid_at(where,
+                          fmt::format("leaf: observation {} out of range", static_cast<int>(o)));
       e.leaf.push_back(static_cast<Observation>(o));
     }
   }
   if (m.start()) {
-    if (m.start()->size() > kMaxStart) return error(where, "start: too many particles");
+    if (m.start()->size() > kMaxStart) return invalid_at(where, "start: too many particles");
     for (flatbuffers::uoffset_t i = 0; i < m.start()->size(); ++i) {
       const msg::StartParticle p = element(*m.start(), i);
       e.start.push_back({p.particle(), p.state_hash(), p.boxes_left()});
@@ -141,17 +139,17 @@ plr::Expected<LibraryEntry> read_entry(const msg::LibraryEntry& m, const std::st
   if (m.fidelity()) {
     e.fidelity = m.fidelity()->str().substr(0, 64);
     if (!is_fidelity(e.fidelity))
-      return error(where, "fidelity: '" + e.fidelity + "' is not full, adaptive or fast");
+      return invalid_at(where, "fidelity: '" + e.fidelity + "' is not full, adaptive or fast");
   }
   if (const msg::FidelityCheck* c = m.check()) {
     e.check = FidelityCheck{c->value(),      c->boxes(),          c->full_value(),
                             c->full_boxes(), c->full_particles(), c->first_particle()};
     for (const double v : {c->value(), c->boxes(), c->full_value(), c->full_boxes()})
-      if (!std::isfinite(v)) return error(where, "check: values must be finite");
+      if (!std::isfinite(v)) return invalid_at(where, "check: values must be finite");
   }
   if (e.is_continuation() && (e.leaf.empty() || e.start.empty()))
-    return error(where, "a continuation (parent '" + e.parent.substr(0, 64) +
-                            "') needs its leaf and the belief it starts from");
+    return invalid_at(where, "a continuation (parent '" + e.parent.substr(0, 64) +
+                                 "') needs its leaf and the belief it starts from");
   return e;
 }
 
@@ -225,19 +223,19 @@ plr::Expected<Library> deserialize_library(const std::uint8_t* data, std::size_t
   const std::uint8_t* fb = framed->data;
   const std::size_t body = framed->size;
   if (!msg::StrategyLibraryBufferHasIdentifier(fb))
-    return error(origin, "byte 8: not a strategy library (identifier is not PLRL)");
+    return invalid_at(origin, "byte 8: not a strategy library (identifier is not PLRL)");
   flatbuffers::Verifier verifier(fb, body);
   if (!msg::VerifyStrategyLibraryBuffer(verifier))
-    return error(origin,
-                 fmt::format("bytes 4..{}: malformed (FlatBuffers verification)", body + 4));
+    return invalid_at(origin,
+                      fmt::format("bytes 4..{}: malformed (FlatBuffers verification)", body + 4));
   const msg::StrategyLibrary* m = msg::GetStrategyLibrary(fb);
   if (m->version() != kLibraryVersion)
-    return error(origin, fmt::format("version {} is not supported (this build reads {})",
-                                     m->version(), kLibraryVersion));
+    return invalid_at(origin, fmt::format("version {} is not supported (this build reads {})",
+                                          m->version(), kLibraryVersion));
   Library library;
   if (m->entries()) {
     if (m->entries()->size() > kMaxLibraryEntries)
-      return error(origin, fmt::format("entries: more than {}", kMaxLibraryEntries));
+      return invalid_at(origin, fmt::format("entries: more than {}", kMaxLibraryEntries));
     for (flatbuffers::uoffset_t i = 0; i < m->entries()->size(); ++i) {
       const msg::LibraryEntry* e = m->entries()->Get(i);
       const std::string name = text(e->name()).substr(0, 64);

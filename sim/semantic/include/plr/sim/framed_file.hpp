@@ -29,6 +29,9 @@ struct FramedBody {
   FramedBody& operator=(const FramedBody&) = delete;
 };
 
+// PLR_ERR_INVALID, "<where>: <what>": the one-line form of a bad file's error.
+plr::Error invalid_at(const std::string& where, const std::string& what);
+
 // The body of a framed buffer, checked against `max_body` bytes and the
 // CRC. `what` names the content in errors ("a library has at least 8
 // bytes"); errors are one line, "<origin>: <cause>", with byte offsets.
