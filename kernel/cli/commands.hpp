@@ -53,7 +53,7 @@ struct SwapOptions {
 // 1 internal; `plr run` adds 1 (the job failed) and 128 + signal.
 int exit_code(plr_status code);
 // Prints "plr: MESSAGE" to stderr (control bytes escaped, one problem a
-// line) and returns `code`; the second, the error's exit code.
+// line) and returns `code`, or for an Error its kind's exit code.
 int fail(const std::string& message, int code = 1);
 int fail(const Error& error);
 
